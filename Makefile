@@ -1,0 +1,42 @@
+# bt_nav — the two commands users need are `make demo` and `make test`.
+# Every target builds its own virtual environment from scratch if it is missing, so a fresh clone works.
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.bt_nav-installed
+
+# DDS never leaves this machine; each target gets its own domain (tests pick their own per process).
+export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
+export ROS_DOMAIN_ID ?= 57
+
+.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean
+
+all: test
+
+$(STAMP): pyproject.toml setup.py setup.cfg
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[test]"
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
+
+test: $(STAMP) lint
+	$(BIN)/python -m pytest -q
+
+demo: $(STAMP)
+	$(BIN)/bt-nav demo
+
+bench: $(STAMP)
+	$(BIN)/python bench/run.py
+
+faults: $(STAMP)
+	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults
+
+clean:
+	rm -rf build install log runs .pytest_cache
