@@ -1,0 +1,212 @@
+"""The one table of bt_nav's parameters.
+
+Every consumer reads this table instead of repeating names and defaults: the ROS executive declares
+its parameters (with descriptors and ranges) from it, the lock-step runner builds its configuration
+from it, the launch files and the pip bringup take their defaults from it, and the README's parameter
+table is checked against it. Tree leaves read the values from blackboard keys of the same names,
+which is how a live parameter update reaches the tree on the next tick.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+Value = bool | int | float | str
+
+MANEUVER_ALIASES: dict[str, str] = {
+    "none": "none",
+    "a": "A",
+    "randomizer": "A",
+    "b": "B",
+    "retreat": "B",
+    "c": "C",
+    "smart_pivot": "C",
+    "smartpivot": "C",
+    "pivot": "C",
+}
+MANEUVER_TITLES: dict[str, str] = {
+    "none": "no evasive maneuver",
+    "A": "A Randomizer",
+    "B": "B Retreat",
+    "C": "C Smart Pivot",
+}
+
+
+def normalise_maneuver(value: str) -> str:
+    """Map a user's maneuver spelling (``a``, ``Randomizer``, ``smart_pivot``...) to none|A|B|C.
+
+    Raises:
+        ValueError: for an unknown name, listing the accepted ones.
+    """
+    key = str(value).strip().lower().replace("-", "_").replace(" ", "_")
+    try:
+        return MANEUVER_ALIASES[key]
+    except KeyError:
+        accepted = ", ".join(sorted(set(MANEUVER_ALIASES)))
+        raise ValueError(f"unknown maneuver {value!r}; accepted: {accepted}") from None
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter: its default, what it means and the values it accepts.
+
+    ``live`` parameters may change while the executive runs (the next tick uses them); the others
+    shape the tree or the node's wiring and are read-only after start-up.
+    """
+
+    name: str
+    default: Value
+    description: str
+    unit: str = ""
+    minimum: float | None = None
+    maximum: float | None = None
+    choices: tuple[str, ...] | None = None
+    live: bool = True
+    in_tree: bool = True  # written to the blackboard for the tree's leaves
+
+    def check(self, value: Any) -> str | None:
+        """Return why ``value`` is not acceptable, or None when it is."""
+        expected = type(self.default)
+        if expected is bool:
+            if not isinstance(value, bool):
+                return f"{self.name} must be a bool, got {value!r}"
+            return None
+        if expected is str:
+            if not isinstance(value, str):
+                return f"{self.name} must be a string, got {value!r}"
+            if self.name == "maneuver":
+                try:
+                    normalise_maneuver(value)
+                except ValueError as exc:
+                    return f"{self.name}: {exc}"
+            elif self.choices is not None and value not in self.choices:
+                return f"{self.name} must be one of {', '.join(self.choices)}, got {value!r}"
+            return None
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"{self.name} must be a number, got {value!r}"
+        if expected is int and not isinstance(value, int):
+            return f"{self.name} must be an integer, got {value!r}"
+        if not math.isfinite(value):
+            return f"{self.name} must be finite, got {value!r}"
+        if self.minimum is not None and value < self.minimum:
+            return f"{self.name} must be >= {self.minimum}{self.unit_suffix}, got {value}"
+        if self.maximum is not None and value > self.maximum:
+            return f"{self.name} must be <= {self.maximum}{self.unit_suffix}, got {value}"
+        return None
+
+    @property
+    def unit_suffix(self) -> str:
+        """`` m`` style suffix for messages."""
+        return f" {self.unit}" if self.unit else ""
+
+
+PARAMS: tuple[ParamSpec, ...] = (
+    # --- the mission -------------------------------------------------------------------------------
+    ParamSpec("maneuver", "none", "Evasive rotation maneuver: none, A (Randomizer), B (Retreat), "
+              "C (Smart Pivot); the names are accepted too.", live=False,
+              choices=("none", "A", "B", "C")),
+    ParamSpec("mission_duration", 50.0, "Time from the first arming until the robot must have stopped "
+              "and asked for evaluation.", "s", 1.0, 3600.0),
+    ParamSpec("stop_margin", 0.5, "The stop and the evaluation call happen this long before "
+              "mission_duration runs out, so the referee sees them inside the limit.", "s", 0.0, 10.0),
+    ParamSpec("evaluation_timeout", 2.0, "How long one evaluation call may take before it is abandoned.",
+              "s", 0.05, 60.0),
+    ParamSpec("evaluation_retries", 5, "Further attempts after a failed, refused or timed-out "
+              "evaluation call.", "", 0, 100),
+    ParamSpec("evaluation_retry_delay", 0.5, "Pause between evaluation attempts.", "s", 0.0, 10.0),
+    # --- perception --------------------------------------------------------------------------------
+    ParamSpec("safety_distance", 0.5, "Trigger distance of maneuvers A (front) and B (left and right).",
+              "m", 0.05, 10.0),
+    ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
+    ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
+              "m", 0.05, 10.0),
+    ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): slow down and "
+              "turn away.", "m", 0.05, 10.0),
+    ParamSpec("front_half_angle_deg", 30.0, "Half-width of the front sector.", "deg", 1.0, 180.0),
+    ParamSpec("side_center_deg", 15.0, "Centre of the left sector (the right one mirrors it).", "deg",
+              0.0, 180.0),
+    ParamSpec("side_half_angle_deg", 15.0, "Half-width of the left and right sectors.", "deg", 1.0, 180.0),
+    ParamSpec("min_valid_beams", 3, "A sector with fewer valid beams is unknown (treated as close).",
+              "", 1, 1000),
+    ParamSpec("scan_timeout", 0.5, "No scan newer than this: stop until a fresh one arrives.", "s",
+              0.05, 10.0),
+    ParamSpec("odom_timeout", 0.5, "Odometry older than this: maneuvers integrate the commanded rate "
+              "instead (open loop).", "s", 0.05, 10.0),
+    # --- motion ------------------------------------------------------------------------------------
+    ParamSpec("max_linear_speed", 0.22, "Forward speed with nothing ahead (TurtleBot3 Burger: 0.22).",
+              "m/s", 0.0, 2.0),
+    ParamSpec("slow_linear_speed", 0.12, "Forward speed when an obstacle is at the far distance; it "
+              "rises towards max_linear_speed as the obstacle recedes.", "m/s", 0.0, 2.0),
+    ParamSpec("angular_speed", 1.5, "Turn rate for rotating in place and turning away.", "rad/s",
+              0.05, 3.0),
+    ParamSpec("maneuver_angular_speed", 1.8, "Peak turn rate during an evasive maneuver.", "rad/s",
+              0.05, 3.0),
+    ParamSpec("maneuver_tolerance_deg", 3.0, "A maneuver is done when the remaining angle is smaller.",
+              "deg", 0.1, 30.0),
+    ParamSpec("maneuver_time_margin", 2.0, "A maneuver may take its nominal time plus this much; then "
+              "it stops and fails.", "s", 0.0, 60.0),
+    ParamSpec("random_seed", -1, "Seed of maneuver A's random choices; -1 draws one from the OS.", "",
+              -1, 2**31 - 1, live=False),
+    # --- the ROS edge (not read by the tree) --------------------------------------------------------
+    ParamSpec("tick_rate_hz", 20.0, "Tree ticks per second (node clock, so sim time when use_sim_time).",
+              "Hz", 1.0, 200.0, live=False, in_tree=False),
+    ParamSpec("cmd_vel_stamped", False, "Publish geometry_msgs/TwistStamped instead of Twist "
+              "(TurtleBot3 on Jazzy).", live=False, in_tree=False),
+    ParamSpec("frame_id", "base_link", "frame_id of stamped commands.", live=False, in_tree=False),
+    ParamSpec("stats_period", 10.0, "Seconds between tick-statistics log lines (0 disables).", "s",
+              0.0, 3600.0, in_tree=False),
+)
+
+SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in PARAMS}
+
+
+def defaults() -> dict[str, Value]:
+    """Every parameter's default value."""
+    return {spec.name: spec.default for spec in PARAMS}
+
+
+def cross_check(values: Mapping[str, Value]) -> str | None:
+    """Return why a complete set of values is inconsistent, or None.
+
+    Single values are checked by :meth:`ParamSpec.check`; these rules relate two parameters.
+    """
+    if values["close_distance"] >= values["far_distance"]:
+        return (f"close_distance ({values['close_distance']}) must be smaller than far_distance "
+                f"({values['far_distance']})")
+    if values["slow_linear_speed"] > values["max_linear_speed"]:
+        return (f"slow_linear_speed ({values['slow_linear_speed']}) must not exceed max_linear_speed "
+                f"({values['max_linear_speed']})")
+    return None
+
+
+def resolve(overrides: Mapping[str, Any] | None = None) -> dict[str, Value]:
+    """Defaults updated with ``overrides``, every value checked; ints are accepted for floats.
+
+    Raises:
+        ValueError: naming the first unknown parameter or unacceptable value.
+    """
+    values = defaults()
+    for name, value in (overrides or {}).items():
+        spec = SPECS.get(name)
+        if spec is None:
+            raise ValueError(f"unknown parameter {name!r}")
+        values[name] = coerce(spec, value)
+    for name, value in values.items():
+        reason = SPECS[name].check(value)
+        if reason:
+            raise ValueError(reason)
+    reason = cross_check(values)
+    if reason:
+        raise ValueError(reason)
+    values["maneuver"] = normalise_maneuver(str(values["maneuver"]))
+    return values
+
+
+def coerce(spec: ParamSpec, value: Any) -> Any:
+    """Accept an int where a float is expected (``-p safety_distance:=1`` on the command line)."""
+    if isinstance(spec.default, float) and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
