@@ -1,7 +1,7 @@
 """2D LiDAR model: exact ray casting against world segments and circles, vectorised with numpy.
 
-A scan is one (beams x obstacles) broadcast: no Python loop over beams or obstacles, so a 360-beam scan of
-stage_4 costs tens of microseconds and the simulator can run many times faster than real time.
+A scan is one (obstacles x beams) broadcast: no Python loop over beams or obstacles, so a 360-beam scan of
+stage_4 costs about 0.1 ms and the simulator can run many times faster than real time.
 
 Reading conventions follow the TurtleBot3 LDS-01 driver as seen in sensor_msgs/LaserScan:
 beam i is at robot-frame angle ``angle_min + i * angle_increment`` (CCW positive, 0 = straight ahead);
@@ -59,7 +59,7 @@ class RayCaster:
 
     Ray p + t*u against segment a + s*d: with w = a - p, t = cross(w, d) / cross(u, d) and
     s = cross(w, u) / cross(u, d). Only cross(u, d) and cross(w, u) depend on the beam, so the per-scan
-    work is a handful of (B, N) products written into preallocated buffers.
+    work is a handful of (obstacles, beams) products written into preallocated buffers.
     Ray against circle (centre c, radius r): with w = c - p, b = u.w, the near hit is
     t = b - sqrt(b^2 - |w|^2 + r^2).
     """
@@ -70,34 +70,40 @@ class RayCaster:
         nb = model.num_beams
         ang = model.angle_min + model.angle_increment * np.arange(nb, dtype=np.float64)
         # Beam directions in the robot frame; the scan rotates them by yaw (cheaper than nb trig calls).
-        self._cos = np.cos(ang)[:, None]
-        self._sin = np.sin(ang)[:, None]
+        self._cos = np.cos(ang)
+        self._sin = np.sin(ang)
+        # Obstacle data as (K, 1) columns: work arrays are (obstacles, beams) so the per-beam minimum is a
+        # reduction over rows of contiguous memory (several times faster than reducing short rows).
         segs = world.segments
-        self._ax = np.ascontiguousarray(segs[:, 0])
-        self._ay = np.ascontiguousarray(segs[:, 1])
-        self._dx = np.ascontiguousarray(segs[:, 2] - segs[:, 0])
-        self._dy = np.ascontiguousarray(segs[:, 3] - segs[:, 1])
+        self._ax = np.ascontiguousarray(segs[:, 0:1])
+        self._ay = np.ascontiguousarray(segs[:, 1:2])
+        self._dx = np.ascontiguousarray(segs[:, 2:3] - segs[:, 0:1])
+        self._dy = np.ascontiguousarray(segs[:, 3:4] - segs[:, 1:2])
         circ = world.circles
-        self._cx = np.ascontiguousarray(circ[:, 0])
-        self._cy = np.ascontiguousarray(circ[:, 1])
-        self._r2 = np.ascontiguousarray(circ[:, 2] ** 2)
+        self._cx = np.ascontiguousarray(circ[:, 0:1])
+        self._cy = np.ascontiguousarray(circ[:, 1:2])
+        self._r2 = np.ascontiguousarray(circ[:, 2:3] ** 2)
         n, m = segs.shape[0], circ.shape[0]
-        # Work buffers, reused by every scan (one RayCaster per thread).
-        self._ux = np.empty((nb, 1))
-        self._uy = np.empty((nb, 1))
-        self._den = np.empty((nb, n))
-        self._tmp = np.empty((nb, n))
-        self._s = np.empty((nb, n))
-        self._t = np.empty((nb, n))
-        self._mask = np.empty((nb, n), dtype=bool)
-        self._mask2 = np.empty((nb, n), dtype=bool)
-        self._cb = np.empty((nb, m))
-        self._ctmp = np.empty((nb, m))
-        self._cmask = np.empty((nb, m), dtype=bool)
+        # Work buffers, reused by every scan (so one RayCaster must not be shared between threads).
+        self._ux = np.empty(nb)
+        self._uy = np.empty(nb)
+        self._den = np.empty((n, nb))
+        self._tmp = np.empty((n, nb))
+        self._s = np.empty((n, nb))
+        self._t = np.empty((n, nb))
+        self._mask = np.empty((n, nb), dtype=bool)
+        self._mask2 = np.empty((n, nb), dtype=bool)
+        self._cb = np.empty((m, nb))
+        self._ctmp = np.empty((m, nb))
+        self._cmask = np.empty((m, nb), dtype=bool)
         self._best = np.empty(nb)
+        self._cbest = np.empty(nb)
 
     def true_ranges(self, x: float, y: float, yaw: float) -> np.ndarray:
-        """Exact distance to the first obstacle along every beam (float64, +inf if none). Reused buffer."""
+        """Exact distance to the first obstacle along every beam (float64, +inf if none).
+
+        Returns an internal buffer that the next call overwrites; copy it to keep it.
+        """
         cy, sy = math.cos(yaw), math.sin(yaw)
         ux, uy = self._ux, self._uy
         # World-frame beam directions: rotate the robot-frame ones by yaw.
@@ -113,11 +119,11 @@ class RayCaster:
             wy = self._ay - y
             cwd = wx * self._dy - wy * self._dx  # cross(w, d), beam independent
             den, tmp, s, t = self._den, self._tmp, self._s, self._t
-            np.multiply(ux, self._dy, out=den)
-            np.multiply(uy, self._dx, out=tmp)
+            np.multiply(self._dy, ux, out=den)
+            np.multiply(self._dx, uy, out=tmp)
             den -= tmp  # cross(u, d)
-            np.multiply(uy, wx, out=s)
-            np.multiply(ux, wy, out=tmp)
+            np.multiply(wx, uy, out=s)
+            np.multiply(wy, ux, out=tmp)
             s -= tmp  # cross(w, u)
             # Parallel rays (den == 0) divide to inf/nan and are rejected by the range tests below.
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -134,15 +140,15 @@ class RayCaster:
             # Invert the mask in place and overwrite misses with inf, then take the nearest hit per beam.
             np.logical_not(mask, out=mask)
             np.copyto(t, np.inf, where=mask)
-            np.min(t, axis=1, out=best)
+            np.minimum.reduce(t, axis=0, out=best)
 
         if self._cx.shape[0]:
             wx = self._cx - x
             wy = self._cy - y
             c2 = wx * wx + wy * wy - self._r2  # < 0: the sensor is inside the cylinder
             b, tmp, cmask = self._cb, self._ctmp, self._cmask
-            np.multiply(ux, wx, out=b)
-            np.multiply(uy, wy, out=tmp)
+            np.multiply(wx, ux, out=b)
+            np.multiply(wy, uy, out=tmp)
             b += tmp  # u . w
             np.multiply(b, b, out=tmp)
             tmp -= c2  # discriminant
@@ -152,8 +158,9 @@ class RayCaster:
             np.subtract(b, tmp, out=tmp)  # near intersection (-inf for misses)
             np.less(tmp, 0.0, out=cmask)  # behind the sensor (or missed)
             np.copyto(tmp, np.inf, where=cmask)
-            tmp[:, c2 < 0.0] = 0.0  # inside a cylinder: every beam is blocked at once
-            best = np.minimum(best, tmp.min(axis=1), out=best)
+            tmp[c2[:, 0] < 0.0] = 0.0  # inside a cylinder: every beam is blocked at once
+            np.minimum.reduce(tmp, axis=0, out=self._cbest)
+            np.minimum(best, self._cbest, out=best)
         return best
 
     def cast(self, x: float, y: float, yaw: float, rng: np.random.Generator | None = None) -> np.ndarray:

@@ -63,7 +63,10 @@ class RotationManeuver(Leaf, register=False):
         self.rotation = 0.0
         self.turned = 0.0
         self.open_loop_ticks = 0
+        self._odom_turned = 0.0  # sum of yaw increments between odometry samples
+        self._since_sample = 0.0  # commanded rate integrated since the last sample (dead reckoning)
         self._last_yaw: float | None = None
+        self._last_stamp = -math.inf
         self._last_rate = 0.0
         self._last_time = 0.0
         self._started = 0.0
@@ -76,36 +79,54 @@ class RotationManeuver(Leaf, register=False):
     def initialise(self) -> None:
         """Decide the rotation and start the clock."""
         self.rotation = self.choose_rotation(self.get_input("sectors"))
-        self.turned = 0.0
+        self.turned = self._odom_turned = self._since_sample = 0.0
         self.open_loop_ticks = 0
         now = self.clock()
         self._started = self._last_time = now
         self._last_rate = 0.0
-        odom = self._fresh_odom(now)
+        odom = self._new_odom(now)
         self._last_yaw = odom.yaw if odom is not None else None
+        self._last_stamp = odom.stamp if odom is not None else -math.inf
         rate = self.get_input("angular_speed")
         self._allowance = abs(self.rotation) / rate + 1.0 + self.get_input("time_margin")
         self._set_output("active", True)
         self.events.info(f"{self.label}: starting a {math.degrees(self.rotation):+.0f} deg rotation")
 
-    def _fresh_odom(self, now: float) -> OdomSample | None:
+    def _new_odom(self, now: float) -> OdomSample | None:
+        """The latest odometry sample if it is usable and not the one already counted."""
         odom: OdomSample = self.get_input("odom")
         timeout = self.get_input("odom_timeout")
-        if math.isfinite(odom.yaw) and -timeout <= now - odom.stamp <= timeout:
-            return odom
-        return None
+        if odom.stamp == self._last_stamp or not math.isfinite(odom.yaw):
+            return None
+        if not -timeout <= now - odom.stamp <= timeout:
+            return None
+        return odom
+
+    def _measure(self, now: float) -> None:
+        """Update ``turned``: odometry yaw increments, dead reckoning between (or without) samples.
+
+        A new sample's increment covers the interval that dead reckoning bridged, so the bridge is
+        dropped then; when samples stop coming the bridge simply keeps growing (open loop).
+        """
+        odom = self._new_odom(now)
+        if odom is None:
+            self._since_sample += self._last_rate * max(0.0, now - self._last_time)
+            if now - self._last_stamp > self.get_input("odom_timeout"):
+                self.open_loop_ticks += 1
+        else:
+            if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned
+                self._odom_turned += self._since_sample
+            else:
+                self._odom_turned += float(wrap_angle(odom.yaw - self._last_yaw))
+            self._since_sample = 0.0
+            self._last_yaw, self._last_stamp = odom.yaw, odom.stamp
+        self._last_time = now
+        self.turned = self._odom_turned + self._since_sample
 
     def update(self) -> Status:
         """Advance the turn; RUNNING until within tolerance or out of time."""
         now = self.clock()
-        odom = self._fresh_odom(now)
-        if odom is not None and self._last_yaw is not None:
-            self.turned += float(wrap_angle(odom.yaw - self._last_yaw))
-        elif odom is None:
-            self.turned += self._last_rate * max(0.0, now - self._last_time)
-            self.open_loop_ticks += 1
-        self._last_yaw = odom.yaw if odom is not None else None
-        self._last_time = now
+        self._measure(now)
         remaining = self.rotation - self.turned
         if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
             return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")

@@ -1,0 +1,240 @@
+"""A deterministic harness for ticking the real mission tree step by step, without ROS.
+
+Used by bt_nav's own tick-by-tick tests and meant for users who add leaves: a fake clock, synthetic
+scans for any LiDAR layout, perfect odometry that integrates the commanded turn rate, a local Trigger
+client whose answers a test scripts, and a recorder of what every tick decided.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .core import MissionCore
+from .scan import Scan
+from .types import Command
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The metadata of a LaserScan: where the beams point and what ranges are valid."""
+
+    num_beams: int
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+
+    @property
+    def angle_max(self) -> float:
+        """Angle of the last beam."""
+        return self.angle_min + (self.num_beams - 1) * self.angle_increment
+
+
+LDS01 = Layout(360, 0.0, 2 * math.pi / 360, 0.12, 3.5)  # TurtleBot3: 0..2pi
+RPLIDAR = Layout(640, -math.pi, 2 * math.pi / 640, 0.15, 12.0)  # TurtleBot4: -pi..pi
+REVERSED = Layout(720, math.pi, -2 * math.pi / 720, 0.1, 8.0)  # clockwise sweep
+FRONT_270 = Layout(1081, -3 * math.pi / 4, 3 * math.pi / 2 / 1080, 0.02, 30.0)  # partial field of view
+
+
+def synthetic_scan(obstacles: Iterable[tuple[float, float]] = (), *, layout: Layout = LDS01,
+                   width_deg: float = 12.0, background: float = math.inf) -> Scan:
+    """A scan seeing each ``(angle_deg, distance)`` obstacle over ``width_deg``, ``background`` elsewhere.
+
+    ``distance`` may be NaN or +-inf to build REP 117 cases.
+    """
+    angles = layout.angle_min + np.arange(layout.num_beams) * layout.angle_increment
+    ranges = np.full(layout.num_beams, background, dtype=np.float64)
+    for angle_deg, distance in obstacles:
+        offset = np.abs((angles - math.radians(angle_deg) + math.pi) % (2 * math.pi) - math.pi)
+        hit = offset <= math.radians(width_deg) / 2 + 1e-9
+        if math.isnan(distance):
+            ranges[hit] = math.nan
+        else:
+            ranges[hit] = np.fmin(ranges[hit], distance)
+    return Scan(layout.angle_min, layout.angle_max, layout.angle_increment, layout.range_min,
+                layout.range_max, ranges)
+
+
+class FakeClock:
+    """Seconds that move only when a test says so."""
+
+    def __init__(self, start: float = 0.0) -> None:
+        self.now = start
+
+    def __call__(self) -> float:
+        return self.now
+
+    def advance(self, dt: float) -> float:
+        """Move forward (or back, to simulate a reset) and return the new time."""
+        self.now += dt
+        return self.now
+
+
+@dataclass
+class TriggerRequest:
+    """Stand-in for std_srvs/Trigger.Request (off-ROS)."""
+
+
+@dataclass
+class TriggerResponse:
+    """Stand-in for std_srvs/Trigger.Response (off-ROS)."""
+
+    success: bool = False
+    message: str = ""
+
+
+class TriggerType:
+    """Stand-in for the std_srvs/Trigger service type: what ``client.srv_type`` gives."""
+
+    Request = TriggerRequest
+    Response = TriggerResponse
+
+
+class LocalFuture:
+    """The part of rclpy's Future the EvaluateMission leaf uses."""
+
+    def __init__(self) -> None:
+        self._done = False
+        self._result: Any = None
+        self._exception: BaseException | None = None
+        self.cancelled = False
+
+    def done(self) -> bool:  # noqa: D102
+        return self._done
+
+    def result(self) -> Any:  # noqa: D102
+        if self._exception is not None:
+            raise self._exception
+        return self._result
+
+    def set_result(self, result: Any) -> None:  # noqa: D102
+        self._result, self._done = result, True
+
+    def set_exception(self, exc: BaseException) -> None:  # noqa: D102
+        self._exception, self._done = exc, True
+
+
+Handler = Callable[[TriggerRequest], TriggerResponse]
+
+
+class LocalTriggerClient:
+    """A Trigger client with rclpy Client's interface, answered in-process.
+
+    ``script`` lists what successive calls get: ``"ok"``, ``"refuse"`` (success=false), ``"hang"``
+    (never answered), ``"raise"`` (the future fails), or a handler function; once the script runs out,
+    ``default`` answers. ``absent_until`` keeps the service "not ready" until that clock time.
+    """
+
+    srv_type = TriggerType
+
+    def __init__(self, script: Sequence[str | Handler] = (), default: str | Handler = "ok",
+                 clock: Callable[[], float] | None = None, absent_until: float = -math.inf) -> None:
+        self.script = list(script)
+        self.default = default
+        self.clock = clock
+        self.absent_until = absent_until
+        self.calls: list[float] = []
+        self.removed: list[LocalFuture] = []
+        self.pending: list[LocalFuture] = []
+
+    def service_is_ready(self) -> bool:  # noqa: D102
+        return self.clock is None or self.clock() >= self.absent_until
+
+    def call_async(self, request: TriggerRequest) -> LocalFuture:  # noqa: D102
+        self.calls.append(self.clock() if self.clock else float(len(self.calls)))
+        action = self.script.pop(0) if self.script else self.default
+        future = LocalFuture()
+        if callable(action):
+            future.set_result(action(request))
+        elif action == "ok":
+            future.set_result(TriggerResponse(True, "evaluation accepted"))
+        elif action == "refuse":
+            future.set_result(TriggerResponse(False, "not now"))
+        elif action == "raise":
+            future.set_exception(RuntimeError("server died mid-call"))
+        elif action == "hang":
+            self.pending.append(future)
+        else:
+            raise ValueError(f"unknown script action {action!r}")
+        return future
+
+    def remove_pending_request(self, future: LocalFuture) -> None:  # noqa: D102
+        future.cancelled = True
+        self.removed.append(future)
+        if future in self.pending:
+            self.pending.remove(future)
+
+
+@dataclass
+class TickRecord:
+    """What one tick decided."""
+
+    tick: int
+    time: float
+    tip: str
+    command: Command
+    statuses: dict[str, str] = field(repr=False)
+    yaw: float = 0.0
+
+
+class TickHarness:
+    """The real tree from ``trees/mission.xml``, ticked at ``dt`` on a fake clock.
+
+    Every tick: the clock advances, the current synthetic scan is fed (unless ``feed_scans`` is off),
+    perfect odometry integrates the previous command's turn rate (unless ``feed_odom`` is off), the
+    tree ticks, and a :class:`TickRecord` is kept.
+    """
+
+    def __init__(self, maneuver: str = "none", overrides: dict[str, Any] | None = None, *,
+                 layout: Layout = LDS01, dt: float = 0.05, client: LocalTriggerClient | None = None,
+                 events: Any = None) -> None:
+        self.clock = FakeClock()
+        self.client = client if client is not None else LocalTriggerClient(clock=self.clock)
+        if self.client.clock is None:
+            self.client.clock = self.clock
+        settings = {"maneuver": maneuver, "random_seed": 7, **(overrides or {})}
+        self.core = MissionCore(settings, clock=self.clock, evaluation_client=self.client, events=events)
+        self.layout = layout
+        self.dt = dt
+        self.obstacles: list[tuple[float, float]] = []
+        self.scan: Scan | None = synthetic_scan(layout=layout)
+        self.feed_scans = True
+        self.feed_odom = True
+        self.yaw = 0.0
+        self.records: list[TickRecord] = []
+
+    def see(self, *obstacles: tuple[float, float], **scan_kwargs: Any) -> None:
+        """From the next tick on, the scan shows these ``(angle_deg, distance)`` obstacles."""
+        self.obstacles = list(obstacles)
+        self.scan = synthetic_scan(obstacles, layout=self.layout, **scan_kwargs)
+
+    def arm(self, data: bool = True) -> tuple[bool, str]:
+        """Call the arm service."""
+        return self.core.request_arm(data)
+
+    def tick(self, n: int = 1) -> TickRecord:
+        """Run ``n`` ticks; returns the last record."""
+        for _ in range(n):
+            self.clock.advance(self.dt)
+            self.yaw = math.remainder(self.yaw + self.core.last_command.angular * self.dt, 2 * math.pi)
+            if self.feed_scans and self.scan is not None:
+                self.core.feed_scan(self.scan)
+            if self.feed_odom:
+                self.core.feed_odom(self.yaw)
+            command = self.core.tick()
+            self.records.append(TickRecord(self.core.ticks, self.clock.now, self.core.tip, command,
+                                           self.core.statuses(), self.yaw))
+        return self.records[-1]
+
+    def run_until(self, predicate: Callable[[TickRecord], bool], limit: int = 2000) -> TickRecord:
+        """Tick until ``predicate(record)`` holds; fails loudly after ``limit`` ticks."""
+        for _ in range(limit):
+            record = self.tick()
+            if predicate(record):
+                return record
+        raise AssertionError(f"condition not met within {limit} ticks; last tip {self.records[-1].tip}")
