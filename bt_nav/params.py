@@ -28,7 +28,7 @@ MANEUVER_ALIASES: dict[str, str] = {
     "pivot": "C",
 }
 MANEUVER_TITLES: dict[str, str] = {
-    "none": "no evasive maneuver",
+    "none": "none",
     "A": "A Randomizer",
     "B": "B Retreat",
     "C": "C Smart Pivot",

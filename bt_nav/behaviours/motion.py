@@ -22,6 +22,7 @@ class Stop(Leaf):
 
     INPUT_PORTS = {}
     OUTPUT_PORTS = dict(CMD_PORT)
+    ATTRIBUTES = ("reason",)  # constructor arguments set in the tree file (listed for Groot2's model)
 
     def __init__(self, name: str, reason: str = "stop", **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)

@@ -1,0 +1,111 @@
+"""The tree file parses with the pinned py_trees parser, and its Groot2 model matches the leaves."""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import py_trees
+import pytest
+
+from bt_nav.behaviours import LEAF_CLASSES, REGISTRY
+from bt_nav.dump_tree import nodes_model
+from bt_nav.resources import tree_file
+from bt_nav.testing import TickHarness
+from bt_nav.tree import load_tree
+
+GOLDEN = Path(__file__).parent / "golden"
+UPDATE = os.environ.get("BT_NAV_UPDATE_GOLDEN") == "1"
+
+
+def test_py_trees_is_the_pinned_version() -> None:
+    """The XML parser is experimental upstream: a new py_trees must be a deliberate upgrade."""
+    assert py_trees.version.__version__ == "2.6.0"
+
+
+def test_tree_file_is_behaviortree_cpp_v4() -> None:
+    root = ET.parse(tree_file()).getroot()
+    assert root.tag == "root" and root.attrib["BTCPP_format"] == "4"
+    assert root.attrib["main_tree_to_execute"] == "Mission"
+    ids = {bt.attrib["ID"] for bt in root.findall("BehaviorTree")}
+    assert ids == {"Mission", "ManeuverNone", "ManeuverA", "ManeuverB", "ManeuverC"}
+
+
+@pytest.mark.parametrize(("maneuver", "leaf"), [("none", "NoManeuver"), ("A", "Randomizer"), ("B", "Retreat"),
+                                                ("randomizer", "Randomizer"), ("smart_pivot", "SmartPivot")])
+def test_each_maneuver_fills_the_slot(maneuver: str, leaf: str) -> None:
+    root = load_tree(maneuver)
+    names = [n.name for n in root.iterate()]
+    assert leaf in names
+    others = {"NoManeuver", "Randomizer", "Retreat", "SmartPivot"} - {leaf}
+    assert not others & set(names), "exactly one maneuver in the tree"
+    assert len(names) == len(set(names)), "node names are unique"
+    priorities = next(n for n in root.iterate() if n.name == "Priorities")
+    order = [c.name for c in priorities.children]
+    assert order[:3] == ["MissionOver", "Disarmed", "ScanUnusable"]
+    assert order[-3:] == ["Close", "Far", "FullSpeed"]
+
+
+def test_reactive_composites_are_memoryless() -> None:
+    root = load_tree("A")
+    for node in root.iterate():
+        if isinstance(node, py_trees.composites.Composite) and not isinstance(node, py_trees.composites.Parallel):
+            assert node.memory is False, f"{node.name} must re-evaluate its guards every tick"
+
+
+def test_ports_are_wired_to_the_shared_keys() -> None:
+    root = load_tree("C")
+    pivot = next(n for n in root.iterate() if n.name == "SmartPivot")
+    assert pivot._get_blackboard_key("cmd_vel") == "/cmd_vel"
+    assert pivot._get_blackboard_key("angular_speed") == "/maneuver_angular_speed"
+    trigger = next(n for n in root.iterate() if n.name == "FrontTooClose?")
+    assert trigger._get_blackboard_key("distance") == "/pivot_distance"
+
+
+def test_unknown_maneuver_and_unknown_tags_are_clear_errors(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="unknown maneuver"):
+        load_tree("Z")
+    bad = tmp_path / "bad.xml"
+    bad.write_text(tree_file().read_text().replace("<DriveForward ", "<DriveBackward "))
+    with pytest.raises(ValueError, match="DriveBackward"):
+        load_tree("none", bad)
+
+
+def test_groot_model_in_the_tree_file_matches_the_leaves() -> None:
+    committed = ET.parse(tree_file()).getroot().find("TreeNodesModel")
+    assert committed is not None
+
+    def entries(model: ET.Element) -> list:
+        return sorted((e.tag, e.attrib["ID"], [(p.tag, p.attrib["name"], p.attrib["type"]) for p in e]) for e in model)
+
+    assert entries(committed) == entries(nodes_model()), "regenerate: bt-nav dump-tree --format groot-model"
+    used = {e.tag for e in ET.parse(tree_file()).getroot().iter()} & set(LEAF_CLASSES)
+    declared = {e.attrib["ID"] for e in committed}
+    assert used <= declared
+    assert set(LEAF_CLASSES) <= set(REGISTRY)
+
+
+def golden(name: str, text: str) -> None:
+    path = GOLDEN / f"{name}.txt"
+    if UPDATE or not path.exists():
+        path.write_text(text, encoding="utf-8")
+        if not UPDATE:
+            pytest.fail(f"golden file {path.name} was missing and has been written; check it in")
+    assert text == path.read_text(encoding="utf-8"), f"snapshot differs from {path} (BT_NAV_UPDATE_GOLDEN=1)"
+
+
+def test_golden_snapshots() -> None:
+    h = TickHarness("A")
+    h.tick()
+    golden("01_before_arming", h.core.snapshot())
+    h.arm()
+    h.tick()
+    golden("02_full_speed", h.core.snapshot())
+    h.see((0.0, 0.45))
+    h.tick(3)
+    golden("03_maneuver_a_running", h.core.snapshot())
+    h.see()
+    h.clock.now = 60.0
+    h.tick()
+    golden("04_mission_over", h.core.snapshot())
