@@ -30,7 +30,7 @@ FORMATS = ("ascii", "unicode", "dot", "svg", "png", "xml", "json", "groot-model"
 STATUS_FILL = {"SUCCESS": "#9be39b", "FAILURE": "#f4a3a3", "RUNNING": "#9cc7f4", "INVALID": "#e6e6e6"}
 
 
-class GraphvizMissing(RuntimeError):
+class GraphvizMissingError(RuntimeError):
     """svg/png were asked for but graphviz's ``dot`` is not installed."""
 
 
@@ -100,7 +100,7 @@ def graphviz(dot_text: str, fmt: str) -> bytes:
     """Render dot text with graphviz's ``dot`` binary."""
     binary = shutil.which("dot")
     if binary is None:
-        raise GraphvizMissing(f"rendering {fmt} needs graphviz's `dot` binary: install it with "
+        raise GraphvizMissingError(f"rendering {fmt} needs graphviz's `dot` binary: install it with "
                               "`sudo apt-get install graphviz` (or use --format dot)")
     return subprocess.run([binary, f"-T{fmt}"], input=dot_text.encode(), capture_output=True,
                           check=True).stdout
@@ -161,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         normalise_maneuver(args.maneuver)
         out = render(args.maneuver, args.format)
-    except (ValueError, GraphvizMissing) as exc:
+    except (ValueError, GraphvizMissingError) as exc:
         print(f"bt-nav dump-tree: {exc}", file=sys.stderr)
         return 2
     if args.output:

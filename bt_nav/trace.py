@@ -24,7 +24,7 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, bool) or value is None or isinstance(value, int | str):
         return value
     if isinstance(value, float):
-        return value if math.isfinite(value) else str(value)
+        return round(value, 6) if math.isfinite(value) else str(value)
     if isinstance(value, Command):
         return {"linear": jsonable(value.linear), "angular": jsonable(value.angular), "source": value.source}
     return repr(value)
