@@ -1,8 +1,9 @@
 """Build script shared by pip (PEP 517, metadata in pyproject.toml) and colcon (ament_python).
 
 colcon's ament_python build still drives ``setup.py``; the data files below give the ROS layout
-(share/bt_nav/{package.xml,trees,launch,config,sim/worlds} and the ament index marker), while
-console scripts land in lib/bt_nav through setup.cfg so that ``ros2 run bt_nav executive`` works.
+(share/bt_nav/{package.xml,trees,launch,config,sim/worlds} and the ament index marker), while the
+console scripts (declared in pyproject.toml) land in lib/bt_nav through setup.cfg, so that
+``ros2 run bt_nav executive`` works.
 """
 
 from glob import glob
@@ -10,15 +11,6 @@ from glob import glob
 from setuptools import setup
 
 PACKAGE = "bt_nav"
-
-ENTRY_POINTS = [
-    "bt-nav = bt_nav.cli:main",
-    "executive = bt_nav.cli:executive_main",
-    "sim = bt_nav.cli:sim_main",
-    "referee = bt_nav.cli:referee_main",
-    "dump_tree = bt_nav.cli:dump_tree_main",
-    "watch = bt_nav.cli:watch_main",
-]
 
 setup(
     name=PACKAGE,
@@ -33,5 +25,4 @@ setup(
         (f"share/{PACKAGE}/sim/worlds", glob("sim/worlds/*.yaml")),
     ],
     zip_safe=False,
-    entry_points={"console_scripts": ENTRY_POINTS},
 )

@@ -263,7 +263,8 @@ class Referee:
                         else t0 + cfg.reactivate_at)
         checks.append(self._static_check("static after deactivation", deact_start, deact_end,
                                          "the run ended before the deactivation test"))
-        checks.append({"name": "minimum distance from start", "passed": self.max_distance >= cfg.min_distance_from_start,
+        far_enough = self.max_distance >= cfg.min_distance_from_start
+        checks.append({"name": "minimum distance from start", "passed": far_enough,
                        "value": round(self.max_distance, 4), "required": cfg.min_distance_from_start,
                        "detail": f"reached {self.max_distance:.2f} m, required {cfg.min_distance_from_start} m"})
         checks.append({"name": "minimum travelled distance", "passed": self.travelled >= cfg.min_travelled,

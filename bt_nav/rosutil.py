@@ -1,0 +1,245 @@
+"""Small rclpy helpers for bt_nav's nodes: parameters from the table, messages, DDS env, logging.
+
+Kept apart from :mod:`bt_nav.executive` so that the simulator, the referee and the tests build
+their ROS plumbing the same way (one place decides how a parameter is declared or how a
+``Twist`` is stamped). Importing this module imports rclpy; the mission core never does.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import zlib
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import py_trees
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from . import params as P
+from .types import Command
+
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+
+#: Parameters every rclpy node has; never reported as unknown.
+ROS_OWN_PARAMETERS = ("use_sim_time", "start_type_description_service")
+
+#: ``~/tree``: late joiners (``bt-nav watch``) get the current tree at once.
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class ConfigError(ValueError):
+    """A start-up configuration the node refuses to run with (the message is the one-line reason)."""
+
+
+# ---------------------------------------------------------------------------------------------- parameters
+def parameter_type(spec: P.ParamSpec) -> int:
+    """The ``rcl_interfaces/ParameterType`` of a table entry (from the type of its default)."""
+    if isinstance(spec.default, bool):
+        return ParameterType.PARAMETER_BOOL
+    if isinstance(spec.default, int):
+        return ParameterType.PARAMETER_INTEGER
+    if isinstance(spec.default, float):
+        return ParameterType.PARAMETER_DOUBLE
+    return ParameterType.PARAMETER_STRING
+
+
+def parameter_descriptor(spec: P.ParamSpec) -> ParameterDescriptor:
+    """What ``ros2 param describe`` shows for one table entry.
+
+    The range lets rclpy (and rqt's sliders) refuse out-of-range values before our own check runs;
+    parameters that shape the tree or the wiring (``live=False``) are read-only, so a change is
+    refused with rclpy's own "read-only" reason instead of being silently ignored.
+    """
+    kind = parameter_type(spec)
+    description = spec.description + (f" [{spec.unit}]" if spec.unit else "")
+    constraints: list[str] = []
+    if spec.choices:
+        extra = " (names such as randomizer, retreat, smart_pivot are accepted)" if spec.name == "maneuver" else ""
+        constraints.append(f"one of {', '.join(spec.choices)}{extra}")
+    if not spec.live:
+        constraints.append("read-only: set it at start-up (-p or a params file)")
+    descriptor = ParameterDescriptor(name=spec.name, type=kind, description=description,
+                                     additional_constraints="; ".join(constraints), read_only=not spec.live)
+    if kind == ParameterType.PARAMETER_DOUBLE and (spec.minimum is not None or spec.maximum is not None):
+        low = -math.inf if spec.minimum is None else float(spec.minimum)
+        high = math.inf if spec.maximum is None else float(spec.maximum)
+        descriptor.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+    elif kind == ParameterType.PARAMETER_INTEGER and (spec.minimum is not None or spec.maximum is not None):
+        low = INT64_MIN if spec.minimum is None else int(spec.minimum)
+        high = INT64_MAX if spec.maximum is None else int(spec.maximum)
+        descriptor.integer_range = [IntegerRange(from_value=low, to_value=high, step=0)]
+    return descriptor
+
+
+def _coerce_overrides(node: Node) -> None:
+    """Let ``-p safety_distance:=1`` mean 1.0, as :func:`bt_nav.params.coerce` does off-ROS.
+
+    rclpy types a parameter by its default and refuses an INTEGER override of a DOUBLE parameter;
+    users type integers on the command line all the time. rclpy has no public accessor for the
+    overrides, so this reaches into ``_parameter_overrides`` (absent: nothing to do).
+    """
+    overrides = getattr(node, "_parameter_overrides", None)
+    if not isinstance(overrides, dict):
+        return
+    for spec in P.PARAMS:
+        given = overrides.get(spec.name)
+        if given is not None and given.type_ == Parameter.Type.INTEGER and isinstance(spec.default, float):
+            overrides[spec.name] = Parameter(spec.name, Parameter.Type.DOUBLE, float(given.value))
+
+
+def unknown_overrides(node: Node) -> list[str]:
+    """Override names (``-p``, params file) that are no parameter of ours: most likely typos."""
+    overrides = getattr(node, "_parameter_overrides", None)
+    if not isinstance(overrides, dict):
+        return []
+    return sorted(name for name in overrides
+                  if name not in P.SPECS and name not in ROS_OWN_PARAMETERS and not name.startswith("qos_overrides."))
+
+
+def declare_parameters(node: Node) -> dict[str, P.Value]:
+    """Declare every parameter of :data:`bt_nav.params.PARAMS` and return their start-up values.
+
+    Raises:
+        ConfigError: with one line naming the parameter and why its value is refused (type or range);
+            the caller refuses to start rather than run a robot on a configuration nobody meant.
+    """
+    _coerce_overrides(node)
+    values: dict[str, P.Value] = {}
+    for spec in P.PARAMS:
+        try:
+            parameter = node.declare_parameter(spec.name, spec.default, parameter_descriptor(spec))
+        except InvalidParameterTypeException as exc:
+            raise ConfigError(f"parameter {spec.name}: {exc}") from None
+        except InvalidParameterValueException as exc:
+            raise ConfigError(f"parameter {spec.name}: {exc}") from None
+        values[spec.name] = parameter.value
+    return values
+
+
+# ---------------------------------------------------------------------------------------------- messages
+def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
+    """Heading (rad, about +z) of an orientation quaternion; NaN when it is not a rotation at all."""
+    # atan2 of two terms that both scale with |q|^2: correct for unnormalised quaternions too.
+    sin_term = 2.0 * (w * z + x * y)
+    cos_term = w * w + x * x - y * y - z * z
+    if not (math.isfinite(sin_term) and math.isfinite(cos_term)) or (sin_term == 0.0 and cos_term == 0.0):
+        return math.nan
+    return math.atan2(sin_term, cos_term)
+
+
+class CommandPublisher:
+    """``cmd_vel`` as ``geometry_msgs/Twist`` or ``TwistStamped`` (TurtleBot3 on Jazzy wants the latter).
+
+    The rest of the node publishes a :class:`~bt_nav.types.Command` and does not care which.
+    """
+
+    def __init__(self, node: Node, topic: str = "cmd_vel", *, stamped: bool = False,
+                 frame_id: str = "base_link", depth: int = 10) -> None:
+        from geometry_msgs.msg import Twist, TwistStamped
+
+        self.node = node
+        self.stamped = stamped
+        self.frame_id = frame_id
+        self._type = TwistStamped if stamped else Twist
+        self.publisher = node.create_publisher(self._type, topic, depth)
+        self.published = 0
+
+    def message(self, command: Command) -> Any:
+        """The message for ``command`` (stamped with the node clock when stamped)."""
+        msg = self._type()
+        twist = msg.twist if self.stamped else msg
+        twist.linear.x = float(command.linear)
+        twist.angular.z = float(command.angular)
+        if self.stamped:
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            msg.header.frame_id = self.frame_id
+        return msg
+
+    def publish(self, command: Command) -> None:
+        """Publish one command."""
+        self.publisher.publish(self.message(command))
+        self.published += 1
+
+    def wait_acked(self, timeout_sec: float) -> bool:
+        """Wait until every matched subscriber acknowledged what was published (reliable QoS)."""
+        from rclpy.duration import Duration
+
+        return bool(self.publisher.wait_for_all_acked(Duration(nanoseconds=int(timeout_sec * 1e9))))
+
+
+# ---------------------------------------------------------------------------------------------- DDS env
+def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
+    """A ROS domain in ``[low, high]`` derived from ``key`` (a pid, a worker name): stable per key."""
+    if isinstance(key, int):
+        return low + key % (high - low + 1)
+    return low + zlib.crc32(key.encode()) % (high - low + 1)
+
+
+def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """An environment whose DDS traffic stays on this machine, in ``domain_id``.
+
+    ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` keeps discovery off the network (a lab full of
+    robots on one Wi-Fi must not see our test nodes); the domain keeps concurrent runs apart.
+    ``ROS_LOCALHOST_ONLY`` is the pre-Jazzy spelling and is dropped to avoid the deprecation warning.
+    """
+    env = dict(os.environ if base is None else base)
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(int(domain_id))
+    return env
+
+
+# ---------------------------------------------------------------------------------------------- py_trees logs
+_PY_TREES_METHODS: dict[str, py_trees.logging.Level] = {
+    "debug": py_trees.logging.Level.DEBUG,
+    "info": py_trees.logging.Level.INFO,
+    "warning": py_trees.logging.Level.WARN,
+    "error": py_trees.logging.Level.ERROR,
+}
+_PADDING = re.compile(r"\s+:\s*$")
+
+
+def route_py_trees_logging(logger: Any) -> Callable[[], None]:
+    """Send py_trees' own log output through ``logger`` (an rclpy logger); returns an undo function.
+
+    py_trees prints through its own console module, so its messages would bypass ``/rosout``, the
+    log files and ``--log-level``. Every py_trees behaviour logs through
+    :class:`py_trees.logging.Logger`, so its four methods are replaced; the module-level
+    ``py_trees.logging.level`` still filters as before, and it is set to DEBUG only when the rclpy
+    logger is at DEBUG (py_trees logs every tick of every behaviour at that level).
+    """
+    from rclpy.logging import LoggingSeverity
+
+    module = py_trees.logging
+    saved = {name: getattr(module.Logger, name) for name in _PY_TREES_METHODS}
+    saved_level = module.level
+
+    def make(method: str, threshold: py_trees.logging.Level) -> Callable[[Any, str], None]:
+        def log(self: Any, msg: str) -> None:
+            if module.level <= threshold:
+                prefix = _PADDING.sub("", self.prefix)
+                getattr(logger, method)(f"{prefix}: {msg}" if prefix else msg)
+
+        log.__doc__ = f"py_trees {method} -> rclpy logger"
+        return log
+
+    for method, threshold in _PY_TREES_METHODS.items():
+        setattr(module.Logger, method, make(method, threshold))
+    try:
+        debug = logger.get_effective_level() <= LoggingSeverity.DEBUG
+    except Exception:  # a logger without levels (tests): keep py_trees' own setting
+        debug = saved_level <= py_trees.logging.Level.DEBUG
+    module.level = py_trees.logging.Level.DEBUG if debug else py_trees.logging.Level.INFO
+
+    def undo() -> None:
+        for method, original in saved.items():
+            setattr(module.Logger, method, original)
+        module.level = saved_level
+
+    return undo
