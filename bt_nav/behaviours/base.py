@@ -18,6 +18,7 @@ from py_trees.ports import BehaviourWithPorts, PortInformation
 from ..types import Clock, Command
 
 _DEFAULT_EVENTS = logging.getLogger("bt_nav")
+_STORAGE = py_trees.blackboard.Blackboard.storage  # the process-global key -> value dict
 
 
 class EventLogger(Protocol):
@@ -50,6 +51,25 @@ class Leaf(BehaviourWithPorts):
         self.clock: Clock = _no_clock
         self.events: EventLogger = _DEFAULT_EVENTS
         self.node: Any = None
+        self._port_keys: dict[str, str] = {}
+
+    def get_input(self, port_name: str, default: Any = None) -> Any:
+        """Read an input port: a direct blackboard lookup once the port's key is known.
+
+        py_trees' ``get_input`` re-resolves the remapping and re-checks the type on every read, which
+        was half the tick's cost (26 reads a tick). Values are type-checked where they are written
+        (output ports, the parameter table), so the fast path reads the resolved key directly and
+        falls back to the full ``get_input`` (defaults, errors) when the key holds nothing yet.
+        """
+        key = self._port_keys.get(port_name)
+        if key is None:
+            if port_name not in self.input_ports():
+                return super().get_input(port_name, default)
+            key = self._port_keys[port_name] = self._get_blackboard_key(port_name)
+        value = _STORAGE.get(key)
+        if value is None:
+            return super().get_input(port_name, default)
+        return value
 
     def setup(self, **kwargs: Any) -> None:
         """Take the clock, the event logger and (on the ROS path) the node."""

@@ -58,14 +58,19 @@ class ProcessScan(Leaf):
         self._sectors: Sectors = UNKNOWN_SECTORS
         self._error: str = ""
         self._status = "no scan yet"
+        self._config_inputs: tuple[Any, ...] = ()
+        self._config_cache = SectorConfig()
 
     def _config(self) -> SectorConfig:
-        return SectorConfig.from_degrees(
-            front_half_deg=self.get_input("front_half_angle_deg"),
-            side_center_deg=self.get_input("side_center_deg"),
-            side_half_deg=self.get_input("side_half_angle_deg"),
-            min_valid_beams=self.get_input("min_valid_beams"),
-        )
+        """The sector geometry from the parameters (rebuilt only when one of them changes)."""
+        inputs = (self.get_input("front_half_angle_deg"), self.get_input("side_center_deg"),
+                  self.get_input("side_half_angle_deg"), self.get_input("min_valid_beams"))
+        if inputs != self._config_inputs:
+            self._config_inputs = inputs
+            self._config_cache = SectorConfig.from_degrees(
+                front_half_deg=inputs[0], side_center_deg=inputs[1], side_half_deg=inputs[2],
+                min_valid_beams=inputs[3])
+        return self._config_cache
 
     def update(self) -> Status:
         """Always SUCCESS; the verdict goes to ``scan_ok``."""
