@@ -210,3 +210,19 @@ def coerce(spec: ParamSpec, value: Any) -> Any:
     if isinstance(spec.default, float) and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     return value
+
+
+def markdown_table() -> str:
+    """The parameter table as README markdown (tests/test_readme.py checks the README holds it)."""
+    rows = ["| parameter | default | unit | range | live | description |", "|---|---|---|---|---|---|"]
+    for spec in PARAMS:
+        if spec.choices:
+            allowed = " / ".join(spec.choices)
+        elif spec.minimum is not None or spec.maximum is not None:
+            allowed = f"{spec.minimum:g} .. {spec.maximum:g}"
+        else:
+            allowed = ""
+        default = f"`{spec.default}`" if not isinstance(spec.default, str) else f'`"{spec.default}"`'
+        rows.append(f"| `{spec.name}` | {default} | {spec.unit} | {allowed} | {'yes' if spec.live else 'no'} "
+                    f"| {spec.description} |")
+    return "\n".join(rows) + "\n"
