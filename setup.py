@@ -9,8 +9,24 @@ console scripts (declared in pyproject.toml) land in lib/bt_nav through setup.cf
 from glob import glob
 
 from setuptools import setup
+from setuptools.dist import Distribution
 
 PACKAGE = "bt_nav"
+
+
+class ColconDistribution(Distribution):
+    """Keeps ``python_requires`` a plain string, which colcon needs.
+
+    colcon (colcon-python-setup-py) reads the configured distribution back with
+    ``ast.literal_eval(repr(dist.__dict__))``, and setuptools stores pyproject's ``requires-python``
+    as a ``SpecifierSet``, whose repr is no literal: ``colcon build`` then fails with "invalid syntax".
+    """
+
+    def parse_config_files(self, *args, **kwargs):  # noqa: D102
+        super().parse_config_files(*args, **kwargs)
+        for owner in (self, self.metadata):
+            if getattr(owner, "python_requires", None) is not None:
+                owner.python_requires = str(owner.python_requires)
 
 setup(
     name=PACKAGE,
@@ -25,4 +41,5 @@ setup(
         (f"share/{PACKAGE}/sim/worlds", glob("sim/worlds/*.yaml")),
     ],
     zip_safe=False,
+    distclass=ColconDistribution,
 )

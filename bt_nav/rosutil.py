@@ -110,8 +110,14 @@ def declare_parameters(node: Node) -> dict[str, P.Value]:
             the caller refuses to start rather than run a robot on a configuration nobody meant.
     """
     _coerce_overrides(node)
+    overrides = getattr(node, "_parameter_overrides", None)
     values: dict[str, P.Value] = {}
     for spec in P.PARAMS:
+        given = overrides.get(spec.name) if isinstance(overrides, dict) else None
+        if given is not None:  # our table's wording ("must be >= 0.05 m, got -1.0") beats rclpy's
+            reason = spec.check(P.coerce(spec, given.value))
+            if reason:
+                raise ConfigError(reason)
         try:
             parameter = node.declare_parameter(spec.name, spec.default, parameter_descriptor(spec))
         except InvalidParameterTypeException as exc:
@@ -195,7 +201,37 @@ def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, 
     return env
 
 
-# ---------------------------------------------------------------------------------------------- py_trees logs
+# ---------------------------------------------------------------------------------------------- logging
+class EventLog:
+    """An rclpy logger that may be called with any severity from any line.
+
+    rclpy identifies a log call by its call site and raises ValueError ("Logger severity cannot be
+    changed between calls") when one site logs at two severities, e.g. ``log = events.info if ok else
+    events.warning; log(msg)``. Shared code (the leaves, py_trees) cannot be expected to know that,
+    so everything it logs goes through these four methods: one fixed call site per severity. The
+    price: the file/line rclpy records is this adapter's, not the leaf's (the messages name the leaf).
+    """
+
+    def __init__(self, logger: Any) -> None:
+        self.logger = logger
+
+    def debug(self, msg: str) -> None:
+        """DEBUG."""
+        self.logger.debug(str(msg))
+
+    def info(self, msg: str) -> None:
+        """INFO."""
+        self.logger.info(str(msg))
+
+    def warning(self, msg: str) -> None:
+        """WARN."""
+        self.logger.warning(str(msg))
+
+    def error(self, msg: str) -> None:
+        """ERROR."""
+        self.logger.error(str(msg))
+
+
 _PY_TREES_METHODS: dict[str, py_trees.logging.Level] = {
     "debug": py_trees.logging.Level.DEBUG,
     "info": py_trees.logging.Level.INFO,
@@ -216,6 +252,7 @@ def route_py_trees_logging(logger: Any) -> Callable[[], None]:
     """
     from rclpy.logging import LoggingSeverity
 
+    sink = logger if isinstance(logger, EventLog) else EventLog(logger)
     module = py_trees.logging
     saved = {name: getattr(module.Logger, name) for name in _PY_TREES_METHODS}
     saved_level = module.level
@@ -224,7 +261,7 @@ def route_py_trees_logging(logger: Any) -> Callable[[], None]:
         def log(self: Any, msg: str) -> None:
             if module.level <= threshold:
                 prefix = _PADDING.sub("", self.prefix)
-                getattr(logger, method)(f"{prefix}: {msg}" if prefix else msg)
+                getattr(sink, method)(f"{prefix}: {msg}" if prefix else msg)
 
         log.__doc__ = f"py_trees {method} -> rclpy logger"
         return log
@@ -232,7 +269,7 @@ def route_py_trees_logging(logger: Any) -> Callable[[], None]:
     for method, threshold in _PY_TREES_METHODS.items():
         setattr(module.Logger, method, make(method, threshold))
     try:
-        debug = logger.get_effective_level() <= LoggingSeverity.DEBUG
+        debug = sink.logger.get_effective_level() <= LoggingSeverity.DEBUG
     except Exception:  # a logger without levels (tests): keep py_trees' own setting
         debug = saved_level <= py_trees.logging.Level.DEBUG
     module.level = py_trees.logging.Level.DEBUG if debug else py_trees.logging.Level.INFO

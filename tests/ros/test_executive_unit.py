@@ -1,0 +1,148 @@
+"""The executive's pieces in-process (no subprocess, no spinning): stats, helpers, last-line checks."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from types import SimpleNamespace
+from typing import Any
+
+import py_trees
+import pytest
+import rclpy.logging
+from rcl_interfaces.msg import ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from bt_nav import params as P
+from bt_nav.executive import Executive, TickStats
+from bt_nav.rosutil import EventLog, domain_id_for, parameter_descriptor, route_py_trees_logging, yaw_from_quaternion
+from bt_nav.types import Command
+
+
+@pytest.fixture
+def executive(ros_context: Any) -> Iterator[Executive]:
+    """An Executive on an in-process node that is never spun (its own name: no clash with subprocesses)."""
+    node = Node("bt_nav_executive_unit", context=ros_context, start_parameter_services=False)
+    try:
+        yield Executive(node)
+    finally:
+        node.destroy_node()
+
+
+def test_tick_stats_summary() -> None:
+    stats = TickStats(period=0.05)
+    for duration in [0.001] * 98 + [0.002, 0.06]:
+        stats.record(duration)
+    assert (stats.ticks, stats.overruns) == (100, 1)
+    line = TickStats.describe(stats.take_window())
+    assert line == "tick ms min/mean/p99/max 1.00/1.60/2.00/60.00 over 100"
+    assert stats.window == [] and len(stats.history) == 100
+    assert TickStats.describe([]) == "no ticks"
+    assert "overruns 1 (period 50.0 ms), exceptions 2" in stats.counters(faults=2)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.5, -2.0, math.pi - 1e-9])
+def test_yaw_from_quaternion(yaw: float) -> None:
+    assert yaw_from_quaternion(0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)) == pytest.approx(yaw)
+    assert yaw_from_quaternion(0.0, 0.0, 3 * math.sin(yaw / 2), 3 * math.cos(yaw / 2)) == pytest.approx(yaw)
+
+
+def test_yaw_from_a_non_rotation_is_nan() -> None:
+    assert math.isnan(yaw_from_quaternion(0.0, 0.0, 0.0, 0.0))
+    assert math.isnan(yaw_from_quaternion(math.nan, 0.0, 0.0, 1.0))
+
+
+def test_descriptors_follow_the_table() -> None:
+    maneuver = parameter_descriptor(P.SPECS["maneuver"])
+    assert maneuver.read_only and maneuver.type == ParameterType.PARAMETER_STRING
+    assert "one of none, A, B, C" in maneuver.additional_constraints
+    distance = parameter_descriptor(P.SPECS["safety_distance"])
+    assert not distance.read_only and distance.description.endswith("[m]")
+    assert (distance.floating_point_range[0].from_value, distance.floating_point_range[0].to_value) == (0.05, 10.0)
+    retries = parameter_descriptor(P.SPECS["evaluation_retries"])
+    assert retries.type == ParameterType.PARAMETER_INTEGER and retries.integer_range[0].to_value == 100
+
+
+def test_domain_ids_stay_in_range() -> None:
+    assert {domain_id_for(pid) for pid in range(1000)} == set(range(100, 200))
+    assert 100 <= domain_id_for("gw3") <= 199
+
+
+def _log_either(log: Any, ok: bool) -> None:
+    (log.info if ok else log.warning)("same call site, two severities")
+
+
+def test_event_log_allows_two_severities_from_one_call_site() -> None:
+    raw = rclpy.logging.get_logger("bt_nav_test_events")
+    _log_either(raw, True)
+    with pytest.raises(ValueError, match="severity cannot be changed"):
+        _log_either(raw, False)  # why EventLog exists: a leaf doing this would raise inside the tick
+    events = EventLog(rclpy.logging.get_logger("bt_nav_test_events2"))
+    _log_either(events, True)
+    _log_either(events, False)
+
+
+def test_py_trees_logging_is_routed_and_restored() -> None:
+    class Sink:
+        def __init__(self) -> None:
+            self.lines: list[tuple[str, str]] = []
+
+        def get_effective_level(self) -> int:
+            return 20  # INFO
+
+        def debug(self, msg: str) -> None:
+            self.lines.append(("debug", msg))
+
+        def info(self, msg: str) -> None:
+            self.lines.append(("info", msg))
+
+        def warning(self, msg: str) -> None:
+            self.lines.append(("warning", msg))
+
+        def error(self, msg: str) -> None:
+            self.lines.append(("error", msg))
+
+    sink = Sink()
+    original = py_trees.logging.Logger.warning
+    undo = route_py_trees_logging(sink)
+    try:
+        logger = py_trees.logging.Logger("Leaf")
+        logger.debug("hidden at INFO")
+        logger.info("hello")
+        logger.warning("careful")
+        logger.error("broken")
+    finally:
+        undo()
+    assert sink.lines == [("info", "Leaf: hello"), ("warning", "Leaf: careful"), ("error", "Leaf: broken")]
+    assert py_trees.logging.Logger.warning is original
+
+
+def test_vet_stops_anything_the_robot_may_not_do(executive: Executive) -> None:
+    assert executive.vet(Command(0.1, 0.0, "x")).is_zero  # disarmed
+    executive.core.request_arm(True)
+    assert executive.vet(Command(0.1, 0.5, "x")) == Command(0.1, 0.5, "x")
+    assert executive.vet(Command(math.nan, 0.0, "x")).is_zero
+    assert executive.vet(Command(0.5, 0.0, "x")).is_zero  # beyond max_linear_speed
+    assert executive.vet(Command(0.0, -2.5, "x")).is_zero  # beyond the turn rates
+    assert executive.stats.vetoed == 4
+
+
+def test_unconvertible_scan_is_dropped_and_counted(executive: Executive) -> None:
+    executive._on_scan(SimpleNamespace(ranges=[1.0]))  # no angle fields at all
+    executive._on_scan(SimpleNamespace(angle_min="x", angle_max=0.0, angle_increment=0.1, range_min=0.1,
+                                       range_max=3.0, ranges=[1.0]))
+    assert (executive.scans, executive.bad_scans) == (0, 2)
+    assert not executive.core.board.exists("/scan") or executive.core.value("scan") is None
+
+
+def test_parameter_callbacks_check_then_apply(executive: Executive) -> None:
+    refused = executive._on_set_parameters([Parameter("close_distance", value=0.9)])
+    assert not refused.successful and "far_distance" in refused.reason
+    together = [Parameter("far_distance", value=1.2), Parameter("close_distance", value=0.9)]
+    assert executive._on_set_parameters(together).successful
+    assert executive.core.params["close_distance"] == 0.3  # checked only: nothing applied yet
+    executive._after_set_parameters(together)
+    assert (executive.core.params["close_distance"], executive.core.params["far_distance"]) == (0.9, 1.2)
+    assert executive.core.value("far_distance") == 1.2  # the tree sees it
+    assert executive._on_set_parameters([Parameter("use_sim_time", value=True)]).successful

@@ -1,0 +1,149 @@
+"""The simulator node over real DDS: clock, sensor metadata, motion, collisions, bad input, followers."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+from simtools import Probe, Proc, stamp_of, wait_until, yaw_of
+
+SPAWN = (-0.7, 0.0)  # stage_4's spawn, facing +x
+# The inner wall at x = 0.204 (0.15 thick) has its face at x = 0.129: a robot (r = 0.12) spawned at
+# x = -0.3 touches it after 0.309 m.
+WALL_FACE = 0.204 - 0.075
+
+
+@pytest.fixture
+def sim(ros_context: Any) -> Iterator[Callable[..., tuple[Proc, Probe]]]:
+    """Factory: start ``bt-nav sim <args>`` and a probe; both stopped at teardown."""
+    started: list[tuple[Proc, Probe]] = []
+
+    def start(*args: str, stamped: bool = False) -> tuple[Proc, Probe]:
+        probe = Probe(ros_context, stamped=stamped)
+        proc = Proc("sim", *args)
+        started.append((proc, probe))
+        wait_until(lambda: probe.now() > 0.0 and len(probe.truth) > 0, 20.0, "the simulator's first messages",
+                   proc.output)
+        return proc, probe
+
+    yield start
+    for proc, probe in started:
+        proc.stop()
+        probe.close()
+
+
+@pytest.mark.parametrize("profile, range_max, period", [("lab", 3.5, 0.2), ("homework", 10.0, 0.1)])
+def test_clock_scan_and_odometry(sim: Callable[..., tuple[Proc, Probe]], profile: str, range_max: float,
+                                 period: float) -> None:
+    proc, probe = sim("--profile", profile)
+    probe.wait_sim_time(probe.now() + 1.5)
+    with probe.lock:
+        clock = list(probe.clock)
+        scans = list(probe.scans)
+        odom = list(probe.odom)
+        truth = list(probe.truth)
+    assert proc.alive(), proc.output()
+    assert all(b > a for a, b in zip(clock, clock[1:], strict=False)), "/clock must only move forward"
+    assert len(scans) >= 5
+    scan = scans[-1]
+    assert len(scan.ranges) == 360
+    assert scan.angle_min == 0.0
+    assert scan.angle_increment == pytest.approx(2 * math.pi / 360, rel=1e-6)
+    assert scan.angle_max == pytest.approx(2 * math.pi * 359 / 360, rel=1e-6)
+    assert (scan.range_min, scan.range_max) == pytest.approx((0.12, range_max))
+    assert scan.scan_time == pytest.approx(period)
+    assert scan.header.frame_id == "base_scan"
+    stamps = [stamp_of(s) for s in scans]
+    assert [round(b - a, 6) for a, b in zip(stamps, stamps[1:], strict=False)] == [period] * (len(stamps) - 1)
+    # stage_4 at the spawn: the wall at x = 0.129 is 0.829 m straight ahead (beam 0), nothing is beyond range.
+    assert scan.ranges[0] == pytest.approx(WALL_FACE - SPAWN[0], abs=0.05)
+    assert all(math.isfinite(r) and scan.range_min <= r <= range_max for r in scan.ranges[:10])
+
+    assert odom[-1].header.frame_id == "odom" and odom[-1].child_frame_id == "base_footprint"
+    assert truth[-1].header.frame_id == "world"
+    assert (truth[-1].pose.pose.position.x, truth[-1].pose.pose.position.y) == pytest.approx(SPAWN)
+    assert (odom[-1].pose.pose.position.x, odom[-1].pose.pose.position.y) == pytest.approx((0.0, 0.0))
+    odom_stamps = [stamp_of(m) for m in odom]
+    gaps = [b - a for a, b in zip(odom_stamps, odom_stamps[1:], strict=False)]
+    assert max(gaps) <= 0.041 and sum(gaps) / len(gaps) == pytest.approx(1 / 30, rel=0.1)
+
+
+def test_cmd_vel_moves_the_robot(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim("--ros-args", "-p", "noise:=false")
+    start = probe.now()
+    probe.command = (0.2, 0.4)
+    probe.wait_sim_time(start + 2.0)
+    probe.command = (0.0, 0.0)
+    probe.wait_sim_time(probe.now() + 0.5)
+    truth = probe.last_truth().pose.pose
+    odom = probe.odom[-1].pose.pose
+    assert proc.alive(), proc.output()
+    moved = math.hypot(truth.position.x - SPAWN[0], truth.position.y - SPAWN[1])
+    assert 0.3 < moved < 0.5, moved
+    assert truth.position.y > 0.01 and yaw_of(truth) > 0.5  # turning left while driving
+    # Without noise, odometry is exact: the pose relative to the start, in the odom frame.
+    assert (odom.position.x, odom.position.y) == pytest.approx((truth.position.x - SPAWN[0], truth.position.y),
+                                                                abs=1e-6)
+    assert yaw_of(odom) == pytest.approx(yaw_of(truth), abs=1e-6)
+
+
+def test_one_collision_event_per_contact(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim("--ros-args", "-p", "spawn_x:=-0.3", "-p", "noise:=false")
+    probe.command = (0.22, 0.0)
+    wait_until(lambda: len(probe.collisions) >= 1, 20.0, "a collision event", proc.output)
+    probe.wait_sim_time(probe.now() + 2.0)  # keep pushing against the wall: still one event
+    assert len(probe.collisions) == 1, probe.collisions
+    event = probe.collisions[0]
+    assert set(event) == {"t", "x", "y", "yaw"}
+    assert event["x"] == pytest.approx(WALL_FACE - 0.12, abs=1e-3) and event["y"] == pytest.approx(0.0)
+    assert probe.last_truth().pose.pose.position.x == pytest.approx(WALL_FACE - 0.12, abs=1e-3)  # no penetration
+    probe.command = (-0.1, 0.0)  # back off, then drive in again: a second event
+    probe.wait_sim_time(probe.now() + 1.0)
+    probe.command = (0.22, 0.0)
+    wait_until(lambda: len(probe.collisions) >= 2, 20.0, "a second collision event", proc.output)
+    assert probe.collisions[1]["t"] > event["t"] + 1.0
+
+
+def test_bad_commands_never_crash_it(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim()
+    probe.command = (math.nan, math.inf)
+    probe.wait_sim_time(probe.now() + 1.0)
+    assert proc.alive(), proc.output()
+    assert probe.last_truth().pose.pose.position.x == pytest.approx(SPAWN[0])  # a bad command is a stop
+    probe.command = (0.2, 0.0)
+    probe.wait_sim_time(probe.now() + 1.0)
+    assert probe.last_truth().pose.pose.position.x > SPAWN[0] + 0.1
+    assert any("non-finite cmd_vel" in line for line in proc.stderr)
+
+
+def test_twist_stamped_commands(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim("--ros-args", "-p", "cmd_vel_stamped:=true", stamped=True)
+    probe.command = (0.2, 0.0)
+    probe.wait_sim_time(probe.now() + 1.0)
+    assert probe.last_truth().pose.pose.position.x > SPAWN[0] + 0.1, proc.output()
+
+
+def test_sim_time_waits_for_a_holding_follower(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim()
+    held_at = probe.now()
+    probe.sync(who="test", t=held_at, hold=True)
+    wait_until(lambda: any("following test" in line for line in proc.stderr), 10.0, "the sim to follow", proc.output)
+    frozen = probe.now()
+    import time
+
+    time.sleep(0.5)  # wall time passes, sim time must not (beyond what was in flight)
+    assert probe.now() == frozen
+    assert frozen - held_at < 1.0
+    probe.sync(who="test", t=frozen, hold=False)  # released, but lagging: at most max_lag (0.1 s) ahead
+    time.sleep(0.3)
+    assert probe.now() <= frozen + 0.1 + 1e-6
+    probe.sync(who="test", leave=True)
+    probe.wait_sim_time(frozen + 1.0)
+
+
+def test_refuses_an_unknown_profile() -> None:
+    proc = Proc("sim", "--ros-args", "-p", "profile:=gazebo")
+    assert proc.wait(20.0) == 1
+    assert "unknown profile 'gazebo'" in proc.output()

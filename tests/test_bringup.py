@@ -1,0 +1,126 @@
+"""The node table of bt_nav.bringup, its command lines, and the demo's tree-tip parser (no DDS)."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import pytest
+
+from bt_nav import bringup
+from bt_nav.bringup import NodeSpec, choose_domain_id, nodes, param_arg, parse_assignments
+from bt_nav.demo import tip_from_snapshot
+
+
+def _by_name(specs: list[NodeSpec]) -> dict[str, NodeSpec]:
+    return {spec.executable: spec for spec in specs}
+
+
+def test_homework_profile() -> None:
+    specs = _by_name(nodes("homework", maneuver="B", seed=7, rtf=0.0))
+    assert set(specs) == {"sim", "executive"}
+    exe = specs["executive"]
+    assert exe.name == "bt_nav_executive"
+    assert exe.remappings == [("arm", "/reactive_control/activate"),
+                              ("evaluate_mission", "/reactive_control/evaluate_mission")]
+    assert exe.parameters["use_sim_time"] is True
+    assert (exe.parameters["maneuver"], exe.parameters["random_seed"]) == ("B", 7)
+    assert all(path.endswith("config/homework.yaml") for path in exe.parameter_files)
+    sim = specs["sim"]
+    assert (sim.name, sim.parameters["world"], sim.parameters["profile"]) == ("bt_nav_sim", "stage_4", "homework")
+    assert (sim.parameters["seed"], sim.parameters["real_time_factor"]) == (7, 0.0)
+
+
+def test_eval_adds_the_referee_and_lab_remaps_arm() -> None:
+    specs = _by_name(nodes("eval", results_json="/tmp/r.json"))
+    assert list(specs) == ["sim", "executive", "referee"]  # the referee last: the demo starts it last
+    referee = specs["referee"]
+    assert referee.name == "bt_nav_referee"
+    assert referee.parameters == {"use_sim_time": True, "wait_for_cmd_vel": True, "json": "/tmp/r.json"}
+    lab = _by_name(nodes("lab", world="corridor"))
+    assert lab["executive"].remappings == [("arm", "toggle_navigation")]
+    assert (lab["sim"].parameters["profile"], lab["sim"].parameters["world"]) == ("lab", "corridor")
+    real_robot = nodes("lab", include_sim=False)
+    assert [s.executable for s in real_robot] == ["executive"]
+    assert real_robot[0].parameters["use_sim_time"] is False
+
+
+def test_stamped_commands_reach_the_simulator_and_referee() -> None:
+    specs = _by_name(nodes("eval", executive={"cmd_vel_stamped": True}))
+    assert specs["sim"].parameters["cmd_vel_stamped"] is True
+    assert specs["referee"].parameters["cmd_vel_stamped"] is True
+
+
+def test_bad_profiles() -> None:
+    with pytest.raises(ValueError, match="unknown profile"):
+        nodes("gazebo")
+    with pytest.raises(ValueError, match="referee"):
+        nodes("lab", with_referee=True)
+
+
+def test_command_line() -> None:
+    spec = NodeSpec("sim", "bt_nav_sim", {"world": "stage_4", "real_time_factor": 2.0, "seed": 3, "noise": False},
+                    [("cmd_vel", "/robot/cmd_vel")], parameter_files=["/x.yaml"])
+    assert spec.command("py") == [
+        "py", "-m", "bt_nav.cli", "sim", "--ros-args", "-r", "__node:=bt_nav_sim", "--params-file", "/x.yaml",
+        "-p", 'world:="stage_4"', "-p", "real_time_factor:=2.0", "-p", "seed:=3", "-p", "noise:=false",
+        "-r", "cmd_vel:=/robot/cmd_vel"]
+    assert spec.command()[0] == sys.executable
+
+
+@pytest.mark.parametrize("value, text", [
+    (True, "true"), (3, "3"), (1.0, "1.0"), (math.nan, ".nan"), (-math.inf, "-.inf"), ("1.5", '"1.5"'),
+    ("A", '"A"'), ([1, 2], "[1, 2]"),
+])
+def test_param_arg_types(value: object, text: str) -> None:
+    assert param_arg("p", value) == f"p:={text}"
+
+
+def test_parse_assignments() -> None:
+    assert parse_assignments(["a=1", "b=0.5", "c=x", "d=true"]) == {"a": 1, "b": 0.5, "c": "x", "d": True}
+    with pytest.raises(ValueError):
+        parse_assignments(["novalue"])
+
+
+def test_domain_id(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert choose_domain_id(42) == 42
+    monkeypatch.setenv("ROS_DOMAIN_ID", "7")
+    assert choose_domain_id() == 7
+    monkeypatch.delenv("ROS_DOMAIN_ID")
+    assert all(100 <= choose_domain_id() <= 200 for _ in range(50))
+
+
+def test_child_env_is_local(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ROS_LOCALHOST_ONLY", "1")
+    env = bringup.child_env(123)
+    assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST" and env["ROS_DOMAIN_ID"] == "123"
+    assert "ROS_LOCALHOST_ONLY" not in env
+
+
+SNAPSHOT = """\
+[-] Mission [maneuver C Smart Pivot] [*]
+    [-] Inputs [✓]
+        --> ArmService [✓] -- armed
+        --> ProcessScan [✓] -- ok
+    [o] Priorities [*]
+        [-] MissionOver [✕]
+            --> DeadlineReached? [✕] -- 49.5 s left
+            --> StopAtDeadline [-]
+        [-] ManeuverC_SmartPivot [{pivot}]
+            [o] Engaged? [{engaged}]
+                --> InProgress? [✕]
+                --> FrontTooClose? [{engaged}]
+            --> SmartPivot [{pivot_leaf}] -- +90 deg to go
+        [-] Far [{far}]
+            --> ObstacleFar? [{far_cond}] -- far
+            --> TurnAway [{far}] -- turning left
+        --> FullSpeed [-]
+"""
+
+
+def test_tip_from_snapshot() -> None:
+    turning = SNAPSHOT.format(pivot="✕", engaged="✕", pivot_leaf="-", far="*", far_cond="✓")
+    assert tip_from_snapshot(turning) == "TurnAway"
+    pivoting = SNAPSHOT.format(pivot="*", engaged="✓", pivot_leaf="*", far="-", far_cond="-")
+    assert tip_from_snapshot(pivoting) == "SmartPivot"
+    assert tip_from_snapshot("not a tree") == ""

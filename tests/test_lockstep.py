@@ -1,0 +1,96 @@
+"""The lock-step runner: the real tree and the simulator stepped together, judged by the referee."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from bt_nav.lockstep import main, run_mission
+from bt_nav.sim.plot import BRANCHES, Trajectory, plot_run
+from bt_nav.trace import read_trace
+
+
+def test_same_seed_same_run() -> None:
+    a = run_mission("stage_4", "A", seed=3)
+    b = run_mission("stage_4", "A", seed=3)
+    assert a.results == b.results
+    assert a.branch_ticks == b.branch_ticks
+    np.testing.assert_array_equal(a.trajectory.x, b.trajectory.x)
+    np.testing.assert_array_equal(a.trajectory.yaw, b.trajectory.yaw)
+    c = run_mission("stage_4", "A", seed=4)
+    assert not np.array_equal(a.trajectory.x, c.trajectory.x), "the seed matters"
+
+
+def test_stage_4_mission_passes() -> None:
+    result = run_mission("stage_4", "none", seed=0)
+    assert result.passed, result.report_lines
+    assert result.collisions == 0
+    assert result.report_lines[-1] == "overall: PASSED"
+    assert result.active_time == pytest.approx(39.5, abs=0.1)
+    assert 0.0 < result.efficiency <= 1.0
+    assert result.travelled >= 8.0
+    assert set(result.branch_ticks) <= set(BRANCHES)
+    times = result.results["times"]
+    assert times["activated"] == 5.0 and times["deactivation_requested"] == 20.0
+    assert times["evaluation_called"] == pytest.approx(54.5, abs=0.06)
+    assert result.sim_time == pytest.approx(57.5)
+
+
+def test_driving_into_a_wall_is_caught_by_the_referee() -> None:
+    """Thresholds so small the robot never reacts: it hits the wall, and the referee must fail it."""
+    result = run_mission("stage_4", "none", seed=0, overrides={"close_distance": 0.05, "far_distance": 0.06},
+                         jitter=None)
+    assert result.collisions >= 1
+    assert not result.passed
+    assert "no collision" in result.failed_checks
+    assert result.report_lines[-1] == "overall: FAILED"
+    event = result.results["collision_events"][0]
+    assert 5.0 < event["t"] < 20.0
+
+
+def test_merged_physics_steps_match_fixed_steps() -> None:
+    merged = run_mission("stage_4", "C", seed=1, duration=20.0)
+    fixed = run_mission("stage_4", "C", seed=1, duration=20.0, merge_steps=False)
+    gap = np.hypot(merged.trajectory.x - fixed.trajectory.x, merged.trajectory.y - fixed.trajectory.y)
+    assert gap.max() < 1e-4
+    assert merged.branch_ticks == fixed.branch_ticks
+
+
+def test_lab_profile_and_bad_arguments() -> None:
+    result = run_mission("empty_room", "none", seed=0, profile="lab", duration=8.0)
+    assert result.travelled > 0.3
+    with pytest.raises(ValueError, match="profile"):
+        run_mission(profile="gazebo")
+    with pytest.raises(ValueError, match="unknown parameter"):
+        run_mission(overrides={"no_such_parameter": 1})
+
+
+def test_cli_writes_trace_plot_and_json(tmp_path, capsys) -> None:
+    trace, picture, results = tmp_path / "trace.jsonl", tmp_path / "run.png", tmp_path / "results.json"
+    code = main(["--world", "stage_4", "--maneuver", "B", "--seed", "2", "--trace", str(trace),
+                 "--plot", str(picture), "--json", str(results)])
+    out = capsys.readouterr().out
+    data = json.loads(results.read_text())
+    assert code == (0 if data["passed"] else 1)
+    assert "overall:" in out and "maneuver B, seed 2" in out
+    assert picture.stat().st_size > 10_000
+    header, ticks = read_trace(trace)
+    assert header["maneuver"] == "B" and len(ticks) > 1000
+    assert "pose" in ticks[0]
+    assert len(data["trajectory"]["x"]) == len(data["trajectory"]["branch"]) > 1000
+
+
+def test_plot_accepts_a_plain_dict_trajectory(tmp_path) -> None:
+    """The ROS demo records topics into plain arrays; the same function draws them."""
+    from bt_nav.sim import load_world
+
+    t = np.linspace(0.0, 10.0, 50)
+    trajectory = {"t": t, "x": np.cos(t / 3), "y": np.sin(t / 3), "yaw": t / 3 + np.pi / 2,
+                  "branch": ["FullSpeed"] * 20 + ["Maneuver"] * 10 + ["TurnAway"] * 20}
+    results = {"passed": False, "travelled": 3.3, "collisions": 1, "collision_events": [{"x": 1.0, "y": 0.0}],
+               "checks": [{"name": "no collision", "passed": False}]}
+    path = plot_run(load_world("empty_room"), trajectory, results, tmp_path / "sub" / "run.svg")
+    assert path.exists() and "<svg" in path.read_text()[:500]
+    assert Trajectory.from_dict(trajectory).segments_of("Maneuver") == [(20, 30)]

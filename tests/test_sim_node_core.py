@@ -1,0 +1,115 @@
+"""The simulator node's ROS-free parts: SimCore's clock and schedules, odometry, collision edges, followers."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bt_nav.sim.node import Followers, SimConfig, SimCore, split_ros_args
+
+MS = 1_000_000
+
+
+def _run(core: SimCore, v: float, w: float, seconds: float) -> list:
+    return [core.advance(v, w) for _ in range(round(seconds / (core.step_ns * 1e-9)))]
+
+
+@pytest.mark.parametrize("profile, scans_per_s", [("homework", 10), ("lab", 5)])
+def test_schedules_land_on_the_grid(profile: str, scans_per_s: int) -> None:
+    core = SimCore(SimConfig(profile=profile))
+    first = core.outputs()
+    assert first.t_ns == 0 and first.scan is not None and first.odom
+    outs = _run(core, 0.0, 0.0, 10.0)
+    assert core.t_ns == 10_000 * MS  # integer nanoseconds: no drift after 1000 steps
+    scan_times = [o.t_ns for o in outs if o.scan is not None]
+    assert len(scan_times) == 10 * scans_per_s
+    assert {b - a for a, b in zip(scan_times, scan_times[1:], strict=False)} == {1000 * MS // scans_per_s}
+    odom_times = [o.t_ns for o in outs if o.odom]
+    assert len(odom_times) == 300  # 30 Hz on a 100 Hz grid: gaps of 30 and 40 ms
+    assert {b - a for a, b in zip(odom_times, odom_times[1:], strict=False)} == {30 * MS, 40 * MS}
+
+
+def test_noiseless_odometry_is_the_pose_relative_to_the_start() -> None:
+    core = SimCore(SimConfig(noise=False, spawn_yaw=math.pi / 2))
+    _run(core, 0.2, 0.5, 3.0)
+    sx, sy, syaw = core.spawn
+    dx, dy = core.state.x - sx, core.state.y - sy
+    # odom frame = start pose: rotate the world displacement by -spawn_yaw
+    ex, ey = math.cos(-syaw) * dx - math.sin(-syaw) * dy, math.sin(-syaw) * dx + math.cos(-syaw) * dy
+    assert (core.odom_x, core.odom_y) == pytest.approx((ex, ey), abs=1e-9)
+    assert core.odom_yaw == pytest.approx(math.remainder(core.state.yaw - syaw, 2 * math.pi), abs=1e-9)
+
+
+def test_noisy_odometry_drifts_a_little_and_is_seeded() -> None:
+    a, b = SimCore(SimConfig(seed=3)), SimCore(SimConfig(seed=3))
+    _run(a, 0.2, 0.3, 5.0)
+    _run(b, 0.2, 0.3, 5.0)
+    assert (a.odom_x, a.odom_y, a.odom_yaw) == (b.odom_x, b.odom_y, b.odom_yaw)
+    truth = math.hypot(a.state.x - a.spawn[0], a.state.y - a.spawn[1])
+    assert 0.0 < abs(math.hypot(a.odom_x, a.odom_y) - truth) < 0.02 * truth
+
+
+def test_collision_events_are_rising_edges() -> None:
+    core = SimCore(SimConfig(noise=False, spawn_x=-0.3))  # 0.309 m in front of the wall at x = 0.129
+    outs = _run(core, 0.22, 0.0, 4.0)
+    assert sum(o.collision for o in outs) == 1 and core.collisions == 1
+    assert core.state.x == pytest.approx(0.129 - 0.12, abs=1e-6)
+    _run(core, -0.1, 0.0, 1.0)
+    outs = _run(core, 0.22, 0.0, 2.0)
+    assert sum(o.collision for o in outs) == 1 and core.collisions == 2
+
+
+def test_nan_commands_are_stops() -> None:
+    core = SimCore(SimConfig(noise=False))
+    _run(core, math.nan, math.inf, 1.0)
+    assert (core.state.x, core.state.y) == core.spawn[:2]
+
+
+def test_bad_config_is_refused() -> None:
+    with pytest.raises(ValueError, match="unknown profile"):
+        SimCore(SimConfig(profile="gazebo"))
+    with pytest.raises(ValueError, match="physics_rate_hz"):
+        SimCore(SimConfig(physics_rate_hz=0.0))
+    with pytest.raises(FileNotFoundError, match="bundled worlds"):
+        SimCore(SimConfig(world="atlantis"))
+
+
+def test_followers_bound_the_lead_and_time_out() -> None:
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    assert f.blocking(10**9, wall=0.0) == (None, [])
+    assert f.report("cmd_vel", 1000 * MS, False, wall=0.0)  # joins
+    assert f.blocking(1050 * MS, wall=0.1) == (None, [])  # exactly one period ahead is allowed
+    assert f.blocking(1060 * MS, wall=0.1) == ("cmd_vel", [])
+    assert f.blocking(1060 * MS, wall=1.2) == (None, ["cmd_vel"])  # silent too long: dropped
+    assert not f.any_active()
+    assert f.report("cmd_vel", 1070 * MS, False, wall=1.3)  # speaks again: rejoins
+    assert f.blocking(1130 * MS, wall=1.3) == ("cmd_vel", [])
+
+
+def test_followers_learn_a_longer_period() -> None:
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    for k in range(5):  # a 10 Hz follower
+        f.report("slow", k * 100 * MS, False, wall=0.0)
+    assert f.lead_ns("slow") == 100 * MS
+    assert f.blocking(500 * MS, wall=0.0) == (None, [])
+    f.report("slow", 520 * MS, False, wall=0.0)  # one short gap: the shortest gap wins
+    assert f.lead_ns("slow") == 100 * MS
+
+
+def test_holds_block_until_released_or_too_long() -> None:
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    f.report("referee", 0, True, wall=0.0)
+    assert f.blocking(10 * MS, wall=4.0) == ("referee", [])
+    f.report("referee", 0, False, wall=4.5)
+    assert f.blocking(10 * MS, wall=4.5) == (None, [])
+    f.report("referee", 0, True, wall=5.0)
+    assert f.blocking(10 * MS, wall=10.1) == (None, ["referee"])
+    assert f.leave("referee") and not f.leave("referee")
+
+
+def test_split_ros_args() -> None:
+    ours, ros = split_ros_args(["--world", "x", "--ros-args", "-p", "a:=1", "--", "--rtf", "2", "--ros-args", "-r",
+                                "b:=c"])
+    assert ours == ["--world", "x", "--rtf", "2"]
+    assert ros == ["--ros-args", "-p", "a:=1", "--", "--ros-args", "-r", "b:=c", "--"]
