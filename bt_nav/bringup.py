@@ -46,6 +46,9 @@ HOMEWORK_EVALUATE = "/reactive_control/evaluate_mission"
 #: The lab's arm service name (the teleop-style toggle used on the real robot).
 LAB_ARM = "toggle_navigation"
 
+#: Simulator speed cap (as-fast-as-possible mode) before the referee joins, in the profiles with a referee.
+SOLO_RTF = 5.0
+
 #: Node names (the console scripts are ``executive``, ``sim`` and ``referee``).
 EXECUTIVE_NAME = "bt_nav_executive"
 SIM_NAME = "bt_nav_sim"
@@ -217,6 +220,9 @@ def nodes(
             sim_params["real_time_factor"] = float(rtf)
         if stamped is not None:
             sim_params["cmd_vel_stamped"] = bool(stamped)
+        if with_referee:
+            # Until the referee follows the simulation (its t0), nothing is judged: no need to race.
+            sim_params["solo_rtf"] = SOLO_RTF
         sim_params.update(sim or {})
         specs.insert(0, NodeSpec("sim", SIM_NAME, sim_params))
 

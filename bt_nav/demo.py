@@ -2,8 +2,10 @@
 
 It starts the ``eval`` profile of :mod:`bt_nav.bringup` — simulator (stage_4, homework LiDAR),
 executive (homework service names, ``config/homework.yaml``) and referee — as subprocesses on this
-machine only, with the simulator as fast as the executive keeps up (``--rtf 0``), and records from
-its own small node:
+machine only, with the simulator as fast as the executive and the referee keep up (``--rtf 0``; the
+simulator waits for both, see :mod:`bt_nav.sim.node`, so the verdict does not depend on the CPU
+load). The referee is started last, once this process sees ground truth and the executive's
+commands, so the recording covers the whole schedule. The demo records from its own small node:
 
 - ``ground_truth_odom`` (the trajectory) with the tree's tip from ``/bt_nav_executive/tree`` (the
   branch that drove each sample; the executive publishes the tree whenever a status changes), and
@@ -295,18 +297,14 @@ def main(argv: list[str] | None = None) -> int:
                    any(c.poll() is not None for c in launcher.children)):
             time.sleep(0.02)
         referee = launcher.start(specs[-1])
-        deadline = time.monotonic() + opts.timeout + _GRACE
-        while True:
-            ended = launcher.wait_any(timeout=max(0.0, deadline - time.monotonic()))
-            if ended is None:
-                print(f"bt-nav demo: no verdict within {opts.timeout + _GRACE:g} s wall; stopping", file=sys.stderr)
-                break
-            if ended is referee:
-                code = int(referee.poll() or 0)
-                break
+        ended = launcher.wait_any(timeout=opts.timeout + _GRACE)
+        if ended is None:
+            print(f"bt-nav demo: no verdict within {opts.timeout + _GRACE:g} s wall; stopping", file=sys.stderr)
+        elif ended is referee:
+            code = int(referee.poll() or 0)
+        else:
             print(f"bt-nav demo: {ended.name} exited with {ended.poll()} before the verdict; see "
                   f"{run_dir / (ended.name + '.log')}", file=sys.stderr)
-            break
     except KeyboardInterrupt:
         print("bt-nav demo: interrupted", file=sys.stderr)
         code = 130
@@ -314,12 +312,12 @@ def main(argv: list[str] | None = None) -> int:
         launcher.shutdown()
         rec = recorder.close()
         logs.close()
-    wall = time.monotonic() - wall0
 
     results: dict[str, Any] = {}
     if results_path.is_file():
         results = json.loads(results_path.read_text(encoding="utf-8"))
     written = _write_outputs(run_dir, opts, maneuver, rec, results)
+    wall = time.monotonic() - wall0
     start, end = _mission_slice(rec, results)
     summary = [f"demo wall time {wall:.1f} s"]
     if end - start > 1:

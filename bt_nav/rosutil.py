@@ -187,6 +187,43 @@ def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
     return low + zlib.crc32(key.encode()) % (high - low + 1)
 
 
+#: Lock files of the domains this process claimed; kept open so that the claims last until it exits.
+_DOMAIN_CLAIMS: list[Any] = []
+
+
+def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None,
+                    lock_dir: str | os.PathLike[str] | None = None) -> int:
+    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way.
+
+    A claim is an exclusive ``flock`` on ``<lock_dir>/bt_nav_ros_domains/domain-<id>.lock`` held until
+    this process ends (the kernel drops it even after a crash, so nothing needs cleaning up). The
+    search starts at ``start`` (default: the pid) so concurrent claimers rarely contend. Processes that
+    pick a domain another way (a fixed ``ROS_DOMAIN_ID``, a random pick) are invisible here: give them
+    a different range. The default range, 215-232, lies above the Linux ephemeral ports (Fast DDS uses
+    ports 7400 + 250 * domain + ...; 102-214 overlap 32768-60999) and below 233, where the ports would
+    pass 65535. When every domain is claimed, the first candidate is returned unclaimed.
+    """
+    import fcntl
+    import tempfile
+
+    directory = os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(),
+                             "bt_nav_ros_domains")
+    os.makedirs(directory, exist_ok=True)
+    span = high - low + 1
+    first = (os.getpid() if start is None else start) % span
+    for offset in range(span):
+        domain = low + (first + offset) % span
+        handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # held open: the claim
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        _DOMAIN_CLAIMS.append(handle)
+        return domain
+    return low + first
+
+
 def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
     """An environment whose DDS traffic stays on this machine, in ``domain_id``.
 

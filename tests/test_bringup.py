@@ -37,6 +37,8 @@ def test_eval_adds_the_referee_and_lab_remaps_arm() -> None:
     referee = specs["referee"]
     assert referee.name == "bt_nav_referee"
     assert referee.parameters == {"use_sim_time": True, "wait_for_cmd_vel": True, "json": "/tmp/r.json"}
+    assert specs["sim"].parameters["solo_rtf"] == bringup.SOLO_RTF
+    assert "solo_rtf" not in _by_name(nodes("homework"))["sim"].parameters
     lab = _by_name(nodes("lab", world="corridor"))
     assert lab["executive"].remappings == [("arm", "toggle_navigation")]
     assert (lab["sim"].parameters["profile"], lab["sim"].parameters["world"]) == ("lab", "corridor")

@@ -42,6 +42,15 @@ def armed_harness(maneuver: str = "none", **kwargs) -> TickHarness:
 
 
 # ---------------------------------------------------------------- arming and reactive driving
+def test_arming_before_the_clock_starts_is_refused() -> None:
+    """Under use_sim_time the node clock reads 0 until /clock arrives: no timer may start from there."""
+    h = TickHarness()
+    ok, message = h.arm()
+    assert not ok and "clock has not started" in message
+    assert h.tick().command.is_zero
+    assert h.arm()[0]
+
+
 def test_still_before_arming() -> None:
     h = TickHarness()
     for _ in range(40):

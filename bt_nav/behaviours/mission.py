@@ -54,6 +54,11 @@ class ArmService(Leaf):
             message = "disarmed: robot stopped" if armed else "already disarmed: robot stays stopped"
             self.events.info(f"{self.label}: {message}")
             return True, message
+        if now <= 0.0:
+            message = ("refused: the clock has not started yet (with use_sim_time, no /clock has arrived); "
+                       "the mission timer cannot start at t=0")
+            self.events.warning(f"{self.label}: {message}")
+            return False, message
         if self.get_input("mission_over"):
             message = (f"refused: the mission ended (first armed at t={first:.2f} s); "
                        "the robot stays stopped — restart the executive for a new mission")

@@ -1,8 +1,8 @@
 """Fixtures for tests that run real rclpy nodes over real DDS (all marked ``ros`` automatically).
 
 Importing :mod:`ros_harness` sets this process's DDS environment (localhost only, a domain of its own
-in 100-199 derived from the pid) before anything calls ``rclpy.init``; the executives started by the
-fixtures inherit it. See ros_harness.py for how the tests drive simulated time.
+in 215-232 claimed with a lock file) before anything calls ``rclpy.init``; the executives started by
+the fixtures inherit it. See ros_harness.py for how the tests drive simulated time.
 """
 
 from __future__ import annotations

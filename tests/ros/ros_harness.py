@@ -1,8 +1,10 @@
 """The test harness for the executive over real DDS: its subprocess, the harness node, scans and waits.
 
 Isolation: this process (and every executive it starts) talks on localhost only
-(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) in a domain of its own, 100-199, derived from the pid
-(so pytest-xdist workers and two concurrent ``make test`` runs on one machine do not see each other).
+(``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) in a domain of its own: 215-232, claimed with a lock
+file (:func:`bt_nav.rosutil.claim_domain_id`), so pytest-xdist workers and concurrent ``make test``
+runs on one machine never share one, and away from the 100-200 where ``bt-nav demo`` and
+``sim-run`` pick random domains (a shared domain means foreign /clock and /cmd_vel in the test).
 Both are set here, at import, before any ``rclpy.init``.
 
 The executive under test always runs as a subprocess (the real ``main``, signals included) with
@@ -28,9 +30,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.rosutil import dds_env, domain_id_for
+from bt_nav.rosutil import claim_domain_id, dds_env
 
-DOMAIN_ID = domain_id_for(os.getpid())
+DOMAIN_ID = claim_domain_id(215, 232)  # not 100-200: bt-nav demo/sim-run pick random domains there
 os.environ.update(dds_env(DOMAIN_ID))
 os.environ.update({"RCUTILS_COLORIZED_OUTPUT": "0", "RCUTILS_LOGGING_BUFFERED_STREAM": "0",
                    "PYTHONUNBUFFERED": "1"})
@@ -230,7 +232,8 @@ class Harness:
     def details(self) -> str:
         """Context for a failure message."""
         last = self.samples[-5:]
-        text = f"sim_time {self.sim_time:.3f}, {len(self.samples)} cmd_vel, last {last}, calls {self.calls}"
+        text = (f"domain {DOMAIN_ID}, nodes {sorted(self.node.get_node_names())}, sim_time {self.sim_time:.3f}, "
+                f"{len(self.samples)} cmd_vel, last {last}, calls {self.calls}")
         return text + ("\n" + self.process.tail() if self.process is not None else "")
 
     def wait(self, predicate: Callable[[], bool], what: str, timeout: float = 10.0, *,

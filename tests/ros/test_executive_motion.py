@@ -16,7 +16,7 @@ FREE = laser_scan()  # nothing within 3 m: full speed
 
 
 def test_no_motion_before_arm_then_motion_after(executive: Callable[..., Harness]) -> None:
-    h = executive()
+    h = executive("-p", "stats_period:=0.5")
     h.ticks(10, scan=FREE)
     before = len(h.samples)
     assert before >= 11 and all(s.is_zero for s in h.samples), h.samples
@@ -27,6 +27,9 @@ def test_no_motion_before_arm_then_motion_after(executive: Callable[..., Harness
     after = h.tick(scan=FREE)  # the first tick after the arming
     assert len(h.samples) == before + 1
     assert after.linear == pytest.approx(V_MAX) and after.angular == 0.0
+    # Tick statistics every stats_period of the node clock, i.e. of simulated time here.
+    h.wait(lambda: h.process.has_line(r"stats: tick ms min/mean/p99/max [\d./]+ over \d+; ticks \d+, overruns \d+"),
+           "a stats line")
 
 
 def test_disarm_stops_on_the_next_tick(executive: Callable[..., Harness]) -> None:

@@ -16,7 +16,14 @@ from rclpy.parameter import Parameter
 
 from bt_nav import params as P
 from bt_nav.executive import Executive, TickStats
-from bt_nav.rosutil import EventLog, domain_id_for, parameter_descriptor, route_py_trees_logging, yaw_from_quaternion
+from bt_nav.rosutil import (
+    EventLog,
+    claim_domain_id,
+    domain_id_for,
+    parameter_descriptor,
+    route_py_trees_logging,
+    yaw_from_quaternion,
+)
 from bt_nav.types import Command
 
 
@@ -67,6 +74,12 @@ def test_descriptors_follow_the_table() -> None:
 def test_domain_ids_stay_in_range() -> None:
     assert {domain_id_for(pid) for pid in range(1000)} == set(range(100, 200))
     assert 100 <= domain_id_for("gw3") <= 199
+
+
+def test_claimed_domains_are_exclusive(tmp_path: Any) -> None:
+    claimed = [claim_domain_id(220, 222, start=0, lock_dir=tmp_path) for _ in range(3)]
+    assert sorted(claimed) == [220, 221, 222]  # each one locked: the next claim moves on
+    assert claim_domain_id(220, 222, start=1, lock_dir=tmp_path) == 221  # all taken: unclaimed fallback
 
 
 def _log_either(log: Any, ok: bool) -> None:
@@ -146,3 +159,24 @@ def test_parameter_callbacks_check_then_apply(executive: Executive) -> None:
     assert (executive.core.params["close_distance"], executive.core.params["far_distance"]) == (0.9, 1.2)
     assert executive.core.value("far_distance") == 1.2  # the tree sees it
     assert executive._on_set_parameters([Parameter("use_sim_time", value=True)]).successful
+
+
+def test_an_exception_in_a_leaf_stops_the_robot_and_the_node_lives_on(executive: Executive,
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    from bt_nav.behaviours import DriveForward
+    from bt_nav.core import find_leaf
+    from bt_nav.scan import Scan
+
+    def broken() -> Any:
+        raise RuntimeError("sensor driver returned garbage")
+
+    monkeypatch.setattr(find_leaf(executive.core.root, DriveForward), "update", broken)  # shadows the method
+    executive.core.request_arm(True)
+    executive.core.feed_scan(Scan(ranges=[3.0] * 360, angle_min=0.0, angle_max=2 * math.pi * 359 / 360,
+                                  angle_increment=2 * math.pi / 360, range_min=0.12, range_max=3.5))
+    executive._on_tick()
+    assert executive.core.faults == 1 and executive.core.last_command.is_zero
+    assert executive.stats.ticks == 1 and executive.cmd.published == 1
+    monkeypatch.undo()
+    executive._on_tick()
+    assert executive.core.last_command.linear > 0.0  # the next tick starts afresh
