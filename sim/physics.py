@@ -175,8 +175,9 @@ def step(
         x=x,
         y=y,
         yaw=wrap_angle(yaw),
-        v=0.0 if blocked else v1,
-        w=w1,
+        # the ramp arithmetic can land a rounding error past the limit (0.22000000000000003)
+        v=0.0 if blocked else _clamp(v1, params.max_linear),
+        w=_clamp(w1, params.max_angular),
         colliding=collided,
     )
     return new, collided

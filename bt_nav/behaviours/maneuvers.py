@@ -145,8 +145,10 @@ class RotationManeuver(Leaf, register=False):
         self._last_rate = 0.0
         self._set_output("active", False)
         self.feedback_message = message
-        log = self.events.info if status == Status.SUCCESS else self.events.warning
-        log(f"{self.label}: {message}")
+        if status == Status.SUCCESS:  # two call sites: rclpy refuses one call site with two severities
+            self.events.info(f"{self.label}: {message}")
+        else:
+            self.events.warning(f"{self.label}: {message}")
         return status
 
     def terminate(self, new_status: Status) -> None:

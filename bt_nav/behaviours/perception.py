@@ -96,8 +96,10 @@ class ProcessScan(Leaf):
 
     def _publish(self, ok: bool, status: str, sectors: Sectors) -> Status:
         if status != self._status:
-            log = self.events.info if ok else self.events.warning
-            log(f"{self.label}: {status}{' — stopping' if not ok else ' — scan usable again'}")
+            if ok:  # two call sites: rclpy refuses one log call site with two severities
+                self.events.info(f"{self.label}: {status} — scan usable again")
+            else:
+                self.events.warning(f"{self.label}: {status} — stopping")
             self._status = status
         self._set_output("scan_ok", ok)
         self._set_output("scan_status", status)

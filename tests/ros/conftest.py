@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 import rclpy
 from rclpy.signals import SignalHandlerOptions
-from ros_harness import STARTUP_TIMEOUT, T0, ExecutiveProcess, Harness, laser_scan
+from ros_harness import STARTUP_TIMEOUT, ExecutiveProcess, Harness, laser_scan
 
 PRIME = laser_scan()  # a free scan, sent until the executive says it has one
 
@@ -23,7 +23,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     """Mark every test below tests/ros with ``ros`` (``-m 'not ros'`` skips DDS tests)."""
     here = Path(__file__).parent
     for item in items:
-        if here in Path(str(item.fspath)).parents:
+        if here in item.path.parents:
             item.add_marker(pytest.mark.ros)
 
 
@@ -74,14 +74,14 @@ def make_harness(ros_context: Any) -> Iterator[Callable[..., Harness]]:
 @pytest.fixture
 def executive(start_executive: Callable[..., ExecutiveProcess], make_harness: Callable[..., Harness]
               ) -> Callable[..., Harness]:
-    """Factory: start an executive and a harness connected to it; disarmed, scans flowing, time past :data:`T0`."""
+    """Factory: start an executive and a harness connected to it: disarmed, commands and scans flowing."""
 
     def start(*ros_args: str, stamped: bool = False, arm_service: str = "/arm") -> Harness:
         harness = make_harness(stamped=stamped, arm_service=arm_service)
         process = start_executive(*ros_args)
         harness.connect(process)
         # Matching is seen from the harness's side only; these prove the executive's side too.
-        harness.tick(T0, timeout=STARTUP_TIMEOUT)  # its /clock reader and cmd_vel writer: one tick, disarmed
+        harness.first_contact()  # its /clock reader and cmd_vel writer
         harness.wait(lambda: harness.tick(scan=PRIME).is_zero and process.has_line("scan usable again"),
                      "the executive to receive scans", STARTUP_TIMEOUT)
         return harness

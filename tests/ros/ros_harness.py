@@ -256,6 +256,24 @@ class Harness:
                            and self.cmd_sub.get_publisher_count() > 0 and self.arm_client.service_is_ready()),
                   "the executive's endpoints to match", timeout)
 
+    def first_contact(self, start: float = T0, timeout: float = STARTUP_TIMEOUT) -> Sample:
+        """Step simulated time from ``start`` until a command arrives: both directions are matched then.
+
+        Matching seen from the harness's side does not mean the executive has matched us yet. A tick
+        whose command goes out before the executive's cmd_vel writer has matched our reader is lost
+        for good, and resending the same ``/clock`` time triggers no new tick, so time must advance
+        until a command gets through. After that one, nothing is lost any more (reliable, matched).
+        """
+        deadline = time.monotonic() + timeout
+        target = start
+        while True:
+            try:
+                return self._step(target, None, 1.0)
+            except AssertionError:
+                if time.monotonic() > deadline:
+                    raise
+                target += PERIOD
+
     def _on_cmd(self, msg: Any) -> None:
         twist = msg.twist if self.stamped else msg
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9 if self.stamped else None

@@ -52,9 +52,10 @@ def test_colcon_build_and_run_the_installed_executive(tmp_path: Path, start_exec
                               command=[str(executable)], env=env)
     harness = make_harness(arm_service="/toggle_navigation")
     harness.connect(process)
+    assert harness.first_contact().is_zero  # /clock in, cmd_vel out
     response = harness.arm(True)
     assert response.success and response.message
-    assert harness.tick(1.025).is_zero  # armed, but no scan yet: stopped
+    assert harness.tick().is_zero  # armed, but no scan yet: stopped
     assert process.has_line("arm server /toggle_navigation"), process.tail()
     assert process.has_line(f"tree {share}/trees/mission.xml"), process.tail()
     assert process.has_line(f"bt_nav from {site_packages}/bt_nav"), process.tail()

@@ -73,3 +73,13 @@ def test_unreadable_params_file_refuses_to_start(start_executive: Callable[..., 
     wait_until(lambda: not process.alive, 20.0, "the executive to refuse", details=process.tail)
     assert process.proc.returncode == 2
     assert any("refusing to start" in line for line in process.lines), process.tail()
+
+
+def test_arming_before_the_first_clock_is_refused(start_executive: Callable[..., ExecutiveProcess],
+                                                  make_harness: Callable[..., Harness]) -> None:
+    h = make_harness()
+    h.connect(start_executive())
+    refused = h.arm(True)  # use_sim_time and no /clock yet: the mission timer would start at t=0
+    assert not refused.success and "clock" in refused.message
+    assert h.first_contact().is_zero
+    assert h.arm(True).success

@@ -11,6 +11,9 @@ from collections.abc import Callable
 
 import pytest
 from ros_harness import PERIOD, REPO, V_MAX, Harness, laser_scan
+from std_msgs.msg import String
+
+from bt_nav.rosutil import LATCHED
 
 FREE = laser_scan()  # nothing within 3 m: full speed
 
@@ -118,7 +121,13 @@ def test_tree_topic_follows_the_tip(executive: Callable[..., Harness]) -> None:
     h.ticks(3, scan=FREE)  # nothing changes: no new snapshot
     h.tick(scan=laser_scan(front=0.2))
     h.wait(lambda: len(h.trees) > count, "a ~/tree message after the tip changed")
-    assert len(h.trees) == count + 1
+    assert len(h.trees) == count + 1 and "RotateInPlace" in h.trees[-1]
+
+    # Transient local, depth 1: a late joiner (bt-nav watch) gets the current tree at once, and only it.
+    late: list[str] = []
+    h.node.create_subscription(String, "/bt_nav_executive/tree", late.append, LATCHED)
+    h.wait(lambda: bool(late), "the latched tree for a late subscriber")
+    assert [m.data for m in late] == [h.trees[-1]]
 
 
 def test_remapped_service_names(executive: Callable[..., Harness]) -> None:
