@@ -33,7 +33,7 @@ demo: $(STAMP)
 	$(BIN)/bt-nav demo
 
 bench: $(STAMP)
-	$(BIN)/python bench/run.py
+	$(BIN)/python -m bench.run
 
 faults: $(STAMP)
 	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults

@@ -28,25 +28,40 @@ Parameters: every entry of :data:`bt_nav.params.PARAMS`, declared with its descr
 (``ros2 param describe``); the ones that shape the tree or the wiring (maneuver, random_seed,
 tick_rate_hz, cmd_vel_stamped, frame_id) are read-only. A runtime change is checked by the same rules
 as at start-up (one value, then cross rules such as close_distance < far_distance) and refused with the
-reason. An invalid value at start-up (``-p``, params file) is not patched over: the node logs
-``refusing to start: <reason>`` and exits with status 2 — a robot must not drive on a configuration
-nobody meant.
+reason, and the refusal is logged in one line (``parameter change refused: <reason>``) whether our
+check or rclpy's own (range, type, read-only) refused it; an integer for a float parameter is
+accepted, as on the command line. An invalid value at start-up (``-p``, params file) is not patched
+over: the node logs ``refusing to start: <reason>`` and exits with status 2 — a robot must not drive
+on a configuration nobody meant. One more parameter guards the ROS edge only: ``clock_watchdog``
+(below).
 
 Timing: the tree ticks on a timer of the node clock, so with ``use_sim_time`` the ticks, the mission
 deadline, the scan timeout and the maneuvers all follow ``/clock``. Tick statistics (duration, overruns
 against the period, exceptions, vetoed commands) are logged every ``stats_period`` and at exit.
+
+Clock watchdog: with ``use_sim_time`` a stalled ``/clock`` (simulator paused or dead, bag player
+stopped) means no ticks, and a robot base keeps executing the last ``cmd_vel`` it got — the tree,
+frozen with the clock, cannot stop it. So a timer on the steady (wall) clock publishes one zero twist
+when the last command was motion and no tick has happened for ``clock_watchdog`` wall seconds
+(default 1.0; 0 disables; live), logged in one line, and another line when ticks resume.
 
 Safety: no motion before the first arming, a stop on the first tick after a disarm and at the deadline
 (the tree); every command is checked once more before it is published (finite, within the limits, zero
 when disarmed or after the deadline). SIGINT and SIGTERM publish a zero twist before the ROS context
 goes down (rclpy's own handlers are off, because they shut the context down first); the exit status is
 0 then.
+
+Testing hook (off unless the variable is set; tests/faults uses it): ``BT_NAV_FAULT_INJECT=<leaf>[@<n>]``
+(comma-separated for several) makes the n-th ``update`` (default: the first) of each named tree node
+raise :class:`InjectedFaultError` once, to prove that an exception inside the tree stops the robot for that
+tick, is logged in one line and leaves the node running. The node warns at start-up when it is armed.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import signal
 import sys
 import threading
@@ -54,12 +69,13 @@ from collections import deque
 from collections.abc import Iterable
 from contextlib import suppress
 from pathlib import Path
-from time import perf_counter
+from time import monotonic, perf_counter
 from types import FrameType
 from typing import Any
 
 import rclpy
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -75,6 +91,7 @@ from .rosutil import (
     CommandPublisher,
     ConfigError,
     EventLog,
+    as_double,
     declare_parameters,
     route_py_trees_logging,
     unknown_overrides,
@@ -91,6 +108,62 @@ SPIN_TIMEOUT = 0.05
 FINAL_STOPS, FINAL_ACK_TIMEOUT = 3, 0.5
 #: Slack when re-checking the limits (the core clamps exactly; this only absorbs float noise).
 LIMIT_EPS = 1e-9
+#: The ROS edge's own parameter (not in :data:`bt_nav.params.PARAMS`: it is no mission setting). Why it
+#: exists: see "Clock watchdog" above.
+CLOCK_WATCHDOG = P.ParamSpec(
+    "clock_watchdog", 1.0, "Wall-clock seconds without a tick, while the last command was motion, after which "
+    "a zero twist is published (a stalled /clock under use_sim_time freezes the ticks); 0 disables.", "s",
+    0.0, 60.0, in_tree=False)
+#: Wall-clock seconds between two looks of the watchdog.
+WATCHDOG_CHECK_PERIOD = 0.1
+#: Environment variable of the test-only fault injection (see the module docstring).
+FAULT_INJECT_ENV = "BT_NAV_FAULT_INJECT"
+
+
+class InjectedFaultError(RuntimeError):
+    """What an injected fault raises: its own type, so a log line can never pass for a real bug."""
+
+
+def inject_faults(root: Any, spec: str) -> list[str]:
+    """Arm the faults of a ``BT_NAV_FAULT_INJECT`` value on the tree under ``root``; returns ``name@n`` each.
+
+    The behaviour's ``update`` is wrapped on the instance (the class stays untouched): the n-th call
+    raises once, every other call runs the original.
+
+    Raises:
+        ConfigError: for an entry that names no node of the tree or has a bad count.
+    """
+    nodes = {node.name: node for node in root.iterate()}
+    armed: list[str] = []
+    for entry in filter(None, (part.strip() for part in spec.split(","))):
+        name, _, count = entry.partition("@")
+        node = nodes.get(name)
+        if node is None:
+            raise ConfigError(f"{FAULT_INJECT_ENV}: no tree node named {name!r} (nodes: {', '.join(sorted(nodes))})")
+        try:
+            nth = int(count) if count else 1
+        except ValueError:
+            nth = 0
+        if nth < 1:
+            raise ConfigError(f"{FAULT_INJECT_ENV}: {entry!r}: the count after @ must be an integer >= 1")
+        _raise_on_update(node, nth)
+        armed.append(f"{name}@{nth}")
+    return armed
+
+
+def _raise_on_update(node: Any, nth: int) -> None:
+    """Make the ``nth`` call of ``node.update`` raise :class:`InjectedFaultError` (once)."""
+    original = node.update
+    calls = 0
+
+    def update() -> Any:
+        nonlocal calls
+        calls += 1
+        if calls == nth:
+            raise InjectedFaultError(f"injected by {FAULT_INJECT_ENV} into update {nth} of {node.name}")
+        return original()
+
+    node.update = update
 
 
 class TickStats:
@@ -156,13 +229,19 @@ class Executive:
         self.log = node.get_logger()
         self._clock = node.get_clock()
         self._closed = False
-        for name in unknown_overrides(node):
+        for name in unknown_overrides(node, extra=(CLOCK_WATCHDOG.name,)):
             self.log.warning(f"ignoring parameter {name!r}: not a bt_nav parameter (typo?)")
         values = declare_parameters(node)
+        self.watchdog = float(declare_parameters(node, (CLOCK_WATCHDOG,))[CLOCK_WATCHDOG.name])
         try:
             self.core = MissionCore(values, clock=self.now, node=node, events=EventLog(self.log), tree_path=tree_path)
         except (ValueError, OSError) as exc:
             raise ConfigError(str(exc)) from None
+        faults = os.environ.get(FAULT_INJECT_ENV, "")
+        if faults.strip():
+            armed = inject_faults(self.core.root, faults)
+            self.log.warning(f"test-only fault injection armed ({FAULT_INJECT_ENV}): {', '.join(armed)} "
+                             "will raise once each")
         params = self.core.params
         self.period = 1.0 / float(params["tick_rate_hz"])
         self.stats = TickStats(self.period)
@@ -171,6 +250,11 @@ class Executive:
         self.bad_odom = 0
         self._stats_since: float | None = None
         self._tree_key: tuple[Any, ...] | None = None
+        self._refusal_logged: str | None = None  # set by the pre-set callback, so a refusal is logged once
+        self._last_tick_wall: float | None = None  # monotonic() of the last tick (watchdog)
+        self._moving = False  # the last command published was motion
+        self._stalled = False  # the watchdog stopped the robot; cleared by the next tick
+        self.watchdog_stops = 0
 
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import LaserScan
@@ -182,9 +266,12 @@ class Executive:
         self.tree_publisher = node.create_publisher(String, "~/tree", LATCHED)
         self.scan_subscription = node.create_subscription(LaserScan, "scan", self._on_scan, qos_profile_sensor_data)
         self.odom_subscription = node.create_subscription(Odometry, "odom", self._on_odom, qos_profile_sensor_data)
+        node.add_pre_set_parameters_callback(self._before_set_parameters)
         node.add_on_set_parameters_callback(self._on_set_parameters)
         node.add_post_set_parameters_callback(self._after_set_parameters)
         self.timer = node.create_timer(self.period, self._on_tick)
+        self.watchdog_timer = node.create_timer(WATCHDOG_CHECK_PERIOD, self._on_watchdog,
+                                                clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.log.info(self.describe(tree_path))
 
     # ------------------------------------------------------------------ info
@@ -230,20 +317,50 @@ class Executive:
         self.core.feed_odom(yaw)
 
     # ------------------------------------------------------------------ parameters
+    def check_change(self, parameters: list[Parameter]) -> str | None:
+        """Why this batch of changes is refused (our rules: table, cross rules, read-only), or None."""
+        for p in parameters:
+            if p.name == CLOCK_WATCHDOG.name:
+                reason = CLOCK_WATCHDOG.check(P.coerce(CLOCK_WATCHDOG, p.value))
+                if reason:
+                    return reason
+            elif p.name not in P.SPECS and not self.node.has_parameter(p.name):
+                return f"unknown parameter {p.name!r}: not a bt_nav parameter (typo?)"
+        values = {p.name: p.value for p in parameters if p.name in P.SPECS}
+        return self.core.check_params(values) if values else None
+
+    def _before_set_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
+        """Accept integers for float parameters, and log a refusal before rclpy makes it silently.
+
+        rclpy checks the descriptors (range, type, read-only) before the on-set callback runs and
+        refuses without a word in the node's log; our rules match the descriptors, so the reason
+        is known here already and logged in the same one line as our own refusals.
+        """
+        parameters = [as_double(P.SPECS.get(p.name) or CLOCK_WATCHDOG, p)
+                      if p.name in P.SPECS or p.name == CLOCK_WATCHDOG.name else p for p in parameters]
+        self._refusal_logged = self.check_change(parameters)
+        if self._refusal_logged:
+            self.log.warning(f"parameter change refused: {self._refusal_logged}")
+        return parameters
+
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         """Validate a change (the batch as a whole); applied only in the post-set callback."""
-        values = {p.name: p.value for p in parameters if p.name in P.SPECS}
-        reason = self.core.check_params(values) if values else None
-        if reason:
+        reason = self.check_change(parameters)
+        if reason and reason != self._refusal_logged:
             self.log.warning(f"parameter change refused: {reason}")
+        self._refusal_logged = None
         return SetParametersResult(successful=reason is None, reason=reason or "")
 
     def _after_set_parameters(self, parameters: list[Parameter]) -> None:
         """Apply an accepted change; the tree sees it on the next tick."""
         values = {p.name: p.value for p in parameters if p.name in P.SPECS}
+        watchdog = [p.value for p in parameters if p.name == CLOCK_WATCHDOG.name]
+        if watchdog:
+            self.watchdog = float(watchdog[-1])
+            values[CLOCK_WATCHDOG.name] = self.watchdog
         if not values:
             return
-        reason = self.core.set_params(values)
+        reason = self.core.set_params({k: v for k, v in values.items() if k in P.SPECS})
         if reason:  # cannot happen after a successful check; say so loudly if it ever does
             self.log.error(f"accepted parameter change could not be applied: {reason}")
             return
@@ -254,18 +371,45 @@ class Executive:
     def _on_tick(self) -> None:
         """One tick: tree, last check, publish; then the tree snapshot and the stats."""
         started = perf_counter()
+        self._note_tick()
         try:
             command = self.vet(self.core.tick())
             self.cmd.publish(command)
+            self._moving = not command.is_zero
             self._publish_tree()
         except Exception as exc:  # the node must outlive any bug at its edge, and stop the robot
             self.stats.exceptions += 1
+            self._moving = False
             self.log.error(f"tick {self.core.ticks} failed outside the tree: {exc!r}; publishing a stop")
             with suppress(Exception):
                 self.cmd.publish(Command(0.0, 0.0, "executive error"))
         finally:
             self.stats.record(perf_counter() - started)
         self._log_stats_when_due()
+
+    def _note_tick(self) -> None:
+        """The watchdog's bookkeeping: when this tick happened, and a line if it ends a watchdog stop."""
+        now = monotonic()
+        if self._stalled and self._last_tick_wall is not None:
+            self.log.info(f"clock watchdog: ticking again after {now - self._last_tick_wall:.1f} s of wall time "
+                          "without a tick")
+        self._stalled = False
+        self._last_tick_wall = now
+
+    def _on_watchdog(self) -> None:
+        """Publish one stop when the robot was last told to move and the ticks stopped (wall clock)."""
+        if self.watchdog <= 0.0 or not self._moving or self._last_tick_wall is None:
+            return
+        idle = monotonic() - self._last_tick_wall
+        if idle < self.watchdog:
+            return
+        self._moving = False
+        self._stalled = True
+        self.watchdog_stops += 1
+        self.cmd.publish(Command(0.0, 0.0, "clock watchdog"))
+        clock = "/clock stalled?" if self.node.get_parameter("use_sim_time").value else "tick timer starved?"
+        self.log.warning(f"clock watchdog: no tick for {idle:.1f} s of wall time while moving ({clock}): "
+                         "published a stop; the next tick decides again")
 
     def vet(self, command: Command) -> Command:
         """The last look before the wire: finite, within limits, zero when the robot may not move.
@@ -322,6 +466,8 @@ class Executive:
         self._closed = True
         with suppress(Exception):
             self.timer.cancel()
+        with suppress(Exception):
+            self.watchdog_timer.cancel()
         self.core.shutdown()
         try:
             for _ in range(FINAL_STOPS):
@@ -332,7 +478,7 @@ class Executive:
             self.log.error(f"could not publish the final zero twist: {exc!r}")
         self.log.info(f"final stats: {TickStats.describe(self.stats.history)}; "
                       f"{self.stats.counters(self.core.faults)}; scans {self.scans} (dropped {self.bad_scans}), "
-                      f"evaluation calls {self.core.evaluation_calls}")
+                      f"evaluation calls {self.core.evaluation_calls}, watchdog stops {self.watchdog_stops}")
 
 
 class ShutdownRequest:

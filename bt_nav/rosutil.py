@@ -11,7 +11,7 @@ import math
 import os
 import re
 import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import py_trees
@@ -77,42 +77,56 @@ def parameter_descriptor(spec: P.ParamSpec) -> ParameterDescriptor:
     return descriptor
 
 
-def _coerce_overrides(node: Node) -> None:
-    """Let ``-p safety_distance:=1`` mean 1.0, as :func:`bt_nav.params.coerce` does off-ROS.
+def as_double(spec: P.ParamSpec, parameter: Parameter) -> Parameter:
+    """``parameter`` retyped DOUBLE when it is an INTEGER for a float entry (else unchanged).
 
-    rclpy types a parameter by its default and refuses an INTEGER override of a DOUBLE parameter;
-    users type integers on the command line all the time. rclpy has no public accessor for the
-    overrides, so this reaches into ``_parameter_overrides`` (absent: nothing to do).
+    rclpy types a parameter by its default and refuses an INTEGER value for a DOUBLE parameter;
+    users type integers (``-p safety_distance:=1``, ``ros2 param set ... safety_distance 1``) all
+    the time, and :func:`bt_nav.params.coerce` accepts them off-ROS, so the ROS edge does too.
+    """
+    if parameter.type_ == Parameter.Type.INTEGER and isinstance(spec.default, float):
+        return Parameter(parameter.name, Parameter.Type.DOUBLE, float(parameter.value))
+    return parameter
+
+
+def _coerce_overrides(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> None:
+    """Let ``-p safety_distance:=1`` mean 1.0 (see :func:`as_double`).
+
+    rclpy has no public accessor for the overrides, so this reaches into ``_parameter_overrides``
+    (absent: nothing to do).
     """
     overrides = getattr(node, "_parameter_overrides", None)
     if not isinstance(overrides, dict):
         return
-    for spec in P.PARAMS:
+    for spec in specs:
         given = overrides.get(spec.name)
-        if given is not None and given.type_ == Parameter.Type.INTEGER and isinstance(spec.default, float):
-            overrides[spec.name] = Parameter(spec.name, Parameter.Type.DOUBLE, float(given.value))
+        if given is not None:
+            overrides[spec.name] = as_double(spec, given)
 
 
-def unknown_overrides(node: Node) -> list[str]:
-    """Override names (``-p``, params file) that are no parameter of ours: most likely typos."""
+def unknown_overrides(node: Node, extra: Iterable[str] = ()) -> list[str]:
+    """Override names (``-p``, params file) that are no parameter of ours (nor in ``extra``): most likely typos."""
     overrides = getattr(node, "_parameter_overrides", None)
     if not isinstance(overrides, dict):
         return []
+    known = set(extra)
     return sorted(name for name in overrides
-                  if name not in P.SPECS and name not in ROS_OWN_PARAMETERS and not name.startswith("qos_overrides."))
+                  if name not in P.SPECS and name not in ROS_OWN_PARAMETERS and name not in known
+                  and not name.startswith("qos_overrides."))
 
 
-def declare_parameters(node: Node) -> dict[str, P.Value]:
-    """Declare every parameter of :data:`bt_nav.params.PARAMS` and return their start-up values.
+def declare_parameters(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> dict[str, P.Value]:
+    """Declare every parameter of ``specs`` (default :data:`bt_nav.params.PARAMS`) and return their start-up values.
 
     Raises:
         ConfigError: with one line naming the parameter and why its value is refused (type or range);
             the caller refuses to start rather than run a robot on a configuration nobody meant.
     """
-    _coerce_overrides(node)
+    specs = tuple(specs)
+    _coerce_overrides(node, specs)
     overrides = getattr(node, "_parameter_overrides", None)
     values: dict[str, P.Value] = {}
-    for spec in P.PARAMS:
+    for spec in specs:
         given = overrides.get(spec.name) if isinstance(overrides, dict) else None
         if given is not None:  # our table's wording ("must be >= 0.05 m, got -1.0") beats rclpy's
             reason = spec.check(P.coerce(spec, given.value))

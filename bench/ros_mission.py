@@ -1,0 +1,196 @@
+"""One whole homework mission over DDS, as ``bt-nav demo`` runs it: its speed and its processes' memory.
+
+The ``eval`` graph of :func:`bt_nav.bringup.nodes` (simulator with ``real_time_factor`` 0, the
+executive with ``config/homework.yaml``, the referee) runs as subprocesses in a domain of its own;
+the demo's :class:`~bt_nav.demo.Recorder` node in this process records ground truth with its wall
+arrival time, which gives the real-time factor over exactly the referee's mission (from its t0 to
+its report): simulated seconds / wall seconds. Start-up (Python imports, DDS discovery) is reported
+apart, because it is a fixed cost, not a speed.
+
+Memory: ``VmHWM`` (peak resident set) and ``VmRSS`` of the executive and the simulator are read from
+``/proc/<pid>/status`` once the referee has given its verdict, while both still run, so the peak
+covers the whole mission. The executive's own tick statistics (its exit log line) come along.
+
+CPU: what each process spent (user + system, ``/proc/<pid>/stat``) from the referee's start to its
+verdict, next to the wall time of that span: on a small machine the real-time factor is bounded by
+the CPU the processes need per simulated second, and this says which process needs it. The
+referee's whole life is counted (it exits with its verdict; its last reading is taken while it
+still runs); "recorder" is this process (the demo's recorder node). With ``profile_to``, the
+executive runs under ``python -m cProfile`` (its one thread is the whole node) and writes its
+profile there; such a run is slower and only says where the executive's time goes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import resource
+import tempfile
+import time
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bt_nav.bringup import Launcher, NodeSpec, child_env, nodes
+from bt_nav.rosutil import dds_env
+
+#: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
+REFEREE_TIMEOUT = 120.0
+GRACE = 15.0
+#: Wall seconds to wait for ground truth and the executive's first commands before starting the referee.
+STARTUP = 45.0
+_FINAL_STATS = re.compile(r"final stats: (?P<stats>tick ms [^;]*)")
+
+
+def proc_status(pid: int) -> dict[str, int]:
+    """``VmHWM`` and ``VmRSS`` (kB) of a running process; empty when it is gone."""
+    out: dict[str, int] = {}
+    try:
+        with open(f"/proc/{pid}/status", encoding="utf-8") as stream:
+            for line in stream:
+                key, _, value = line.partition(":")
+                if key in ("VmHWM", "VmRSS"):
+                    out[f"{key}_kb"] = int(value.split()[0])
+    except (OSError, ValueError, IndexError):
+        return {}
+    return out
+
+
+def proc_cpu(pid: int) -> float | None:
+    """User + system CPU seconds of a running process (None when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="utf-8") as stream:
+            fields = stream.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _self_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+@dataclass
+class ProfiledSpec(NodeSpec):
+    """A node started under ``python -m cProfile -o <profile_out>`` (same arguments otherwise)."""
+
+    profile_out: str = ""
+
+    def command(self, python: str | None = None) -> list[str]:
+        """``python -m cProfile -o <out> -m bt_nav.cli <executable> ...``."""
+        base = super().command(python)
+        return [base[0], "-m", "cProfile", "-o", self.profile_out, *base[1:]]
+
+
+def _mission_window(t: list[float], wall: list[float], results: dict[str, Any]) -> tuple[float, float] | None:
+    """(simulated s, wall s) between the referee's t0 and its report, from the recorded samples."""
+    times = results.get("times") or {}
+    t0, report = times.get("t0"), times.get("report")
+    if t0 is None or report is None:
+        return None
+    inside = [i for i, stamp in enumerate(t) if t0 <= stamp <= t0 + report]
+    if len(inside) < 2:
+        return None
+    first, last = inside[0], inside[-1]
+    return t[last] - t[first], wall[last] - wall[first]
+
+
+def _wait_verdict(launcher: Launcher, referee: Any) -> tuple[Any, float | None]:
+    """Wait for the first child to exit (the referee, normally); also returns the referee's last CPU reading."""
+    deadline = time.monotonic() + REFEREE_TIMEOUT + GRACE
+    referee_cpu: float | None = None
+    while time.monotonic() < deadline:
+        for child in launcher.children:
+            if child.poll() is not None:
+                return child, referee_cpu
+        referee_cpu = proc_cpu(referee.popen.pid) or referee_cpu
+        time.sleep(0.05)
+    return None, referee_cpu
+
+
+def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: int = 400,
+                profile_to: str | Path | None = None) -> dict[str, Any]:
+    """Run one mission; returns its real-time factor, verdict, timings, CPU and memory.
+
+    The DDS environment of this process is set to ``domain`` (the recorder node lives here).
+    """
+    from bt_nav.demo import Recorder, effective_maneuver, rec_ready
+
+    os.environ.update(dds_env(domain))
+    env = child_env(domain)
+    logs: dict[str, deque[str]] = {}
+
+    def sink(name: str, line: str) -> None:
+        logs.setdefault(name, deque(maxlen=log_lines)).append(line)
+
+    with tempfile.TemporaryDirectory(prefix="bt_nav_bench_") as tmp:
+        results_path = Path(tmp) / "results.json"
+        specs = nodes("eval", world=world, seed=seed, rtf=0.0, results_json=str(results_path),
+                      referee={"timeout": REFEREE_TIMEOUT})
+        if profile_to is not None:
+            specs = [ProfiledSpec(**vars(s), profile_out=str(profile_to)) if s.executable == "executive" else s
+                     for s in specs]
+        out: dict[str, Any] = {"world": world, "maneuver": effective_maneuver(None), "seed": seed, "domain": domain}
+        wall0 = time.monotonic()
+        recorder = Recorder()
+        launcher = Launcher(env, sink=sink)
+        referee_code: int | None = None
+        memory: dict[str, dict[str, int]] = {}
+        try:
+            for spec in specs[:-1]:
+                launcher.start(spec)
+            deadline = time.monotonic() + STARTUP
+            while not (rec_ready(recorder) or time.monotonic() > deadline
+                       or any(c.poll() is not None for c in launcher.children)):
+                time.sleep(0.02)
+            out["startup_wall_s"] = round(time.monotonic() - wall0, 3)
+            referee = launcher.start(specs[-1])
+            span_start = time.monotonic()
+            cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children if c is not referee}
+            self_start = _self_cpu()
+            ended, referee_cpu = _wait_verdict(launcher, referee)
+            span = time.monotonic() - span_start
+            memory = {c.name: proc_status(c.popen.pid) for c in launcher.children if c.poll() is None}
+            cpu: dict[str, float | None] = {}
+            for c in launcher.children:
+                if c is referee:
+                    cpu[c.name] = referee_cpu
+                else:
+                    now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
+                    cpu[c.name] = None if now is None or before is None else round(now - before, 3)
+            cpu["recorder"] = round(_self_cpu() - self_start, 3)
+            out["cpu_s"] = cpu
+            out["cpu_span_wall_s"] = round(span, 3)
+            if ended is referee:
+                referee_code = referee.poll()
+            elif ended is not None:
+                out["error"] = f"{ended.name} exited with {ended.poll()} before the verdict"
+            else:
+                out["error"] = "no verdict in time"
+        finally:
+            launcher.shutdown()
+            rec = recorder.close()
+        out["total_wall_s"] = round(time.monotonic() - wall0, 3)
+        results = json.loads(results_path.read_text(encoding="utf-8")) if results_path.is_file() else {}
+
+    out["referee_exit"] = referee_code
+    out["passed"] = referee_code == 0
+    out["memory"] = memory
+    window = _mission_window(rec.t, rec.wall, results)
+    if window is not None:
+        sim_s, wall_s = window
+        out.update({"mission_sim_s": round(sim_s, 3), "mission_wall_s": round(wall_s, 3),
+                    "rtf": round(sim_s / wall_s, 3) if wall_s > 0 else None})
+    else:
+        out.update({"mission_sim_s": None, "mission_wall_s": None, "rtf": None})
+        out.setdefault("error", "no mission window (referee results or ground truth missing)")
+    stats = [m["stats"] for line in logs.get("executive", ()) if (m := _FINAL_STATS.search(line))]
+    out["executive_tick_stats"] = stats[-1] if stats else None
+    checks = results.get("checks") or []
+    out["failed_checks"] = [c.get("name") for c in checks if not c.get("passed")]
+    if "error" in out:
+        out["log_tail"] = {name: list(lines)[-15:] for name, lines in logs.items()}
+    return out
