@@ -25,11 +25,13 @@ plus transport and tick; the target is one tick period + 3 ms, with no misses.
 
 from __future__ import annotations
 
+import bisect
 import math
 import os
 import random
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from bt_nav.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
@@ -149,7 +151,8 @@ class Probe:
             self.rclpy.try_shutdown(context=self.context)
 
 
-def _wait(predicate: Any, timeout: float, what: str, tick: Any = None) -> None:
+def _wait(predicate: Callable[[], bool], timeout: float, what: str, tick: Callable[[], Any] | None = None) -> None:
+    """Poll ``predicate``, calling ``tick`` in between (to keep scans flowing); TimeoutError after ``timeout``."""
     end = time.monotonic() + timeout
     while not predicate():
         if time.monotonic() > end:
@@ -164,13 +167,13 @@ def analyse(events: list[tuple[int, str]], commands: list[tuple[int, int, int, f
     """Latencies of the switches (see the module docstring); times in ns in, milliseconds out."""
     total, published, returned, callback = [], [], [], []
     late_pickups = misses = 0
+    commands = sorted(commands, key=lambda c: c[1])
+    received = [c[1] for c in commands]
     for index, (stamp, kind) in enumerate(events):
         until = events[index + 1][0] if index + 1 < len(events) else end_ns
         stale = 0
         hit = None
-        for cb_ns, recv_ns, src_ns, linear, angular in commands:
-            if recv_ns <= stamp:
-                continue
+        for cb_ns, recv_ns, src_ns, linear, angular in commands[bisect.bisect_right(received, stamp):]:
             if recv_ns > until:
                 break
             if reflects(kind, linear, angular):

@@ -50,7 +50,7 @@ def _profile_lines(profile: dict[str, Any], what: str, top: int = 5) -> list[str
     return [f"- {what}: own time by area: {areas}.", f"- Top functions by own time: {functions}."]
 
 
-def tick_section(result: dict[str, Any]) -> list[str]:
+def tick_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
     """Benchmark 1."""
     rows = []
     for r in result["rows"]:
@@ -69,6 +69,7 @@ def tick_section(result: dict[str, Any]) -> list[str]:
               "thread's CPU time (no preemption): a wall p99 far above it is other processes' load. The "
               "conversion of the ROS message happens once per scan in the executive's callback, outside the tick.",
               ""]
+    lines += _tail_verdict(result["rows"], doc)
     prof = result.get("profile")
     if prof:
         lines.append(f"Profile (cProfile, {prof['ticks']} ticks at {prof['beams']} beams, "
@@ -79,7 +80,23 @@ def tick_section(result: dict[str, Any]) -> list[str]:
     return lines
 
 
-def latency_section(result: dict[str, Any]) -> list[str]:
+def _tail_verdict(rows: list[dict[str, Any]], doc: dict[str, Any] | None) -> list[str]:
+    """One sentence on where the p99 comes from: the tree (CPU p99 near wall p99) or preemption."""
+    pre = [r["beams"] for r in rows if (r.get("tree_cpu_ms") or {}).get("p99")
+           and r["tree_ms"]["p99"] > 2 * r["tree_cpu_ms"]["p99"]]
+    load = ""
+    if doc is not None:
+        load = (f" (load average {doc['run']['load_start'][0] if doc['run']['load_start'] else '?'} at the start "
+                f"on {doc['machine']['cores']} cores)")
+    if not pre:
+        return ["Wall p99 is close to CPU p99 at every size: the tail is the tick's own cost (on a shared host "
+                "that includes cache and SMT contention), not preemption.", ""]
+    sizes = ", ".join(str(b) for b in pre)
+    return [f"At {sizes} beams the wall p99 is more than twice the CPU p99: the tail is this process being "
+            f"preempted by other processes{load}, not the tree; the CPU p99 is what the tree costs.", ""]
+
+
+def latency_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
     """Benchmark 2."""
     rows = []
     for key, label in (("latency_ms", "scan published -> reflecting cmd_vel received (DDS)"),
@@ -105,7 +122,7 @@ def _latency_met(result: dict[str, Any]) -> bool | None:
     return bool(p99 <= result["target_p99_ms"] and not result["misses"])
 
 
-def sim_section(result: dict[str, Any]) -> list[str]:
+def sim_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
     """Benchmark 3."""
     lid = result["lidar"]
     lines = ["LiDAR (RayCaster.cast, homework LiDAR, stage_4):", ""]
@@ -124,10 +141,12 @@ def sim_section(result: dict[str, Any]) -> list[str]:
                       lock["wall_per_55s_mission"], lock["rtf_median"]]])
     prof = lock.get("profile")
     if prof:
-        parts = ", ".join(f"`{name}` {share * 100:.0f} %" for name, share in prof["inclusive_share"].items()
-                          if share >= 0.01)
+        wall = lock["wall_s"]["p50"]
+        parts = ", ".join(f"`{name}` {share * 100:.0f} % (~{share * wall:.2f} s)"
+                          for name, share in prof["inclusive_share"].items() if share >= 0.01)
         lines += ["", f"Profile of one mission (cProfile, {prof['total_s']} s under the profiler, "
-                  f"{prof['armed_ticks']} armed ticks):", f"- Inclusive time of its parts: {parts}."]
+                  f"{lock['runs'][0]['ticks']} ticks of which {prof['armed_ticks']} armed):",
+                  f"- Inclusive time of its parts (share, and that share of the median {wall} s mission): {parts}."]
         lines += _profile_lines(prof, "Mission")
     ros = result.get("ros", {})
     lines += ["", "ROS path (sim + executive + referee over DDS, rtf 0, as `bt-nav demo`):", ""]
@@ -161,7 +180,7 @@ def sim_section(result: dict[str, Any]) -> list[str]:
     return lines
 
 
-def quality_section(result: dict[str, Any]) -> list[str]:
+def quality_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
     """Benchmark 4."""
     rows = []
     for s in result["summary"]:
@@ -178,7 +197,7 @@ def quality_section(result: dict[str, Any]) -> list[str]:
     return lines
 
 
-def memory_section(result: dict[str, Any]) -> list[str]:
+def memory_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
     """Benchmark 5."""
     if "skipped" in result:
         return [f"skipped: {result['skipped']}"]
@@ -237,7 +256,7 @@ def render(doc: dict[str, Any]) -> str:
         if "error" in section:
             lines.append(f"failed: `{section['error']}`")
             continue
-        lines += render_section(section["result"])
+        lines += render_section(section["result"], doc)
     return "\n".join(lines) + "\n"
 
 

@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     session = Session(args)
     started, load_start, t_start = now_iso(), load_average(), time.monotonic()
-    command = "python -m bench.run " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
+    command = " ".join(["python -m bench.run", *(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))])
     out_dir: Path = args.out
     out_dir.mkdir(parents=True, exist_ok=True)
     json_path, md_path = out_dir / "latest.json", out_dir / "latest.md"

@@ -75,7 +75,7 @@ EXECUTIVE_AREAS = (
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core"),
 )
-EXECUTIVE_PARTS = ("executors.py:spin_once", "executive.py:_on_tick", "core.py:tick", "executive.py:_publish_tree",
+EXECUTIVE_PARTS = ("executive.py:_on_tick", "core.py:tick", "executive.py:_publish_tree",
                    "core.py:statuses", "core.py:snapshot", "rosutil.py:publish", "executive.py:_on_scan",
                    "executive.py:_on_odom", "executive.py:vet")
 #: Functions whose inclusive time splits a lock-step mission into its parts.

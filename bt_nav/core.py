@@ -218,6 +218,8 @@ class MissionCore:
         """Stop every running leaf (a pending evaluation request is dropped) and return a stop."""
         try:
             self.tree.interrupt()
+            if self.evaluate_leaf is not None:
+                self.evaluate_leaf.cancel()
         except Exception as exc:
             self.events.error(f"interrupting the tree at shutdown failed: {exc!r}")
         self.last_command = Command(0.0, 0.0, "shutdown")

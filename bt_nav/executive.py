@@ -336,8 +336,8 @@ class Executive:
         refuses without a word in the node's log; our rules match the descriptors, so the reason
         is known here already and logged in the same one line as our own refusals.
         """
-        parameters = [as_double(P.SPECS.get(p.name) or CLOCK_WATCHDOG, p)
-                      if p.name in P.SPECS or p.name == CLOCK_WATCHDOG.name else p for p in parameters]
+        specs = {**P.SPECS, CLOCK_WATCHDOG.name: CLOCK_WATCHDOG}
+        parameters = [as_double(specs[p.name], p) if p.name in specs else p for p in parameters]
         self._refusal_logged = self.check_change(parameters)
         if self._refusal_logged:
             self.log.warning(f"parameter change refused: {self._refusal_logged}")

@@ -373,3 +373,67 @@ def test_live_parameter_update_and_refusals() -> None:
     assert "finite" in h.core.set_param("safety_distance", math.nan)
     assert "cannot change" in h.core.set_param("maneuver", "B")
     assert "unknown maneuver" in h.core.set_param("maneuver", "Z")
+
+
+def test_a_clock_jumping_back_does_not_stretch_the_maneuver_allowance() -> None:
+    h = armed_harness("C")
+    h.see((0.0, 0.25))
+    h.tick()
+    h.see()
+    leaf = next(n for n in h.core.root.iterate() if n.name == "SmartPivot")
+    frozen = h.yaw
+    h.clock.advance(-100.0)  # simulator reset while the robot is stuck
+    ticks = 0
+    while leaf.status.value == "RUNNING":
+        h.clock.advance(h.dt)
+        h.core.feed_scan(h.scan)
+        h.core.feed_odom(frozen)
+        h.core.tick()
+        ticks += 1
+        assert ticks < 200, "the allowance must count ticks, not clock differences"
+    assert leaf.status.value == "FAILURE"
+
+
+def test_a_request_in_flight_survives_a_tree_reset() -> None:
+    """An exception elsewhere resets the tree; the evaluation already sent must not be sent again."""
+    client = LocalTriggerClient(default="hang")
+    h = armed_harness(client=client, overrides={"mission_duration": 2.0, "evaluation_timeout": 30.0})
+    h.run_until(lambda r: len(client.calls) == 1, limit=100)
+    stop = next(n for n in h.core.root.iterate() if n.name == "StopAtDeadline")
+
+    def explode():
+        raise RuntimeError("boom")
+
+    stop.update = explode
+    assert h.tick().command.is_zero
+    del stop.update
+    pending = client.pending[0]
+    pending.set_result(type("R", (), {"success": True, "message": "ok"})())
+    h.run_until(lambda r: h.core.evaluation_calls == 1, limit=20)
+    assert len(client.calls) == 1 and not client.removed
+
+
+def test_evaluation_retry_delay_survives_a_clock_jump_back() -> None:
+    client = LocalTriggerClient(script=["refuse"], default="ok")
+    h = armed_harness(client=client, overrides={"mission_duration": 2.0})
+    h.run_until(lambda r: len(client.calls) == 1, limit=100)
+    h.clock.advance(-50.0)
+    h.run_until(lambda r: len(client.calls) == 2, limit=30)
+
+
+def test_blind_front_and_open_loop_are_said_in_one_line_each() -> None:
+    events = Events()
+    h = armed_harness("C", events=events)
+    h.see((0.0, math.nan), width_deg=70.0)
+    h.tick(5)
+    assert sum("front sector unknown" in m for _, m in events.lines) == 1
+    h.see()
+    h.tick()
+    assert sum("front sector known again" in m for _, m in events.lines) == 1
+    h.run_until(lambda r: r.tip == "FullSpeed", limit=200)
+    h.feed_odom = False
+    h.see((0.0, 0.25))
+    assert h.tick().tip == "SmartPivot"
+    h.see()
+    h.run_until(lambda r: r.tip == "FullSpeed", limit=200)
+    assert sum("open loop" in m for _, m in events.lines) == 1

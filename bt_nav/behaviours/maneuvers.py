@@ -69,8 +69,9 @@ class RotationManeuver(Leaf, register=False):
         self._last_stamp = -math.inf
         self._last_rate = 0.0
         self._last_time = 0.0
-        self._started = 0.0
+        self._elapsed = 0.0  # seconds since the start, summed per update so a clock jumping back cannot stretch it
         self._allowance = 0.0
+        self._open_loop_logged = False
 
     def choose_rotation(self, sectors: Sectors) -> float:
         """Signed angle to turn (rad, + is CCW / left), decided when the maneuver starts."""
@@ -82,7 +83,9 @@ class RotationManeuver(Leaf, register=False):
         self.turned = self._odom_turned = self._since_sample = 0.0
         self.open_loop_ticks = 0
         now = self.clock()
-        self._started = self._last_time = now
+        self._last_time = now
+        self._elapsed = 0.0
+        self._open_loop_logged = False
         self._last_rate = 0.0
         odom = self._new_odom(now)
         self._last_yaw = odom.yaw if odom is not None else None
@@ -109,10 +112,16 @@ class RotationManeuver(Leaf, register=False):
         dropped then; when samples stop coming the bridge simply keeps growing (open loop).
         """
         odom = self._new_odom(now)
+        dt = max(0.0, now - self._last_time)
+        self._elapsed += dt
         if odom is None:
-            self._since_sample += self._last_rate * max(0.0, now - self._last_time)
+            self._since_sample += self._last_rate * dt
             if now - self._last_stamp > self.get_input("odom_timeout"):
                 self.open_loop_ticks += 1
+                if not self._open_loop_logged:
+                    self._open_loop_logged = True
+                    self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
+                                        "(integrating the commanded turn rate)")
         else:
             if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned
                 self._odom_turned += self._since_sample
@@ -130,8 +139,8 @@ class RotationManeuver(Leaf, register=False):
         remaining = self.rotation - self.turned
         if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
             return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
-        if now - self._started > self._allowance:
-            return self._finish(Status.FAILURE, f"out of time after {now - self._started:.1f} s, "
+        if self._elapsed > self._allowance:
+            return self._finish(Status.FAILURE, f"out of time after {self._elapsed:.1f} s, "
                                 f"{math.degrees(remaining):+.0f} deg short")
         peak = self.get_input("angular_speed")
         rate = math.copysign(min(peak, max(self.MIN_RATE, self.GAIN * abs(remaining))), remaining)

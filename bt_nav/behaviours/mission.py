@@ -36,9 +36,13 @@ class ArmService(Leaf):
         super().setup(**kwargs)
         self.service = None
         if self.node is not None:
+            from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
             from std_srvs.srv import SetBool  # ROS edge only: the core runs without it
 
-            self.service = self.node.create_service(SetBool, "arm", self._on_request)
+            # keep every request: with the default keep-last-10 a burst of calls loses requests, and a
+            # client waiting for its disarm confirmation would never hear back
+            qos = QoSProfile(depth=1, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+            self.service = self.node.create_service(SetBool, "arm", self._on_request, qos_profile=qos)
 
     def _on_request(self, request: Any, response: Any) -> Any:
         response.success, response.message = self.handle(bool(request.data))
@@ -152,8 +156,9 @@ class EvaluateMission(Leaf):
         self.successful_calls = 0
         self.final: Status | None = None
         self._in_attempt = False
-        self._attempt_started = 0.0
-        self._next_attempt_at = -math.inf
+        self._attempt_elapsed = 0.0  # seconds spent in the current attempt
+        self._wait_left = 0.0  # seconds of retry delay still to wait
+        self._last_time: float | None = None
 
     def setup(self, **kwargs: Any) -> None:
         """Use the injected ``evaluation_client`` or create a Trigger client on the node."""
@@ -165,18 +170,33 @@ class EvaluateMission(Leaf):
             self.client = self.node.create_client(Trigger, "evaluate_mission")
 
     def initialise(self) -> None:
-        """Send the first request right away (``call_async``); later ticks only poll."""
+        """Send the first request right away (``call_async``); later ticks only poll.
+
+        After a tree reset (an exception elsewhere) a request already in flight is kept and polled
+        again: sending a second one would ask the referee twice.
+        """
         if self.final is None and self.client is not None:
             self._advance(self.clock())
 
+    def _elapse(self, now: float) -> float:
+        """Seconds since the previous call, never negative: a clock jumping back (a simulator reset)
+        must not stretch a timeout or a retry delay by the size of the jump."""
+        dt = 0.0 if self._last_time is None else max(0.0, now - self._last_time)
+        self._last_time = now
+        return dt
+
     def _advance(self, now: float) -> None:
         """Open an attempt when one is due and send its request as soon as the server is there."""
-        if not self._in_attempt:
-            if now < self._next_attempt_at:
+        dt = self._elapse(now)
+        if self._in_attempt:
+            self._attempt_elapsed += dt
+        else:
+            self._wait_left -= dt
+            if self._wait_left > 0.0:
                 return
             self.attempts += 1
             self._in_attempt = True
-            self._attempt_started = now
+            self._attempt_elapsed = 0.0
         if self.future is None and self.client.service_is_ready():
             self.future = self.client.call_async(self.client.srv_type.Request())
             self.feedback_message = f"attempt {self.attempts}: request sent"
@@ -190,8 +210,7 @@ class EvaluateMission(Leaf):
             return self.final
         if self.client is None:
             return self._give_up("no evaluation client (no node and none injected)")
-        now = self.clock()
-        self._advance(now)
+        self._advance(self.clock())
         if not self._in_attempt:
             return Status.RUNNING  # waiting out the retry delay
         if self.future is not None and self.future.done():
@@ -204,7 +223,7 @@ class EvaluateMission(Leaf):
                 return self._succeeded(str(response.message))
             message = "no response" if response is None else f"success=false: {response.message}"
             return self._attempt_failed(message)
-        if now - self._attempt_started >= self.get_input("timeout"):
+        if self._attempt_elapsed >= self.get_input("timeout"):
             if self.future is None:
                 return self._attempt_failed("the evaluation service is not available")
             self.client.remove_pending_request(self.future)
@@ -227,7 +246,7 @@ class EvaluateMission(Leaf):
             return self._give_up(f"attempt {self.attempts}: {why}; no retries left")
         self.events.warning(f"{self.label}: evaluation attempt {self.attempts} failed ({why}); retrying")
         self._set_output("result", f"attempt {self.attempts} failed: {why}")
-        self._next_attempt_at = self.clock() + self.get_input("retry_delay")
+        self._wait_left = self.get_input("retry_delay")
         self.feedback_message = f"attempt {self.attempts} failed: {why}"
         return Status.RUNNING
 
@@ -239,8 +258,10 @@ class EvaluateMission(Leaf):
         return Status.FAILURE
 
     def terminate(self, new_status: Status) -> None:
-        """Drop a pending request when preempted or shut down (idempotent)."""
-        if new_status == Status.INVALID and self.future is not None:
-            if self.client is not None:
-                self.client.remove_pending_request(self.future)
-            self.future = None
+        """Keep a request in flight across a reset; :meth:`cancel` drops it at shutdown."""
+
+    def cancel(self) -> None:
+        """Drop a pending request (shutdown); idempotent."""
+        if self.future is not None and self.client is not None:
+            self.client.remove_pending_request(self.future)
+        self.future = None

@@ -79,9 +79,6 @@ class TurnAway(Leaf):
     MIN_TURN = 0.35
     #: Speed falls as depth ** SPEED_EXPONENT (1: linear in depth).
     SPEED_EXPONENT = 2.0
-    MODE = 1
-    CURVATURE_GAIN = 1.0
-    MIN_ROOM = 0.05
 
     INPUT_PORTS = {
         **SECTORS_PORT,
@@ -109,12 +106,7 @@ class TurnAway(Leaf):
         depth = min(1.0, max(0.0, (far - front) / max(far - close, 1e-6)))
         slow, fast = self.get_input("slow_speed"), self.get_input("max_speed")
         linear = fast - (fast - slow) * depth ** self.SPEED_EXPONENT
-        if self.MODE == 0:
-            angular = self.direction * self.get_input("angular_speed") * (self.MIN_TURN + (1.0 - self.MIN_TURN) * depth)
-        else:
-            room = max(front - close, self.MIN_ROOM)
-            rate = min(self.get_input("angular_speed"), self.CURVATURE_GAIN * linear / room)
-            angular = self.direction * rate
+        angular = self.direction * self.get_input("angular_speed") * (self.MIN_TURN + (1.0 - self.MIN_TURN) * depth)
         self.command(linear, angular)
         self.feedback_message = f"turning {'left' if self.direction > 0 else 'right'}"
         return Status.RUNNING

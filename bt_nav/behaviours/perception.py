@@ -58,6 +58,7 @@ class ProcessScan(Leaf):
         self._sectors: Sectors = UNKNOWN_SECTORS
         self._error: str = ""
         self._status = "no scan yet"
+        self._front_known: bool | None = None
         self._config_inputs: tuple[Any, ...] = ()
         self._config_cache = SectorConfig()
 
@@ -94,6 +95,18 @@ class ProcessScan(Leaf):
             return self._publish(False, "scan stamped in the future (clock jumped back?)", UNKNOWN_SECTORS)
         return self._publish(True, "ok", self._sectors)
 
+    def _watch_front(self, front: SectorReading) -> None:
+        """One line when the front sector becomes unknown (the robot then only rotates) and one when
+        it is known again: otherwise a robot turning on the spot for a blind LiDAR says nothing."""
+        if front.known == self._front_known:
+            return
+        if not front.known:
+            self.events.warning(f"{self.label}: front sector unknown ({front.valid_beams} of {front.total_beams} "
+                                "beams valid) — treated as an obstacle")
+        elif self._front_known is False:
+            self.events.info(f"{self.label}: front sector known again")
+        self._front_known = front.known
+
     def _publish(self, ok: bool, status: str, sectors: Sectors) -> Status:
         if status != self._status:
             if ok:  # two call sites: rclpy refuses one log call site with two severities
@@ -101,6 +114,8 @@ class ProcessScan(Leaf):
             else:
                 self.events.warning(f"{self.label}: {status} — stopping")
             self._status = status
+        if ok:
+            self._watch_front(sectors.front)
         self._set_output("scan_ok", ok)
         self._set_output("scan_status", status)
         self._set_output("sectors", sectors)

@@ -287,12 +287,18 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
+#: Table order: the categories of the issue, then anything else in the order run.
+CATEGORY_ORDER = ("scan", "timing", "services", "process", "parameters", "mission", "commands")
+
+
 def write_outcomes(rows: list[CaseRecord], directory: Path) -> tuple[Path, Path]:
-    """``outcomes.md`` (the README table) and ``outcomes.json`` in ``directory``."""
+    """``outcomes.md`` (the README table, rows by category) and ``outcomes.json`` in ``directory``."""
     directory.mkdir(parents=True, exist_ok=True)
+    rank = {category: i for i, category in enumerate(CATEGORY_ORDER)}
+    rows = sorted(rows, key=lambda row: rank.get(row.category, len(rank)))
     counts = outcome_counts(rows)
     lines = [f"Fault suite{' (long variant)' if LONG else ''}: {len(rows)} cases, {counts['survived']} survived"
-             + "".join(f", {counts[k]} {k}" for k in ("known bug", "failed", "skipped") if counts[k]), "",
+             + counts_tail(counts), "",
              "| case | category | what was checked | outcome |", "|---|---|---|---|"]
     for row in rows:
         outcome = row.outcome + (f": {row.detail}" if row.detail else "")
@@ -302,6 +308,15 @@ def write_outcomes(rows: list[CaseRecord], directory: Path) -> tuple[Path, Path]
     js = directory / "outcomes.json"
     js.write_text(json.dumps({"long": LONG, "counts": counts, "cases": [asdict(r) for r in rows]}, indent=2) + "\n")
     return md, js
+
+
+def counts_tail(counts: dict[str, int]) -> str:
+    """``, 5 known bugs, 1 failed`` (only the outcomes that occurred)."""
+    parts = []
+    for key in ("known bug", "failed", "skipped"):
+        if counts[key]:
+            parts.append(f", {counts[key]} {key}{'s' if key == 'known bug' and counts[key] != 1 else ''}")
+    return "".join(parts)
 
 
 def outcome_counts(rows: list[CaseRecord]) -> dict[str, int]:
@@ -330,10 +345,9 @@ def pytest_terminal_summary(terminalreporter: Any, exitstatus: int, config: pyte
     if not rows:
         return
     counts = outcome_counts(rows)
-    extra = "".join(f", {counts[k]} {k}" for k in ("known bug", "failed", "skipped") if counts[k])
     terminalreporter.write_sep("=", "fault suite")
     terminalreporter.write_line(f"fault suite{' (long)' if LONG else ''}: {len(rows)} cases, "
-                                f"{counts['survived']} survived{extra} -> {OUT_DIR / 'outcomes.md'}")
+                                f"{counts['survived']} survived{counts_tail(counts)} -> {OUT_DIR / 'outcomes.md'}")
     for row in rows:
         if row.outcome in ("failed", "known bug"):
             terminalreporter.write_line(f"  {row.outcome}: {row.case}: {row.detail}")

@@ -13,6 +13,7 @@ import math
 from typing import Any
 
 import numpy as np
+import pytest
 from conftest import LONG, FaultCases
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -61,7 +62,7 @@ def any_scan(draw: st.DrawFn) -> Scan:
     fields: dict[str, Any] = {"angle_min": angle_min, "angle_max": angle_min + increment * max(n - 1, 0),
                               "angle_increment": increment, "range_min": draw(st.floats(0.0, 1.0)),
                               "range_max": draw(st.floats(1.5, 40.0))}
-    for name in draw(st.sets(st.sampled_from(sorted(fields)), max_size=3)):
+    for name in draw(st.one_of(st.just(set()), st.sets(st.sampled_from(sorted(fields)), max_size=3))):
         fields[name] = draw(SCALARS)
     values = st.one_of(st.floats(0.0, 5.0), st.sampled_from([math.nan, math.inf, -math.inf, 0.0]), st.floats())
     ranges: Any = np.full(n, draw(values))
@@ -146,13 +147,9 @@ def test_absurd_beam_count_in_process(faults: FaultCases) -> None:
 
 # ---------------------------------------------------------------------------------------------- backward clock jumps
 def test_backward_jump_and_the_maneuver_allowance(faults: FaultCases) -> None:
-    known = ("RotationManeuver measures its allowance as clock() - started, so a backward /clock jump of J s "
-             "lets a maneuver that cannot finish (stuck robot, odometry frozen) keep turning J s longer; fix in "
-             "maneuvers.py: accumulate elapsed time as the sum of max(0, now - last_time) per update")
     with faults.case("clock back 100 s mid-maneuver, odometry frozen (stuck robot)", "timing",
                      "maneuver C cannot finish (odometry says it does not turn); after a 100 s backward jump it must "
-                     "still give up within its allowance (90/1.8 + 1 + 2 = 3.9 s of ticks) and stop",
-                     known_bug=known) as case:
+                     "still give up within its allowance (90/1.8 + 1 + 2 = 3.9 s of ticks) and stop") as case:
         events = Events()
         th = TickHarness("C", events=events)
         th.feed_odom = False
@@ -178,13 +175,9 @@ def test_backward_jump_and_the_maneuver_allowance(faults: FaultCases) -> None:
 
 
 def test_backward_jump_and_the_evaluation_timeout(faults: FaultCases) -> None:
-    known = ("EvaluateMission measures its timeout and retry delay as clock() - attempt_started / clock() < "
-             "next_attempt_at, so a backward jump of J s delays the retry of a lost evaluation call by J s; fix in "
-             "mission.py: accumulate elapsed time per update (as for the maneuver)")
     with faults.case("clock back 100 s during a pending evaluation call", "timing",
                      "the first call is lost (never answered); after a 100 s backward jump the retry must still "
-                     "come after evaluation_timeout + retry_delay (2.5 s of ticks); robot stays stopped",
-                     known_bug=known) as case:
+                     "come after evaluation_timeout + retry_delay (2.5 s of ticks); robot stays stopped") as case:
         th = TickHarness("none", {"mission_duration": 10.0}, client=LocalTriggerClient(["hang"]), events=Events())
         th.tick()
         assert th.arm()[0]
@@ -199,3 +192,23 @@ def test_backward_jump_and_the_evaluation_timeout(faults: FaultCases) -> None:
         assert len(th.client.calls) == 2, "no retry at all"
         elapsed = 0.5 + ticks * th.dt
         case.bug_check(elapsed <= 2.5 + 0.5, f"the retry came after {elapsed:.1f} s of ticks")
+
+
+def test_fault_injection_hook_refuses_bad_specs() -> None:
+    """The test-only hook (BT_NAV_FAULT_INJECT) refuses what it cannot arm, so a typo cannot silently test nothing."""
+    from bt_nav.executive import InjectedFaultError, inject_faults
+    from bt_nav.rosutil import ConfigError
+
+    th = TickHarness("none", events=Events())
+    with pytest.raises(ConfigError, match="no tree node named 'Nope'"):
+        inject_faults(th.core.root, "Nope")
+    with pytest.raises(ConfigError, match="integer >= 1"):
+        inject_faults(th.core.root, "FullSpeed@0")
+    assert inject_faults(th.core.root, " FullSpeed@2 , StopBlind ") == ["FullSpeed@2", "StopBlind@1"]
+    th.tick()
+    assert th.arm()[0]
+    commands = [th.tick().command for _ in range(3)]
+    assert [c.is_zero for c in commands] == [False, True, False]  # the 2nd update of FullSpeed raised, once
+    assert th.core.faults == 1
+    assert len(th.core.events.matching("exception in leaf 'FullSpeed': InjectedFaultError")) == 1
+    assert issubclass(InjectedFaultError, RuntimeError)

@@ -31,8 +31,8 @@ from sensor_msgs.msg import LaserScan
 from bt_nav.scan import Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
 
 NAN, INF = math.nan, math.inf
-GAP_UNKNOWN_FRONT = ("no log line says the front is unknown (the robot rotates in place without a word); "
-                     "proposed: ProcessScan logs 'front sector unknown ...' once per change")
+GAP_UNKNOWN_FRONT = ("gap: no log line says the front is unknown (it rotates in place without a word); proposed: "
+                     "ProcessScan logs 'front sector unknown ...' once per change")
 
 
 def malformed_case(run: Run, faults: FaultCases, name: str, msg: Any, why: str) -> None:
@@ -101,7 +101,7 @@ def test_bad_scans_one_executive(executive: Callable[..., Harness], faults: Faul
     malformed_case(run, faults, "scan: len(ranges) inconsistent with the angles",
                    scan_msg([3.0] * 100, angle_increment=2 * math.pi / 360, angle_max=2 * math.pi * 359 / 360),
                    r"len\(ranges\) = 100 is inconsistent")
-    malformed_case(run, faults, "scan: range limits NaN / inverted",
+    malformed_case(run, faults, "scan: range_min NaN",
                    scan_msg([3.0] * 360, range_min=NAN), r"range_min must be finite")
     malformed_case(run, faults, "scan: range_max below range_min", scan_msg([3.0] * 360, range_min=3.5, range_max=0.12),
                    r"range_max must be > range_min")
@@ -128,11 +128,11 @@ def test_bad_scans_one_executive(executive: Callable[..., Harness], faults: Faul
         sample = run.ticks(2, one_free)[-1]
         assert sample.linear >= 0.0 and math.isfinite(sample.angular)
         if sample.linear > 0.0:
-            case.note("drives at full speed on ONE beam reading 3 m: min_valid_beams (3) is waived when a sector "
-                      "has fewer beams (scan.py _reading); design question for the lead")
+            case.note("finding: drives at full speed on ONE beam (min_valid_beams is waived for a sector with "
+                      "fewer beams, scan.py _reading); design question")
         run.recover()
     with faults.case("scan: 100,000 beams", "scan", "100k-beam scans (400 KB) over DDS: free -> full speed, obstacle "
-                     "ahead -> rotates in place; tick keeps up (no overrun line); node alive"):
+                     "ahead -> rotates in place; node alive"):
         n = 100_000
         big_free = filled(3.0, n)
         run.assert_full_speed(run.ticks(3, big_free)[-1])
@@ -152,7 +152,7 @@ def test_bad_scans_one_executive(executive: Callable[..., Harness], faults: Faul
             run.no_complaints(mark)
             run.recover()
 
-    with faults.case("scan group: deadline after 18 bad-scan cases", "mission",
+    with faults.case(f"scan group: deadline after {len(faults.records)} scan cases", "mission",
                      "stop at the deadline, exactly one evaluation call, one 'deadline reached' line, node alive"):
         run.finish()
 
@@ -169,7 +169,7 @@ FIELDS = ("angle_min", "angle_max", "angle_increment", "range_min", "range_max",
 def laser_scans(draw: st.DrawFn) -> Any:
     """Any LaserScan: a plausible layout (any beam count, either sweep direction) with REP 117 patches in the
     ranges, and zero to three fields replaced by anything a float32 can hold (NaN, +-inf, huge, negative)."""
-    broken = draw(st.sets(st.sampled_from(FIELDS), max_size=3))
+    broken = draw(st.one_of(st.just(set()), st.sets(st.sampled_from(FIELDS), max_size=3)))  # half intact
     n = draw(st.one_of(st.integers(0, 4), st.integers(5, 400), st.sampled_from([360, 640, 1081])))
     angle_min = draw(st.floats(-7.0, 7.0, width=32))
     span = draw(st.floats(0.0625, 6.25, width=32)) * draw(st.sampled_from([1.0, -1.0]))

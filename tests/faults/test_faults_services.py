@@ -182,15 +182,10 @@ def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Call
             assert h.arm(True).success
             run.assert_full_speed(run.tick(FREE))
             run.alive()
-        known = ("the arm service keeps rmw's default service QoS (KEEP_LAST, depth 10): requests beyond the 10 "
-                 "the single-threaded executive has not taken yet are dropped and never answered (a client waiting "
-                 "for a disarm confirmation hangs); fix in mission.py ArmService.setup: create_service(..., "
-                 "qos_profile=QoSProfile(history=KEEP_ALL, reliability=RELIABLE)) (996-1000 of 1000 answered in a "
-                 "stand-alone rclpy experiment, vs 11 with the default)")
         with faults.case("arm burst: 200 calls in flight at once", "services",
                          "200 requests (arm/disarm alternating, the LAST a disarm) sent without waiting, from a "
                          "KEEP_ALL client: every request answered; the last request wins (robot stopped on the next "
-                         "tick); node alive", known_bug=known) as case:
+                         "tick); node alive") as case:
             all_qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=1, reliability=ReliabilityPolicy.RELIABLE)
             eager = h.node.create_client(SetBool, "/arm", qos_profile=all_qos)
             h.wait(eager.service_is_ready, "the KEEP_ALL client to see the arm service")

@@ -68,8 +68,8 @@ def test_sensor_stream_faults(executive: Callable[..., Harness], faults: FaultCa
         run.expect_one(r"SmartPivot: done: turned [+-]\d", mark)
         assert h.sim_time - started < ALLOWANCE_C, "finished by the allowance, not by dead reckoning"
         run.gap_line(r"SmartPivot: .*open loop", mark, case.note,
-                     "no line says odometry was lost and the turn went open loop (RotationManeuver counts "
-                     "open_loop_ticks silently); proposed: log once per maneuver when it falls back")
+                     "gap: no line says the turn went open loop (proposed: RotationManeuver logs it once per "
+                     "maneuver)")
         run.odom = "live"
 
     with faults.case("odometry frozen mid-maneuver (stuck robot)", "timing",
