@@ -16,8 +16,9 @@ Physics step: the integrator (:func:`bt_nav.sim.step`) is exact for a constant c
 arcs, closed-form acceleration ramps, 2 cm collision sub-steps with bisection to the contact), so the
 1/60 s grid steps are merged into one call whenever the command does not change and nothing samples
 the state in between, and skipped while the robot rests under a zero command. The result equals
-fixed 1/60 s stepping up to float rounding (``tests/test_lockstep.py`` checks it) at about half the
-cost. Collision events are the rising edges of the physics' ``collided`` flag.
+fixed 1/60 s stepping to within 1e-4 m (``tests/test_lockstep.py`` checks it; the difference is the
+arc approximation inside acceleration ramps) with half the physics calls. Collision events are the
+rising edges of the physics' ``collided`` flag.
 
 Everything random comes from ``seed``: the LiDAR noise, a small perturbation of the spawn pose (so
 seeds explore different paths, as Gazebo's own jitter does) and maneuver A's random choices.

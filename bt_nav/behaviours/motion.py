@@ -76,7 +76,7 @@ class TurnAway(Leaf):
     #: m: the side turned towards must be this much nearer than the other before the direction flips.
     SWITCH_MARGIN = 0.15
     #: Turn rate at the far edge of the band, as a fraction of ``angular_speed``.
-    MIN_TURN = 0.35
+    MIN_TURN = 0.3
     #: Speed falls as depth ** SPEED_EXPONENT (1: linear in depth).
     SPEED_EXPONENT = 2.0
 
@@ -98,8 +98,8 @@ class TurnAway(Leaf):
         """Graded forward speed and turn rate, RUNNING."""
         sectors: Sectors = self.get_input("sectors")
         left, right = _side_range(sectors.left), _side_range(sectors.right)
-        towards, away = (left, right) if self.direction > 0 else (right, left)
-        if away > towards + self.SWITCH_MARGIN:
+        chosen, other = (left, right) if self.direction > 0 else (right, left)
+        if other > chosen + self.SWITCH_MARGIN:
             self.direction = -self.direction
         close, far = self.get_input("close_distance"), self.get_input("far_distance")
         front = sectors.front.min_range if sectors.front.known else close
