@@ -55,6 +55,17 @@ HARD_STOP = 60.0  # s after t0: the run ends even if the referee has not reporte
 DEFAULT_JITTER = (0.05, 10.0)
 
 
+def profile_parameters(profile: str) -> dict[str, Any]:
+    """The tree parameters of the profile's params file (``config/homework.yaml`` or ``config/lab.yaml``),
+    without its maneuver: lock-step runs what ``bt-nav demo`` and the launch files run."""
+    from .bringup import config_file, file_parameters
+    from .params import SPECS
+
+    path = config_file(f"{profile}.yaml")
+    values = file_parameters(path) if path is not None else {}
+    return {k: v for k, v in values.items() if k in SPECS and SPECS[k].in_tree and k != "maneuver"}
+
+
 @dataclass
 class MissionResult:
     """Everything one lock-step mission produced."""
@@ -157,7 +168,8 @@ def run_mission(world: str | World = "stage_4", maneuver: str = "none", seed: in
     model = PROFILES[profile]
     world_obj = world if isinstance(world, World) else load_world(world, seed=seed)
     maneuver = normalise_maneuver(maneuver)
-    settings = {"random_seed": int(seed) % 2**31, **(overrides or {}), "maneuver": maneuver}
+    settings = {**profile_parameters(profile), "random_seed": int(seed) % 2**31, **(overrides or {}),
+                "maneuver": maneuver}
 
     clock = _Clock()
     referee = Referee(referee_config or RefereeConfig())

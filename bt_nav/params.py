@@ -123,17 +123,16 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
     ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
               "m", 0.05, 10.0),
-    ParamSpec("far_distance", 1.2, "Front obstacle nearer than this (but not close): keep driving and "
-              "turn away. Wide, so the turn starts early and gently and the front rarely gets within "
-              "safety_distance (each maneuver costs a standstill).", "m", 0.05, 10.0),
-    ParamSpec("front_half_angle_deg", 20.0, "Half-width of the front sector. +-20 deg covers the robot's "
-              "swept width from 0.35 m out; wider, walls beside the path read as ahead and trigger "
-              "maneuvers in narrow passages.", "deg", 1.0, 180.0),
-    ParamSpec("side_center_deg", 30.0, "Centre of the left sector (the right one mirrors it).", "deg",
+    ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): keep driving and "
+              "turn away (the homework profile widens it to 1.2 m so turns start early and gently).", "m",
+              0.05, 10.0),
+    ParamSpec("front_half_angle_deg", 30.0, "Half-width of the front sector (homework profile: 20 deg, so "
+              "walls beside the path in narrow passages do not read as ahead).", "deg", 1.0, 180.0),
+    ParamSpec("side_center_deg", 15.0, "Centre of the left sector (the right one mirrors it); the default "
+              "left/right sectors are the halves of the front cone, as the homework suggests.", "deg",
               0.0, 180.0),
-    ParamSpec("side_half_angle_deg", 30.0, "Half-width of the left and right sectors: 0-60 deg, so the "
-              "turn direction sees the robot's shoulders (narrower sides let it turn into wall ends).",
-              "deg", 1.0, 180.0),
+    ParamSpec("side_half_angle_deg", 15.0, "Half-width of the left and right sectors (homework profile: "
+              "0-60 deg, so the turn direction sees the robot's shoulders).", "deg", 1.0, 180.0),
     ParamSpec("min_valid_beams", 3, "A sector with fewer valid beams is unknown (treated as close).",
               "", 1, 1000),
     ParamSpec("scan_timeout", 0.5, "No scan newer than this: stop until a fresh one arrives.", "s",
@@ -143,13 +142,12 @@ PARAMS: tuple[ParamSpec, ...] = (
     # --- motion ------------------------------------------------------------------------------------
     ParamSpec("max_linear_speed", 0.22, "Forward speed with nothing ahead (TurtleBot3 Burger: 0.22).",
               "m/s", 0.0, 2.0),
-    ParamSpec("slow_linear_speed", 0.2, "Forward speed while turning away with the obstacle at "
+    ParamSpec("slow_linear_speed", 0.12, "Forward speed while turning away with the obstacle at "
               "close_distance; it rises (quadratically) to max_linear_speed at far_distance.", "m/s",
               0.0, 2.0),
-    ParamSpec("angular_speed", 2.5, "Turn rate for rotating in place and peak rate of turning away. "
-              "The 2D simulator (like Gazebo's diff drive) turns this fast at full forward speed; a real "
-              "Burger's wheels saturate (v + 0.08 |w| <= 0.22), so lower it on the robot.", "rad/s",
-              0.05, 3.0),
+    ParamSpec("angular_speed", 1.5, "Turn rate for rotating in place and peak rate of turning away. "
+              "A real Burger cannot turn fast at full speed (its wheels share 0.22 m/s): keep it moderate "
+              "on a robot; the homework profile uses 2.5 in simulation.", "rad/s", 0.05, 3.0),
     ParamSpec("maneuver_angular_speed", 1.8, "Peak turn rate during an evasive maneuver.", "rad/s",
               0.05, 3.0),
     ParamSpec("maneuver_tolerance_deg", 3.0, "A maneuver is done when the remaining angle is smaller.",

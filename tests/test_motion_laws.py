@@ -1,7 +1,8 @@
 """The TurnAway control law: speed kept high across the far band, turn direction with hysteresis.
 
-Defaults assumed: front +-20 deg, sides 0..60 deg, close 0.3 m, far 1.2 m, speeds 0.2..0.22 m/s,
-angular_speed 2.5 rad/s (bt_nav/params.py); the tests read them from the parameter table.
+Run with the homework profile (config/homework.yaml over bt_nav/params.py's defaults: front +-20 deg,
+sides 0..60 deg, close 0.3 m, far 1.2 m, speeds 0.2..0.22 m/s, angular_speed 2.5 rad/s), the tuning
+these laws were made for; the tests read the values from there.
 """
 
 from __future__ import annotations
@@ -10,13 +11,15 @@ import pytest
 
 from bt_nav import params as P
 from bt_nav.behaviours.motion import TurnAway
+from bt_nav.lockstep import profile_parameters
 from bt_nav.testing import TickHarness
 
-D = P.defaults()
+HOMEWORK = profile_parameters("homework")
+D = {**P.defaults(), **HOMEWORK}
 
 
 def armed() -> TickHarness:
-    h = TickHarness()
+    h = TickHarness(overrides=HOMEWORK)
     h.tick()
     assert h.arm()[0]
     return h

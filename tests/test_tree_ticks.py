@@ -365,7 +365,7 @@ def test_live_parameter_update_and_refusals() -> None:
     h = armed_harness()
     h.see((0.0, 0.5))
     assert h.tick().tip == "TurnAway"
-    assert "smaller than far_distance" in h.core.set_param("close_distance", 1.3)
+    assert "smaller than far_distance" in h.core.set_param("close_distance", 0.8)
     assert h.core.set_param("far_distance", 1.0) is None
     assert h.core.set_param("close_distance", 0.6) is None
     assert h.tick().tip == "RotateInPlace"

@@ -55,7 +55,7 @@ def test_integer_for_a_float_parameter_is_accepted(executive: Callable[..., Harn
 def test_params_file_and_typo_warning(executive: Callable[..., Harness]) -> None:
     h = executive("--params-file", str(REPO / "config" / "homework.yaml"), "-p", "safty_distance:=0.4")
     values = h.get_parameters("mission_duration", "maneuver", "slow_linear_speed")
-    assert values == {"mission_duration": 50.0, "maneuver": "C", "slow_linear_speed": 0.15}
+    assert values == {"mission_duration": 50.0, "maneuver": "C", "slow_linear_speed": 0.2}
     h.wait(lambda: h.process.has_line(r"ignoring parameter 'safty_distance'"), "the typo warning")
     assert h.process.has_line(r"maneuver C Smart Pivot")
 
