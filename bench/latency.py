@@ -29,13 +29,12 @@ import bisect
 import math
 import os
 import random
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
 from bt_nav.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
-from bt_nav.rosutil import dds_env
+from bt_nav.rosutil import ThreadedNode, dds_env
 
 from .common import Target, at_most, percentiles
 from .ros_mission import proc_status
@@ -79,19 +78,14 @@ class Probe:
     """
 
     def __init__(self, domain: int) -> None:
-        import rclpy
         from geometry_msgs.msg import Twist
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-        from rclpy.signals import SignalHandlerOptions
         from sensor_msgs.msg import LaserScan
         from std_srvs.srv import SetBool
 
         os.environ.update(dds_env(domain))
-        self.rclpy = rclpy
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node("bt_nav_bench_latency", context=self.context)
+        self.ros = ThreadedNode("bt_nav_bench_latency")
+        self.node = self.ros.node
         self.scan_pub = self.node.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
         # (callback ns, received ns, source ns, linear, angular)
         self.commands: list[tuple[int, int, int, float, float]] = []
@@ -99,20 +93,7 @@ class Probe:
             Twist, "cmd_vel", self._on_cmd, QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.arm_client = self.node.create_client(SetBool, "arm")
         self._set_bool = SetBool
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, name="latency-probe", daemon=True)
-        self._thread.start()
-
-    def _spin(self) -> None:
-        while not self._stop.is_set() and self.context.ok():
-            try:
-                self.executor.spin_once(timeout_sec=0.05)
-            except Exception:  # the context going down while stopping
-                if not self._stop.is_set():
-                    raise
-                break
+        self.ros.start()
 
     def _on_cmd(self, msg: Any, info: Any) -> None:
         self.commands.append((time.time_ns(), int(info.get("received_timestamp") or 0),
@@ -143,12 +124,7 @@ class Probe:
 
     def close(self) -> None:
         """Stop spinning, destroy the node, shut the context down."""
-        self._stop.set()
-        self._thread.join(timeout=2.0)
-        try:
-            self.node.destroy_node()
-        finally:
-            self.rclpy.try_shutdown(context=self.context)
+        self.ros.close()
 
 
 def _wait(predicate: Callable[[], bool], timeout: float, what: str, tick: Callable[[], Any] | None = None) -> None:

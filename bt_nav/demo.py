@@ -110,18 +110,15 @@ class Recorder:
     """A node of the demo's own, spinning in a thread: ground truth, commands and the tree tip."""
 
     def __init__(self) -> None:
-        import rclpy
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-        from rclpy.signals import SignalHandlerOptions
         from std_msgs.msg import String
 
-        self.rclpy = rclpy
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node("bt_nav_demo_recorder", context=self.context)
+        from .rosutil import ThreadedNode
+
+        self.ros = ThreadedNode("bt_nav_demo_recorder")
+        self.node = self.ros.node
         self.data = Recording()
         self.lock = threading.Lock()
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -130,29 +127,18 @@ class Recorder:
         self.node.create_subscription(Odometry, "ground_truth_odom", self._on_truth, reliable)
         self.node.create_subscription(Twist, "cmd_vel", self._on_cmd, reliable)
         self.node.create_subscription(String, f"/{EXECUTIVE_NAME}/tree", self._on_tree, latched)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, name="recorder", daemon=True)
-        self._thread.start()
-
-    def _spin(self) -> None:
-        while not self._stop.is_set() and self.context.ok():
-            try:
-                self.executor.spin_once(timeout_sec=0.05)
-            except Exception:  # context going down while stopping
-                if not self._stop.is_set():
-                    raise
-                break
+        self.ros.start()
 
     def _on_truth(self, msg: Any) -> None:
+        from .rosutil import yaw_from_quaternion
+
         q = msg.pose.pose.orientation
         d = self.data
         with self.lock:
             d.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
             d.x.append(msg.pose.pose.position.x)
             d.y.append(msg.pose.pose.position.y)
-            d.yaw.append(math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z)))
+            d.yaw.append(yaw_from_quaternion(q.x, q.y, q.z, q.w))
             d.tip.append(d.current_tip)
             d.wall.append(time.monotonic())
             d.cmd_linear.append(d.current_cmd[0])
@@ -171,12 +157,7 @@ class Recorder:
 
     def close(self) -> Recording:
         """Stop spinning, destroy the node, shut the context down; returns the recording."""
-        self._stop.set()
-        self._thread.join(timeout=2.0)
-        try:
-            self.node.destroy_node()
-        finally:
-            self.rclpy.try_shutdown(context=self.context)
+        self.ros.close()
         return self.data
 
 

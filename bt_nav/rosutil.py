@@ -10,11 +10,13 @@ from __future__ import annotations
 import math
 import os
 import re
+import threading
 import zlib
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import py_trees
+import rclpy
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.node import Node
@@ -151,6 +153,50 @@ def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
     if not (math.isfinite(sin_term) and math.isfinite(cos_term)) or (sin_term == 0.0 and cos_term == 0.0):
         return math.nan
     return math.atan2(sin_term, cos_term)
+
+
+class ThreadedNode:
+    """A node in a private rclpy context whose executor spins in a daemon thread.
+
+    For in-process observers (the demo's recorder, the latency probe): their callbacks run while the
+    main thread waits on subprocesses or publishes, and their own context keeps them apart from any
+    other rclpy user of the process. Create subscriptions on ``node``, then :meth:`start`.
+    """
+
+    def __init__(self, name: str) -> None:
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, name=name, daemon=True)
+
+    def start(self) -> None:
+        """Start spinning."""
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set() and self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # the context going down while stopping
+                if not self._stop.is_set():
+                    raise
+                break
+
+    def close(self) -> None:
+        """Stop spinning, destroy the node, shut the context down."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+        try:
+            self.node.destroy_node()
+        finally:
+            rclpy.try_shutdown(context=self.context)
 
 
 class CommandPublisher:
