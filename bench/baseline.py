@@ -1,7 +1,7 @@
 """The baseline for the tick-cost benchmark: the same decisions as the mission tree, hand-written
 as one if/else function in the style of the lab's template (a flag, a few sector minima, branches).
 
-It shares the scan geometry (bt_nav.scan) with the tree, so the ratio measured against it is the
+It shares the scan geometry (bt_nav.mission.scan) with the tree, so the ratio measured against it is the
 price of the behaviour tree itself: composites, ports and the blackboard.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from bt_nav.scan import Proximity, Scan, SectorConfig, classify, clearer_side, sector_minima
+from bt_nav.mission.scan import Proximity, Scan, SectorConfig, classify, clearer_side, sector_minima
 
 
 class IfElseController:

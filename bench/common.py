@@ -88,8 +88,8 @@ def homework_overrides() -> dict[str, Any]:
     The lock-step benchmarks run what ``bt-nav demo`` runs (the executive with that file), not the
     bare defaults, so their missions and the ROS-path ones are the same missions.
     """
-    from bt_nav import params as P
-    from bt_nav.bringup import config_file, file_parameters
+    from bt_nav.mission import params as P
+    from bt_nav.ros.bringup import config_file, file_parameters
 
     path = config_file("homework.yaml")
     values = file_parameters(path) if path is not None else {}

@@ -33,8 +33,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from bt_nav.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
-from bt_nav.rosutil import ThreadedNode, dds_env
+from bt_nav.ros.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
+from bt_nav.ros.rosutil import ThreadedNode, dds_env
 
 from .common import Target, at_most, percentiles
 from .ros_mission import proc_status

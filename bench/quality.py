@@ -1,6 +1,6 @@
 """Benchmark 4: mission quality, graded by the referee over worlds x maneuvers x seeds (lock-step).
 
-:func:`bt_nav.grade.grade` runs every (world, maneuver, seed) in worker processes, with the
+:func:`bt_nav.cli.grade.grade` runs every (world, maneuver, seed) in worker processes, with the
 parameters of ``config/homework.yaml`` (what ``bt-nav demo`` runs) and the maneuver varied. Per
 (world, maneuver): pass rate, collisions, travelled distance, and distance efficiency = travelled /
 (max_linear_speed x time armed before the deadline stop) — 1.0 would be driving straight at full
@@ -17,7 +17,7 @@ import os
 import time
 from typing import Any
 
-from bt_nav.grade import grade, summarize
+from bt_nav.cli.grade import grade, summarize
 
 from .common import Target, at_least, homework_overrides, median
 

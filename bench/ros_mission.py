@@ -1,8 +1,8 @@
 """One whole homework mission over DDS, as ``bt-nav demo`` runs it: its speed and its processes' memory.
 
-The ``eval`` graph of :func:`bt_nav.bringup.nodes` (simulator with ``real_time_factor`` 0, the
+The ``eval`` graph of :func:`bt_nav.ros.bringup.nodes` (simulator with ``real_time_factor`` 0, the
 executive with ``config/homework.yaml``, the referee) runs as subprocesses in a domain of its own;
-the demo's :class:`~bt_nav.demo.Recorder` node in this process records ground truth with its wall
+the demo's :class:`~bt_nav.cli.demo.Recorder` node in this process records ground truth with its wall
 arrival time, which gives the real-time factor over exactly the referee's mission (from its t0 to
 its report): simulated seconds / wall seconds. Start-up (Python imports, DDS discovery) is reported
 apart, because it is a fixed cost, not a speed.
@@ -33,8 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.bringup import Launcher, NodeSpec, child_env, nodes
-from bt_nav.rosutil import dds_env
+from bt_nav.ros.bringup import Launcher, NodeSpec, child_env, nodes
+from bt_nav.ros.rosutil import dds_env
 
 #: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
 REFEREE_TIMEOUT = 120.0
@@ -117,7 +117,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     The DDS environment of this process is set to ``domain`` (the recorder node lives here).
     """
-    from bt_nav.demo import Recorder, effective_maneuver, rec_ready
+    from bt_nav.cli.demo import Recorder, effective_maneuver, rec_ready
 
     os.environ.update(dds_env(domain))
     env = child_env(domain)

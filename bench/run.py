@@ -15,7 +15,7 @@ Missed targets do not fail the command (a benchmark is a measurement, not a test
 crashes does (exit 1), after the others have run and the files are written.
 
 DDS: every ROS process started here talks on localhost only, in a domain of 201-214 claimed with a
-lock file (:func:`bt_nav.rosutil.claim_domain_id`): above ``bt-nav demo``/``sim-run`` (100-200) and
+lock file (:func:`bt_nav.ros.rosutil.claim_domain_id`): above ``bt-nav demo``/``sim-run`` (100-200) and
 below the tests (215-232), so benchmarks, tests and demos can run side by side. ``--no-dds`` skips
 everything that needs DDS (the latency, the ROS path of ``sim``, memory).
 """
@@ -65,7 +65,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 def _domain() -> int:
     """A fresh DDS domain for one activity (the claim lasts until this process exits)."""
-    from bt_nav.rosutil import claim_domain_id
+    from bt_nav.ros.rosutil import claim_domain_id
 
     return claim_domain_id(*DOMAIN_RANGE)
 

@@ -3,7 +3,7 @@
 - LiDAR: :meth:`sim.lidar.RayCaster.cast` in stage_4 with the homework LiDAR (360 beams, seeded
   noise, as the simulator and the lock-step runner call it), from random poses; per-call timings,
   scans/s = 1 / p50. The noise-free geometry (``true_ranges``) is timed in the same loop.
-- Lock-step: :func:`bt_nav.lockstep.run_mission` on stage_4 with ``config/homework.yaml``'s
+- Lock-step: :func:`bt_nav.cli.lockstep.run_mission` on stage_4 with ``config/homework.yaml``'s
   parameters over several seeds, serially in this process; wall seconds per mission (median) and
   what one mission's time is spent on (cProfile: inclusive time of the tree tick, the ray casting,
   the physics, the referee).
@@ -24,11 +24,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bt_nav_sim import HOMEWORK_LIDAR, RayCaster, load_world
 
-from bt_nav import params as P
-from bt_nav.demo import effective_maneuver
-from bt_nav.lockstep import run_mission
-from bt_nav.sim import HOMEWORK_LIDAR, RayCaster, load_world
+from bt_nav.cli.demo import effective_maneuver
+from bt_nav.cli.lockstep import run_mission
+from bt_nav.mission import params as P
 
 from .common import (
     Target,
@@ -50,7 +50,7 @@ TARGET_RTF = 10.0
 LOCKSTEP_AREAS = (
     ("py_trees/", "py_trees framework"),
     ("bt_nav/behaviours", "bt_nav leaves"),
-    ("bt_nav/scan.py", "scan processing (bt_nav.scan)"),
+    ("bt_nav/scan.py", "scan processing (bt_nav.mission.scan)"),
     ("sim/lidar.py", "LiDAR ray casting (Python side)"),
     ("sim/physics.py", "physics"),
     ("sim/world.py", "world geometry (collision clearance)"),
@@ -70,7 +70,7 @@ EXECUTIVE_AREAS = (
     ("py_trees/", "py_trees framework"),
     ("bt_nav/executive.py", "executive edge (callbacks, vet, ~/tree, stats)"),
     ("bt_nav/behaviours", "bt_nav leaves"),
-    ("bt_nav/scan.py", "scan processing (bt_nav.scan)"),
+    ("bt_nav/scan.py", "scan processing (bt_nav.mission.scan)"),
     ("numpy", "numpy kernels"),
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core"),

@@ -10,7 +10,7 @@ CPU clock, which stops while the process is preempted: when the wall p99 is far 
 the tail is other processes' load, not the tree.
 
 Also measured, because the executive pays it once per scan in its subscription callback (outside
-the tick): the conversion of a ``sensor_msgs/LaserScan`` into a :class:`bt_nav.scan.Scan`.
+the tick): the conversion of a ``sensor_msgs/LaserScan`` into a :class:`bt_nav.mission.scan.Scan`.
 
 A cProfile run of the tree (360 beams) says where a tick's time goes, split by area (py_trees'
 framework, bt_nav's leaves, scan processing, numpy...).
@@ -24,8 +24,8 @@ import math
 import time
 from typing import Any
 
-from bt_nav import params as P
-from bt_nav.scan import Scan
+from bt_nav.mission import params as P
+from bt_nav.mission.scan import Scan
 from bt_nav.testing import Layout, TickHarness, synthetic_scan
 
 from .baseline import IfElseController
@@ -43,7 +43,7 @@ ALREADY_REMOVED = [
 AREAS = (
     ("py_trees/", "py_trees framework (composites, status, blackboard)"),
     ("bt_nav/behaviours", "bt_nav leaves"),
-    ("bt_nav/scan.py", "scan processing (bt_nav.scan)"),
+    ("bt_nav/scan.py", "scan processing (bt_nav.mission.scan)"),
     ("numpy", "numpy kernels"),
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core"),

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from .core import MissionCore
-from .scan import Scan
-from .types import Command
+from bt_nav.mission.core import MissionCore
+from bt_nav.mission.datatypes import Command
+from bt_nav.mission.scan import Scan
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@
 
 from launch import LaunchDescription
 
-from bt_nav.bringup import nodes
-from bt_nav.launching import declare, to_actions
+from bt_nav.ros.bringup import nodes
+from bt_nav.ros.launching import declare, to_actions
 
 ARGUMENTS = ["maneuver", "safety_distance", "world", "seed", "real_time_factor"]
 

@@ -7,8 +7,8 @@
 
 from launch import LaunchDescription
 
-from bt_nav.bringup import nodes
-from bt_nav.launching import declare, to_actions
+from bt_nav.ros.bringup import nodes
+from bt_nav.ros.launching import declare, to_actions
 
 ARGUMENTS = ["safety_distance", "maneuver", "use_sim_time"]
 

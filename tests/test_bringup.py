@@ -1,4 +1,4 @@
-"""The node table of bt_nav.bringup, its command lines, and the demo's tree-tip parser (no DDS)."""
+"""The node table of bt_nav.ros.bringup, its command lines, and the demo's tree-tip parser (no DDS)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import sys
 
 import pytest
 
-from bt_nav import bringup
-from bt_nav.bringup import NodeSpec, choose_domain_id, nodes, param_arg, parse_assignments
-from bt_nav.demo import tip_from_snapshot
+from bt_nav.cli.demo import tip_from_snapshot
+from bt_nav.ros import bringup
+from bt_nav.ros.bringup import NodeSpec, choose_domain_id, nodes, param_arg, parse_assignments
 
 
 def _by_name(specs: list[NodeSpec]) -> dict[str, NodeSpec]:

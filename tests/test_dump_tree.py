@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav import dump_tree, replay
+from bt_nav.cli import dump_tree, replay
+from bt_nav.mission.trace import TraceRecorder, read_trace
 from bt_nav.testing import TickHarness
-from bt_nav.trace import TraceRecorder, read_trace
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "tree"
 HAVE_DOT = shutil.which("dot") is not None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from bt_nav.grade import format_table, grade, main, summarize
+from bt_nav.cli.grade import format_table, grade, main, summarize
 
 
 def test_tiny_grid_in_parallel_matches_serial() -> None:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.params import SPECS
+from bt_nav.mission.params import SPECS
 
 ROOT = Path(__file__).resolve().parent.parent
 LAUNCH = ROOT / "launch"

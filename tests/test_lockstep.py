@@ -6,10 +6,10 @@ import json
 
 import numpy as np
 import pytest
+from bt_nav_sim.plot import BRANCHES, Trajectory, plot_run
 
-from bt_nav.lockstep import main, run_mission
-from bt_nav.sim.plot import BRANCHES, Trajectory, plot_run
-from bt_nav.trace import read_trace
+from bt_nav.cli.lockstep import main, run_mission
+from bt_nav.mission.trace import read_trace
 
 
 def test_same_seed_same_run() -> None:
@@ -84,7 +84,7 @@ def test_cli_writes_trace_plot_and_json(tmp_path, capsys) -> None:
 
 def test_plot_accepts_a_plain_dict_trajectory(tmp_path) -> None:
     """The ROS demo records topics into plain arrays; the same function draws them."""
-    from bt_nav.sim import load_world
+    from bt_nav_sim import load_world
 
     t = np.linspace(0.0, 10.0, 50)
     trajectory = {"t": t, "x": np.cos(t / 3), "y": np.sin(t / 3), "yaw": t / 3 + np.pi / 2,

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import pytest
 
-from bt_nav import params as P
-from bt_nav.behaviours.motion import TurnAway
-from bt_nav.lockstep import profile_parameters
+from bt_nav.cli.lockstep import profile_parameters
+from bt_nav.mission import params as P
+from bt_nav.mission.behaviours.motion import TurnAway
 from bt_nav.testing import TickHarness
 
 HOMEWORK = profile_parameters("homework")

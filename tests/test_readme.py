@@ -6,13 +6,13 @@ import re
 from pathlib import Path
 
 from bt_nav.cli import COMMANDS
-from bt_nav.params import markdown_table
+from bt_nav.mission.params import markdown_table
 
 README = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
 
 
 def test_parameter_table_is_current() -> None:
-    assert markdown_table() in README, "paste bt_nav.params.markdown_table() into the README"
+    assert markdown_table() in README, "paste bt_nav.mission.params.markdown_table() into the README"
 
 
 def test_no_unfilled_placeholders() -> None:

@@ -11,8 +11,7 @@ import math
 from dataclasses import dataclass
 
 import pytest
-
-from bt_nav.sim.referee_core import CHECKS, Activate, Referee, RefereeConfig
+from bt_nav_sim.referee_core import CHECKS, Activate, Referee, RefereeConfig
 
 RATE = 30.0  # ground-truth samples per second
 

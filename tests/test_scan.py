@@ -1,4 +1,4 @@
-"""Tests for ``bt_nav.scan``: hand-computed layouts of the real sensors plus brute-force property tests.
+"""Tests for ``bt_nav.mission.scan``: hand-computed layouts of the real sensors plus brute-force property tests.
 
 The property tests compare the vectorised, cached implementation with a deliberately naive reference that
 loops over beams in pure Python and wraps angles a different way (``atan2(sin, cos)``), so a shared bug in
@@ -17,7 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bt_nav.scan import (
+from bt_nav.mission.scan import (
     MAX_BEAMS,
     Proximity,
     Scan,

@@ -1,4 +1,4 @@
-"""Ray casting, range conventions, noise and dropouts of bt_nav.sim.lidar."""
+"""Ray casting, range conventions, noise and dropouts of bt_nav_sim.lidar."""
 
 from __future__ import annotations
 
@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 import pytest
-
-from bt_nav.sim import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays, load_world, world_from_dict
+from bt_nav_sim import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays, load_world, world_from_dict
 
 NOISELESS = LidarModel(range_max=10.0, noise_sigma=0.0)
 

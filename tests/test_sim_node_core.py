@@ -5,8 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-
-from bt_nav.sim.node import Followers, SimConfig, SimCore, split_ros_args
+from bt_nav_sim.nodes.simulator import Followers, SimConfig, SimCore, split_ros_args
 
 MS = 1_000_000
 

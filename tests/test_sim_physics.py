@@ -1,14 +1,13 @@
-"""Kinematics, limits, collisions and tunnelling of bt_nav.sim.physics."""
+"""Kinematics, limits, collisions and tunnelling of bt_nav_sim.physics."""
 
 from __future__ import annotations
 
 import math
 
 import pytest
+from bt_nav_sim import RobotParams, RobotState, load_world, step, world_from_dict
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from bt_nav.sim import RobotParams, RobotState, load_world, step, world_from_dict
 
 P = RobotParams()
 VOID = world_from_dict({"name": "void"})

@@ -1,4 +1,4 @@
-"""World loading, box geometry, clearance and the cluttered generator of bt_nav.sim."""
+"""World loading, box geometry, clearance and the cluttered generator of bt_nav_sim."""
 
 from __future__ import annotations
 
@@ -8,9 +8,8 @@ from collections import deque
 
 import numpy as np
 import pytest
-
-from bt_nav.sim import LidarModel, World, cast_rays, list_worlds, load_world
-from bt_nav.sim.world import box_corners, box_segments, world_from_dict
+from bt_nav_sim import LidarModel, World, cast_rays, list_worlds, load_world
+from bt_nav_sim.world import box_corners, box_segments, world_from_dict
 
 ROBOT_RADIUS = 0.12
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from bt_nav.behaviours import LEAF_CLASSES, REGISTRY
-from bt_nav.dump_tree import nodes_model
-from bt_nav.resources import tree_file
+from bt_nav.cli.dump_tree import nodes_model
+from bt_nav.mission.behaviours import LEAF_CLASSES, REGISTRY
+from bt_nav.mission.resources import tree_file
+from bt_nav.mission.tree import load_tree
 from bt_nav.testing import TickHarness
-from bt_nav.tree import load_tree
 
 GOLDEN = Path(__file__).parent / "golden"
 UPDATE = os.environ.get("BT_NAV_UPDATE_GOLDEN") == "1"

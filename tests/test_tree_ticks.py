@@ -333,7 +333,7 @@ def test_stale_scan_stops_until_a_fresh_one_arrives() -> None:
 
 
 def test_malformed_scan_is_a_safe_stop_with_a_reason() -> None:
-    from bt_nav.scan import Scan
+    from bt_nav.mission.scan import Scan
 
     h = armed_harness()
     h.tick()

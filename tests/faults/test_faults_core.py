@@ -1,6 +1,6 @@
 """Faults that need no DDS: the mission core ticked in-process (bt_nav.testing), where thousands of inputs are cheap.
 
-The ROS edge only ever hands the core a :class:`~bt_nav.scan.Scan` built from a LaserScan; the core itself
+The ROS edge only ever hands the core a :class:`~bt_nav.mission.scan.Scan` built from a LaserScan; the core itself
 is also driven by the lock-step runner, which builds Scans directly, so here the fuzzer may put anything in
 a Scan (any dtype, any shape, any scalar) and checks that no leaf ever raises and that the command obeys
 the same oracle as over DDS. The time-jump cases show what a backward ``/clock`` jump does to the two
@@ -18,7 +18,7 @@ from conftest import LONG, FaultCases
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from bt_nav.scan import MAX_BEAMS, Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
+from bt_nav.mission.scan import MAX_BEAMS, Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
 from bt_nav.testing import LocalTriggerClient, TickHarness
 
 V_MAX, W_TURN = 0.22, 1.5
@@ -196,8 +196,8 @@ def test_backward_jump_and_the_evaluation_timeout(faults: FaultCases) -> None:
 
 def test_fault_injection_hook_refuses_bad_specs() -> None:
     """The test-only hook (BT_NAV_FAULT_INJECT) refuses what it cannot arm, so a typo cannot silently test nothing."""
-    from bt_nav.executive import InjectedFaultError, inject_faults
-    from bt_nav.rosutil import ConfigError
+    from bt_nav.ros.executive import InjectedFaultError, inject_faults
+    from bt_nav.ros.rosutil import ConfigError
 
     th = TickHarness("none", events=Events())
     with pytest.raises(ConfigError, match="no tree node named 'Nope'"):

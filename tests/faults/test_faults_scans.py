@@ -28,7 +28,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import V_MAX, Harness
 from sensor_msgs.msg import LaserScan
 
-from bt_nav.scan import Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
+from bt_nav.mission.scan import Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
 
 NAN, INF = math.nan, math.inf
 GAP_UNKNOWN_FRONT = ("gap: no log line says the front is unknown (it rotates in place without a word); proposed: "

@@ -2,7 +2,7 @@
 
 Isolation: this process (and every executive it starts) talks on localhost only
 (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) in a domain of its own: 215-232, claimed with a lock
-file (:func:`bt_nav.rosutil.claim_domain_id`), so pytest-xdist workers and concurrent ``make test``
+file (:func:`bt_nav.ros.rosutil.claim_domain_id`), so pytest-xdist workers and concurrent ``make test``
 runs on one machine never share one, and away from the 100-200 where ``bt-nav demo`` and
 ``sim-run`` pick random domains (a shared domain means foreign /clock and /cmd_vel in the test).
 Both are set here, at import, before any ``rclpy.init``.
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.rosutil import claim_domain_id, dds_env
+from bt_nav.ros.rosutil import claim_domain_id, dds_env
 
 DOMAIN_ID = claim_domain_id(215, 232)  # not 100-200: bt-nav demo/sim-run pick random domains there
 os.environ.update(dds_env(DOMAIN_ID))

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bt_nav.rosutil import dds_env, domain_id_for
+from bt_nav.ros.rosutil import dds_env, domain_id_for
 
 REPO = Path(__file__).resolve().parents[2]
 

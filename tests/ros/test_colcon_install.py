@@ -38,11 +38,12 @@ def test_colcon_build_and_run_the_installed_executive(tmp_path: Path, start_exec
     share = prefix / "share" / "bt_nav"
     for path in (executable, share / "package.xml", share / "trees" / "mission.xml",
                  share / "config" / "lab.yaml", prefix / "share" / "ament_index" / "resource_index" / "packages" /
-                 "bt_nav", site_packages / "bt_nav" / "sim" / "__init__.py", site_packages / "bt_nav" / "executive.py"):
+                 "bt_nav", site_packages / "bt_nav_sim" / "__init__.py", site_packages / "bt_nav_sim" / "worlds" / "stage_4.yaml",
+                 site_packages / "bt_nav_sim" / "nodes" / "simulator.py", site_packages / "bt_nav" / "ros" / "executive.py"):
         assert path.exists(), f"not installed: {path.relative_to(tmp_path)}"
     assert os.access(executable, os.X_OK)
     assert executable.read_text().startswith(f"#!{sys.executable}")  # the venv's python runs it
-    assert not (site_packages / "bt_nav" / "sim").is_symlink()  # a real copy of sim/, not a dangling link
+    assert not (site_packages / "bt_nav" / "sim").exists()  # the simulator installs once, as bt_nav_sim
 
     env = dict(os.environ)
     env.pop("BT_NAV_SHARE", None)

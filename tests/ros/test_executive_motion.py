@@ -13,7 +13,7 @@ import pytest
 from ros_harness import PERIOD, REPO, V_MAX, Harness, laser_scan
 from std_msgs.msg import String
 
-from bt_nav.rosutil import LATCHED
+from bt_nav.ros.rosutil import LATCHED
 
 FREE = laser_scan()  # nothing within 3 m: full speed
 

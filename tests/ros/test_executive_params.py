@@ -16,7 +16,7 @@ from rcl_interfaces.srv import DescribeParameters, ListParameters
 from rclpy.parameter import Parameter
 from ros_harness import ExecutiveProcess, Harness
 
-from bt_nav import params as P
+from bt_nav.mission import params as P
 
 
 @pytest.fixture(scope="module")

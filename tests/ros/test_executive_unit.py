@@ -14,9 +14,10 @@ from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from bt_nav import params as P
-from bt_nav.executive import Executive, TickStats
-from bt_nav.rosutil import (
+from bt_nav.mission import params as P
+from bt_nav.mission.datatypes import Command
+from bt_nav.ros.executive import Executive, TickStats
+from bt_nav.ros.rosutil import (
     EventLog,
     claim_domain_id,
     domain_id_for,
@@ -24,7 +25,6 @@ from bt_nav.rosutil import (
     route_py_trees_logging,
     yaw_from_quaternion,
 )
-from bt_nav.types import Command
 
 
 @pytest.fixture
@@ -163,9 +163,9 @@ def test_parameter_callbacks_check_then_apply(executive: Executive) -> None:
 
 def test_an_exception_in_a_leaf_stops_the_robot_and_the_node_lives_on(executive: Executive,
                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
-    from bt_nav.behaviours import DriveForward
-    from bt_nav.core import find_leaf
-    from bt_nav.scan import Scan
+    from bt_nav.mission.behaviours import DriveForward
+    from bt_nav.mission.core import find_leaf
+    from bt_nav.mission.scan import Scan
 
     def broken() -> Any:
         raise RuntimeError("sensor driver returned garbage")

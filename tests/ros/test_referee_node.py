@@ -9,10 +9,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from bt_nav_sim.nodes.referee import scaled
+from bt_nav_sim.referee_core import RefereeConfig
 from simtools import Proc, wait_until
-
-from bt_nav.sim.referee import scaled
-from bt_nav.sim.referee_core import RefereeConfig
 
 ACTIVATE = "/reactive_control/activate"
 EVALUATE = "/reactive_control/evaluate_mission"

@@ -1,0 +1,82 @@
+"""``bt-nav <command>``: one console script for the pip path, plus the ``ros2 run bt_nav <exe>`` entry points.
+
+Each command lives in its own module with a ``main(argv) -> int``; this file only dispatches, and
+imports a command's module when it runs, so ``bt-nav dump-tree`` does not pay for rclpy.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+#: command -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "executive": ("bt_nav.ros.executive", "run the mission executive node (ros2 run bt_nav executive)"),
+    "sim": ("bt_nav_sim.nodes.simulator", "run the 2D TurtleBot3 simulator node"),
+    "referee": ("bt_nav_sim.nodes.referee", "run the homework referee node"),
+    "sim-run": ("bt_nav.ros.bringup", "simulator + executive (+ referee) in one go, without ros2 launch"),
+    "demo": ("bt_nav.cli.demo", "the whole homework mission over DDS in sim time, with verdict and picture"),
+    "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),
+    "grade": ("bt_nav.cli.grade", "grade worlds x maneuvers x seeds in lock-step, in parallel"),
+    "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
+    "replay": ("bt_nav.cli.replay", "print a recorded tick trace tick by tick, or render one tick"),
+    "watch": ("bt_nav.cli.watch", "print the executive's ~/tree snapshots as they change"),
+}
+
+
+def usage() -> str:
+    """The command list."""
+    width = max(len(name) for name in COMMANDS)
+    lines = ["usage: bt-nav <command> [options]   (bt-nav <command> --help for its options)", "", "commands:"]
+    lines += [f"  {name:<{width}}  {help_}" for name, (_, help_) in COMMANDS.items()]
+    return "\n".join(lines)
+
+
+def run(command: str, argv: list[str]) -> int:
+    """Import the command's module and run its ``main``."""
+    module_name, _ = COMMANDS[command]
+    module = importlib.import_module(module_name)
+    return int(module.main(argv) or 0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``bt-nav``."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help", "help"):
+        print(usage())
+        return 0
+    command, rest = argv[0], argv[1:]
+    if command not in COMMANDS:
+        print(f"bt-nav: unknown command {command!r}\n\n{usage()}", file=sys.stderr)
+        return 2
+    return run(command, rest)
+
+
+def _entry(command: str) -> int:
+    return run(command, sys.argv[1:])
+
+
+def executive_main() -> int:
+    """``ros2 run bt_nav executive``."""
+    return _entry("executive")
+
+
+def sim_main() -> int:
+    """``ros2 run bt_nav sim``."""
+    return _entry("sim")
+
+
+def referee_main() -> int:
+    """``ros2 run bt_nav referee``."""
+    return _entry("referee")
+
+
+def dump_tree_main() -> int:
+    """``ros2 run bt_nav dump_tree``."""
+    return _entry("dump-tree")
+
+
+def watch_main() -> int:
+    """``ros2 run bt_nav watch``."""
+    return _entry("watch")
+

@@ -1,0 +1,54 @@
+"""bt_nav's behaviours, grouped by family, and the registry the XML parser builds the tree from.
+
+| module | leaves |
+|---|---|
+| ``control`` | ReactiveSequence, ReactiveFallback, ForceSuccess (BehaviorTree.CPP tags) |
+| ``mission`` | ArmService, IsArmed, MissionDeadline, EvaluateMission |
+| ``perception`` | ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontCloserThan, SidesCloserThan |
+| ``motion`` | Stop, DriveForward, TurnAway, RotateInPlace |
+| ``maneuvers`` | ManeuverActive, RandomizerManeuver (A), RetreatManeuver (B), SmartPivotManeuver (C), AlwaysFailure |
+
+To add a leaf: subclass :class:`~bt_nav.mission.behaviours.base.Leaf` (or ``Condition``), declare
+``INPUT_PORTS`` / ``OUTPUT_PORTS``, add it to :data:`REGISTRY` and declare it in the tree file's
+``TreeNodesModel`` (a test checks that the two agree).
+"""
+
+from __future__ import annotations
+
+from py_trees.ports import PortsMixin
+
+from bt_nav.mission.behaviours.control import ForceSuccess, ReactiveFallback, ReactiveSequence
+from bt_nav.mission.behaviours.maneuvers import (
+    AlwaysFailure,
+    ManeuverActive,
+    RandomizerManeuver,
+    RetreatManeuver,
+    RotationManeuver,
+    SmartPivotManeuver,
+)
+from bt_nav.mission.behaviours.mission import ArmService, EvaluateMission, IsArmed, MissionDeadline
+from bt_nav.mission.behaviours.motion import DriveForward, RotateInPlace, Stop, TurnAway
+from bt_nav.mission.behaviours.perception import (
+    FrontCloserThan,
+    ObstacleClose,
+    ObstacleFar,
+    ProcessScan,
+    ScanHealthy,
+    SidesCloserThan,
+)
+
+_CLASSES: tuple[type[PortsMixin], ...] = (
+    ReactiveSequence, ReactiveFallback, ForceSuccess,
+    ArmService, IsArmed, MissionDeadline, EvaluateMission,
+    ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontCloserThan, SidesCloserThan,
+    Stop, DriveForward, TurnAway, RotateInPlace,
+    ManeuverActive, RandomizerManeuver, RetreatManeuver, SmartPivotManeuver, AlwaysFailure,
+)
+
+REGISTRY: dict[str, type[PortsMixin]] = {cls.__name__: cls for cls in _CLASSES}
+"""Tag -> class, handed to py_trees' XML parser (only these tags, plus py_trees' own decorators)."""
+
+LEAF_CLASSES = {name: cls for name, cls in REGISTRY.items() if cls not in (ReactiveSequence, ReactiveFallback,
+                                                                           ForceSuccess)}
+
+__all__ = ["REGISTRY", "LEAF_CLASSES", "RotationManeuver", *REGISTRY]

@@ -1,0 +1,216 @@
+"""The three evasive rotation maneuvers of the lab (A, B, C), each its own leaf.
+
+All three share one closed-loop controller (:class:`RotationManeuver`): they differ only in how
+much to turn, which they decide when they start. Rotation only — ``linear.x`` is exactly zero on
+every tick of a maneuver. The angle turned is accumulated from odometry yaw increments (so a 180 deg
+spin and the +-pi seam are no special cases); without fresh odometry the leaf integrates its own
+commanded rate instead (open loop), and a time allowance ends a maneuver that cannot finish.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from typing import Any
+
+import py_trees
+
+from bt_nav.mission.behaviours.base import CMD_PORT, Condition, Leaf, port
+from bt_nav.mission.behaviours.perception import SECTORS_PORT
+from bt_nav.mission.datatypes import NO_ODOM, OdomSample
+from bt_nav.mission.scan import Sectors, clearer_side, wrap_angle
+
+Status = py_trees.common.Status
+
+ACTIVE_PORT = {"active": port(bool, "a maneuver is under way", default=False)}
+
+
+class ManeuverActive(Condition):
+    """Is a maneuver under way? Keeps its branch selected after the trigger has cleared."""
+
+    INPUT_PORTS = dict(ACTIVE_PORT)
+    OUTPUT_PORTS = {}
+
+    def answer(self) -> bool:
+        """``active`` as written by the maneuver leaf."""
+        return bool(self.get_input("active"))
+
+
+class RotationManeuver(Leaf, register=False):
+    """Rotate in place by :meth:`choose_rotation` radians, closed loop on odometry yaw.
+
+    SUCCESS when the remaining angle is within ``tolerance_deg``; FAILURE (with a stop) when the
+    nominal time plus ``time_margin`` has passed. ``active`` is True from start to end, so the branch
+    is not abandoned when the trigger clears mid-turn; a preemption (disarm, deadline) ends it through
+    ``terminate`` with a zero twist.
+    """
+
+    INPUT_PORTS = {
+        **SECTORS_PORT,
+        "odom": port(OdomSample, "latest odometry yaw", default=NO_ODOM),
+        "angular_speed": port(float, "peak turn rate", default=1.8),
+        "tolerance_deg": port(float, default=3.0),
+        "time_margin": port(float, default=2.0),
+        "odom_timeout": port(float, default=0.5),
+    }
+    OUTPUT_PORTS = {**CMD_PORT, **ACTIVE_PORT}
+
+    GAIN = 3.0  # 1/s: proportional slow-down over the last ~35 deg, so the sim's inertia does not overshoot
+    MIN_RATE = 0.3  # rad/s: below this a real base stalls; also bounds the approach time
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.rotation = 0.0
+        self.turned = 0.0
+        self.open_loop_ticks = 0
+        self._odom_turned = 0.0  # sum of yaw increments between odometry samples
+        self._since_sample = 0.0  # commanded rate integrated since the last sample (dead reckoning)
+        self._last_yaw: float | None = None
+        self._last_stamp = -math.inf
+        self._last_rate = 0.0
+        self._last_time = 0.0
+        self._elapsed = 0.0  # seconds since the start, summed per update so a clock jumping back cannot stretch it
+        self._allowance = 0.0
+        self._open_loop_logged = False
+
+    def choose_rotation(self, sectors: Sectors) -> float:
+        """Signed angle to turn (rad, + is CCW / left), decided when the maneuver starts."""
+        raise NotImplementedError
+
+    def initialise(self) -> None:
+        """Decide the rotation and start the clock."""
+        self.rotation = self.choose_rotation(self.get_input("sectors"))
+        self.turned = self._odom_turned = self._since_sample = 0.0
+        self.open_loop_ticks = 0
+        now = self.clock()
+        self._last_time = now
+        self._elapsed = 0.0
+        self._open_loop_logged = False
+        self._last_rate = 0.0
+        odom = self._new_odom(now)
+        self._last_yaw = odom.yaw if odom is not None else None
+        self._last_stamp = odom.stamp if odom is not None else -math.inf
+        rate = self.get_input("angular_speed")
+        self._allowance = abs(self.rotation) / rate + 1.0 + self.get_input("time_margin")
+        self._set_output("active", True)
+        self.events.info(f"{self.label}: starting a {math.degrees(self.rotation):+.0f} deg rotation")
+
+    def _new_odom(self, now: float) -> OdomSample | None:
+        """The latest odometry sample if it is usable and not the one already counted."""
+        odom: OdomSample = self.get_input("odom")
+        timeout = self.get_input("odom_timeout")
+        if odom.stamp == self._last_stamp or not math.isfinite(odom.yaw):
+            return None
+        if not -timeout <= now - odom.stamp <= timeout:
+            return None
+        return odom
+
+    def _measure(self, now: float) -> None:
+        """Update ``turned``: odometry yaw increments, dead reckoning between (or without) samples.
+
+        A new sample's increment covers the interval that dead reckoning bridged, so the bridge is
+        dropped then; when samples stop coming the bridge simply keeps growing (open loop).
+        """
+        odom = self._new_odom(now)
+        dt = max(0.0, now - self._last_time)
+        self._elapsed += dt
+        if odom is None:
+            self._since_sample += self._last_rate * dt
+            if now - self._last_stamp > self.get_input("odom_timeout"):
+                self.open_loop_ticks += 1
+                if not self._open_loop_logged:
+                    self._open_loop_logged = True
+                    self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
+                                        "(integrating the commanded turn rate)")
+        else:
+            if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned
+                self._odom_turned += self._since_sample
+            else:
+                self._odom_turned += float(wrap_angle(odom.yaw - self._last_yaw))
+            self._since_sample = 0.0
+            self._last_yaw, self._last_stamp = odom.yaw, odom.stamp
+        self._last_time = now
+        self.turned = self._odom_turned + self._since_sample
+
+    def update(self) -> Status:
+        """Advance the turn; RUNNING until within tolerance or out of time."""
+        now = self.clock()
+        self._measure(now)
+        remaining = self.rotation - self.turned
+        if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
+            return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
+        if self._elapsed > self._allowance:
+            return self._finish(Status.FAILURE, f"out of time after {self._elapsed:.1f} s, "
+                                f"{math.degrees(remaining):+.0f} deg short")
+        peak = self.get_input("angular_speed")
+        rate = math.copysign(min(peak, max(self.MIN_RATE, self.GAIN * abs(remaining))), remaining)
+        self._last_rate = rate
+        self.command(0.0, rate)
+        self.feedback_message = f"{math.degrees(remaining):+.0f} deg to go"
+        return Status.RUNNING
+
+    def _finish(self, status: Status, message: str) -> Status:
+        self.command(0.0, 0.0)
+        self._last_rate = 0.0
+        self._set_output("active", False)
+        self.feedback_message = message
+        if status == Status.SUCCESS:  # two call sites: rclpy refuses one call site with two severities
+            self.events.info(f"{self.label}: {message}")
+        else:
+            self.events.warning(f"{self.label}: {message}")
+        return status
+
+    def terminate(self, new_status: Status) -> None:
+        """Preempted (disarm, deadline, shutdown): stop turning and release the branch."""
+        if new_status == Status.INVALID and self.status == Status.RUNNING:
+            self.command(0.0, 0.0)
+            self._set_output("active", False)
+            self.events.info(f"{self.label}: preempted, stopped")
+
+
+class RandomizerManeuver(RotationManeuver):
+    """A — The Randomizer: a random side, a random angle between 90 and 180 deg (seedable)."""
+
+    MIN_DEG, MAX_DEG = 90.0, 180.0
+
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name=name, **kwargs)
+        self.rng = random.Random()
+
+    def setup(self, **kwargs: Any) -> None:
+        """Seed the generator from ``random_seed`` (None or -1: from the OS)."""
+        super().setup(**kwargs)
+        seed = kwargs.get("random_seed")
+        self.rng = random.Random(None if seed is None or seed < 0 else seed)
+
+    def choose_rotation(self, sectors: Sectors) -> float:
+        """Random side, random magnitude."""
+        side = self.rng.choice((-1.0, 1.0))
+        return side * math.radians(self.rng.uniform(self.MIN_DEG, self.MAX_DEG))
+
+
+class RetreatManeuver(RotationManeuver):
+    """B — The Retreat: squeezed left and right, spin 180 deg (starting towards the clearer side)."""
+
+    def choose_rotation(self, sectors: Sectors) -> float:
+        """Half a turn."""
+        return clearer_side(sectors) * math.pi
+
+
+class SmartPivotManeuver(RotationManeuver):
+    """C — The Smart Pivot: 90 deg towards whichever side reads the larger distance."""
+
+    def choose_rotation(self, sectors: Sectors) -> float:
+        """A quarter turn to the clearer side."""
+        return clearer_side(sectors) * math.pi / 2
+
+
+class AlwaysFailure(Leaf):
+    """BT.CPP ``AlwaysFailure``: the maneuver slot when no maneuver is chosen."""
+
+    INPUT_PORTS = {}
+    OUTPUT_PORTS = {}
+
+    def update(self) -> Status:
+        """FAILURE, so the priority list moves on."""
+        return Status.FAILURE

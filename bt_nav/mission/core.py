@@ -1,0 +1,256 @@
+"""The mission core: the tree, its blackboard and one safe ``tick()``, with no ROS in sight.
+
+Both drivers of the tree use this class, so they cannot drift apart:
+- the ROS executive (:mod:`bt_nav.ros.executive`) feeds it scans and odometry from subscriptions,
+  passes its node to ``setup`` (the arm server and evaluation client are created there) and
+  publishes the command each tick returns;
+- the lock-step runner (:mod:`bt_nav.cli.lockstep`) feeds it the simulator's scans and applies the
+  command to the same physics, without DDS.
+
+py_trees' blackboard is process-global, so one process holds one MissionCore at a time (creating a
+new one clears the blackboard).
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from collections.abc import Mapping
+from typing import Any
+
+import py_trees
+
+from bt_nav.mission import params as P
+from bt_nav.mission.behaviours import ArmService, EvaluateMission
+from bt_nav.mission.behaviours.base import EventLogger
+from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample
+from bt_nav.mission.scan import Scan
+from bt_nav.mission.tree import load_tree
+
+Status = py_trees.common.Status
+
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+#: Blackboard keys the drivers write (besides the parameters).
+INPUT_KEYS = ("scan", "scan_stamp", "odom")
+#: Blackboard keys the drivers and the trace read.
+OUTPUT_KEYS = ("cmd_vel", "armed", "first_armed_at", "mission_over", "scan_ok", "scan_status",
+               "maneuver_active", "evaluation_result")
+
+
+def strip_ansi(text: str) -> str:
+    """Remove terminal colour codes (py_trees' unicode display uses them)."""
+    return _ANSI.sub("", text)
+
+
+def find_leaf(root: py_trees.behaviour.Behaviour, cls: type) -> Any:
+    """The one behaviour of class ``cls`` in the tree (None when absent)."""
+    return next((node for node in root.iterate() if isinstance(node, cls)), None)
+
+
+def culprit(exc: BaseException) -> str:
+    """Name of the innermost behaviour on the exception's traceback ("?" when none)."""
+    name, tb = "?", exc.__traceback__
+    while tb is not None:
+        owner = tb.tb_frame.f_locals.get("self")
+        if isinstance(owner, py_trees.behaviour.Behaviour):
+            name = owner.name
+        tb = tb.tb_next
+    return name
+
+
+class MissionCore:
+    """The mission tree, ready to tick.
+
+    Args:
+        overrides: parameter values over :mod:`bt_nav.mission.params` defaults (checked; ValueError if bad).
+        clock: mission-clock seconds (node clock on the ROS path, simulated time in lock-step).
+        node: an rclpy node for the leaves that own ROS services, or None off-ROS.
+        evaluation_client: an object with rclpy Client's interface, used instead of creating one.
+        events: logger for the one-line event messages (rclpy logger on the ROS path).
+        tree_path: another tree file (default: the installed ``trees/mission.xml``).
+    """
+
+    def __init__(self, overrides: Mapping[str, Any] | None = None, *, clock: Clock, node: Any = None,
+                 evaluation_client: Any = None, events: EventLogger | None = None,
+                 tree_path: str | None = None) -> None:
+        self.params: dict[str, P.Value] = P.resolve(overrides)
+        self.clock = clock
+        self.events: EventLogger = events or logging.getLogger("bt_nav")
+        py_trees.blackboard.Blackboard.clear()
+        self.root = load_tree(str(self.params["maneuver"]), tree_path)
+        self.tree = py_trees.trees.BehaviourTree(self.root)
+        self.board = py_trees.blackboard.Client(name="MissionCore")
+        for key in INPUT_KEYS + tuple(s.name for s in P.PARAMS if s.in_tree):
+            self.board.register_key(key=f"/{key}", access=py_trees.common.Access.WRITE)
+        for key in OUTPUT_KEYS:
+            self.board.register_key(key=f"/{key}", access=py_trees.common.Access.READ)
+        for spec in P.PARAMS:
+            if spec.in_tree:
+                self.board.set(f"/{spec.name}", self.params[spec.name])
+        self.board.set("/odom", OdomSample())
+        seed = int(self.params["random_seed"])
+        self.tree.setup(node=node, clock=clock, events=self.events, evaluation_client=evaluation_client,
+                        random_seed=None if seed < 0 else seed)
+        self.arm_leaf: ArmService = find_leaf(self.root, ArmService)
+        self.evaluate_leaf: EvaluateMission | None = find_leaf(self.root, EvaluateMission)
+        self.ticks = 0
+        self.faults = 0
+        self.last_command: Command = STOP
+
+    # ------------------------------------------------------------------ inputs
+    def feed_scan(self, scan: Scan, stamp: float | None = None) -> None:
+        """The newest scan and when it arrived (default: now on the mission clock)."""
+        self.board.set("/scan", scan)
+        self.board.set("/scan_stamp", float(self.clock() if stamp is None else stamp))
+
+    def feed_odom(self, yaw: float, stamp: float | None = None) -> None:
+        """The newest odometry heading (rad) and when it arrived."""
+        self.board.set("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp)))
+
+    def request_arm(self, data: bool) -> tuple[bool, str]:
+        """Same as a call of the ``arm`` service: (success, message)."""
+        return self.arm_leaf.handle(bool(data))
+
+    def set_param(self, name: str, value: Any) -> str | None:
+        """Change one parameter; returns why it was refused, or None when applied.
+
+        Parameters that shape the tree (``live=False``) are refused while running.
+        """
+        spec = P.SPECS.get(name)
+        if spec is None:
+            return f"unknown parameter {name!r}"
+        value = P.coerce(spec, value)
+        reason = spec.check(value)
+        if reason:
+            return reason
+        if value == self.params[name]:
+            return None
+        if not spec.live:
+            return f"{name} cannot change while the executive runs (restart it with the new value)"
+        candidate = {**self.params, name: value}
+        reason = P.cross_check(candidate)
+        if reason:
+            return reason
+        self.params[name] = value
+        if spec.in_tree:
+            self.board.set(f"/{name}", value)
+        return None
+
+    def check_params(self, values: Mapping[str, Any]) -> str | None:
+        """Why this batch of changes would be refused, or None; nothing is applied.
+
+        The batch is judged as a whole (cross rules on the combined result), so a ROS
+        ``set_parameters_atomically`` of close_distance and far_distance together can move both
+        across each other's old values. Same rules as :meth:`set_param` otherwise.
+        """
+        return self._candidate(values)[1]
+
+    def set_params(self, values: Mapping[str, Any]) -> str | None:
+        """Apply a batch of changes all or nothing; returns why it was refused, or None when applied."""
+        candidate, reason = self._candidate(values)
+        if reason:
+            return reason
+        for name, value in candidate.items():
+            if value != self.params[name]:
+                self.params[name] = value
+                if P.SPECS[name].in_tree:
+                    self.board.set(f"/{name}", value)
+        return None
+
+    def _candidate(self, values: Mapping[str, Any]) -> tuple[dict[str, P.Value], str | None]:
+        """The parameters after ``values`` (checked one by one, then together) and the refusal reason."""
+        candidate = dict(self.params)
+        for name, raw in values.items():
+            spec = P.SPECS.get(name)
+            if spec is None:
+                return candidate, f"unknown parameter {name!r}"
+            value = P.coerce(spec, raw)
+            reason = spec.check(value)
+            if reason:
+                return candidate, reason
+            if name == "maneuver":
+                value = P.normalise_maneuver(value)  # "randomizer" is the running "A", not a change
+            if value == self.params[name]:
+                continue
+            if not spec.live:
+                return candidate, f"{name} cannot change while the executive runs (restart it with the new value)"
+            candidate[name] = value
+        return candidate, P.cross_check(candidate)
+
+    # ------------------------------------------------------------------ ticking
+    def tick(self) -> Command:
+        """Tick the tree once and return the command to publish: always finite and within limits.
+
+        An exception inside a leaf is logged with the leaf's name, the tree is reset and the command
+        is a stop; the next tick starts afresh. The caller never sees the exception.
+        """
+        self.ticks += 1
+        try:
+            self.tree.tick()
+            command = self.board.get("/cmd_vel") if self.board.exists("/cmd_vel") else STOP
+        except Exception as exc:  # one bad tick must not kill the node or leave the robot moving
+            self.faults += 1
+            self.events.error(f"tick {self.ticks}: exception in leaf '{culprit(exc)}': {exc!r}; "
+                              "publishing a stop and resetting the tree")
+            try:
+                self.root.stop(Status.INVALID)
+            except Exception as stop_exc:
+                self.events.error(f"resetting the tree after the exception failed too: {stop_exc!r}")
+            command = Command(0.0, 0.0, f"exception in {culprit(exc)}")
+        self.last_command = self.limit(command)
+        return self.last_command
+
+    def limit(self, command: Command) -> Command:
+        """Clamp to the configured limits; anything non-finite becomes a stop."""
+        if not command.is_finite():
+            self.events.error(f"non-finite command from {command.source}: publishing a stop")
+            return Command(0.0, 0.0, f"non-finite from {command.source}")
+        v_max = float(self.params["max_linear_speed"])
+        w_max = max(float(self.params["angular_speed"]), float(self.params["maneuver_angular_speed"]))
+        linear = min(v_max, max(-v_max, command.linear))
+        angular = min(w_max, max(-w_max, command.angular))
+        if (linear, angular) == (command.linear, command.angular):
+            return command
+        return Command(linear, angular, command.source)
+
+    def shutdown(self) -> Command:
+        """Stop every running leaf (a pending evaluation request is dropped) and return a stop."""
+        try:
+            self.tree.interrupt()
+            if self.evaluate_leaf is not None:
+                self.evaluate_leaf.cancel()
+        except Exception as exc:
+            self.events.error(f"interrupting the tree at shutdown failed: {exc!r}")
+        self.last_command = Command(0.0, 0.0, "shutdown")
+        return self.last_command
+
+    # ------------------------------------------------------------------ introspection
+    def value(self, key: str, default: Any = None) -> Any:
+        """A blackboard value the core reads (see OUTPUT_KEYS) or writes."""
+        return self.board.get(f"/{key}") if self.board.exists(f"/{key}") else default
+
+    @property
+    def tip(self) -> str:
+        """Name of the tree's tip after the last tick."""
+        tip = self.root.tip()
+        return tip.name if tip is not None else ""
+
+    def statuses(self) -> dict[str, str]:
+        """Every node's status after the last tick, by name."""
+        return {node.name: node.status.value for node in self.root.iterate()}
+
+    def snapshot(self, show_status: bool = True) -> str:
+        """The tree as unicode art, without colour codes (for logs, ``~/tree`` and golden tests)."""
+        return strip_ansi(py_trees.display.unicode_tree(self.root, show_status=show_status))
+
+    @property
+    def mission_over(self) -> bool:
+        """The deadline has latched."""
+        return bool(self.value("mission_over", False))
+
+    @property
+    def evaluation_calls(self) -> int:
+        """Successful evaluation calls so far (0 or 1)."""
+        return self.evaluate_leaf.successful_calls if self.evaluate_leaf is not None else 0
+

@@ -1,0 +1,39 @@
+"""Where bt_nav's data files (trees, launch files, configs) are, however it was installed.
+
+Looked up in this order: ``$BT_NAV_SHARE``; the source checkout (``bt_nav/..``, also what an editable
+pip install sees); ``<prefix>/share/bt_nav`` (a regular pip install puts data files under the venv);
+the ament index (a colcon install, ``ros2 run``).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from functools import lru_cache
+from pathlib import Path
+
+
+@lru_cache(maxsize=1)
+def share_dir() -> Path:
+    """The directory holding ``trees/``, ``launch/``, ``config/`` and ``package.xml``."""
+    candidates: list[Path] = []
+    if os.environ.get("BT_NAV_SHARE"):
+        candidates.append(Path(os.environ["BT_NAV_SHARE"]))
+    candidates.append(Path(__file__).resolve().parents[2])
+    candidates.append(Path(sys.prefix) / "share" / "bt_nav")
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        candidates.append(Path(get_package_share_directory("bt_nav")))
+    except Exception:  # not a ROS install, or bt_nav not in the index
+        pass
+    for candidate in candidates:
+        if (candidate / "trees" / "mission.xml").is_file():
+            return candidate
+    tried = ", ".join(str(c) for c in candidates)
+    raise FileNotFoundError(f"bt_nav data files not found (looked for trees/mission.xml in: {tried})")
+
+
+def tree_file(name: str = "mission.xml") -> Path:
+    """A tree file under ``trees/``."""
+    return share_dir() / "trees" / name

@@ -1,0 +1,54 @@
+"""Build the mission tree from ``trees/mission.xml`` with py_trees' BehaviorTree.CPP parser.
+
+The shape of the tree lives only in the XML. The ``maneuver`` parameter selects which maneuver
+subtree fills the slot named ``Maneuver``: the loader rewrites that ``<SubTree ID=...>`` before
+parsing (the upstream parser has no way to pick a subtree at run time), so the chosen maneuver shows
+in the tree's name, its display and its trace.
+
+py_trees' parser is experimental and pinned (py_trees==2.6.0); ``tests/test_tree_parse.py`` guards it.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import py_trees
+from py_trees.parsers.behaviour_tree_xml import parse_behaviour_tree_xml
+
+from bt_nav.mission.behaviours import REGISTRY
+from bt_nav.mission.params import MANEUVER_TITLES, normalise_maneuver
+from bt_nav.mission.resources import tree_file
+
+MANEUVER_SLOT = "Maneuver"
+SUBTREE_FOR = {"none": "ManeuverNone", "A": "ManeuverA", "B": "ManeuverB", "C": "ManeuverC"}
+
+
+def select_maneuver(root: ET.Element, maneuver: str) -> None:
+    """Point the ``Maneuver`` SubTree slot at the chosen maneuver's subtree (in place)."""
+    choice = normalise_maneuver(maneuver)
+    slots = [e for e in root.iter("SubTree") if e.attrib.get("name") == MANEUVER_SLOT]
+    if len(slots) != 1:
+        raise ValueError(f"the tree file needs exactly one <SubTree name='{MANEUVER_SLOT}'>, found {len(slots)}")
+    slots[0].attrib["ID"] = SUBTREE_FOR[choice]
+
+
+def load_tree(maneuver: str = "none", path: str | os.PathLike[str] | None = None) -> py_trees.behaviour.Behaviour:
+    """Parse the mission tree with the chosen maneuver; returns the root behaviour.
+
+    Node names are shortened to the names written in the XML (the parser prefixes every parent's
+    name, which makes the display unreadable); they stay unique within this tree.
+    """
+    source = Path(path) if path is not None else tree_file()
+    document = ET.parse(source)
+    select_maneuver(document.getroot(), maneuver)
+    with tempfile.TemporaryDirectory(prefix="bt_nav_tree_") as tmp:
+        selected = Path(tmp) / source.name
+        document.write(selected, encoding="unicode")
+        root = parse_behaviour_tree_xml(str(selected), node_registry=dict(REGISTRY))
+    for node in root.iterate():
+        node.name = node.name.rsplit(".", 1)[-1]
+    root.name = f"{root.name} [maneuver {MANEUVER_TITLES[normalise_maneuver(maneuver)]}]"
+    return root

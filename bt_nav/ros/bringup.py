@@ -1,0 +1,434 @@
+"""The one definition of bt_nav's node graph per profile, and ``bt-nav sim-run`` which starts it.
+
+:func:`nodes` returns plain data (:class:`NodeSpec`: console-script name, node name, parameters,
+parameter files, remappings, arguments) so that every way of starting the system reads the same
+table: ``bt-nav sim-run`` and ``bt-nav demo`` here (subprocesses, no ``ros2 launch`` needed) and the
+``launch/*.launch.py`` files, which turn each spec into a ``launch_ros.actions.Node``::
+
+    Node(package="bt_nav", executable=s.executable, name=s.name, arguments=s.arguments,
+         parameters=[*s.parameter_files, s.parameters], remappings=s.remappings)
+
+Profiles:
+
+``lab``       the executive on the lab's interface (``arm`` is ``toggle_navigation``) with
+              ``config/lab.yaml`` when present, plus the simulator with the LDS-01 profile;
+``homework``  the executive on the homework's interface (``arm`` -> ``/reactive_control/activate``,
+              ``evaluate_mission`` -> ``/reactive_control/evaluate_mission``) with
+              ``config/homework.yaml`` when present, in sim time, plus the simulator in stage_4 with
+              the homework LiDAR;
+``eval``      ``homework`` plus the referee.
+
+This module imports neither rclpy nor launch, so launch files and tools can read it anywhere.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+PROFILES = ("lab", "homework", "eval")
+
+#: The homework's service names (what the course's evaluator calls and serves).
+HOMEWORK_ACTIVATE = "/reactive_control/activate"
+HOMEWORK_EVALUATE = "/reactive_control/evaluate_mission"
+#: The lab's arm service name (the teleop-style toggle used on the real robot).
+LAB_ARM = "toggle_navigation"
+
+#: Simulator speed cap (as-fast-as-possible mode) before the referee joins, in the profiles with a referee.
+SOLO_RTF = 5.0
+
+#: Node names (the console scripts are ``executive``, ``sim`` and ``referee``).
+EXECUTIVE_NAME = "bt_nav_executive"
+SIM_NAME = "bt_nav_sim"
+REFEREE_NAME = "bt_nav_referee"
+
+
+@dataclass
+class NodeSpec:
+    """One node to start: what ``launch_ros.actions.Node`` needs, and what ``bt-nav`` needs."""
+
+    executable: str  # console script of package bt_nav, and the ``bt-nav`` subcommand of the same name
+    name: str  # node name
+    parameters: dict[str, Any] = field(default_factory=dict)
+    remappings: list[tuple[str, str]] = field(default_factory=list)
+    arguments: list[str] = field(default_factory=list)  # non-ROS arguments, before ``--ros-args``
+    parameter_files: list[str] = field(default_factory=list)  # applied before ``parameters``
+
+    def ros_args(self) -> list[str]:
+        """``--ros-args`` for this node: name, parameter files, parameters, remappings (in that order,
+        so explicit parameters override the files)."""
+        args = ["--ros-args", "-r", f"__node:={self.name}"]
+        for path in self.parameter_files:
+            args += ["--params-file", str(path)]
+        for name, value in self.parameters.items():
+            args += ["-p", param_arg(name, value)]
+        for src, dst in self.remappings:
+            args += ["-r", f"{src}:={dst}"]
+        return args
+
+    def command(self, python: str | None = None) -> list[str]:
+        """The subprocess command line: ``python -m bt_nav.cli <executable> <arguments> --ros-args ...``.
+
+        ``-m bt_nav.cli`` instead of the console script, so the child uses the same interpreter and
+        package as the parent even when the venv's ``bin`` is not on PATH.
+        """
+        return [python or sys.executable, "-m", "bt_nav.cli", self.executable, *self.arguments, *self.ros_args()]
+
+
+def param_arg(name: str, value: Any) -> str:
+    """``name:=value`` for ``-p`` with the value typed as meant: rcl reads it as YAML, so strings are
+    double-quoted (``"1.5"`` stays a string, ``stage_4`` cannot turn into something else), floats
+    always carry a decimal point (``1.0``, not ``1``, or rclpy refuses a double parameter) and
+    non-finite floats use YAML's spelling."""
+    if isinstance(value, bool):
+        text = "true" if value else "false"
+    elif isinstance(value, int):
+        text = str(value)
+    elif isinstance(value, float):
+        if math.isnan(value):
+            text = ".nan"
+        elif math.isinf(value):
+            text = ".inf" if value > 0 else "-.inf"
+        else:
+            text = repr(value)
+    elif isinstance(value, str):
+        text = json.dumps(value)
+    elif isinstance(value, list | tuple):
+        text = json.dumps(list(value))
+    else:
+        raise TypeError(f"parameter {name}: unsupported value type {type(value).__name__}")
+    return f"{name}:={text}"
+
+
+def parse_assignments(items: list[str]) -> dict[str, Any]:
+    """``["name=value", ...]`` from the command line into a dict, values read as YAML (``50`` -> 50)."""
+    import yaml
+
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise ValueError(f"expected NAME=VALUE, got {item!r}")
+        out[name.strip()] = yaml.safe_load(text) if text.strip() else ""
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- the table
+def config_file(name: str) -> Path | None:
+    """``config/<name>`` from bt_nav's data files, or None when it does not exist (yet)."""
+    try:
+        from bt_nav.mission.resources import share_dir
+
+        path = share_dir() / "config" / name
+    except FileNotFoundError:
+        return None
+    return path if path.is_file() else None
+
+
+def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[str, Any]:
+    """The parameters a ROS params file gives ``node_name`` (``/**`` and the node's own section).
+
+    Used to keep the simulator's ``cmd_vel_stamped`` equal to the executive's when only the file says it.
+    """
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as stream:
+            data = yaml.safe_load(stream) or {}
+    except (OSError, yaml.YAMLError):
+        return {}
+    merged: dict[str, Any] = {}
+    for key in ("/**", "**", node_name, f"/{node_name}"):
+        section = data.get(key) if isinstance(data, dict) else None
+        if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
+            merged.update(section["ros__parameters"])
+    return merged
+
+
+def nodes(
+    profile: str,
+    *,
+    world: str | None = None,
+    maneuver: str | None = None,
+    seed: int | None = None,
+    rtf: float | None = None,
+    with_referee: bool | None = None,
+    include_sim: bool = True,
+    results_json: str | None = None,
+    executive: dict[str, Any] | None = None,
+    sim: dict[str, Any] | None = None,
+    referee: dict[str, Any] | None = None,
+) -> list[NodeSpec]:
+    """The nodes of ``profile`` (lab | homework | eval), with the given overrides.
+
+    Args:
+        profile: which graph (see the module docstring).
+        world: simulator world (name or YAML path); default stage_4.
+        maneuver: the executive's evasive maneuver (none, A, B, C or a name).
+        seed: one seed for everything random: sensor noise, generated worlds, maneuver A's choices.
+        rtf: simulator real-time factor (0 = as fast as the executive keeps up).
+        with_referee: add the referee (default: only in ``eval``).
+        include_sim: add the simulator; without it (a real robot) the executive uses wall time.
+        results_json: where the referee writes its verdict.
+        executive: further executive parameters (override the params file and the profile's values).
+        sim: further simulator parameters.
+        referee: further referee parameters.
+    """
+    if profile not in PROFILES:
+        raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
+    homework = profile in ("homework", "eval")
+    with_referee = (profile == "eval") if with_referee is None else with_referee
+    if with_referee and not homework:
+        raise ValueError("the referee judges the homework interface: use profile homework or eval")
+
+    exe_params: dict[str, Any] = {"use_sim_time": include_sim}
+    files: list[str] = []
+    cfg = config_file("homework.yaml" if homework else "lab.yaml")
+    if cfg is not None:
+        files.append(str(cfg))
+    if maneuver is not None:
+        exe_params["maneuver"] = maneuver
+    if seed is not None:
+        exe_params["random_seed"] = int(seed)
+    exe_params.update(executive or {})
+    if homework:
+        remaps = [("arm", HOMEWORK_ACTIVATE), ("evaluate_mission", HOMEWORK_EVALUATE)]
+    else:
+        remaps = [("arm", LAB_ARM)]
+    specs = [NodeSpec("executive", EXECUTIVE_NAME, exe_params, remaps, parameter_files=files)]
+
+    stamped = exe_params.get("cmd_vel_stamped")
+    if stamped is None and cfg is not None:
+        stamped = file_parameters(cfg).get("cmd_vel_stamped")
+    if include_sim:
+        sim_params: dict[str, Any] = {"world": world or "stage_4", "profile": "homework" if homework else "lab"}
+        if seed is not None:
+            sim_params["seed"] = int(seed)
+        if rtf is not None:
+            sim_params["real_time_factor"] = float(rtf)
+        if stamped is not None:
+            sim_params["cmd_vel_stamped"] = bool(stamped)
+        if with_referee:
+            # Until the referee follows the simulation (its t0), nothing is judged: no need to race.
+            sim_params["solo_rtf"] = SOLO_RTF
+        sim_params.update(sim or {})
+        specs.insert(0, NodeSpec("sim", SIM_NAME, sim_params))
+
+    if with_referee:
+        # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many
+        # times real time, a process still starting up would otherwise lose seconds of the schedule.
+        ref_params: dict[str, Any] = {"use_sim_time": include_sim, "wait_for_cmd_vel": True}
+        if stamped:
+            ref_params["cmd_vel_stamped"] = True
+        if results_json:
+            ref_params["json"] = str(results_json)
+        ref_params.update(referee or {})
+        specs.append(NodeSpec("referee", REFEREE_NAME, ref_params))
+    return specs
+
+
+# ---------------------------------------------------------------------------------------------- processes
+def choose_domain_id(requested: int | None = None) -> int:
+    """``requested``, else ``$ROS_DOMAIN_ID``, else a random domain in 100-200 (concurrent runs stay apart)."""
+    if requested is not None:
+        return int(requested)
+    env = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    if env.isdigit():
+        return int(env)
+    return random.randint(100, 200)
+
+
+def child_env(domain_id: int) -> dict[str, str]:
+    """Environment of every child: DDS on this machine only, in ``domain_id``, unbuffered output."""
+    env = dict(os.environ)
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(int(domain_id))
+    env["PYTHONUNBUFFERED"] = "1"
+    env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
+    return env
+
+
+class Child:
+    """One started node: its process and the thread that forwards its output line by line."""
+
+    def __init__(self, spec: NodeSpec, popen: subprocess.Popen, thread: threading.Thread) -> None:
+        self.spec = spec
+        self.popen = popen
+        self.thread = thread
+
+    @property
+    def name(self) -> str:
+        """Short name used as output prefix (the executable: sim, executive, referee)."""
+        return self.spec.executable
+
+    def poll(self) -> int | None:
+        """Exit code, or None while running."""
+        return self.popen.poll()
+
+
+LineSink = Callable[[str, str], None]  # (child name, line without newline)
+
+
+class Launcher:
+    """Starts NodeSpecs as subprocesses and stops them politely.
+
+    Children run in their own sessions, so a terminal Ctrl-C reaches only this process, which then
+    forwards SIGINT to each child, waits, and escalates to SIGTERM and SIGKILL: every node gets the
+    chance to publish its last stop command and flush its files, but nothing outlives the launcher.
+    """
+
+    def __init__(self, env: dict[str, str], sink: LineSink | None = None) -> None:
+        self.env = env
+        self.sink = sink or self.print_line
+        self.children: list[Child] = []
+        self._lock = threading.Lock()
+        width = 9
+        self._width = width
+
+    def print_line(self, name: str, line: str) -> None:
+        """Default sink: ``[name] line`` on stdout."""
+        with self._lock:
+            print(f"[{name:<{self._width}}] {line}", flush=True)
+
+    def start(self, spec: NodeSpec, sink: LineSink | None = None) -> Child:
+        """Start one node; its stdout and stderr go line by line to ``sink`` (default: the launcher's)."""
+        popen = subprocess.Popen(spec.command(), env=self.env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
+                                 errors="replace")
+        out = sink or self.sink
+        thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)
+        thread.start()
+        child = Child(spec, popen, thread)
+        self.children.append(child)
+        return child
+
+    @staticmethod
+    def _pump(name: str, stream: IO[str], sink: LineSink) -> None:
+        for line in stream:
+            sink(name, line.rstrip("\n"))
+
+    def wait_any(self, timeout: float | None = None, poll: float = 0.05) -> Child | None:
+        """Block until a child exits (returned) or ``timeout`` wall seconds pass (None)."""
+        end = None if timeout is None else time.monotonic() + timeout
+        while end is None or time.monotonic() < end:
+            for child in self.children:
+                if child.poll() is not None:
+                    return child
+            time.sleep(poll)
+        return None
+
+    def shutdown(self, grace: float = 5.0) -> None:
+        """SIGINT to every running child, wait up to ``grace`` s, then SIGTERM, then SIGKILL."""
+        for sig, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
+            running = [c for c in self.children if c.poll() is None]
+            if not running:
+                break
+            for child in running:
+                try:
+                    child.popen.send_signal(sig)
+                except ProcessLookupError:
+                    pass
+            end = time.monotonic() + wait
+            for child in running:
+                try:
+                    child.popen.wait(timeout=max(0.0, end - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    pass
+        for child in self.children:
+            child.thread.join(timeout=2.0)
+
+
+# ---------------------------------------------------------------------------------------------- bt-nav sim-run
+def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
+    """Options of ``bt-nav sim-run``."""
+    parser = argparse.ArgumentParser(prog=prog, description="Start the simulator and the executive (and the "
+                                     "referee) as subprocesses over DDS on this machine; Ctrl-C stops them all.")
+    parser.add_argument("--profile", choices=PROFILES, default="homework")
+    parser.add_argument("--world", help="simulator world: name or YAML path (default stage_4)")
+    parser.add_argument("--maneuver", help="evasive maneuver: none, A, B, C (or randomizer, retreat, smart_pivot)")
+    parser.add_argument("--seed", type=int, help="one seed for sensor noise, generated worlds and maneuver A")
+    parser.add_argument("--rtf", type=float, help="simulator real-time factor (default 1; 0 = as fast as possible)")
+    parser.add_argument("--with-referee", action="store_true", help="add the referee (implied by --profile eval)")
+    parser.add_argument("--json", help="referee results file")
+    parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
+                        help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="extra executive parameter (repeatable), e.g. safety_distance=0.4")
+    parser.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID or random 100-200)")
+    parser.add_argument("--print", action="store_true", dest="print_only",
+                        help="print the commands instead of running them")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav sim-run``: exit code of the referee when there is one, else of the first node to exit;
+    130 after Ctrl-C."""
+    opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    if opts.maneuver is not None:
+        from bt_nav.mission.params import normalise_maneuver
+
+        try:
+            opts.maneuver = normalise_maneuver(opts.maneuver)
+        except ValueError as exc:
+            print(f"bt-nav sim-run: {exc}", file=sys.stderr)
+            return 2
+    try:
+        specs = nodes(opts.profile, world=opts.world, maneuver=opts.maneuver, seed=opts.seed, rtf=opts.rtf,
+                      with_referee=True if opts.with_referee else None, results_json=opts.json,
+                      executive=parse_assignments(opts.set), sim=parse_assignments(opts.sim_param))
+    except ValueError as exc:
+        print(f"bt-nav sim-run: {exc}", file=sys.stderr)
+        return 2
+    domain = choose_domain_id(opts.domain_id)
+    if opts.print_only:
+        print(f"export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_DOMAIN_ID={domain}")
+        for spec in specs:
+            print(" ".join(_shell_quote(a) for a in spec.command()))
+        return 0
+    launcher = Launcher(child_env(domain))
+    print(f"bt-nav sim-run: profile {opts.profile}, ROS_DOMAIN_ID={domain} (localhost only); Ctrl-C stops",
+          flush=True)
+    code = 0
+    try:
+        for spec in specs:
+            launcher.start(spec)
+        referee = next((c for c in launcher.children if c.spec.executable == "referee"), None)
+        while True:
+            ended = launcher.wait_any(timeout=0.5)
+            if ended is None:
+                continue
+            if referee is not None and ended is not referee:
+                print(f"bt-nav sim-run: {ended.name} exited with {ended.poll()} before the referee's verdict",
+                      file=sys.stderr, flush=True)
+                code = ended.poll() or 1
+            else:
+                code = ended.poll() or 0
+            break
+    except KeyboardInterrupt:
+        code = 130
+    finally:
+        launcher.shutdown()
+    return code
+
+
+def _shell_quote(arg: str) -> str:
+    import shlex
+
+    return shlex.quote(arg)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,381 @@
+"""Small rclpy helpers for bt_nav's nodes: parameters from the table, messages, DDS env, logging.
+
+Kept apart from :mod:`bt_nav.ros.executive` so that the simulator, the referee and the tests build
+their ROS plumbing the same way (one place decides how a parameter is declared or how a
+``Twist`` is stamped). Importing this module imports rclpy; the mission core never does.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import threading
+import zlib
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import py_trees
+import rclpy
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bt_nav.mission import params as P
+from bt_nav.mission.datatypes import Command
+
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+
+#: Parameters every rclpy node has; never reported as unknown.
+ROS_OWN_PARAMETERS = ("use_sim_time", "start_type_description_service")
+
+#: ``~/tree``: late joiners (``bt-nav watch``) get the current tree at once.
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class ConfigError(ValueError):
+    """A start-up configuration the node refuses to run with (the message is the one-line reason)."""
+
+
+# ---------------------------------------------------------------------------------------------- parameters
+def parameter_type(spec: P.ParamSpec) -> int:
+    """The ``rcl_interfaces/ParameterType`` of a table entry (from the type of its default)."""
+    if isinstance(spec.default, bool):
+        return ParameterType.PARAMETER_BOOL
+    if isinstance(spec.default, int):
+        return ParameterType.PARAMETER_INTEGER
+    if isinstance(spec.default, float):
+        return ParameterType.PARAMETER_DOUBLE
+    return ParameterType.PARAMETER_STRING
+
+
+def parameter_descriptor(spec: P.ParamSpec) -> ParameterDescriptor:
+    """What ``ros2 param describe`` shows for one table entry.
+
+    The range lets rclpy (and rqt's sliders) refuse out-of-range values before our own check runs;
+    parameters that shape the tree or the wiring (``live=False``) are read-only, so a change is
+    refused with rclpy's own "read-only" reason instead of being silently ignored.
+    """
+    kind = parameter_type(spec)
+    description = spec.description + (f" [{spec.unit}]" if spec.unit else "")
+    constraints: list[str] = []
+    if spec.choices:
+        extra = " (names such as randomizer, retreat, smart_pivot are accepted)" if spec.name == "maneuver" else ""
+        constraints.append(f"one of {', '.join(spec.choices)}{extra}")
+    if not spec.live:
+        constraints.append("read-only: set it at start-up (-p or a params file)")
+    descriptor = ParameterDescriptor(name=spec.name, type=kind, description=description,
+                                     additional_constraints="; ".join(constraints), read_only=not spec.live)
+    if kind == ParameterType.PARAMETER_DOUBLE and (spec.minimum is not None or spec.maximum is not None):
+        low = -math.inf if spec.minimum is None else float(spec.minimum)
+        high = math.inf if spec.maximum is None else float(spec.maximum)
+        descriptor.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+    elif kind == ParameterType.PARAMETER_INTEGER and (spec.minimum is not None or spec.maximum is not None):
+        low = INT64_MIN if spec.minimum is None else int(spec.minimum)
+        high = INT64_MAX if spec.maximum is None else int(spec.maximum)
+        descriptor.integer_range = [IntegerRange(from_value=low, to_value=high, step=0)]
+    return descriptor
+
+
+def as_double(spec: P.ParamSpec, parameter: Parameter) -> Parameter:
+    """``parameter`` retyped DOUBLE when it is an INTEGER for a float entry (else unchanged).
+
+    rclpy types a parameter by its default and refuses an INTEGER value for a DOUBLE parameter;
+    users type integers (``-p safety_distance:=1``, ``ros2 param set ... safety_distance 1``) all
+    the time, and :func:`bt_nav.mission.params.coerce` accepts them off-ROS, so the ROS edge does too.
+    """
+    if parameter.type_ == Parameter.Type.INTEGER and isinstance(spec.default, float):
+        return Parameter(parameter.name, Parameter.Type.DOUBLE, float(parameter.value))
+    return parameter
+
+
+def _coerce_overrides(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> None:
+    """Let ``-p safety_distance:=1`` mean 1.0 (see :func:`as_double`).
+
+    rclpy has no public accessor for the overrides, so this reaches into ``_parameter_overrides``
+    (absent: nothing to do).
+    """
+    overrides = getattr(node, "_parameter_overrides", None)
+    if not isinstance(overrides, dict):
+        return
+    for spec in specs:
+        given = overrides.get(spec.name)
+        if given is not None:
+            overrides[spec.name] = as_double(spec, given)
+
+
+def unknown_overrides(node: Node, extra: Iterable[str] = ()) -> list[str]:
+    """Override names (``-p``, params file) that are no parameter of ours (nor in ``extra``): most likely typos."""
+    overrides = getattr(node, "_parameter_overrides", None)
+    if not isinstance(overrides, dict):
+        return []
+    known = set(extra)
+    return sorted(name for name in overrides
+                  if name not in P.SPECS and name not in ROS_OWN_PARAMETERS and name not in known
+                  and not name.startswith("qos_overrides."))
+
+
+def declare_parameters(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> dict[str, P.Value]:
+    """Declare every parameter of ``specs`` (default: :data:`bt_nav.mission.params.PARAMS`).
+
+    Returns their start-up values.
+
+    Raises:
+        ConfigError: with one line naming the parameter and why its value is refused (type or range);
+            the caller refuses to start rather than run a robot on a configuration nobody meant.
+    """
+    specs = tuple(specs)
+    _coerce_overrides(node, specs)
+    overrides = getattr(node, "_parameter_overrides", None)
+    values: dict[str, P.Value] = {}
+    for spec in specs:
+        given = overrides.get(spec.name) if isinstance(overrides, dict) else None
+        if given is not None:  # our table's wording ("must be >= 0.05 m, got -1.0") beats rclpy's
+            reason = spec.check(P.coerce(spec, given.value))
+            if reason:
+                raise ConfigError(reason)
+        try:
+            parameter = node.declare_parameter(spec.name, spec.default, parameter_descriptor(spec))
+        except InvalidParameterTypeException as exc:
+            raise ConfigError(f"parameter {spec.name}: {exc}") from None
+        except InvalidParameterValueException as exc:
+            raise ConfigError(f"parameter {spec.name}: {exc}") from None
+        values[spec.name] = parameter.value
+    return values
+
+
+# ---------------------------------------------------------------------------------------------- messages
+def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
+    """Heading (rad, about +z) of an orientation quaternion; NaN when it is not a rotation at all."""
+    # atan2 of two terms that both scale with |q|^2: correct for unnormalised quaternions too.
+    sin_term = 2.0 * (w * z + x * y)
+    cos_term = w * w + x * x - y * y - z * z
+    if not (math.isfinite(sin_term) and math.isfinite(cos_term)) or (sin_term == 0.0 and cos_term == 0.0):
+        return math.nan
+    return math.atan2(sin_term, cos_term)
+
+
+class ThreadedNode:
+    """A node in a private rclpy context whose executor spins in a daemon thread.
+
+    For in-process observers (the demo's recorder, the latency probe): their callbacks run while the
+    main thread waits on subprocesses or publishes, and their own context keeps them apart from any
+    other rclpy user of the process. Create subscriptions on ``node``, then :meth:`start`.
+    """
+
+    def __init__(self, name: str) -> None:
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, name=name, daemon=True)
+
+    def start(self) -> None:
+        """Start spinning."""
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set() and self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:  # the context going down while stopping
+                if not self._stop.is_set():
+                    raise
+                break
+
+    def close(self) -> None:
+        """Stop spinning, destroy the node, shut the context down."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)
+        try:
+            self.node.destroy_node()
+        finally:
+            rclpy.try_shutdown(context=self.context)
+
+
+class CommandPublisher:
+    """``cmd_vel`` as ``geometry_msgs/Twist`` or ``TwistStamped`` (TurtleBot3 on Jazzy wants the latter).
+
+    The rest of the node publishes a :class:`~bt_nav.mission.datatypes.Command` and does not care which.
+    """
+
+    def __init__(self, node: Node, topic: str = "cmd_vel", *, stamped: bool = False,
+                 frame_id: str = "base_link", depth: int = 10) -> None:
+        from geometry_msgs.msg import Twist, TwistStamped
+
+        self.node = node
+        self.stamped = stamped
+        self.frame_id = frame_id
+        self._type = TwistStamped if stamped else Twist
+        self.publisher = node.create_publisher(self._type, topic, depth)
+        self.published = 0
+
+    def message(self, command: Command) -> Any:
+        """The message for ``command`` (stamped with the node clock when stamped)."""
+        msg = self._type()
+        twist = msg.twist if self.stamped else msg
+        twist.linear.x = float(command.linear)
+        twist.angular.z = float(command.angular)
+        if self.stamped:
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            msg.header.frame_id = self.frame_id
+        return msg
+
+    def publish(self, command: Command) -> None:
+        """Publish one command."""
+        self.publisher.publish(self.message(command))
+        self.published += 1
+
+    def wait_acked(self, timeout_sec: float) -> bool:
+        """Wait until every matched subscriber acknowledged what was published (reliable QoS)."""
+        from rclpy.duration import Duration
+
+        return bool(self.publisher.wait_for_all_acked(Duration(nanoseconds=int(timeout_sec * 1e9))))
+
+
+# ---------------------------------------------------------------------------------------------- DDS env
+def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
+    """A ROS domain in ``[low, high]`` derived from ``key`` (a pid, a worker name): stable per key."""
+    if isinstance(key, int):
+        return low + key % (high - low + 1)
+    return low + zlib.crc32(key.encode()) % (high - low + 1)
+
+
+#: Lock files of the domains this process claimed; kept open so that the claims last until it exits.
+_DOMAIN_CLAIMS: list[Any] = []
+
+
+def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None,
+                    lock_dir: str | os.PathLike[str] | None = None) -> int:
+    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way.
+
+    A claim is an exclusive ``flock`` on ``<lock_dir>/bt_nav_ros_domains/domain-<id>.lock`` held until
+    this process ends (the kernel drops it even after a crash, so nothing needs cleaning up). The
+    search starts at ``start`` (default: the pid) so concurrent claimers rarely contend. Processes that
+    pick a domain another way (a fixed ``ROS_DOMAIN_ID``, a random pick) are invisible here: give them
+    a different range. The default range, 215-232, lies above the Linux ephemeral ports (Fast DDS uses
+    ports 7400 + 250 * domain + ...; 102-214 overlap 32768-60999) and below 233, where the ports would
+    pass 65535. When every domain is claimed, the first candidate is returned unclaimed.
+    """
+    import fcntl
+    import tempfile
+
+    directory = os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(),
+                             "bt_nav_ros_domains")
+    os.makedirs(directory, exist_ok=True)
+    span = high - low + 1
+    first = (os.getpid() if start is None else start) % span
+    for offset in range(span):
+        domain = low + (first + offset) % span
+        handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # held open: the claim
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        _DOMAIN_CLAIMS.append(handle)
+        return domain
+    return low + first
+
+
+def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """An environment whose DDS traffic stays on this machine, in ``domain_id``.
+
+    ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` keeps discovery off the network (a lab full of
+    robots on one Wi-Fi must not see our test nodes); the domain keeps concurrent runs apart.
+    ``ROS_LOCALHOST_ONLY`` is the pre-Jazzy spelling and is dropped to avoid the deprecation warning.
+    """
+    env = dict(os.environ if base is None else base)
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(int(domain_id))
+    return env
+
+
+# ---------------------------------------------------------------------------------------------- logging
+class EventLog:
+    """An rclpy logger that may be called with any severity from any line.
+
+    rclpy identifies a log call by its call site and raises ValueError ("Logger severity cannot be
+    changed between calls") when one site logs at two severities, e.g. ``log = events.info if ok else
+    events.warning; log(msg)``. Shared code (the leaves, py_trees) cannot be expected to know that,
+    so everything it logs goes through these four methods: one fixed call site per severity. The
+    price: the file/line rclpy records is this adapter's, not the leaf's (the messages name the leaf).
+    """
+
+    def __init__(self, logger: Any) -> None:
+        self.logger = logger
+
+    def debug(self, msg: str) -> None:
+        """DEBUG."""
+        self.logger.debug(str(msg))
+
+    def info(self, msg: str) -> None:
+        """INFO."""
+        self.logger.info(str(msg))
+
+    def warning(self, msg: str) -> None:
+        """WARN."""
+        self.logger.warning(str(msg))
+
+    def error(self, msg: str) -> None:
+        """ERROR."""
+        self.logger.error(str(msg))
+
+
+_PY_TREES_METHODS: dict[str, py_trees.logging.Level] = {
+    "debug": py_trees.logging.Level.DEBUG,
+    "info": py_trees.logging.Level.INFO,
+    "warning": py_trees.logging.Level.WARN,
+    "error": py_trees.logging.Level.ERROR,
+}
+_PADDING = re.compile(r"\s+:\s*$")
+
+
+def route_py_trees_logging(logger: Any) -> Callable[[], None]:
+    """Send py_trees' own log output through ``logger`` (an rclpy logger); returns an undo function.
+
+    py_trees prints through its own console module, so its messages would bypass ``/rosout``, the
+    log files and ``--log-level``. Every py_trees behaviour logs through
+    :class:`py_trees.logging.Logger`, so its four methods are replaced; the module-level
+    ``py_trees.logging.level`` still filters as before, and it is set to DEBUG only when the rclpy
+    logger is at DEBUG (py_trees logs every tick of every behaviour at that level).
+    """
+    from rclpy.logging import LoggingSeverity
+
+    sink = logger if isinstance(logger, EventLog) else EventLog(logger)
+    module = py_trees.logging
+    saved = {name: getattr(module.Logger, name) for name in _PY_TREES_METHODS}
+    saved_level = module.level
+
+    def make(method: str, threshold: py_trees.logging.Level) -> Callable[[Any, str], None]:
+        def log(self: Any, msg: str) -> None:
+            if module.level <= threshold:
+                prefix = _PADDING.sub("", self.prefix)
+                getattr(sink, method)(f"{prefix}: {msg}" if prefix else msg)
+
+        log.__doc__ = f"py_trees {method} -> rclpy logger"
+        return log
+
+    for method, threshold in _PY_TREES_METHODS.items():
+        setattr(module.Logger, method, make(method, threshold))
+    try:
+        debug = sink.logger.get_effective_level() <= LoggingSeverity.DEBUG
+    except Exception:  # a logger without levels (tests): keep py_trees' own setting
+        debug = saved_level <= py_trees.logging.Level.DEBUG
+    module.level = py_trees.logging.Level.DEBUG if debug else py_trees.logging.Level.INFO
+
+    def undo() -> None:
+        for method, original in saved.items():
+            setattr(module.Logger, method, original)
+        module.level = saved_level
+
+    return undo

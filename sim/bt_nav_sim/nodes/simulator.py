@@ -1,0 +1,771 @@
+"""``bt_nav_sim``: the 2D TurtleBot3 simulator as a ROS 2 node that owns simulated time.
+
+What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
+
+- advances sim time by one step and moves the robot with the last ``cmd_vel`` received (it persists
+  until the next one, like Gazebo's diff drive; ``cmd_vel_timeout`` can make it expire instead);
+- publishes ``/clock`` (every step), ``scan`` at the LiDAR's rate, ``odom`` and ``ground_truth_odom``
+  at ``odom_rate_hz``, and one ``collisions`` message per collision *event* (rising edge of the
+  physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``.
+
+Every stamp is sim time. The node itself never uses ``use_sim_time``: it is the clock source.
+
+Threading, and why: the physics loop runs in its own thread and the node's executor spins in the
+main thread, serving the ``cmd_vel`` subscription. Polling the executor from inside the loop instead
+(``spin_once(timeout_sec=0)`` per step) was measured at ~130 us per call even when nothing is ready,
+which alone would cap the loop near 7000 steps/s; a separate thread costs nothing while idle. The
+subscription callback only stores the command under a lock and notifies a condition variable; only
+the loop thread touches the simulation and the publishers. The GIL switch interval is lowered so a
+command that arrives while the loop is busy is taken within ~0.1 ms of wall time (at 20x real time,
+the default 5 ms would be 100 ms of sim-time latency).
+
+Pacing (``real_time_factor``): r > 0 advances sim time r times faster than wall time (sleeping as
+needed; after a hiccup of more than 0.25 s it re-anchors instead of bursting to catch up). r = 0 runs
+as fast as the *followers* keep up, at ``idle_rtf`` while there are none, and never faster than
+``afap_max_rtf`` (0 = no cap); ``solo_rtf`` caps the speed while only ``cmd_vel`` is followed (the
+``eval`` bringup sets it, so the minutes before the referee joins cost little CPU).
+
+Followers (``follow``, on by default, in every pacing mode): wall-clock delays of other processes must
+not turn into sim-time delays, or a busy CPU changes the verdict of a run. A follower is
+
+- whoever publishes ``cmd_vel`` (the executive, one command per tick of its sim-time timer): its
+  time is the sim time at which its latest command arrived;
+- any node that publishes on ``sim_sync`` (``std_msgs/String``, JSON ``{"who": name, "t": its clock
+  in s, "hold": bool}``, or ``{"who": name, "leave": true}``): the referee sends a heartbeat at 20 Hz
+  of sim time and holds time while one of its service calls is in flight.
+
+Before each step the loop waits while an active follower lags more than ``max_lag`` (or its own
+period, if longer: see :class:`Followers`) sim seconds behind, or holds; meanwhile it republishes
+``/clock`` every 20 ms of wall time, so a lost best-effort sample cannot stall anyone. A follower
+silent for ``follower_timeout`` wall seconds (or holding for longer than ``hold_timeout``) is dropped
+with a log line until it speaks again, so a dead or absent process never stalls the simulation.
+
+With followers a run is close to lock-step whatever the CPU load: the executive ticks on every one of
+its periods (measured: 20.0 ticks per sim second), its commands take effect within one tick, and the
+referee's activate calls cost no sim time, as they cost almost none at 1x.
+"""
+
+from __future__ import annotations
+
+import argparse
+import array
+import json
+import math
+import signal
+import sys
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster
+from bt_nav_sim.physics import RobotParams, RobotState, step, wrap_angle
+from bt_nav_sim.world import World, load_world
+
+#: LiDAR per profile: ``homework`` is the course's simulated sensor, ``lab`` the real LDS-01.
+PROFILES: dict[str, LidarModel] = {"homework": HOMEWORK_LIDAR, "lab": LDS01}
+
+NODE_NAME = "bt_nav_sim"
+
+# Light wheel-odometry error (relative, per step) when noise is on: odometry drifts a little, the way
+# wheel slip makes it drift on the real base, while ground truth stays exact.
+ODOM_SLIP_SIGMA = 0.01
+# Covariance diagonal published with odometry (pose x, y, yaw; twist v, w); informational only.
+_ODOM_POSE_VAR = 1e-4
+_ODOM_TWIST_VAR = 1e-4
+# Re-anchor the pacing clock when the loop falls behind by more than this much wall time.
+_REANCHOR_S = 0.25
+# While waiting for followers, /clock is republished this often (wall s): best effort may lose a sample.
+_CLOCK_REPEAT_S = 0.02
+
+
+# ---------------------------------------------------------------------------------------------- pure core
+@dataclass(frozen=True)
+class SimConfig:
+    """Everything that shapes one simulation run (all defaults are the homework setup)."""
+
+    world: str = "stage_4"
+    profile: str = "homework"
+    seed: int = 0  # -1: random (noise from OS entropy, generated worlds from their YAML seed)
+    physics_rate_hz: float = 100.0
+    odom_rate_hz: float = 30.0
+    radius: float = 0.12
+    noise: bool = True
+    dropout_prob: float = 0.0
+    spawn_x: float = math.nan  # NaN: the world's spawn
+    spawn_y: float = math.nan
+    spawn_yaw: float = math.nan  # rad
+    cmd_vel_timeout: float = 0.0  # sim s; 0: the last command persists (Gazebo diff drive behaviour)
+
+    def lidar(self) -> LidarModel:
+        """The profile's LiDAR with this run's noise and dropout settings."""
+        try:
+            model = PROFILES[self.profile]
+        except KeyError:
+            raise ValueError(f"unknown profile {self.profile!r}; choose one of {', '.join(PROFILES)}") from None
+        return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0, dropout_prob=self.dropout_prob)
+
+    def check(self) -> None:
+        """Refuse values that would make the loop meaningless (raises ValueError naming the field)."""
+        for name in ("physics_rate_hz", "odom_rate_hz", "radius"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be > 0, got {value}")
+        if not 0.0 <= self.dropout_prob <= 1.0:
+            raise ValueError(f"dropout_prob must be in [0, 1], got {self.dropout_prob}")
+        if self.cmd_vel_timeout < 0 or not math.isfinite(self.cmd_vel_timeout):
+            raise ValueError(f"cmd_vel_timeout must be >= 0, got {self.cmd_vel_timeout}")
+        self.lidar()
+
+
+@dataclass
+class StepOutput:
+    """What became due at one instant of sim time (the node turns it into messages)."""
+
+    t_ns: int
+    scan: np.ndarray | None = None  # float32 ranges when a scan is due
+    odom: bool = False  # odometry and ground truth are due
+    collision: bool = False  # a collision event started at this step
+
+
+@dataclass
+class Follower:
+    """One process the loop waits for (see the module docstring)."""
+
+    t_ns: int  # its time at its latest message, sim ns
+    hold: bool  # it asked to hold sim time
+    seen: float  # monotonic wall time of its latest message
+    active: bool = True
+    intervals: deque[int] = field(default_factory=lambda: deque(maxlen=20))  # between its messages, sim ns
+
+
+class Followers:
+    """Bookkeeping of the followers (no threads, no ROS; the node guards it with its lock).
+
+    How far sim time may lead a follower: ``max_lag``, or the follower's own period when that is longer
+    (the shortest gap between its last 20 messages). A follower that speaks once per period P (the
+    executive's tick, the referee's heartbeat) must be allowed to reach its next message time, which
+    is up to P after its last one; any lead beyond P lets a slow follower skip its own timer ticks
+    (rcl fires a late timer once), so P itself is the right bound, and learning it per follower keeps
+    a 10 Hz executive from stalling on a 0.05 s default.
+
+    Args:
+        max_lag_ns: the smallest lead allowed, sim ns.
+        silence_s: wall seconds without a message after which a follower is dropped.
+        hold_s: wall seconds after which a hold is ignored (the follower is dropped).
+    """
+
+    def __init__(self, max_lag_ns: int, silence_s: float, hold_s: float) -> None:
+        self.max_lag_ns = int(max_lag_ns)
+        self.silence_s = float(silence_s)
+        self.hold_s = float(hold_s)
+        self.members: dict[str, Follower] = {}
+
+    def report(self, who: str, t_ns: int, hold: bool, wall: float) -> bool:
+        """A message from ``who``; returns True when it (re)joins the active followers."""
+        member = self.members.get(who)
+        if member is None:
+            self.members[who] = Follower(int(t_ns), bool(hold), float(wall))
+            return True
+        joined = not member.active
+        if joined:
+            member.intervals.clear()  # a gap that spans a silence is no period
+        elif t_ns > member.t_ns:
+            member.intervals.append(int(t_ns) - member.t_ns)
+        member.t_ns, member.hold, member.seen, member.active = int(t_ns), bool(hold), float(wall), True
+        return joined
+
+    def leave(self, who: str) -> bool:
+        """``who`` is done (the referee after its verdict); returns whether it was a follower."""
+        return self.members.pop(who, None) is not None
+
+    def any_active(self, exclude: tuple[str, ...] = ()) -> bool:
+        """Is anybody (but ``exclude``) being followed?"""
+        return any(m.active for who, m in self.members.items() if who not in exclude)
+
+    def lead_ns(self, who: str) -> int:
+        """How far sim time may lead ``who``."""
+        m = self.members[who]
+        return max(self.max_lag_ns, min(m.intervals, default=0))
+
+    def blocking(self, sim_ns: int, wall: float) -> tuple[str | None, list[str]]:
+        """(who keeps sim time from reaching ``sim_ns``, or None; who was just dropped for silence or for a
+        hold that lasts too long)."""
+        dropped: list[str] = []
+        blocker = None
+        for who, m in self.members.items():
+            if not m.active:
+                continue
+            if m.hold:
+                if wall - m.seen > self.hold_s:
+                    m.active = False
+                    dropped.append(who)
+                elif blocker is None:
+                    blocker = who
+            elif sim_ns - m.t_ns > self.lead_ns(who):
+                if wall - m.seen > self.silence_s:
+                    m.active = False
+                    dropped.append(who)
+                elif blocker is None:
+                    blocker = who
+        return blocker, dropped
+
+
+class SimCore:
+    """Sim time, physics, sensor schedules and odometry, with no ROS: deterministic for a given seed
+    and command sequence.
+
+    Time is kept in integer nanoseconds so that 100 Hz steps land exactly on the 10 Hz scan grid for
+    hours (a float accumulator drifts off it and scans start jittering by one step).
+    """
+
+    def __init__(self, config: SimConfig, world: World | None = None) -> None:
+        config.check()
+        self.config = config
+        seed = None if config.seed < 0 else int(config.seed)
+        self.world = world if world is not None else load_world(config.world, seed=seed)
+        self.model = config.lidar()
+        self.caster = RayCaster(self.world, self.model)
+        self.params = RobotParams(radius=config.radius)
+        # Two independent streams so that turning LiDAR noise off does not change the odometry drift.
+        self.lidar_rng = np.random.default_rng(seed)
+        self.odom_rng = np.random.default_rng(None if seed is None else seed + 1)
+        sx, sy, syaw = self.world.spawn
+        spawn = (
+            sx if math.isnan(config.spawn_x) else config.spawn_x,
+            sy if math.isnan(config.spawn_y) else config.spawn_y,
+            syaw if math.isnan(config.spawn_yaw) else config.spawn_yaw,
+        )
+        self.spawn = spawn
+        self.state = RobotState(*spawn)
+        self.step_ns = max(1, round(1e9 / config.physics_rate_hz))
+        self.scan_period_ns = max(1, round(1e9 / self.model.rate_hz))
+        self.odom_period_ns = max(1, round(1e9 / config.odom_rate_hz))
+        self.t_ns = 0
+        self._next_scan_ns = 0
+        self._next_odom_ns = 0
+        # Odometry: the pose in the odom frame (origin = start pose), dead-reckoned from true motion.
+        self.odom_x = 0.0
+        self.odom_y = 0.0
+        self.odom_yaw = 0.0
+        self.collisions = 0
+        self.steps = 0
+        self.scans = 0
+        self._was_colliding = self.world.clearance(spawn[0], spawn[1]) <= config.radius
+
+    @property
+    def t(self) -> float:
+        """Sim time in seconds."""
+        return self.t_ns * 1e-9
+
+    def outputs(self) -> StepOutput:
+        """What is due at the current time (scan, odometry); advances the schedules past it."""
+        out = StepOutput(self.t_ns)
+        if self.t_ns >= self._next_scan_ns:
+            out.scan = self.scan()
+            self.scans += 1
+            while self._next_scan_ns <= self.t_ns:
+                self._next_scan_ns += self.scan_period_ns
+        if self.t_ns >= self._next_odom_ns:
+            out.odom = True
+            while self._next_odom_ns <= self.t_ns:
+                self._next_odom_ns += self.odom_period_ns
+        return out
+
+    def scan(self) -> np.ndarray:
+        """A scan from the current true pose (noise and dropouts from the seeded stream)."""
+        s = self.state
+        rng = self.lidar_rng if (self.model.noise_sigma > 0 or self.model.dropout_prob > 0) else None
+        return self.caster.cast(s.x, s.y, s.yaw, rng)
+
+    def advance(self, cmd_v: float, cmd_w: float) -> StepOutput:
+        """One physics step under (cmd_v, cmd_w), then whatever became due (see :meth:`outputs`)."""
+        before = self.state
+        self.state, collided = step(before, cmd_v, cmd_w, self.step_ns * 1e-9, self.world, self.params)
+        self.t_ns += self.step_ns
+        self.steps += 1
+        self._integrate_odom(before, self.state)
+        out = self.outputs()
+        if collided and not self._was_colliding:
+            out.collision = True
+            self.collisions += 1
+        self._was_colliding = collided
+        return out
+
+    def _integrate_odom(self, before: RobotState, after: RobotState) -> None:
+        """Wheel odometry: the true displacement in the robot frame, lightly scaled by slip noise."""
+        dx, dy = after.x - before.x, after.y - before.y
+        c, s = math.cos(before.yaw), math.sin(before.yaw)
+        forward, lateral = c * dx + s * dy, -s * dx + c * dy
+        dyaw = wrap_angle(after.yaw - before.yaw)
+        if self.config.noise and (forward or dyaw):
+            slip_s, slip_yaw = self.odom_rng.normal(0.0, ODOM_SLIP_SIGMA, 2)
+            forward *= 1.0 + slip_s
+            dyaw *= 1.0 + slip_yaw
+        oc, os_ = math.cos(self.odom_yaw), math.sin(self.odom_yaw)
+        self.odom_x += oc * forward - os_ * lateral
+        self.odom_y += os_ * forward + oc * lateral
+        self.odom_yaw = wrap_angle(self.odom_yaw + dyaw)
+
+
+# ---------------------------------------------------------------------------------------------- ROS node
+def _import_ros() -> Any:
+    """Import rclpy lazily so :class:`SimCore` stays usable (and testable) without a ROS install."""
+    import rclpy
+
+    return rclpy
+
+
+def _quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of a rotation by ``yaw`` about +z."""
+    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+
+
+def coerce_int_overrides(node: Any, defaults: dict[str, Any]) -> None:
+    """Let ``-p real_time_factor:=20`` mean 20.0: rclpy refuses an INTEGER override of a DOUBLE parameter.
+
+    rclpy has no public accessor for the overrides, so this edits ``_parameter_overrides`` (absent:
+    nothing to do), before the parameters are declared.
+    """
+    from rclpy.parameter import Parameter
+
+    overrides = getattr(node, "_parameter_overrides", None)
+    if not isinstance(overrides, dict):
+        return
+    for name, default in defaults.items():
+        given = overrides.get(name)
+        if isinstance(default, float) and given is not None and given.type_ == Parameter.Type.INTEGER:
+            overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(given.value))
+
+
+def make_node(parameter_overrides: list | None = None) -> Any:
+    """Create the simulator node (rclpy must be initialised).
+
+    The node class is defined inside this function so that importing the module (for :class:`SimCore`,
+    :class:`Followers` and the tests) does not import rclpy.
+    """
+    rclpy = _import_ros()
+    from geometry_msgs.msg import Twist, TwistStamped
+    from nav_msgs.msg import Odometry
+    from rcl_interfaces.msg import ParameterDescriptor
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import LaserScan
+    from std_msgs.msg import String
+
+    class SimNode(Node):
+        """The simulator node (see the module docstring for topics, threading and pacing)."""
+
+        PARAMETERS: dict[str, tuple[Any, str]] = {
+            "world": ("stage_4", "world name (sim/bt_nav_sim/worlds/<name>.yaml) or path to a world YAML"),
+            "profile": ("homework", "LiDAR profile: homework (10 m, 10 Hz) or lab (LDS-01: 3.5 m, 5 Hz)"),
+            "seed": (0, "seed of sensor noise, odometry slip and generated worlds; -1: random"),
+            "real_time_factor": (1.0, "sim seconds per wall second; 0: as fast as the followers keep up"),
+            "physics_rate_hz": (100.0, "physics steps (and /clock messages) per sim second"),
+            "odom_rate_hz": (30.0, "odom and ground_truth_odom rate, Hz of sim time"),
+            "radius": (0.12, "collision radius of the robot, m"),
+            "noise": (True, "LiDAR range noise and odometry slip on/off"),
+            "dropout_prob": (0.0, "probability that a LiDAR beam reads NaN"),
+            "spawn_x": (math.nan, "spawn x, m (NaN: the world's spawn)"),
+            "spawn_y": (math.nan, "spawn y, m (NaN: the world's spawn)"),
+            "spawn_yaw": (math.nan, "spawn heading, rad (NaN: the world's spawn)"),
+            "cmd_vel_stamped": (False, "subscribe geometry_msgs/TwistStamped instead of Twist"),
+            "cmd_vel_timeout": (0.0, "sim s after which the last command expires (0: it persists)"),
+            "follow": (True, "wait for the followers (cmd_vel publishers, sim_sync senders) to keep up"),
+            "max_lag": (0.05, "sim s that sim time may lead an active follower (at least; see Followers)"),
+            "follower_timeout": (1.0, "wall s of silence after which a follower is no longer waited for"),
+            "hold_timeout": (5.0, "wall s after which a follower's hold is ignored"),
+            "idle_rtf": (10.0, "real_time_factor 0: speed while there is no follower"),
+            "afap_max_rtf": (0.0, "real_time_factor 0: upper bound on the speed (0: none)"),
+            "solo_rtf": (0.0, "real_time_factor 0: upper bound while only cmd_vel is followed, no sim_sync "
+                              "follower such as the referee (0: none)"),
+            "duration": (0.0, "stop after this much sim time, s (0: run until shut down)"),
+        }
+
+        def __init__(self) -> None:
+            super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
+            coerce_int_overrides(self, {name: default for name, (default, _) in self.PARAMETERS.items()})
+            p = {name: self.declare_parameter(name, default, ParameterDescriptor(description=text)).value
+                 for name, (default, text) in self.PARAMETERS.items()}
+            config = SimConfig(
+                world=str(p["world"]), profile=str(p["profile"]), seed=int(p["seed"]),
+                physics_rate_hz=float(p["physics_rate_hz"]), odom_rate_hz=float(p["odom_rate_hz"]),
+                radius=float(p["radius"]), noise=bool(p["noise"]), dropout_prob=float(p["dropout_prob"]),
+                spawn_x=float(p["spawn_x"]), spawn_y=float(p["spawn_y"]), spawn_yaw=float(p["spawn_yaw"]),
+                cmd_vel_timeout=float(p["cmd_vel_timeout"]),
+            )
+            self.core = SimCore(config)
+            self.rtf = max(0.0, float(p["real_time_factor"]))
+            self.follow = bool(p["follow"])
+            self.followers = Followers(int(max(0.0, float(p["max_lag"])) * 1e9), max(0.0, float(p["follower_timeout"])),
+                                       max(0.0, float(p["hold_timeout"])))
+            self.idle_rtf = max(0.0, float(p["idle_rtf"]))
+            self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
+            self.solo_rtf = max(0.0, float(p["solo_rtf"]))
+            self.duration_ns = int(max(0.0, float(p["duration"])) * 1e9)
+
+            reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+            # /clock as rclcpp's ClockQoS (best effort, depth 1), what every time source subscribes with: a
+            # reliable writer measured ~2.5x the publish cost with the executive and referee listening.
+            self.clock_pub = self.create_publisher(Clock, "/clock",
+                                                   QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+            self.scan_pub = self.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
+            self.odom_pub = self.create_publisher(Odometry, "odom", reliable)
+            # Deeper history for the referee's and recorders' sake: a reader that falls a little behind
+            # under load gets the samples resent instead of losing them.
+            self.truth_pub = self.create_publisher(Odometry, "ground_truth_odom",
+                                                   QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+            self.collision_pub = self.create_publisher(String, "collisions", QoSProfile(depth=50))
+            stamped = bool(p["cmd_vel_stamped"])
+            self.create_subscription(TwistStamped if stamped else Twist, "cmd_vel",
+                                     self._on_cmd_stamped if stamped else self._on_cmd, 10)
+            self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
+
+            # Messages are reused: publish() serialises synchronously, so only the fields change.
+            self._clock_msg = Clock()
+            self._scan_msg = self._scan_template()
+            self._odom_msg = self._odom_template("odom")
+            self._truth_msg = self._odom_template("world")
+
+            # Command and follower state, shared with the executor thread (guarded by _cond).
+            self._cond = threading.Condition()
+            self._cmd = (0.0, 0.0)
+            self._cmd_arrival_ns = -1  # sim time at which the latest command arrived
+            self._bad_commands = 0
+            self._bad_sync = 0
+            self.commands = 0
+            self._stop = threading.Event()
+            self.finished = threading.Event()
+            self._wall_start = time.monotonic()
+            self.failed: BaseException | None = None
+            self._thread = threading.Thread(target=self._loop_guarded, name="sim-loop", daemon=True)
+
+            c, m, w = self.core, self.core.model, self.core.world
+            pace = f"{self.rtf:g}x real time" if self.rtf > 0 else \
+                (f"as fast as the followers keep up ({self.idle_rtf:g}x without any"
+                 + (f", <= {self.afap_max_rtf:g}x" if self.afap_max_rtf else "") + ")")
+            self.get_logger().info(
+                f"world {w.name} spawn ({c.spawn[0]:.2f}, {c.spawn[1]:.2f}, {math.degrees(c.spawn[2]):.0f} deg); "
+                f"profile {config.profile}: {m.num_beams} beams, {m.range_min}-{m.range_max} m, {m.rate_hz:g} Hz, "
+                f"noise {'on' if config.noise else 'off'}; physics {config.physics_rate_hz:g} Hz; {pace}")
+
+        # -------------------------------------------------------------- lifecycle
+        def start(self) -> None:
+            """Start the physics loop thread."""
+            self._wall_start = time.monotonic()
+            self._thread.start()
+
+        def stop(self) -> None:
+            """Stop the loop thread and wait for it."""
+            self._stop.set()
+            with self._cond:
+                self._cond.notify_all()
+            if self._thread.is_alive():
+                self._thread.join(timeout=5.0)
+
+        def stats(self) -> str:
+            """One line: how much sim time ran in how much wall time."""
+            wall = max(1e-9, time.monotonic() - self._wall_start)
+            c = self.core
+            return (f"simulated {c.t:.2f} s in {wall:.2f} s wall ({c.t / wall:.1f}x real time): {c.steps} steps, "
+                    f"{c.scans} scans, {self.commands} commands, {c.collisions} collision events")
+
+        # -------------------------------------------------------------- commands (executor thread)
+        def _on_cmd(self, msg: Any) -> None:
+            self._set_cmd(msg.linear.x, msg.angular.z)
+
+        def _on_cmd_stamped(self, msg: Any) -> None:
+            self._set_cmd(msg.twist.linear.x, msg.twist.angular.z)
+
+        def _set_cmd(self, v: float, w: float) -> None:
+            """Store the command; a non-finite one is kept as a stop (the physics sanitises it anyway)."""
+            v, w = float(v), float(w)
+            if not (math.isfinite(v) and math.isfinite(w)):
+                self._bad_commands += 1
+                if self._bad_commands in (1, 10, 100) or self._bad_commands % 1000 == 0:
+                    self.get_logger().warning(f"non-finite cmd_vel ({v}, {w}) treated as a stop "
+                                              f"({self._bad_commands} so far)")
+                v, w = 0.0, 0.0
+            with self._cond:
+                self._cmd = (v, w)
+                self._cmd_arrival_ns = self.core.t_ns
+                self.commands += 1
+                if self.follow and self.followers.report("cmd_vel", self.core.t_ns, False, time.monotonic()):
+                    self.get_logger().info(f"following cmd_vel (t={self.core.t:.2f} s)")
+                self._cond.notify_all()
+
+        def _on_sync(self, msg: Any) -> None:
+            """A follower's heartbeat, hold or goodbye (format in the module docstring)."""
+            try:
+                data = json.loads(msg.data)
+                who = str(data["who"])
+                leave = bool(data.get("leave", False))
+                t = float(data.get("t", 0.0))
+                hold = bool(data.get("hold", False))
+                if not (leave or math.isfinite(t)):
+                    raise ValueError("t must be finite")
+            except (ValueError, KeyError, TypeError, AttributeError) as exc:
+                self._bad_sync += 1
+                self.get_logger().warning(f"ignoring sim_sync message {msg.data!r}: {exc}", throttle_duration_sec=5.0)
+                return
+            if not self.follow:
+                return
+            with self._cond:
+                if leave:
+                    if self.followers.leave(who):
+                        self.get_logger().info(f"{who} stopped following (t={self.core.t:.2f} s)")
+                elif self.followers.report(who, int(round(t * 1e9)), hold, time.monotonic()):
+                    self.get_logger().info(f"following {who} (t={self.core.t:.2f} s)")
+                self._cond.notify_all()
+
+        # -------------------------------------------------------------- loop (sim thread)
+        def _loop_guarded(self) -> None:
+            try:
+                self._loop()
+            except Exception as exc:  # report, then let main() exit non-zero instead of hanging
+                self.get_logger().fatal(f"simulation loop died: {exc!r}")
+                self.failed = exc
+            finally:
+                self.finished.set()
+
+        def _loop(self) -> None:
+            core = self.core
+            self._publish(core.outputs())
+            anchor_wall, anchor_ns, anchor_rate = time.monotonic(), core.t_ns, -1.0
+            while not self._stop.is_set() and rclpy.ok(context=self.context):
+                if self.duration_ns and core.t_ns >= self.duration_ns:
+                    self.get_logger().info(f"duration reached (t={core.t:.2f} s): stopping")
+                    break
+                # A wait for a follower is made up for by running ahead of the pace afterwards (the
+                # followers still bound the lead), so a fixed factor is kept on average; only a backlog of
+                # more than _REANCHOR_S wall seconds is written off.
+                self._wait_for_followers()
+                with self._cond:
+                    v, w = self._cmd
+                    arrival = self._cmd_arrival_ns
+                    following = self.followers.any_active()
+                    synced = self.followers.any_active(exclude=("cmd_vel",))
+                rate = self.rtf
+                if rate == 0.0:
+                    rate = self.idle_rtf if not following else self.afap_max_rtf
+                    if following and not synced and self.solo_rtf > 0.0:
+                        rate = min(rate, self.solo_rtf) if rate > 0.0 else self.solo_rtf
+                if rate != anchor_rate:
+                    anchor_wall, anchor_ns, anchor_rate = time.monotonic(), core.t_ns, rate
+                if rate > 0.0:
+                    target = anchor_wall + (core.t_ns + core.step_ns - anchor_ns) * 1e-9 / rate
+                    delay = target - time.monotonic()
+                    if delay > 0.0:
+                        if self._stop.wait(delay):
+                            break
+                    elif delay < -_REANCHOR_S:
+                        anchor_wall, anchor_ns = time.monotonic(), core.t_ns
+                timeout = core.config.cmd_vel_timeout
+                if timeout > 0.0 and (arrival < 0 or core.t_ns - arrival > timeout * 1e9):
+                    v, w = 0.0, 0.0
+                self._publish(core.advance(v, w))
+
+        def _wait_for_followers(self) -> bool:
+            """Hold sim time while an active follower lags or holds; returns whether it waited."""
+            if not self.follow:
+                return False
+            core = self.core
+            waited = False
+            last_clock = time.monotonic()
+            with self._cond:
+                while not self._stop.is_set():
+                    now = time.monotonic()
+                    blocker, dropped = self.followers.blocking(core.t_ns + core.step_ns, now)
+                    for who in dropped:
+                        self.get_logger().info(f"{who} silent or holding too long (t={core.t:.2f} s): not waiting "
+                                               "for it until it speaks again")
+                    if blocker is None:
+                        return waited
+                    waited = True
+                    if now - last_clock >= _CLOCK_REPEAT_S:
+                        self.clock_pub.publish(self._clock_msg)  # in case the last sample was lost
+                        last_clock = now
+                    self._cond.wait(_CLOCK_REPEAT_S)
+            return waited
+
+        # -------------------------------------------------------------- messages
+        def _scan_template(self) -> Any:
+            m = self.core.model
+            msg = LaserScan()
+            msg.header.frame_id = "base_scan"
+            msg.angle_min = float(m.angle_min)
+            msg.angle_max = float(m.angle_max)
+            msg.angle_increment = float(m.angle_increment)
+            msg.scan_time = 1.0 / m.rate_hz
+            msg.time_increment = msg.scan_time / m.num_beams
+            msg.range_min = float(m.range_min)
+            msg.range_max = float(m.range_max)
+            return msg
+
+        def _odom_template(self, frame: str) -> Any:
+            msg = Odometry()
+            msg.header.frame_id = frame
+            msg.child_frame_id = "base_footprint"
+            pose_cov = [0.0] * 36
+            twist_cov = [0.0] * 36
+            for i in (0, 7, 35):
+                pose_cov[i] = _ODOM_POSE_VAR if frame == "odom" else 0.0
+            for i in (0, 35):
+                twist_cov[i] = _ODOM_TWIST_VAR if frame == "odom" else 0.0
+            msg.pose.covariance = pose_cov
+            msg.twist.covariance = twist_cov
+            return msg
+
+        def _publish(self, out: StepOutput) -> None:
+            sec, nanosec = divmod(out.t_ns, 1_000_000_000)
+            clock = self._clock_msg
+            clock.clock.sec, clock.clock.nanosec = sec, nanosec
+            self.clock_pub.publish(clock)
+            state = self.core.state
+            if out.collision:
+                event = {"t": round(out.t_ns * 1e-9, 6), "x": round(state.x, 4), "y": round(state.y, 4),
+                         "yaw": round(state.yaw, 4)}
+                self.collision_pub.publish(String(data=json.dumps(event)))
+                self.get_logger().warning(f"collision at t={event['t']:.2f} s, ({state.x:.2f}, {state.y:.2f})")
+            if out.odom:
+                core = self.core
+                self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
+                self.odom_pub.publish(self._odom_msg)
+                self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
+                self.truth_pub.publish(self._truth_msg)
+            if out.scan is not None:
+                msg = self._scan_msg
+                msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+                ranges = array.array("f")
+                ranges.frombytes(out.scan.astype(np.float32, copy=False).tobytes())
+                msg.ranges = ranges
+                self.scan_pub.publish(msg)
+
+        @staticmethod
+        def _fill_odom(msg: Any, sec: int, nanosec: int, x: float, y: float, yaw: float, state: RobotState) -> None:
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            msg.pose.pose.position.x = float(x)
+            msg.pose.pose.position.y = float(y)
+            q = msg.pose.pose.orientation
+            q.x, q.y, q.z, q.w = _quaternion(yaw)
+            msg.twist.twist.linear.x = float(state.v)
+            msg.twist.twist.angular.z = float(state.w)
+
+    return SimNode()
+
+
+# ---------------------------------------------------------------------------------------------- command line
+class StopSignal:
+    """SIGINT/SIGTERM set a flag instead of tearing the ROS context down under the node's feet.
+
+    rclpy's own handlers shut the context down first, so the node could not log its last line or send
+    a final message; with this the main loop ends, the node cleans up, and only then does rclpy go. A
+    second signal raises KeyboardInterrupt, for a loop that does not come back.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+
+    def __bool__(self) -> bool:
+        return self.signum is not None
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.signum is not None:
+            raise KeyboardInterrupt
+        self.signum = signum
+
+    def install(self) -> StopSignal:
+        """Install the handlers (main thread only; elsewhere this is a no-op)."""
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(sig, self._handle)
+        return self
+
+
+def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """(our own options, the ``--ros-args ... [--]`` parts) of a command line, order kept in each."""
+    ours: list[str] = []
+    ros: list[str] = []
+    inside = False
+    for arg in argv:
+        if arg == "--ros-args":
+            inside = True
+            ros.append(arg)
+        elif inside and arg == "--":
+            inside = False
+            ros.append(arg)
+        elif inside:
+            ros.append(arg)
+        else:
+            ours.append(arg)
+    if inside:
+        ros.append("--")
+    return ours, ros
+
+
+def param_args(values: dict[str, Any]) -> list[str]:
+    """``--ros-args -p name:=value ...`` for the options given on our own command line (None: skipped)."""
+    from bt_nav.ros.bringup import param_arg
+
+    items = [a for name, value in values.items() if value is not None for a in ("-p", param_arg(name, value))]
+    return ["--ros-args", *items, "--"] if items else []
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav sim [--world W] [--profile P] [--seed N] [--rtf X] [--duration S] [--ros-args ...]``.
+
+    The options are shorthands for the parameters of the same meaning; ``--ros-args -p`` works for all.
+    Returns 0 after a clean shutdown (Ctrl-C or ``duration``), 1 if the loop or the set-up failed.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    ours, ros = split_ros_args(argv)
+    parser = argparse.ArgumentParser(prog="bt-nav sim", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--world", help="world name or YAML path (parameter world)")
+    parser.add_argument("--profile", choices=sorted(PROFILES), help="LiDAR profile (parameter profile)")
+    parser.add_argument("--seed", type=int, help="noise / world seed (parameter seed)")
+    parser.add_argument("--rtf", type=float, help="real-time factor, 0 = as fast as possible")
+    parser.add_argument("--duration", type=float, help="stop after this many sim seconds")
+    opts = parser.parse_args(ours)
+    extra = param_args({"world": opts.world, "profile": opts.profile, "seed": opts.seed,
+                        "real_time_factor": opts.rtf, "duration": opts.duration})
+
+    sys.setswitchinterval(1e-4)  # see the module docstring: command latency under load
+    rclpy = _import_ros()
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    rclpy.init(args=[NODE_NAME, *ros, *extra], signal_handler_options=SignalHandlerOptions.NO)
+    stop = StopSignal().install()
+    node = None
+    code = 0
+    try:
+        try:
+            node = make_node()
+        except (ValueError, FileNotFoundError) as exc:
+            print(f"bt-nav sim: {exc}", file=sys.stderr)
+            return 1
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        node.start()
+        try:
+            while rclpy.ok() and not node.finished.is_set() and not stop:
+                executor.spin_once(timeout_sec=0.1)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        node.stop()
+        if node.failed is not None:
+            code = 1
+        node.get_logger().info(node.stats())
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,327 @@
+"""Static 2D worlds for the simulator: walls as line segments plus cylinders.
+
+Everything the physics and the LiDAR need reduces to two numpy arrays (segments and circles), so a world is
+just those arrays plus a spawn pose; boxes are kept separately only so plots can draw them filled.
+
+World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
+
+    name: stage_4                      # required
+    spawn: {x: -0.7, y: 0.0, yaw_deg: 0}   # optional, default origin facing +x
+    segments: [[x1, y1, x2, y2], ...]  # optional, thin walls (zero thickness)
+    boxes:                             # optional, rectangles -> 4 segments each
+      - {x: 0, y: 0, length: 1.0, thickness: 0.15, yaw_deg: 90}   # length runs along yaw
+    circles: [{x: 2, y: 2, r: 0.12}]   # optional, cylinders
+    bounds: [xmin, ymin, xmax, ymax]   # optional, plotting extent; default: obstacles + margin
+    generator:                         # optional, random clutter drawn from a seed
+      kind: cluttered                  # the only kind so far
+      count: 12                        # number of obstacles to add
+      min_r: 0.1                       # obstacle size range (circle radius / half box length), m
+      max_r: 0.3
+      room: [4.7, 4.7]                 # w, h of the free area the clutter is placed in
+      center: [0, 0]                   # optional, centre of that area (default origin)
+      keep_clear: 0.6                  # no obstacle comes closer than this to the spawn point
+      min_gap: 0.35                    # optional, min free gap between any two obstacles/walls
+      box_fraction: 0.35               # optional, share of obstacles that are boxes
+      seed: 7                          # optional default seed (load_world(seed=...) overrides)
+
+The generator keeps every pair of obstacles (and obstacles vs. the static walls) at least ``min_gap``
+apart using bounding circles. With ``min_gap`` larger than the robot diameter the inflated obstacles are
+disjoint islands inside the room, so the free space is connected: the spawn can never be boxed in.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+WORLDS_DIR = Path(__file__).parent / "worlds"
+
+# Margin added around the obstacles when a world does not give explicit plotting bounds.
+_BOUNDS_MARGIN = 0.25
+
+
+def _as_readonly(arr: Any, width: int) -> np.ndarray:
+    """Return a C-contiguous read-only float64 (K, width) copy, so a frozen World really is immutable."""
+    out = np.array(arr, dtype=np.float64, copy=True).reshape(-1, width)
+    out = np.ascontiguousarray(out)
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """An immutable 2D world: walls as segments and cylinders as circles.
+
+    ``eq=False`` keeps identity equality and hashing: numpy fields make value equality ambiguous, and an
+    identity hash lets ray casters be cached per world object.
+    """
+
+    name: str
+    segments: np.ndarray  # (N, 4) float64: x1, y1, x2, y2
+    circles: np.ndarray  # (M, 3) float64: cx, cy, r
+    spawn: tuple[float, float, float]  # x, y, yaw (rad)
+    bounds: tuple[float, float, float, float]  # xmin, ymin, xmax, ymax (plotting)
+    boxes: tuple = ()  # original boxes (cx, cy, length, thickness, yaw_rad), for filled drawing
+    # Precomputed per-segment direction and squared length for clearance(); derived, not constructor args.
+    _seg_d: np.ndarray = field(init=False, repr=False)
+    _seg_inv_len2: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        segs = _as_readonly(self.segments, 4)
+        circ = _as_readonly(self.circles, 3)
+        if np.any(circ[:, 2] < 0):
+            raise ValueError(f"world {self.name!r}: circle radius must be >= 0")
+        d = np.ascontiguousarray(segs[:, 2:4] - segs[:, 0:2])
+        len2 = np.einsum("ij,ij->i", d, d)
+        # Zero-length segments degrade to points: any finite factor works since the projection is 0.
+        inv_len2 = np.where(len2 > 0.0, 1.0 / np.where(len2 > 0.0, len2, 1.0), 0.0)
+        object.__setattr__(self, "segments", segs)
+        object.__setattr__(self, "circles", circ)
+        object.__setattr__(self, "spawn", tuple(float(v) for v in self.spawn))
+        object.__setattr__(self, "bounds", tuple(float(v) for v in self.bounds))
+        object.__setattr__(self, "boxes", tuple(tuple(float(v) for v in b) for b in self.boxes))
+        object.__setattr__(self, "_seg_d", d)
+        object.__setattr__(self, "_seg_inv_len2", inv_len2)
+
+    def clearance(self, x: float, y: float) -> float:
+        """Distance from (x, y) to the nearest obstacle surface (negative inside a circle; inf if empty).
+
+        Vectorised over all obstacles because physics calls it on every sub-step.
+        """
+        best = math.inf
+        segs = self.segments
+        if segs.shape[0]:
+            px = x - segs[:, 0]
+            py = y - segs[:, 1]
+            dx = self._seg_d[:, 0]
+            dy = self._seg_d[:, 1]
+            t = np.clip((px * dx + py * dy) * self._seg_inv_len2, 0.0, 1.0)
+            ex = px - t * dx
+            ey = py - t * dy
+            best = math.sqrt(float(np.min(ex * ex + ey * ey)))
+        circ = self.circles
+        if circ.shape[0]:
+            dc = np.hypot(x - circ[:, 0], y - circ[:, 1]) - circ[:, 2]
+            best = min(best, float(np.min(dc)))
+        return best
+
+
+def box_corners(x: float, y: float, length: float, thickness: float, yaw: float) -> np.ndarray:
+    """Corners (4, 2) of a box centred at (x, y) with ``length`` along ``yaw``, counter-clockwise.
+
+    Order: front-left, rear-left, rear-right, front-right (front = +length direction).
+    """
+    c, s = math.cos(yaw), math.sin(yaw)
+    a, b = 0.5 * length, 0.5 * thickness
+    ux, uy = a * c, a * s  # half length along the box axis
+    nx, ny = -b * s, b * c  # half thickness along the box normal
+    return np.array(
+        [
+            [x + ux + nx, y + uy + ny],
+            [x - ux + nx, y - uy + ny],
+            [x - ux - nx, y - uy - ny],
+            [x + ux - nx, y + uy - ny],
+        ]
+    )
+
+
+def box_segments(x: float, y: float, length: float, thickness: float, yaw: float) -> np.ndarray:
+    """The 4 boundary segments (4, 4) of a box, each corner joined to the next one."""
+    c = box_corners(x, y, length, thickness, yaw)
+    return np.hstack([c, np.roll(c, -1, axis=0)])
+
+
+def _num(d: dict, key: str, where: str, default: float | None = None) -> float:
+    """Fetch a finite float from a YAML mapping with an error that says where it came from."""
+    if key not in d:
+        if default is None:
+            raise ValueError(f"{where}: missing key {key!r}")
+        return float(default)
+    try:
+        v = float(d[key])
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: {key!r} must be a number, got {d[key]!r}") from exc
+    if not math.isfinite(v):
+        raise ValueError(f"{where}: {key!r} must be finite, got {v}")
+    return v
+
+
+def _static_world(name: str, segments: np.ndarray, circles: np.ndarray) -> World:
+    """A throwaway World used only for clearance queries while generating clutter."""
+    return World(name=name, segments=segments, circles=circles, spawn=(0.0, 0.0, 0.0), bounds=(0, 0, 0, 0))
+
+
+def _generate_cluttered(
+    gen: dict,
+    seed: int,
+    spawn: tuple[float, float, float],
+    segments: np.ndarray,
+    circles: np.ndarray,
+    name: str,
+) -> tuple[list[list[float]], list[tuple[float, float, float, float, float]]]:
+    """Draw ``count`` random circles/boxes that keep ``min_gap`` from each other, the walls and the spawn.
+
+    Rejection sampling over bounding circles keeps it simple and deterministic per seed; raising when the
+    room is too crowded is better than silently returning fewer obstacles than the YAML asked for.
+    """
+    where = f"world {name!r} generator"
+    count = int(gen.get("count", 12))
+    min_r = _num(gen, "min_r", where, 0.1)
+    max_r = _num(gen, "max_r", where, 0.3)
+    keep_clear = _num(gen, "keep_clear", where, 0.6)
+    min_gap = _num(gen, "min_gap", where, 0.35)
+    box_fraction = _num(gen, "box_fraction", where, 0.35)
+    room = gen.get("room", [4.0, 4.0])
+    center = gen.get("center", [0.0, 0.0])
+    if not (0 < min_r <= max_r) or count < 0 or len(room) != 2 or len(center) != 2:
+        raise ValueError(f"{where}: need 0 < min_r <= max_r, count >= 0, room [w, h], center [x, y]")
+    w, h = float(room[0]), float(room[1])
+    cx0, cy0 = float(center[0]), float(center[1])
+
+    rng = np.random.default_rng(seed)
+    static = _static_world(name, segments, circles)
+    placed: list[tuple[float, float, float]] = []  # bounding circles (x, y, R)
+    new_circles: list[list[float]] = []
+    new_boxes: list[tuple[float, float, float, float, float]] = []
+    attempts = 0
+    while len(placed) < count:
+        attempts += 1
+        if attempts > 2000 * max(count, 1):
+            raise ValueError(f"{where}: could only place {len(placed)}/{count} obstacles; room too small")
+        is_box = bool(rng.random() < box_fraction)
+        r = float(rng.uniform(min_r, max_r))
+        if is_box:
+            length = 2.0 * r
+            thickness = float(rng.uniform(0.5, 1.0)) * length
+            yaw = float(rng.uniform(0.0, math.pi))
+            bound_r = 0.5 * math.hypot(length, thickness)
+        else:
+            bound_r = r
+        # Keep min_gap to the room edge as well as to the walls: the free space must stay connected.
+        margin = bound_r + min_gap
+        if 2 * margin >= w or 2 * margin >= h:
+            continue
+        x = float(rng.uniform(cx0 - 0.5 * w + margin, cx0 + 0.5 * w - margin))
+        y = float(rng.uniform(cy0 - 0.5 * h + margin, cy0 + 0.5 * h - margin))
+        if math.hypot(x - spawn[0], y - spawn[1]) < keep_clear + bound_r:
+            continue
+        if static.clearance(x, y) < margin:
+            continue
+        if any(math.hypot(x - px, y - py) < pr + bound_r + min_gap for px, py, pr in placed):
+            continue
+        placed.append((x, y, bound_r))
+        if is_box:
+            new_boxes.append((x, y, length, thickness, yaw))
+        else:
+            new_circles.append([x, y, r])
+    return new_circles, new_boxes
+
+
+def world_from_dict(d: dict, seed: int | None = None) -> World:
+    """Build a World from a parsed YAML mapping (schema in the module docstring).
+
+    ``seed`` only matters when the world has a ``generator``; None means the seed written in the YAML.
+    """
+    if not isinstance(d, dict):
+        raise ValueError(f"world description must be a mapping, got {type(d).__name__}")
+    name = str(d.get("name", "unnamed"))
+    where = f"world {name!r}"
+
+    sp = d.get("spawn") or {}
+    spawn = (
+        _num(sp, "x", f"{where} spawn", 0.0),
+        _num(sp, "y", f"{where} spawn", 0.0),
+        math.radians(_num(sp, "yaw_deg", f"{where} spawn", 0.0)),
+    )
+
+    seg_rows: list[np.ndarray] = []
+    for i, s in enumerate(d.get("segments") or []):
+        if len(s) != 4:
+            raise ValueError(f"{where}: segment {i} must be [x1, y1, x2, y2], got {s!r}")
+        seg_rows.append(np.asarray([float(v) for v in s], dtype=np.float64).reshape(1, 4))
+
+    boxes: list[tuple[float, float, float, float, float]] = []
+    for i, b in enumerate(d.get("boxes") or []):
+        bw = f"{where} box {i}"
+        box = (
+            _num(b, "x", bw),
+            _num(b, "y", bw),
+            _num(b, "length", bw),
+            _num(b, "thickness", bw),
+            math.radians(_num(b, "yaw_deg", bw, 0.0)),
+        )
+        if box[2] <= 0 or box[3] <= 0:
+            raise ValueError(f"{bw}: length and thickness must be > 0")
+        boxes.append(box)
+
+    circle_rows: list[list[float]] = []
+    for i, c in enumerate(d.get("circles") or []):
+        cw = f"{where} circle {i}"
+        r = _num(c, "r", cw)
+        if r <= 0:
+            raise ValueError(f"{cw}: r must be > 0")
+        circle_rows.append([_num(c, "x", cw), _num(c, "y", cw), r])
+
+    def _segments() -> np.ndarray:
+        parts = seg_rows + [box_segments(*b) for b in boxes]
+        return np.vstack(parts) if parts else np.zeros((0, 4))
+
+    gen = d.get("generator")
+    if gen:
+        kind = gen.get("kind", "cluttered")
+        if kind != "cluttered":
+            raise ValueError(f"{where}: unknown generator kind {kind!r}")
+        if seed is None:
+            seed = int(gen.get("seed", d.get("seed", 0)))
+        extra_circles, extra_boxes = _generate_cluttered(
+            gen, int(seed), spawn, _segments(), np.asarray(circle_rows).reshape(-1, 3), name
+        )
+        circle_rows += extra_circles
+        boxes += extra_boxes
+
+    segments = _segments()
+    circles = np.asarray(circle_rows, dtype=np.float64).reshape(-1, 3)
+
+    if "bounds" in d:
+        bounds = tuple(float(v) for v in d["bounds"])
+        if len(bounds) != 4:
+            raise ValueError(f"{where}: bounds must be [xmin, ymin, xmax, ymax]")
+    else:
+        xs = [segments[:, 0], segments[:, 2], circles[:, 0] - circles[:, 2], circles[:, 0] + circles[:, 2]]
+        ys = [segments[:, 1], segments[:, 3], circles[:, 1] - circles[:, 2], circles[:, 1] + circles[:, 2]]
+        allx = np.concatenate(xs + [np.array([spawn[0]])])
+        ally = np.concatenate(ys + [np.array([spawn[1]])])
+        m = _BOUNDS_MARGIN
+        bounds = (float(allx.min()) - m, float(ally.min()) - m, float(allx.max()) + m, float(ally.max()) + m)
+
+    return World(name=name, segments=segments, circles=circles, spawn=spawn, bounds=bounds, boxes=tuple(boxes))
+
+
+def list_worlds() -> list[str]:
+    """Names of the bundled worlds (the YAML files in ``sim/bt_nav_sim/worlds``), sorted."""
+    return sorted(p.stem for p in WORLDS_DIR.glob("*.yaml"))
+
+
+def load_world(name_or_path: str, seed: int | None = None) -> World:
+    """Load a bundled world by name (``stage_4``) or any world YAML by path.
+
+    A string counts as a path when it names an existing file or ends in .yaml/.yml, so a typo in a name
+    gives a helpful list of bundled worlds instead of a bare file-not-found.
+    """
+    p = Path(name_or_path)
+    if p.is_file() or p.suffix in (".yaml", ".yml"):
+        path = p
+    else:
+        path = WORLDS_DIR / f"{name_or_path}.yaml"
+        if not path.is_file():
+            raise FileNotFoundError(f"unknown world {name_or_path!r}; bundled worlds: {', '.join(list_worlds())}")
+    with open(path, encoding="utf-8") as fh:
+        data = yaml.safe_load(fh)
+    if isinstance(data, dict) and "name" not in data:
+        data["name"] = path.stem
+    return world_from_dict(data, seed=seed)
