@@ -30,4 +30,18 @@ def test_cli_json(tmp_path, capsys) -> None:
     data = json.loads(out.read_text())
     assert len(data["runs"]) == 2 and data["summary"][0]["runs"] == 2
     assert code == (0 if all(r["passed"] for r in data["runs"]) else 1)
-    assert "missions in" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "2 missions (homework profile" in printed and "passed (" in printed
+    assert data["overall"]["runs"] == 2 and data["settings"]["maneuvers"] == ["A"]
+    assert data["overall"]["passed"] == sum(r["passed"] for r in data["runs"])
+
+
+def test_cli_all_worlds_burger_turtlebot3(tmp_path) -> None:
+    from bt_nav_sim.world import list_worlds
+
+    out = tmp_path / "grade.json"
+    main(["--worlds", "all", "--maneuvers", "none", "--seeds", "1", "--kinematics", "burger",
+          "--profile", "turtlebot3", "--json", str(out)])
+    data = json.loads(out.read_text())
+    assert sorted({r["world"] for r in data["runs"]}) == list_worlds()
+    assert {(r["kinematics"], r["profile"]) for r in data["runs"]} == {("burger", "turtlebot3")}

@@ -6,6 +6,7 @@ import math
 
 import pytest
 from bt_nav_sim import RobotParams, RobotState, load_world, step, world_from_dict
+from bt_nav_sim.physics import wheel_limited
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -213,3 +214,49 @@ def test_random_commands_never_penetrate(cmds: list[tuple[float, float, float]])
         assert world.clearance(s.x, s.y) >= P.radius - 1e-6
         assert abs(s.v) <= P.max_linear and abs(s.w) <= P.max_angular
         assert -math.pi <= s.yaw < math.pi
+
+
+# ------------------------------------------------------------------------------------------ burger kinematics
+BURGER = RobotParams(kinematics="burger")
+
+
+@pytest.mark.parametrize(("v", "w", "expected"), [
+    (0.22, 0.0, (0.22, 0.0)),  # straight: both wheels at 0.22, under the 0.2272 limit
+    (0.0, 2.84, (0.0, 2.84)),  # the published spin: both wheels exactly at the limit
+    (0.0, -2.84, (0.0, -2.84)),
+    (0.1, 1.0, (0.1, 1.0)),  # wheels 0.02 and 0.18: nothing to clamp
+    # wheels 0.02 and 0.42 -> 0.02 and 0.2272: v = 0.1236, w = (0.2272 - 0.02) / 0.16 = 1.295
+    (0.22, 2.5, (0.1236, 1.295)),
+    (0.22, -2.5, (0.1236, -1.295)),
+    (-0.22, 2.5, (-0.1236, 1.295)),
+    # wheels -0.14 and 0.3 -> -0.14 and 0.2272: v = 0.0436, w = 2.295
+    (0.08, 2.75, (0.0436, 2.295)),
+])
+def test_burger_clamps_each_wheel(v: float, w: float, expected: tuple[float, float]) -> None:
+    assert wheel_limited(v, w, BURGER) == pytest.approx(expected, abs=1e-12)
+    assert wheel_limited(v, w, P) == (v, w)  # ideal: the unicycle command as given
+
+
+def test_burger_turning_at_speed_costs_forward_speed() -> None:
+    ideal = _run(RobotState(0.0, 0.0, 0.0), 0.22, 2.5, 0.01, 200)
+    burger = RobotState(0.0, 0.0, 0.0)
+    for _ in range(200):
+        burger, _ = step(burger, 0.22, 2.5, 0.01, VOID, BURGER)
+    assert (ideal.v, ideal.w) == pytest.approx((0.22, 2.5))
+    assert (burger.v, burger.w) == pytest.approx((0.1236, 1.295))
+    # turning radius v / w is larger on the wheel-limited robot: 0.0954 m against 0.088 m
+    assert burger.v / burger.w > ideal.v / ideal.w
+
+
+@given(v=st.floats(-0.5, 0.5), w=st.floats(-4.0, 4.0))
+@settings(max_examples=200, deadline=None)
+def test_burger_wheels_never_exceed_the_limit(v: float, w: float) -> None:
+    lin, ang = wheel_limited(max(-0.22, min(0.22, v)), max(-2.84, min(2.84, w)), BURGER)
+    half = BURGER.wheel_separation / 2
+    for wheel in (lin - ang * half, lin + ang * half):
+        assert abs(wheel) <= BURGER.max_wheel_speed + 1e-12
+
+
+def test_unknown_kinematics_is_refused() -> None:
+    with pytest.raises(ValueError, match="kinematics"):
+        RobotParams(kinematics="tank")

@@ -1,69 +1,74 @@
-"""One homework mission in lock-step: the real mission tree and the 2D simulator in one process, no DDS.
+"""One homework mission in lock-step: the real mission tree and the simulator core in one process, no DDS.
 
-Every rate of the ROS setup is reproduced on the simulated clock, on a fixed base grid (``1 / lcm`` of
-the integer rates: 1/60 s for the 20 Hz tree, 30 Hz odometry and ground truth, 10 Hz homework LiDAR
-(5 Hz lab LiDAR) and the 2 Hz referee), so every event lands exactly on a grid point and the schedule
-is counted in integers with no drift. Within one instant the order is fixed:
+The simulator is :class:`bt_nav_sim.core.SimCore`, the very object the ROS simulator node steps, with the
+same profile, kinematics, noise and odometry slip; the tree is :class:`bt_nav.mission.core.MissionCore`,
+the very object the executive ticks; the referee is :class:`bt_nav_sim.referee_core.Referee`, the ROS
+referee node's core. Only the transport differs: each physics step (100 Hz of sim time) is followed, in a
+fixed order, by what the ROS graph would do at that instant:
 
-1. physics up to now (the last cmd_vel persists, as with Gazebo's diff drive);
-2. ground truth to the referee and odometry yaw to the tree (30 Hz);
-3. a LiDAR scan with seeded noise (at the LiDAR's rate);
-4. the referee's 2 Hz step, its activate calls applied through ``core.request_arm``;
-5. the tree tick (20 Hz); the command it returns holds from now until the next tick. The tree's
-   evaluation call is answered in the same tick by the referee (``LocalTriggerClient``).
+1. the step's outputs: odometry (30 Hz) to the tree (with its slip, as the executive sees ``odom``) and
+   ground truth to the referee; a LiDAR scan (the profile's rate) to the tree; a collision event to the
+   referee;
+2. the referee's 2 Hz step, its activate calls applied through ``core.request_arm``;
+3. the tree tick (``tick_rate_hz`` of sim time); its command drives the physics from the next step on, as
+   the simulator node applies a command that arrived during a step at the next one. The tree's evaluation
+   call is answered in the same tick by the referee (``LocalTriggerClient``).
 
-Physics step: the integrator (:func:`bt_nav_sim.step`) is exact for a constant command (closed-form
-arcs, closed-form acceleration ramps, 2 cm collision sub-steps with bisection to the contact), so the
-1/60 s grid steps are merged into one call whenever the command does not change and nothing samples
-the state in between, and skipped while the robot rests under a zero command. The result equals
-fixed 1/60 s stepping to within 1e-4 m (``tests/test_lockstep.py`` checks it; the difference is the
-arc approximation inside acceleration ramps) with half the physics calls. Collision events are the
-rising edges of the physics' ``collided`` flag.
-
-Everything random comes from ``seed``: the LiDAR noise, a small perturbation of the spawn pose (so
-seeds explore different paths, as Gazebo's own jitter does) and maneuver A's random choices.
+So a lock-step run predicts a DDS run of the same world, profile, kinematics and seed
+(``tests/ros/test_sim_agreement.py`` measures how closely). Everything random comes from ``seed``: LiDAR
+noise, odometry slip, the spawn perturbation (so seeds explore different paths, as Gazebo's own jitter
+does) and maneuver A's random choices.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
-from bt_nav_sim import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, RobotParams, RobotState, World, load_world, step
+from bt_nav_sim.core import SimConfig, SimCore, profile
+from bt_nav_sim.physics import KINEMATICS
 from bt_nav_sim.plot import Trajectory, branch_of_tip, plot_run
 from bt_nav_sim.referee_core import Referee, RefereeConfig
+from bt_nav_sim.world import World, load_world
 
 from bt_nav.mission.core import MissionCore
-from bt_nav.mission.params import normalise_maneuver
+from bt_nav.mission.datatypes import Command
+from bt_nav.mission.params import SPECS, normalise_maneuver
+from bt_nav.mission.profiles import PROFILE_FILES
+from bt_nav.mission.profiles import profile_parameters as profile_file_parameters
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.trace import TraceRecorder
 from bt_nav.testing import LocalTriggerClient, TriggerRequest, TriggerResponse
 
-#: LiDAR model per profile: the course homework's simulated scanner, or the real TurtleBot3's LDS-01.
-PROFILES: dict[str, LidarModel] = {"homework": HOMEWORK_LIDAR, "lab": LDS01}
-ODOM_HZ = 30  # odometry and ground truth, as the TurtleBot3's Gazebo plugins publish them
-REFEREE_HZ = 2
+REFEREE_HZ = 2.0
 HARD_STOP = 60.0  # s after t0: the run ends even if the referee has not reported
 #: Spawn perturbation: uniform within +-metres and +-degrees (None/0 for the exact spawn).
 DEFAULT_JITTER = (0.05, 10.0)
 
 
-def profile_parameters(profile: str) -> dict[str, Any]:
-    """The tree parameters of the profile's params file (``config/homework.yaml`` or ``config/lab.yaml``),
-    without its maneuver: lock-step runs what ``bt-nav demo`` and the launch files run."""
-    from bt_nav.mission.params import SPECS
-    from bt_nav.ros.bringup import config_file, file_parameters
-
-    path = config_file(f"{profile}.yaml")
-    values = file_parameters(path) if path is not None else {}
+def profile_parameters(profile_name: str) -> dict[str, Any]:
+    """The tree parameters of the profile's params files, without its maneuver: lock-step runs what
+    ``bt-nav demo`` and the launch files run."""
+    values = profile_file_parameters(profile_name)
     return {k: v for k, v in values.items() if k in SPECS and SPECS[k].in_tree and k != "maneuver"}
+
+
+class MissionSink(Protocol):
+    """Receives what a DDS recorder would see on the graph (e.g. a rosbag2 writer); times are sim seconds."""
+
+    def clock(self, t: float) -> None: ...  # noqa: D102
+    def scan(self, t: float, scan: Scan) -> None: ...  # noqa: D102
+    def odom(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None: ...  # noqa: D102
+    def ground_truth(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None: ...  # noqa: D102
+    def cmd(self, t: float, v: float, w: float) -> None: ...  # noqa: D102
+    def tree(self, t: float, snapshot: str) -> None: ...  # noqa: D102
+    def event(self, t: float, text: str) -> None: ...  # noqa: D102
 
 
 @dataclass
@@ -74,6 +79,7 @@ class MissionResult:
     maneuver: str
     seed: int
     profile: str
+    kinematics: str
     results: dict[str, Any]  # the referee's results()
     passed: bool
     travelled: float
@@ -88,6 +94,7 @@ class MissionResult:
     trajectory: Trajectory = field(repr=False)
     faults: int = 0  # ticks that raised inside a leaf
     world_model: World | None = field(default=None, repr=False)  # the world as simulated (for plots)
+    events: list[tuple[float, str, str]] = field(default_factory=list, repr=False)  # (t, level, line)
 
     @property
     def failed_checks(self) -> list[str]:
@@ -98,6 +105,7 @@ class MissionResult:
         """JSON-able summary without the trajectory."""
         return {
             "world": self.world, "maneuver": self.maneuver, "seed": self.seed, "profile": self.profile,
+            "kinematics": self.kinematics,
             "passed": self.passed, "travelled": round(self.travelled, 4), "efficiency": round(self.efficiency, 4),
             "active_time": round(self.active_time, 3), "collisions": self.collisions,
             "max_distance_from_start": self.results.get("max_distance_from_start"),
@@ -114,14 +122,6 @@ class MissionResult:
         return out
 
 
-def _rate(value: float, what: str) -> int:
-    """A rate as an integer number of Hz (the base grid needs integer rates)."""
-    rate = int(round(value))
-    if rate <= 0 or abs(rate - value) > 1e-9:
-        raise ValueError(f"lock-step needs a positive integer {what}, got {value}")
-    return rate
-
-
 class _Clock:
     """The simulated mission clock the tree and the local evaluation client read."""
 
@@ -132,178 +132,202 @@ class _Clock:
         return self.now
 
 
-def spawn_pose(world: World, seed: int, jitter: tuple[float, float] | None) -> tuple[float, float, float]:
-    """The world's spawn, perturbed per seed within ``jitter`` (metres, degrees)."""
-    x, y, yaw = world.spawn
-    if not jitter or (jitter[0] <= 0 and jitter[1] <= 0):
-        return x, y, yaw
-    rng = np.random.default_rng([int(seed), 1])
-    dx, dy = rng.uniform(-jitter[0], jitter[0], size=2)
-    dyaw = math.radians(rng.uniform(-jitter[1], jitter[1]))
-    return x + float(dx), y + float(dy), math.remainder(yaw + dyaw, 2 * math.pi)
+@dataclass
+class _Samples:
+    """Ground-truth samples (at odometry times) and the branch the tree was in."""
+
+    t: list[float] = field(default_factory=list)
+    x: list[float] = field(default_factory=list)
+    y: list[float] = field(default_factory=list)
+    yaw: list[float] = field(default_factory=list)
+    branch: list[str] = field(default_factory=list)
+
+    def trajectory(self) -> Trajectory:
+        return Trajectory(np.array(self.t), np.array(self.x), np.array(self.y), np.array(self.yaw),
+                          np.array(self.branch, dtype=object))
+
+
+class LockstepMission:
+    """One mission: SimCore, MissionCore and Referee stepped together (see the module docstring)."""
+
+    def __init__(self, world: str | World = "stage_4", maneuver: str = "none", seed: int = 0,
+                 overrides: dict[str, Any] | None = None, profile_name: str = "homework", *,
+                 kinematics: str = "", noise: bool = True, jitter: tuple[float, float] | None = DEFAULT_JITTER,
+                 referee_config: RefereeConfig | None = None, sink: MissionSink | None = None) -> None:
+        profile(profile_name)  # ValueError for an unknown profile, before any work
+        self.profile = profile_name
+        self.maneuver = normalise_maneuver(maneuver)
+        self.seed = int(seed)
+        world_obj = world if isinstance(world, World) else load_world(world, seed=self.seed)
+        jitter_m, jitter_deg = jitter or (0.0, 0.0)
+        self.sim = SimCore(SimConfig(world=world_obj.name, profile=profile_name, seed=self.seed, noise=noise,
+                                     kinematics=kinematics, spawn_jitter_m=jitter_m, spawn_jitter_deg=jitter_deg),
+                           world=world_obj)
+        self.clock = _Clock()
+        self.referee = Referee(referee_config or RefereeConfig())
+        self.events = _QuietEvents(self.clock, sink)
+        settings = {**profile_parameters(profile_name), "random_seed": self.seed % 2**31, **(overrides or {}),
+                    "maneuver": self.maneuver}
+        client = LocalTriggerClient(default=self._evaluate, clock=self.clock)
+        self.core = MissionCore(settings, clock=self.clock, evaluation_client=client, events=self.events)
+        self.sink = sink
+        self.samples = _Samples()
+        self.branch = "Stopped"
+        self.branch_ticks: Counter[str] = Counter()
+        self.maneuvers = 0
+        self.active_ticks = 0
+        self.command = Command(0.0, 0.0)
+        self.tick_ns = round(1e9 / float(self.core.params["tick_rate_hz"]))
+        self.referee_ns = round(1e9 / REFEREE_HZ)
+
+    def _evaluate(self, _request: TriggerRequest) -> TriggerResponse:
+        ok, message = self.referee.on_evaluate(self.clock.now)
+        self.events.info(f"referee: evaluate_mission -> {message}")
+        return TriggerResponse(ok, message)
+
+    def run(self, duration: float | None = None, trace_path: str | Path | None = None) -> None:
+        """Step until the referee reports (or ``duration`` sim seconds have passed)."""
+        recorder = TraceRecorder(self.core, trace_path) if trace_path is not None else None
+        end_ns = round((duration if duration is not None else HARD_STOP) * 1e9)
+        sim = self.sim
+        next_tick = next_referee = 0
+        out = sim.outputs()
+        self.referee.start(0.0)
+        try:
+            while sim.t_ns <= end_ns:
+                self.clock.now = sim.t
+                self._deliver(out)
+                if sim.t_ns >= next_referee:
+                    next_referee += self.referee_ns
+                    self._referee_step()
+                    if self.referee.done and duration is None:
+                        break
+                if sim.t_ns >= next_tick:
+                    next_tick += self.tick_ns
+                    self._tick(recorder)
+                out = sim.advance(self.command.linear, self.command.angular)
+        finally:
+            if recorder is not None:
+                recorder.close()
+
+    def _deliver(self, out: Any) -> None:
+        """Odometry and ground truth, a scan and a collision event, as the simulator node publishes them."""
+        sim, t, s = self.sim, self.sim.t, self.sim.state
+        if out.collision:
+            self.referee.on_collision(t, s.x, s.y)
+            self.events.warning(f"collision at ({s.x:.2f}, {s.y:.2f})")
+        if out.odom:
+            self.referee.observe(t, s.x, s.y, s.yaw)
+            self.core.feed_odom(sim.odom_yaw, t)
+            for name, value in (("t", t), ("x", s.x), ("y", s.y), ("yaw", s.yaw), ("branch", self.branch)):
+                getattr(self.samples, name).append(value)
+            if self.sink is not None:
+                self.sink.odom(t, sim.odom_x, sim.odom_y, sim.odom_yaw, s.v, s.w)
+                self.sink.ground_truth(t, s.x, s.y, s.yaw, s.v, s.w)
+        if out.scan is not None:
+            m = sim.model
+            scan = Scan(m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max, out.scan)
+            self.core.feed_scan(scan, t)
+            if self.sink is not None:
+                self.sink.scan(t, scan)
+        if self.sink is not None:
+            self.sink.clock(t)
+
+    def _referee_step(self) -> None:
+        t = self.clock.now
+        for action in self.referee.step(t):
+            ok, message = self.core.request_arm(action.data)
+            self.referee.on_activate_result(t, action.data, ok)
+            self.events.info(f"referee: activate({str(action.data).lower()}) -> {ok}: {message}")
+
+    def _tick(self, recorder: TraceRecorder | None) -> None:
+        command = self.core.tick()
+        t, s = self.clock.now, self.sim.state
+        if recorder is not None:
+            recorder.record(command, extra={"pose": [round(s.x, 4), round(s.y, 4), round(s.yaw, 4)]})
+        branch = branch_of_tip(self.core.tip)
+        if bool(self.core.value("armed", False)) and not self.core.mission_over:
+            self.active_ticks += 1
+            self.branch_ticks[branch] += 1
+        if branch == "Maneuver" and self.branch != "Maneuver":
+            self.maneuvers += 1
+        self.branch = branch
+        if self.sink is not None:
+            self.sink.cmd(t, command.linear, command.angular)
+            self.sink.tree(t, self.core.snapshot(show_status=True))
+        self.command = command
+
+    def result(self, wall_time: float) -> MissionResult:
+        """The referee's verdict and the run's measurements."""
+        results = self.referee.results()
+        active_time = self.active_ticks * self.tick_ns * 1e-9
+        v_max = float(self.core.params["max_linear_speed"])
+        travelled = float(results["travelled"])
+        efficiency = travelled / (v_max * active_time) if active_time > 0 and v_max > 0 else 0.0
+        results = {**results, "efficiency": round(efficiency, 4), "active_time": round(active_time, 3)}
+        return MissionResult(
+            world=self.sim.world.name, maneuver=self.maneuver, seed=self.seed, profile=self.profile,
+            kinematics=self.sim.params.kinematics, results=results, passed=self.referee.passed,
+            travelled=travelled, efficiency=efficiency, active_time=active_time,
+            collisions=int(results["collisions"]), wall_time=wall_time, sim_time=self.clock.now,
+            branch_ticks=dict(self.branch_ticks), maneuvers=self.maneuvers,
+            report_lines=self.referee.report_lines(), trajectory=self.samples.trajectory(),
+            faults=self.core.faults, world_model=self.sim.world, events=list(self.events.lines),
+        )
 
 
 def run_mission(world: str | World = "stage_4", maneuver: str = "none", seed: int = 0,
                 overrides: dict[str, Any] | None = None, profile: str = "homework",
                 trace_path: str | Path | None = None, duration: float | None = None,
-                jitter: tuple[float, float] | None = DEFAULT_JITTER, merge_steps: bool = True,
-                referee_config: RefereeConfig | None = None) -> MissionResult:
-    """Run one homework mission in lock-step; deterministic per (world, maneuver, seed, overrides).
+                jitter: tuple[float, float] | None = DEFAULT_JITTER, *, kinematics: str = "",
+                noise: bool = True, referee_config: RefereeConfig | None = None,
+                sink: MissionSink | None = None) -> MissionResult:
+    """Run one homework mission in lock-step; deterministic per (world, maneuver, seed, settings).
 
     Args:
         world: a bundled world name, a YAML path, or a loaded World (generated worlds use ``seed``).
         maneuver: none, A, B or C (any spelling :func:`bt_nav.mission.params.normalise_maneuver` accepts).
-        seed: LiDAR noise, spawn perturbation and maneuver A's randomness.
-        overrides: parameter values over the defaults (``random_seed`` defaults to ``seed``).
-        profile: ``homework`` (10 Hz, 10 m LiDAR) or ``lab`` (LDS-01, 5 Hz, 3.5 m).
+        seed: LiDAR noise, odometry slip, spawn perturbation and maneuver A's randomness.
+        overrides: parameter values over the profile's (``random_seed`` defaults to ``seed``).
+        profile: homework, lab or turtlebot3: the params files (:mod:`bt_nav.mission.profiles`) and the
+            simulated robot (:data:`bt_nav_sim.core.PROFILES`).
         trace_path: write the per-tick JSONL trace here.
         duration: end after this many simulated seconds instead of when the referee reports.
         jitter: spawn perturbation (metres, degrees); None for the exact spawn.
-        merge_steps: merge 1/60 s physics steps under an unchanged command (see the module doc).
+        kinematics: ideal or burger (empty: the profile's).
+        noise: LiDAR noise and odometry slip.
         referee_config: the referee's schedule and thresholds (the homework's by default).
+        sink: receives every message a recorder on the DDS graph would see.
     """
     started = time.perf_counter()
-    if profile not in PROFILES:
-        raise ValueError(f"unknown profile {profile!r}; choose from {', '.join(PROFILES)}")
-    model = PROFILES[profile]
-    world_obj = world if isinstance(world, World) else load_world(world, seed=seed)
-    maneuver = normalise_maneuver(maneuver)
-    settings = {**profile_parameters(profile), "random_seed": int(seed) % 2**31, **(overrides or {}),
-                "maneuver": maneuver}
-
-    clock = _Clock()
-    referee = Referee(referee_config or RefereeConfig())
-
-    def evaluate(_request: TriggerRequest) -> TriggerResponse:
-        ok, message = referee.on_evaluate(clock.now)
-        return TriggerResponse(ok, message)
-
-    client = LocalTriggerClient(default=evaluate, clock=clock)
-    core = MissionCore(settings, clock=clock, evaluation_client=client, events=_QuietEvents())
-    recorder = TraceRecorder(core, trace_path) if trace_path is not None else None
-
-    tick_hz = _rate(float(core.params["tick_rate_hz"]), "tick_rate_hz")
-    lidar_hz = _rate(model.rate_hz, "LiDAR rate")
-    base_hz = math.lcm(tick_hz, ODOM_HZ, lidar_hz, REFEREE_HZ)
-    every_tick, every_odom = base_hz // tick_hz, base_hz // ODOM_HZ
-    every_scan, every_referee = base_hz // lidar_hz, base_hz // REFEREE_HZ
-    end_k = int(round((duration if duration is not None else HARD_STOP) * base_hz))
-
-    caster = RayCaster(world_obj, model)
-    noise = np.random.default_rng([int(seed), 2])
-    robot_params = RobotParams()
-    x0, y0, yaw0 = spawn_pose(world_obj, seed, jitter)
-    state = RobotState(x0, y0, yaw0)
-    phys_k = 0  # grid index the physics state is at
-    colliding = False
-    cmd_v = cmd_w = 0.0
-    dt = 1.0 / base_hz
-    v_max = float(core.params["max_linear_speed"])
-
-    samples_t: list[float] = []
-    samples_x: list[float] = []
-    samples_y: list[float] = []
-    samples_yaw: list[float] = []
-    samples_branch: list[str] = []
-    branch = "Stopped"
-    branch_ticks: Counter[str] = Counter()
-    maneuvers = 0
-    active_ticks = 0
-
-    def advance(k: int) -> None:
-        """Bring the physics to grid index k under the current command."""
-        nonlocal state, phys_k, colliding
-        if k <= phys_k:
-            return
-        if cmd_v == 0.0 and cmd_w == 0.0 and state.v == 0.0 and state.w == 0.0:
-            phys_k = k  # at rest under a zero command: nothing can change
-            return
-        n = k - phys_k if merge_steps else 1
-        while phys_k < k:
-            state, collided = step(state, cmd_v, cmd_w, n * dt, world_obj, robot_params)
-            phys_k += n
-            if collided and not colliding:
-                referee.on_collision(phys_k * dt, state.x, state.y)
-            colliding = collided
-
-    referee.start(0.0)
-    k = 0
-    try:
-        while k <= end_k:
-            t = k * dt
-            clock.now = t
-            if k % every_odom == 0:
-                advance(k)
-                referee.observe(t, state.x, state.y, state.yaw)
-                core.feed_odom(state.yaw, t)
-                samples_t.append(t)
-                samples_x.append(state.x)
-                samples_y.append(state.y)
-                samples_yaw.append(state.yaw)
-                samples_branch.append(branch)
-            if k % every_scan == 0:
-                advance(k)
-                ranges = caster.cast(state.x, state.y, state.yaw, noise)
-                core.feed_scan(Scan(model.angle_min, model.angle_max, model.angle_increment, model.range_min,
-                                    model.range_max, ranges), t)
-            if k % every_referee == 0:
-                for action in referee.step(t):
-                    ok, _ = core.request_arm(action.data)
-                    referee.on_activate_result(t, action.data, ok)
-                if referee.done and duration is None:
-                    break
-            if k % every_tick == 0:
-                command = core.tick()
-                if recorder is not None:
-                    recorder.record(command, extra={"pose": [round(state.x, 4), round(state.y, 4),
-                                                             round(state.yaw, 4)]})
-                new_branch = branch_of_tip(core.tip)
-                armed = bool(core.value("armed", False)) and not core.mission_over
-                if armed:
-                    active_ticks += 1
-                    branch_ticks[new_branch] += 1
-                if new_branch == "Maneuver" and branch != "Maneuver":
-                    maneuvers += 1
-                branch = new_branch
-                if (command.linear, command.angular) != (cmd_v, cmd_w):
-                    advance(k)
-                    cmd_v, cmd_w = command.linear, command.angular
-            k += 1
-    finally:
-        if recorder is not None:
-            recorder.close()
-
-    results = referee.results()
-    active_time = active_ticks / tick_hz
-    travelled = float(results["travelled"])
-    efficiency = travelled / (v_max * active_time) if active_time > 0 and v_max > 0 else 0.0
-    results = {**results, "efficiency": round(efficiency, 4), "active_time": round(active_time, 3)}
-    trajectory = Trajectory(np.array(samples_t), np.array(samples_x), np.array(samples_y),
-                            np.array(samples_yaw), np.array(samples_branch, dtype=object))
-    return MissionResult(
-        world=world_obj.name, maneuver=maneuver, seed=int(seed), profile=profile, results=results,
-        passed=referee.passed, travelled=travelled, efficiency=efficiency, active_time=active_time,
-        collisions=int(results["collisions"]), wall_time=time.perf_counter() - started,
-        sim_time=clock.now, branch_ticks=dict(branch_ticks), maneuvers=maneuvers,
-        report_lines=referee.report_lines(), trajectory=trajectory, faults=core.faults,
-        world_model=world_obj,
-    )
+    mission = LockstepMission(world, maneuver, seed, overrides, profile, kinematics=kinematics, noise=noise,
+                              jitter=jitter, referee_config=referee_config, sink=sink)
+    mission.run(duration, trace_path)
+    return mission.result(time.perf_counter() - started)
 
 
 class _QuietEvents:
-    """Event sink for batch runs: the leaves' one-line messages are kept, not printed."""
+    """Event sink for batch runs: the leaves' one-line messages are kept with their sim time, not printed."""
 
-    def __init__(self) -> None:
-        self.lines: list[tuple[str, str]] = []
+    def __init__(self, clock: _Clock | None = None, sink: MissionSink | None = None) -> None:
+        self.lines: list[tuple[float, str, str]] = []
+        self._clock = clock
+        self._sink = sink
+
+    def _add(self, level: str, msg: str) -> None:
+        t = self._clock.now if self._clock is not None else 0.0
+        self.lines.append((t, level, msg))
+        if self._sink is not None:
+            self._sink.event(t, f"[{level.upper()}] {msg}")
 
     def info(self, msg: str) -> None:  # noqa: D102
-        self.lines.append(("info", msg))
+        self._add("info", msg)
 
     def warning(self, msg: str) -> None:  # noqa: D102
-        self.lines.append(("warning", msg))
+        self._add("warning", msg)
 
     def error(self, msg: str) -> None:  # noqa: D102
-        self.lines.append(("error", msg))
+        self._add("error", msg)
 
 
 def parse_overrides(items: list[str]) -> dict[str, Any]:
@@ -326,7 +350,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--world", default="stage_4", help="bundled world name or YAML path")
     parser.add_argument("--maneuver", default="none", help="none, A, B or C")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--profile", default="homework", choices=sorted(PROFILES))
+    parser.add_argument("--profile", default="homework", choices=sorted(PROFILE_FILES),
+                        help="params files and simulated robot (homework, lab, turtlebot3)")
+    parser.add_argument("--kinematics", default="", choices=("", *KINEMATICS),
+                        help="ideal or burger (per-wheel limits); default: the profile's")
+    parser.add_argument("--no-noise", action="store_true", help="no LiDAR noise and no odometry slip")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter override (repeatable)")
     parser.add_argument("--duration", type=float, default=None, help="simulated seconds (default: until report)")
@@ -338,13 +366,15 @@ def main(argv: list[str] | None = None) -> int:
     try:
         overrides = parse_overrides(args.overrides)
         result = run_mission(args.world, args.maneuver, args.seed, overrides, args.profile, args.trace,
-                             args.duration, jitter=None if args.no_jitter else DEFAULT_JITTER)
+                             args.duration, jitter=None if args.no_jitter else DEFAULT_JITTER,
+                             kinematics=args.kinematics, noise=not args.no_noise)
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     for line in result.report_lines:
         print(line)
     ticks = ", ".join(f"{name} {n}" for name, n in sorted(result.branch_ticks.items(), key=lambda kv: -kv[1]))
-    print(f"{result.world}, maneuver {result.maneuver}, seed {result.seed}: "
+    print(f"{result.world}, maneuver {result.maneuver}, seed {result.seed} ({result.profile}, "
+          f"{result.kinematics} kinematics): "
           f"{'PASSED' if result.passed else 'FAILED'}; travelled {result.travelled:.2f} m, "
           f"efficiency {result.efficiency:.3f} over {result.active_time:.1f} s armed, "
           f"{result.collisions} collisions, {result.maneuvers} maneuvers; ticks: {ticks}; "

@@ -35,8 +35,9 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import IO, Any
+
+from bt_nav.mission.profiles import EXECUTIVE_NAME, config_file, file_parameters  # noqa: F401 - re-exported
 
 PROFILES = ("lab", "homework", "eval")
 
@@ -50,7 +51,6 @@ LAB_ARM = "toggle_navigation"
 SOLO_RTF = 5.0
 
 #: Node names (the console scripts are ``executive``, ``sim`` and ``referee``).
-EXECUTIVE_NAME = "bt_nav_executive"
 SIM_NAME = "bt_nav_sim"
 REFEREE_NAME = "bt_nav_referee"
 
@@ -126,37 +126,6 @@ def parse_assignments(items: list[str]) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------------------------- the table
-def config_file(name: str) -> Path | None:
-    """``config/<name>`` from bt_nav's data files, or None when it does not exist (yet)."""
-    try:
-        from bt_nav.mission.resources import share_dir
-
-        path = share_dir() / "config" / name
-    except FileNotFoundError:
-        return None
-    return path if path.is_file() else None
-
-
-def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[str, Any]:
-    """The parameters a ROS params file gives ``node_name`` (``/**`` and the node's own section).
-
-    Used to keep the simulator's ``cmd_vel_stamped`` equal to the executive's when only the file says it.
-    """
-    import yaml
-
-    try:
-        with open(path, encoding="utf-8") as stream:
-            data = yaml.safe_load(stream) or {}
-    except (OSError, yaml.YAMLError):
-        return {}
-    merged: dict[str, Any] = {}
-    for key in ("/**", "**", node_name, f"/{node_name}"):
-        section = data.get(key) if isinstance(data, dict) else None
-        if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
-            merged.update(section["ros__parameters"])
-    return merged
-
-
 def nodes(
     profile: str,
     *,

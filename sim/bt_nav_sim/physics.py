@@ -28,9 +28,19 @@ _TOUCH_TOL = 1e-6
 _W_EPS = 1e-9
 
 
+#: Kinematics modes of :class:`RobotParams` (see :func:`wheel_limited`).
+KINEMATICS = ("ideal", "burger")
+
+
 @dataclass(frozen=True)
 class RobotParams:
-    """TurtleBot3 Burger limits (ROBOTIS e-manual / turtlebot3_teleop constants)."""
+    """TurtleBot3 Burger limits (ROBOTIS e-manual / turtlebot3_teleop constants) and the kinematics mode.
+
+    ``ideal`` clamps v and w separately, like an ideal unicycle (and Gazebo's diff drive plugin with its
+    default limits): full speed and a fast turn at once. ``burger`` converts the command to wheel speeds
+    and clamps each wheel to ``max_wheel_speed``, as the Burger's motor controller does, so a fast turn
+    costs forward speed (see :func:`wheel_limited`).
+    """
 
     max_linear: float = 0.22  # m/s, Burger maximum translational velocity
     max_angular: float = 2.84  # rad/s, Burger maximum rotational velocity
@@ -40,6 +50,34 @@ class RobotParams:
     # scrub, so it ramps a little slower than translation; 10 rad/s^2 keeps turns crisp but not instant.
     max_angular_accel: float = 10.0  # rad/s^2
     radius: float = 0.12  # m, collision disk (Burger footprint is 0.138 x 0.178 m; ~0.105 m circumradius)
+    kinematics: str = "ideal"
+    wheel_separation: float = 0.160  # m, Burger
+    # Per-wheel speed limit: the published 2.84 rad/s spin needs each wheel at 2.84 * 0.160 / 2 = 0.2272
+    # m/s, and the 0.22 m/s top speed sits just below it, so one limit explains both published figures.
+    max_wheel_speed: float = 0.2272  # m/s
+
+    def __post_init__(self) -> None:
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
+        if not (self.wheel_separation > 0 and self.max_wheel_speed > 0):
+            raise ValueError("wheel_separation and max_wheel_speed must be > 0")
+
+
+def wheel_limited(v: float, w: float, params: RobotParams) -> tuple[float, float]:
+    """The twist a differential drive actually follows for the (already body-clamped) command (v, w).
+
+    ``ideal``: unchanged. ``burger``: wheel speeds v -/+ w * b / 2, each clamped to +-max_wheel_speed on
+    its own (the motor controller saturates each wheel; the curvature is not preserved), and back to
+    (v, w). Example: v = 0.22, w = 2.5 on the Burger gives wheels 0.02 and 0.42 -> 0.02 and 0.2272, so
+    the robot really drives 0.124 m/s and turns 1.29 rad/s.
+    """
+    if params.kinematics == "ideal":
+        return v, w
+    half = 0.5 * params.wheel_separation
+    limit = params.max_wheel_speed
+    left = _clamp(v - w * half, limit)
+    right = _clamp(v + w * half, limit)
+    return 0.5 * (left + right), (right - left) / params.wheel_separation
 
 
 @dataclass
@@ -126,12 +164,12 @@ def step(
 ) -> tuple[RobotState, bool]:
     """Advance the robot by dt under (cmd_v, cmd_w); return (new state, collided).
 
-    Order: sanitise (non-finite -> 0) and clamp the command, ramp the current twist towards it under the
-    acceleration limits, integrate the exact unicycle arc in sub-steps of <= MAX_SUBSTEP metres, and stop
-    at the first sub-step whose disk would overlap an obstacle. A blocked robot keeps the position where it
-    touched (found by bisection on the blocked sub-step, so it never penetrates), still gets the full
-    rotation (a robot against a wall can turn away), and has v set to 0. ``collided`` is True when the step
-    was blocked or the disk ends up touching an obstacle. The input state is not modified.
+    Order: sanitise (non-finite -> 0) and clamp the command (per wheel under ``burger`` kinematics), ramp the
+    current twist towards it under the acceleration limits, integrate the exact unicycle arc in sub-steps of <=
+    MAX_SUBSTEP metres, and stop at the first sub-step whose disk would overlap an obstacle. A blocked robot
+    keeps the position where it touched (found by bisection on the blocked sub-step, so it never penetrates),
+    still gets the full rotation (a robot against a wall can turn away), and has v set to 0. ``collided`` is
+    True when the step was blocked or the disk ends up touching an obstacle. The input state is not modified.
     """
     dt = _finite(dt)
     radius = params.radius
@@ -139,8 +177,8 @@ def step(
         touching = world.clearance(state.x, state.y) <= radius + _TOUCH_TOL
         return replace(state, colliding=touching), touching
 
-    v_target = _clamp(_finite(cmd_v), params.max_linear)
-    w_target = _clamp(_finite(cmd_w), params.max_angular)
+    v_target, w_target = wheel_limited(_clamp(_finite(cmd_v), params.max_linear),
+                                       _clamp(_finite(cmd_w), params.max_angular), params)
     v0, w0 = _finite(state.v), _finite(state.w)
     dv_max = params.max_linear_accel * dt
     dw_max = params.max_angular_accel * dt

@@ -56,23 +56,16 @@ import sys
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster
-from bt_nav_sim.physics import RobotParams, RobotState, step, wrap_angle
-from bt_nav_sim.world import World, load_world
-
-#: LiDAR per profile: ``homework`` is the course's simulated sensor, ``lab`` the real LDS-01.
-PROFILES: dict[str, LidarModel] = {"homework": HOMEWORK_LIDAR, "lab": LDS01}
+from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
+from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 
 NODE_NAME = "bt_nav_sim"
 
-# Light wheel-odometry error (relative, per step) when noise is on: odometry drifts a little, the way
-# wheel slip makes it drift on the real base, while ground truth stays exact.
-ODOM_SLIP_SIGMA = 0.01
 # Covariance diagonal published with odometry (pose x, y, yaw; twist v, w); informational only.
 _ODOM_POSE_VAR = 1e-4
 _ODOM_TWIST_VAR = 1e-4
@@ -82,55 +75,7 @@ _REANCHOR_S = 0.25
 _CLOCK_REPEAT_S = 0.02
 
 
-# ---------------------------------------------------------------------------------------------- pure core
-@dataclass(frozen=True)
-class SimConfig:
-    """Everything that shapes one simulation run (all defaults are the homework setup)."""
-
-    world: str = "stage_4"
-    profile: str = "homework"
-    seed: int = 0  # -1: random (noise from OS entropy, generated worlds from their YAML seed)
-    physics_rate_hz: float = 100.0
-    odom_rate_hz: float = 30.0
-    radius: float = 0.12
-    noise: bool = True
-    dropout_prob: float = 0.0
-    spawn_x: float = math.nan  # NaN: the world's spawn
-    spawn_y: float = math.nan
-    spawn_yaw: float = math.nan  # rad
-    cmd_vel_timeout: float = 0.0  # sim s; 0: the last command persists (Gazebo diff drive behaviour)
-
-    def lidar(self) -> LidarModel:
-        """The profile's LiDAR with this run's noise and dropout settings."""
-        try:
-            model = PROFILES[self.profile]
-        except KeyError:
-            raise ValueError(f"unknown profile {self.profile!r}; choose one of {', '.join(PROFILES)}") from None
-        return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0, dropout_prob=self.dropout_prob)
-
-    def check(self) -> None:
-        """Refuse values that would make the loop meaningless (raises ValueError naming the field)."""
-        for name in ("physics_rate_hz", "odom_rate_hz", "radius"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be > 0, got {value}")
-        if not 0.0 <= self.dropout_prob <= 1.0:
-            raise ValueError(f"dropout_prob must be in [0, 1], got {self.dropout_prob}")
-        if self.cmd_vel_timeout < 0 or not math.isfinite(self.cmd_vel_timeout):
-            raise ValueError(f"cmd_vel_timeout must be >= 0, got {self.cmd_vel_timeout}")
-        self.lidar()
-
-
-@dataclass
-class StepOutput:
-    """What became due at one instant of sim time (the node turns it into messages)."""
-
-    t_ns: int
-    scan: np.ndarray | None = None  # float32 ranges when a scan is due
-    odom: bool = False  # odometry and ground truth are due
-    collision: bool = False  # a collision event started at this step
-
-
+# ---------------------------------------------------------------------------------------------- pacing
 @dataclass
 class Follower:
     """One process the loop waits for (see the module docstring)."""
@@ -214,103 +159,6 @@ class Followers:
         return blocker, dropped
 
 
-class SimCore:
-    """Sim time, physics, sensor schedules and odometry, with no ROS: deterministic for a given seed
-    and command sequence.
-
-    Time is kept in integer nanoseconds so that 100 Hz steps land exactly on the 10 Hz scan grid for
-    hours (a float accumulator drifts off it and scans start jittering by one step).
-    """
-
-    def __init__(self, config: SimConfig, world: World | None = None) -> None:
-        config.check()
-        self.config = config
-        seed = None if config.seed < 0 else int(config.seed)
-        self.world = world if world is not None else load_world(config.world, seed=seed)
-        self.model = config.lidar()
-        self.caster = RayCaster(self.world, self.model)
-        self.params = RobotParams(radius=config.radius)
-        # Two independent streams so that turning LiDAR noise off does not change the odometry drift.
-        self.lidar_rng = np.random.default_rng(seed)
-        self.odom_rng = np.random.default_rng(None if seed is None else seed + 1)
-        sx, sy, syaw = self.world.spawn
-        spawn = (
-            sx if math.isnan(config.spawn_x) else config.spawn_x,
-            sy if math.isnan(config.spawn_y) else config.spawn_y,
-            syaw if math.isnan(config.spawn_yaw) else config.spawn_yaw,
-        )
-        self.spawn = spawn
-        self.state = RobotState(*spawn)
-        self.step_ns = max(1, round(1e9 / config.physics_rate_hz))
-        self.scan_period_ns = max(1, round(1e9 / self.model.rate_hz))
-        self.odom_period_ns = max(1, round(1e9 / config.odom_rate_hz))
-        self.t_ns = 0
-        self._next_scan_ns = 0
-        self._next_odom_ns = 0
-        # Odometry: the pose in the odom frame (origin = start pose), dead-reckoned from true motion.
-        self.odom_x = 0.0
-        self.odom_y = 0.0
-        self.odom_yaw = 0.0
-        self.collisions = 0
-        self.steps = 0
-        self.scans = 0
-        self._was_colliding = self.world.clearance(spawn[0], spawn[1]) <= config.radius
-
-    @property
-    def t(self) -> float:
-        """Sim time in seconds."""
-        return self.t_ns * 1e-9
-
-    def outputs(self) -> StepOutput:
-        """What is due at the current time (scan, odometry); advances the schedules past it."""
-        out = StepOutput(self.t_ns)
-        if self.t_ns >= self._next_scan_ns:
-            out.scan = self.scan()
-            self.scans += 1
-            while self._next_scan_ns <= self.t_ns:
-                self._next_scan_ns += self.scan_period_ns
-        if self.t_ns >= self._next_odom_ns:
-            out.odom = True
-            while self._next_odom_ns <= self.t_ns:
-                self._next_odom_ns += self.odom_period_ns
-        return out
-
-    def scan(self) -> np.ndarray:
-        """A scan from the current true pose (noise and dropouts from the seeded stream)."""
-        s = self.state
-        rng = self.lidar_rng if (self.model.noise_sigma > 0 or self.model.dropout_prob > 0) else None
-        return self.caster.cast(s.x, s.y, s.yaw, rng)
-
-    def advance(self, cmd_v: float, cmd_w: float) -> StepOutput:
-        """One physics step under (cmd_v, cmd_w), then whatever became due (see :meth:`outputs`)."""
-        before = self.state
-        self.state, collided = step(before, cmd_v, cmd_w, self.step_ns * 1e-9, self.world, self.params)
-        self.t_ns += self.step_ns
-        self.steps += 1
-        self._integrate_odom(before, self.state)
-        out = self.outputs()
-        if collided and not self._was_colliding:
-            out.collision = True
-            self.collisions += 1
-        self._was_colliding = collided
-        return out
-
-    def _integrate_odom(self, before: RobotState, after: RobotState) -> None:
-        """Wheel odometry: the true displacement in the robot frame, lightly scaled by slip noise."""
-        dx, dy = after.x - before.x, after.y - before.y
-        c, s = math.cos(before.yaw), math.sin(before.yaw)
-        forward, lateral = c * dx + s * dy, -s * dx + c * dy
-        dyaw = wrap_angle(after.yaw - before.yaw)
-        if self.config.noise and (forward or dyaw):
-            slip_s, slip_yaw = self.odom_rng.normal(0.0, ODOM_SLIP_SIGMA, 2)
-            forward *= 1.0 + slip_s
-            dyaw *= 1.0 + slip_yaw
-        oc, os_ = math.cos(self.odom_yaw), math.sin(self.odom_yaw)
-        self.odom_x += oc * forward - os_ * lateral
-        self.odom_y += os_ * forward + oc * lateral
-        self.odom_yaw = wrap_angle(self.odom_yaw + dyaw)
-
-
 # ---------------------------------------------------------------------------------------------- ROS node
 def _import_ros() -> Any:
     """Import rclpy lazily so :class:`SimCore` stays usable (and testable) without a ROS install."""
@@ -362,7 +210,13 @@ def make_node(parameter_overrides: list | None = None) -> Any:
 
         PARAMETERS: dict[str, tuple[Any, str]] = {
             "world": ("stage_4", "world name (sim/bt_nav_sim/worlds/<name>.yaml) or path to a world YAML"),
-            "profile": ("homework", "LiDAR profile: homework (10 m, 10 Hz) or lab (LDS-01: 3.5 m, 5 Hz)"),
+            "profile": ("homework", "simulator profile: " + "; ".join(f"{name}: {p.description}"
+                                                                     for name, p in PROFILES.items())),
+            "kinematics": ("", f"{' or '.join(KINEMATICS)} (empty: the profile's); burger clamps each wheel"),
+            "max_wheel_speed": (RobotParams.max_wheel_speed, "per-wheel speed limit under burger kinematics, m/s"),
+            "wheel_separation": (RobotParams.wheel_separation, "distance between the wheels, m"),
+            "spawn_jitter_m": (0.0, "per-seed spawn perturbation, +- m (as lock-step and grade use)"),
+            "spawn_jitter_deg": (0.0, "per-seed spawn heading perturbation, +- deg"),
             "seed": (0, "seed of sensor noise, odometry slip and generated worlds; -1: random"),
             "real_time_factor": (1.0, "sim seconds per wall second; 0: as fast as the followers keep up"),
             "physics_rate_hz": (100.0, "physics steps (and /clock messages) per sim second"),
@@ -396,7 +250,9 @@ def make_node(parameter_overrides: list | None = None) -> Any:
                 physics_rate_hz=float(p["physics_rate_hz"]), odom_rate_hz=float(p["odom_rate_hz"]),
                 radius=float(p["radius"]), noise=bool(p["noise"]), dropout_prob=float(p["dropout_prob"]),
                 spawn_x=float(p["spawn_x"]), spawn_y=float(p["spawn_y"]), spawn_yaw=float(p["spawn_yaw"]),
-                cmd_vel_timeout=float(p["cmd_vel_timeout"]),
+                cmd_vel_timeout=float(p["cmd_vel_timeout"]), kinematics=str(p["kinematics"]),
+                max_wheel_speed=float(p["max_wheel_speed"]), wheel_separation=float(p["wheel_separation"]),
+                spawn_jitter_m=float(p["spawn_jitter_m"]), spawn_jitter_deg=float(p["spawn_jitter_deg"]),
             )
             self.core = SimCore(config)
             self.rtf = max(0.0, float(p["real_time_factor"]))
@@ -451,7 +307,8 @@ def make_node(parameter_overrides: list | None = None) -> Any:
             self.get_logger().info(
                 f"world {w.name} spawn ({c.spawn[0]:.2f}, {c.spawn[1]:.2f}, {math.degrees(c.spawn[2]):.0f} deg); "
                 f"profile {config.profile}: {m.num_beams} beams, {m.range_min}-{m.range_max} m, {m.rate_hz:g} Hz, "
-                f"noise {'on' if config.noise else 'off'}; physics {config.physics_rate_hz:g} Hz; {pace}")
+                f"noise {'on' if config.noise else 'off'}; {c.params.kinematics} kinematics; "
+                f"physics {config.physics_rate_hz:g} Hz; {pace}")
 
         # -------------------------------------------------------------- lifecycle
         def start(self) -> None:

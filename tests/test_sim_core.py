@@ -5,7 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.nodes.simulator import Followers, SimConfig, SimCore, split_ros_args
+from bt_nav_sim.core import SimConfig, SimCore
+from bt_nav_sim.nodes.simulator import Followers, split_ros_args
 
 MS = 1_000_000
 

@@ -1,0 +1,68 @@
+"""Mission profiles: which params files a use of bt_nav needs, read without ROS.
+
+A profile names one use: ``homework`` (the course homework in its simulator), ``lab`` (the lab exercise)
+and ``turtlebot3`` (a real or Gazebo TurtleBot3 Burger doing the homework mission). Each maps to the
+params files under ``config/`` that the executive loads in that order (later files win), exactly as
+``ros2 run bt_nav executive --ros-args --params-file A --params-file B`` would. The simulator's side of a
+profile (LiDAR, kinematics) is :data:`bt_nav_sim.core.PROFILES`, under the same names.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from bt_nav.mission.resources import share_dir
+
+#: The executive's node name, the section params files address.
+EXECUTIVE_NAME = "bt_nav_executive"
+
+#: profile -> params files under config/, applied in order.
+PROFILE_FILES: dict[str, tuple[str, ...]] = {
+    "homework": ("homework.yaml",),
+    "lab": ("lab.yaml",),
+    "turtlebot3": ("homework.yaml", "turtlebot3.yaml"),
+}
+
+
+def config_file(name: str) -> Path | None:
+    """``config/<name>`` from bt_nav's data files, or None when it does not exist."""
+    try:
+        path = share_dir() / "config" / name
+    except FileNotFoundError:
+        return None
+    return path if path.is_file() else None
+
+
+def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[str, Any]:
+    """The parameters a ROS params file gives ``node_name`` (``/**`` and the node's own section)."""
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as stream:
+            data = yaml.safe_load(stream) or {}
+    except (OSError, yaml.YAMLError):
+        return {}
+    merged: dict[str, Any] = {}
+    for key in ("/**", "**", node_name, f"/{node_name}"):
+        section = data.get(key) if isinstance(data, dict) else None
+        if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
+            merged.update(section["ros__parameters"])
+    return merged
+
+
+def profile_files(profile: str) -> list[Path]:
+    """The params files of ``profile`` that exist, in load order (ValueError for an unknown profile)."""
+    try:
+        names = PROFILE_FILES[profile]
+    except KeyError:
+        raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILE_FILES)}") from None
+    return [path for path in (config_file(name) for name in names) if path is not None]
+
+
+def profile_parameters(profile: str) -> dict[str, Any]:
+    """Every executive parameter the profile's files set, later files winning."""
+    merged: dict[str, Any] = {}
+    for path in profile_files(profile):
+        merged.update(file_parameters(path))
+    return merged

@@ -1,0 +1,219 @@
+"""The one simulation core: sim time, physics, sensor schedules, odometry and noise, with no ROS.
+
+Every driver of the simulator steps this class, so they cannot drift apart: the ROS simulator node
+(:mod:`bt_nav_sim.nodes.simulator`) publishes what :meth:`SimCore.advance` says is due, and the lock-step
+runner (:mod:`bt_nav.cli.lockstep`) hands the same scans and odometry to the mission tree in-process. The
+same world, profile, kinematics and seed therefore give the same trajectory on both paths (the only
+difference is when a command reaches the physics, which the ROS path leaves to DDS).
+
+Time is kept in integer nanoseconds so that 100 Hz steps land exactly on the 10 Hz scan grid for hours
+(a float accumulator drifts off it and scans start jittering by one step).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster
+from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState, step, wrap_angle
+from bt_nav_sim.world import World, load_world
+
+
+@dataclass(frozen=True)
+class SimProfile:
+    """What a simulated robot looks like to a controller: its LiDAR and its default kinematics."""
+
+    lidar: LidarModel
+    kinematics: str
+    description: str
+
+
+#: The one table of simulator profiles (``--profile`` everywhere a profile is chosen).
+PROFILES: dict[str, SimProfile] = {
+    "homework": SimProfile(HOMEWORK_LIDAR, "ideal",
+                           "the course homework's simulator: 360-beam LiDAR to 10 m at 10 Hz, ideal unicycle"),
+    "lab": SimProfile(LDS01, "ideal", "the lab's LDS-01 LiDAR (3.5 m, 5 Hz), ideal unicycle"),
+    "turtlebot3": SimProfile(LDS01, "burger",
+                             "a real TurtleBot3 Burger: LDS-01 LiDAR (3.5 m, 5 Hz), per-wheel speed limits"),
+}
+
+# Light wheel-odometry error (relative, per step) when noise is on: odometry drifts a little, the way
+# wheel slip makes it drift on the real base, while ground truth stays exact.
+ODOM_SLIP_SIGMA = 0.01
+
+
+def profile(name: str) -> SimProfile:
+    """The profile called ``name`` (ValueError listing the choices otherwise)."""
+    try:
+        return PROFILES[name]
+    except KeyError:
+        raise ValueError(f"unknown profile {name!r}; choose one of {', '.join(PROFILES)}") from None
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Everything that shapes one simulation run (all defaults are the homework setup)."""
+
+    world: str = "stage_4"
+    profile: str = "homework"
+    seed: int = 0  # -1: random (noise from OS entropy, generated worlds from their YAML seed)
+    physics_rate_hz: float = 100.0
+    odom_rate_hz: float = 30.0
+    radius: float = 0.12
+    noise: bool = True  # LiDAR range noise and odometry slip
+    dropout_prob: float = 0.0
+    spawn_x: float = math.nan  # NaN: the world's spawn
+    spawn_y: float = math.nan
+    spawn_yaw: float = math.nan  # rad
+    # Per-seed perturbation of the spawn (uniform within +-metres, +-degrees), so seeds explore different
+    # paths as Gazebo's own jitter does; 0 for the exact spawn.
+    spawn_jitter_m: float = 0.0
+    spawn_jitter_deg: float = 0.0
+    cmd_vel_timeout: float = 0.0  # sim s; 0: the last command persists (Gazebo diff drive behaviour)
+    kinematics: str = ""  # ideal | burger; empty: the profile's
+    max_wheel_speed: float = RobotParams.max_wheel_speed  # m/s, burger kinematics
+    wheel_separation: float = RobotParams.wheel_separation  # m
+
+    def lidar(self) -> LidarModel:
+        """The profile's LiDAR with this run's noise and dropout settings."""
+        model = profile(self.profile).lidar
+        return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0, dropout_prob=self.dropout_prob)
+
+    def robot(self) -> RobotParams:
+        """The robot's limits and kinematics for this run."""
+        return RobotParams(radius=self.radius, kinematics=self.kinematics or profile(self.profile).kinematics,
+                           max_wheel_speed=self.max_wheel_speed, wheel_separation=self.wheel_separation)
+
+    def check(self) -> None:
+        """Refuse values that would make the loop meaningless (raises ValueError naming the field)."""
+        for name in ("physics_rate_hz", "odom_rate_hz", "radius", "max_wheel_speed", "wheel_separation"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be > 0, got {value}")
+        if not 0.0 <= self.dropout_prob <= 1.0:
+            raise ValueError(f"dropout_prob must be in [0, 1], got {self.dropout_prob}")
+        if self.cmd_vel_timeout < 0 or not math.isfinite(self.cmd_vel_timeout):
+            raise ValueError(f"cmd_vel_timeout must be >= 0, got {self.cmd_vel_timeout}")
+        if self.kinematics and self.kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
+        self.lidar()
+
+
+@dataclass
+class StepOutput:
+    """What became due at one instant of sim time (the node turns it into messages)."""
+
+    t_ns: int
+    scan: np.ndarray | None = None  # float32 ranges when a scan is due
+    odom: bool = False  # odometry and ground truth are due
+    collision: bool = False  # a collision event started at this step
+
+
+def spawn_pose(world: World, config: SimConfig) -> tuple[float, float, float]:
+    """The configured spawn (the world's where NaN), perturbed per seed within the configured jitter."""
+    sx, sy, syaw = world.spawn
+    x = sx if math.isnan(config.spawn_x) else config.spawn_x
+    y = sy if math.isnan(config.spawn_y) else config.spawn_y
+    yaw = syaw if math.isnan(config.spawn_yaw) else config.spawn_yaw
+    if config.spawn_jitter_m <= 0 and config.spawn_jitter_deg <= 0:
+        return x, y, yaw
+    rng = np.random.default_rng([max(0, int(config.seed)), 1])
+    dx, dy = rng.uniform(-config.spawn_jitter_m, config.spawn_jitter_m, size=2)
+    dyaw = math.radians(rng.uniform(-config.spawn_jitter_deg, config.spawn_jitter_deg))
+    return x + float(dx), y + float(dy), math.remainder(yaw + dyaw, 2 * math.pi)
+
+
+class SimCore:
+    """Sim time, physics, sensor schedules and odometry: deterministic for a seed and command sequence."""
+
+    def __init__(self, config: SimConfig, world: World | None = None) -> None:
+        config.check()
+        self.config = config
+        seed = None if config.seed < 0 else int(config.seed)
+        self.world = world if world is not None else load_world(config.world, seed=seed)
+        self.model = config.lidar()
+        self.caster = RayCaster(self.world, self.model)
+        self.params = config.robot()
+        # Two independent streams so that turning LiDAR noise off does not change the odometry drift.
+        self.lidar_rng = np.random.default_rng(seed)
+        self.odom_rng = np.random.default_rng(None if seed is None else seed + 1)
+        self.spawn = spawn_pose(self.world, config)
+        self.state = RobotState(*self.spawn)
+        self.step_ns = max(1, round(1e9 / config.physics_rate_hz))
+        self.scan_period_ns = max(1, round(1e9 / self.model.rate_hz))
+        self.odom_period_ns = max(1, round(1e9 / config.odom_rate_hz))
+        self.t_ns = 0
+        self._next_scan_ns = 0
+        self._next_odom_ns = 0
+        # Odometry: the pose in the odom frame (origin = start pose), dead-reckoned from true motion.
+        self.odom_x = 0.0
+        self.odom_y = 0.0
+        self.odom_yaw = 0.0
+        self.collisions = 0
+        self.steps = 0
+        self.scans = 0
+        self._was_colliding = self.world.clearance(self.spawn[0], self.spawn[1]) <= config.radius
+
+    @property
+    def t(self) -> float:
+        """Sim time in seconds."""
+        return self.t_ns * 1e-9
+
+    def outputs(self) -> StepOutput:
+        """What is due at the current time (scan, odometry); advances the schedules past it."""
+        out = StepOutput(self.t_ns)
+        if self.t_ns >= self._next_scan_ns:
+            out.scan = self.scan()
+            self.scans += 1
+            while self._next_scan_ns <= self.t_ns:
+                self._next_scan_ns += self.scan_period_ns
+        if self.t_ns >= self._next_odom_ns:
+            out.odom = True
+            while self._next_odom_ns <= self.t_ns:
+                self._next_odom_ns += self.odom_period_ns
+        return out
+
+    def scan(self) -> np.ndarray:
+        """A scan from the current true pose (noise and dropouts from the seeded stream)."""
+        s = self.state
+        rng = self.lidar_rng if (self.model.noise_sigma > 0 or self.model.dropout_prob > 0) else None
+        return self.caster.cast(s.x, s.y, s.yaw, rng)
+
+    def advance(self, cmd_v: float, cmd_w: float) -> StepOutput:
+        """One physics step under (cmd_v, cmd_w), then whatever became due (see :meth:`outputs`).
+
+        A robot at rest under a zero command cannot move, so the physics is skipped then (it is the
+        most common step of a mission before arming and after the deadline).
+        """
+        before = self.state
+        resting = before.v == 0.0 and before.w == 0.0 and cmd_v == 0.0 and cmd_w == 0.0
+        collided = self._was_colliding
+        if not resting:
+            self.state, collided = step(before, cmd_v, cmd_w, self.step_ns * 1e-9, self.world, self.params)
+            self._integrate_odom(before, self.state)
+        self.t_ns += self.step_ns
+        self.steps += 1
+        out = self.outputs()
+        if collided and not self._was_colliding:
+            out.collision = True
+            self.collisions += 1
+        self._was_colliding = collided
+        return out
+
+    def _integrate_odom(self, before: RobotState, after: RobotState) -> None:
+        """Wheel odometry: the true displacement in the robot frame, lightly scaled by slip noise."""
+        dx, dy = after.x - before.x, after.y - before.y
+        c, s = math.cos(before.yaw), math.sin(before.yaw)
+        forward, lateral = c * dx + s * dy, -s * dx + c * dy
+        dyaw = wrap_angle(after.yaw - before.yaw)
+        if self.config.noise and (forward or dyaw):
+            slip_s, slip_yaw = self.odom_rng.normal(0.0, ODOM_SLIP_SIGMA, 2)
+            forward *= 1.0 + slip_s
+            dyaw *= 1.0 + slip_yaw
+        oc, os_ = math.cos(self.odom_yaw), math.sin(self.odom_yaw)
+        self.odom_x += oc * forward - os_ * lateral
+        self.odom_y += os_ * forward + oc * lateral
+        self.odom_yaw = wrap_angle(self.odom_yaw + dyaw)
