@@ -88,12 +88,9 @@ def homework_overrides() -> dict[str, Any]:
     The lock-step benchmarks run what ``bt-nav demo`` runs (the executive with that file), not the
     bare defaults, so their missions and the ROS-path ones are the same missions.
     """
-    from bt_nav.mission import params as P
-    from bt_nav.ros.bringup import config_file, file_parameters
+    from bt_nav.cli.lockstep import profile_parameters
 
-    path = config_file("homework.yaml")
-    values = file_parameters(path) if path is not None else {}
-    return {name: value for name, value in values.items() if name in P.SPECS and name != "maneuver"}
+    return profile_parameters("homework")
 
 
 # ---------------------------------------------------------------------------------------------- the machine
