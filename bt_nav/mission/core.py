@@ -23,7 +23,7 @@ import py_trees
 from bt_nav.mission import params as P
 from bt_nav.mission.behaviours import ArmService, EvaluateMission
 from bt_nav.mission.behaviours.base import EventLogger
-from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample
+from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample, keep_wheels_within
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.tree import load_tree
 
@@ -202,7 +202,7 @@ class MissionCore:
         return self.last_command
 
     def limit(self, command: Command) -> Command:
-        """Clamp to the configured limits; anything non-finite becomes a stop."""
+        """Clamp to the configured limits (per wheel too, when set); anything non-finite becomes a stop."""
         if not command.is_finite():
             self.events.error(f"non-finite command from {command.source}: publishing a stop")
             return Command(0.0, 0.0, f"non-finite from {command.source}")
@@ -210,6 +210,8 @@ class MissionCore:
         w_max = max(float(self.params["angular_speed"]), float(self.params["maneuver_angular_speed"]))
         linear = min(v_max, max(-v_max, command.linear))
         angular = min(w_max, max(-w_max, command.angular))
+        linear, angular = keep_wheels_within(linear, angular, float(self.params["wheel_speed_limit"]),
+                                             float(self.params["wheel_separation"]))
         if (linear, angular) == (command.linear, command.angular):
             return command
         return Command(linear, angular, command.source)

@@ -31,6 +31,22 @@ class Command:
 STOP = Command(0.0, 0.0, "stop")
 
 
+def keep_wheels_within(linear: float, angular: float, wheel_limit: float, separation: float) -> tuple[float, float]:
+    """Scale (linear, angular) down together until neither wheel exceeds ``wheel_limit`` (0: no limit).
+
+    A differential drive whose motor controller saturates one wheel drives a wider arc than commanded
+    (the Burger at 0.22 m/s and 2.5 rad/s turns at 1.3 rad/s): scaling both components by the same factor
+    keeps the arc the controller chose and only slows along it.
+    """
+    if wheel_limit <= 0.0:
+        return linear, angular
+    fastest = abs(linear) + abs(angular) * 0.5 * separation
+    if fastest <= wheel_limit:
+        return linear, angular
+    scale = wheel_limit / fastest
+    return linear * scale, angular * scale
+
+
 @dataclass(frozen=True, slots=True)
 class OdomSample:
     """The robot's heading from odometry and when it was received (mission-clock seconds)."""

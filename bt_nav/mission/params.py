@@ -154,6 +154,12 @@ PARAMS: tuple[ParamSpec, ...] = (
               "deg", 0.1, 30.0),
     ParamSpec("maneuver_time_margin", 2.0, "A maneuver may take its nominal time plus this much; then "
               "it stops and fails.", "s", 0.0, 60.0),
+    ParamSpec("wheel_speed_limit", 0.0, "Per-wheel speed limit of the base (0: none, an ideal unicycle). When "
+              "set, a command that would need a wheel faster than this is scaled down as a whole, keeping its "
+              "curvature, so the robot follows the arc the tree chose instead of the wider one a saturated "
+              "wheel would drive (TurtleBot3 Burger: 0.2272).", "m/s", 0.0, 2.0, in_tree=False),
+    ParamSpec("wheel_separation", 0.160, "Distance between the wheels, for wheel_speed_limit (Burger: 0.160).",
+              "m", 0.05, 2.0, in_tree=False),
     ParamSpec("random_seed", -1, "Seed of maneuver A's random choices; -1 draws one from the OS.", "",
               -1, 2**31 - 1, live=False),
     # --- the ROS edge (not read by the tree) --------------------------------------------------------
