@@ -105,3 +105,13 @@ def test_plot_accepts_a_plain_dict_trajectory(tmp_path) -> None:
     path = plot_run(load_world("empty_room"), trajectory, results, tmp_path / "sub" / "run.svg")
     assert path.exists() and "<svg" in path.read_text()[:500]
     assert Trajectory.from_dict(trajectory).segments_of("Maneuver") == [(20, 30)]
+
+
+def test_merged_physics_steps_match_single_steps() -> None:
+    """Merging the 10 ms steps between events is exact for a constant command (to the arc approximation
+    inside acceleration ramps), so it changes neither the path nor the tree's decisions."""
+    merged = run_mission("stage_4", "C", seed=1, duration=20.0)
+    single = run_mission("stage_4", "C", seed=1, duration=20.0, merge_steps=False)
+    gap = np.hypot(merged.trajectory.x - single.trajectory.x, merged.trajectory.y - single.trajectory.y)
+    assert gap.max() < 1e-4
+    assert merged.branch_ticks == single.branch_ticks

@@ -6,8 +6,9 @@ the very object the executive ticks; the referee is :class:`bt_nav_sim.referee_c
 referee node's core. Only the transport differs: each physics step (100 Hz of sim time) is followed, in a
 fixed order, by what the ROS graph would do at that instant:
 
-1. the step's outputs: odometry (30 Hz) to the tree (with its slip, as the executive sees ``odom``) and
-   ground truth to the referee; a LiDAR scan (the profile's rate) to the tree; a collision event to the
+1. the step's outputs (physics steps between two events are merged, see :meth:`SimCore.advance`):
+   odometry (30 Hz) to the tree (with its slip, as the executive sees ``odom``) and ground truth to the
+   referee; a LiDAR scan (the profile's rate) to the tree; a collision event to the
    referee;
 2. the referee's 2 Hz step, its activate calls applied through ``core.request_arm``;
 3. the tree tick (``tick_rate_hz`` of sim time); its command drives the physics from the next step on, as
@@ -153,7 +154,8 @@ class LockstepMission:
     def __init__(self, world: str | World = "stage_4", maneuver: str = "none", seed: int = 0,
                  overrides: dict[str, Any] | None = None, profile_name: str = "homework", *,
                  kinematics: str = "", noise: bool = True, jitter: tuple[float, float] | None = DEFAULT_JITTER,
-                 referee_config: RefereeConfig | None = None, sink: MissionSink | None = None) -> None:
+                 referee_config: RefereeConfig | None = None, sink: MissionSink | None = None,
+                 merge_steps: bool = True) -> None:
         profile(profile_name)  # ValueError for an unknown profile, before any work
         self.profile = profile_name
         self.maneuver = normalise_maneuver(maneuver)
@@ -171,6 +173,7 @@ class LockstepMission:
         client = LocalTriggerClient(default=self._evaluate, clock=self.clock)
         self.core = MissionCore(settings, clock=self.clock, evaluation_client=client, events=self.events)
         self.sink = sink
+        self.merge_steps = merge_steps
         self.samples = _Samples()
         self.branch = "Stopped"
         self.branch_ticks: Counter[str] = Counter()
@@ -205,7 +208,8 @@ class LockstepMission:
                 if sim.t_ns >= next_tick:
                     next_tick += self.tick_ns
                     self._tick(recorder)
-                out = sim.advance(self.command.linear, self.command.angular)
+                steps = sim.steps_until(min(next_tick, next_referee)) if self.merge_steps else 1
+                out = sim.advance(self.command.linear, self.command.angular, steps)
         finally:
             if recorder is not None:
                 recorder.close()
@@ -281,7 +285,7 @@ def run_mission(world: str | World = "stage_4", maneuver: str = "none", seed: in
                 trace_path: str | Path | None = None, duration: float | None = None,
                 jitter: tuple[float, float] | None = DEFAULT_JITTER, *, kinematics: str = "",
                 noise: bool = True, referee_config: RefereeConfig | None = None,
-                sink: MissionSink | None = None) -> MissionResult:
+                sink: MissionSink | None = None, merge_steps: bool = True) -> MissionResult:
     """Run one homework mission in lock-step; deterministic per (world, maneuver, seed, settings).
 
     Args:
@@ -298,10 +302,12 @@ def run_mission(world: str | World = "stage_4", maneuver: str = "none", seed: in
         noise: LiDAR noise and odometry slip.
         referee_config: the referee's schedule and thresholds (the homework's by default).
         sink: receives every message a recorder on the DDS graph would see.
+        merge_steps: integrate the physics steps between two events in one go (exact for a constant
+            command; False steps every 10 ms like the simulator node).
     """
     started = time.perf_counter()
     mission = LockstepMission(world, maneuver, seed, overrides, profile, kinematics=kinematics, noise=noise,
-                              jitter=jitter, referee_config=referee_config, sink=sink)
+                              jitter=jitter, referee_config=referee_config, sink=sink, merge_steps=merge_steps)
     mission.run(duration, trace_path)
     return mission.result(time.perf_counter() - started)
 

@@ -36,10 +36,11 @@ def test_colcon_build_and_run_the_installed_executive(tmp_path: Path, start_exec
     executable = prefix / "lib" / "bt_nav" / "executive"
     site_packages = prefix / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / "site-packages"
     share = prefix / "share" / "bt_nav"
-    for path in (executable, share / "package.xml", share / "trees" / "mission.xml",
-                 share / "config" / "lab.yaml", prefix / "share" / "ament_index" / "resource_index" / "packages" /
-                 "bt_nav", site_packages / "bt_nav_sim" / "__init__.py", site_packages / "bt_nav_sim" / "worlds" / "stage_4.yaml",
-                 site_packages / "bt_nav_sim" / "nodes" / "simulator.py", site_packages / "bt_nav" / "ros" / "executive.py"):
+    sim_package = site_packages / "bt_nav_sim"
+    for path in (executable, share / "package.xml", share / "trees" / "mission.xml", share / "config" / "lab.yaml",
+                 prefix / "share" / "ament_index" / "resource_index" / "packages" / "bt_nav",
+                 sim_package / "__init__.py", sim_package / "worlds" / "stage_4.yaml",
+                 sim_package / "nodes" / "simulator.py", site_packages / "bt_nav" / "ros" / "executive.py"):
         assert path.exists(), f"not installed: {path.relative_to(tmp_path)}"
     assert os.access(executable, os.X_OK)
     assert executable.read_text().startswith(f"#!{sys.executable}")  # the venv's python runs it
