@@ -1,0 +1,89 @@
+"""Free paths: how far the robot's whole width could drive along each candidate heading, from one scan.
+
+A cone ("the nearest beam within +-20 deg") is a poor model of what lies ahead of a robot with a width:
+far away the cone is much wider than the robot, so it turns away from obstacles it would pass; close by
+it is narrower, so an obstacle at the robot's shoulder is not "ahead" until the disk touches it. The swept
+corridor of the robot's width is what matters. For heading ``phi`` (robot frame, + is left) and a scan
+point at (x, y), the point is in the corridor when its lateral offset ``l = -x sin(phi) + y cos(phi)`` is
+smaller than the half width ``w``; the robot's front then touches it after travelling
+``a - sqrt(w^2 - l^2)`` along the heading, where ``a = x cos(phi) + y sin(phi)``. The free path of a
+heading is the smallest such distance (or ``horizon`` when nothing is in the way).
+
+Beams without information (NaN after REP 117) are ignored: the cones' ``min_valid_beams`` rule is what
+stops a blind robot, and a few dropped beams must not make a clear corridor look blocked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from bt_nav.mission.scan import Scan, beam_angles, clean_ranges
+
+#: Candidate headings, robot frame: -90 .. +90 deg every 5 deg (0 is straight ahead, index 18).
+HEADINGS = np.radians(np.arange(-90.0, 90.0 + 1e-9, 5.0))
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FreePaths:
+    """Free travel (m) along each of ``headings`` (rad), capped at the horizon it was computed with."""
+
+    headings: np.ndarray
+    free: np.ndarray
+
+    @property
+    def ahead(self) -> float:
+        """Free travel straight ahead."""
+        return float(np.interp(0.0, self.headings, self.free))
+
+    def heading_to(self, need: float, side: int = 0) -> float:
+        """The smallest turn (rad) onto a heading with at least ``need`` of free path.
+
+        ``side`` +1 / -1 restricts the search to left / right turns (0: either, left on a tie); when no
+        heading has ``need``, the heading with the most free path (on that side) is returned.
+        """
+        h = self.headings
+        # smallest turn first; of two equal turns the left one, as scan.clearer_side breaks ties
+        candidates = sorted((i for i in range(h.size) if side == 0 or side * h[i] >= 0),
+                            key=lambda i: (abs(h[i]), -h[i]))
+        for i in candidates:
+            if self.free[i] >= need:
+                return float(self.headings[i])
+        best = max(candidates, key=lambda i: (self.free[i], -abs(self.headings[i])))
+        return float(self.headings[best])
+
+    def side_room(self, side: int) -> float:
+        """The most free path among the headings on one side (+1 left, -1 right, 0 excluded)."""
+        mask = side * self.headings > 0
+        return float(self.free[mask].max()) if mask.any() else 0.0
+
+
+@lru_cache(maxsize=16)
+def _trig(headings: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
+    h = np.asarray(headings)
+    return np.cos(h)[:, None], np.sin(h)[:, None]
+
+
+def free_paths(scan: Scan, half_width: float, horizon: float, headings: np.ndarray = HEADINGS) -> FreePaths:
+    """The free path along every heading for a robot of ``half_width`` (see the module docstring).
+
+    Raises:
+        ScanError: if the scan is malformed.
+    """
+    ranges = clean_ranges(scan)
+    angles = beam_angles(scan)
+    near = np.isfinite(ranges) & (ranges < horizon + half_width)
+    r, theta = ranges[near], angles[near]
+    if r.size == 0:
+        return FreePaths(headings, np.full(headings.shape, float(horizon)))
+    x, y = r * np.cos(theta), r * np.sin(theta)
+    cos_h, sin_h = _trig(tuple(float(h) for h in headings))
+    along = x[None, :] * cos_h + y[None, :] * sin_h
+    lateral = y[None, :] * cos_h - x[None, :] * sin_h
+    inside = (np.abs(lateral) < half_width) & (along > 0.0)
+    reach = along - np.sqrt(np.maximum(half_width * half_width - lateral * lateral, 0.0))
+    free = np.where(inside, reach, math.inf).min(axis=1)
+    return FreePaths(headings, np.clip(free, 0.0, float(horizon)))

@@ -1,0 +1,74 @@
+"""Free paths of the robot's width along candidate headings (bt_nav.mission.paths), on ray-cast scans."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from bt_nav_sim import LDS01, RayCaster, world_from_dict
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bt_nav.mission.paths import HEADINGS, free_paths
+from bt_nav.mission.scan import Scan
+
+HALF = 0.2
+
+
+def scan_of(world: dict, x: float = 0.0, y: float = 0.0, yaw: float = 0.0) -> Scan:
+    """A noiseless LDS-01 scan from (x, y, yaw) in a world given as a dict."""
+    caster = RayCaster(world_from_dict({"name": "t", **world}), LDS01)
+    m = LDS01
+    return Scan(m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max, caster.cast(x, y, yaw))
+
+
+def test_nothing_around_means_the_horizon_everywhere() -> None:
+    paths = free_paths(scan_of({}), HALF, horizon=2.0)
+    assert np.all(paths.free == 2.0) and paths.ahead == 2.0
+    assert paths.heading_to(1.0) == 0.0  # no turn needed
+
+
+def test_wall_ahead_stops_the_front_of_the_disk() -> None:
+    paths = free_paths(scan_of({"segments": [[1.0, -3.0, 1.0, 3.0]]}), HALF, horizon=3.0)
+    assert paths.ahead == pytest.approx(1.0 - HALF, abs=0.02)
+    # along heading phi the disk touches the wall when its centre is HALF from it: (1 - HALF) / cos(phi)
+    i = int(np.argmin(np.abs(HEADINGS - math.radians(45))))
+    assert paths.free[i] == pytest.approx((1.0 - HALF) * math.sqrt(2), abs=0.03)
+
+
+def test_a_post_beside_the_path_does_not_block_it_but_one_in_it_does() -> None:
+    beside = free_paths(scan_of({"circles": [{"x": 1.0, "y": 0.35, "r": 0.05}]}), HALF, horizon=2.0)
+    assert beside.ahead == 2.0  # 0.30 m off the centre line: the 0.2 m half width passes it
+    inside = free_paths(scan_of({"circles": [{"x": 0.6, "y": 0.1, "r": 0.05}]}), HALF, horizon=2.0)
+    assert 0.3 < inside.ahead < 0.6
+    assert inside.heading_to(1.5) < 0  # the post is on the left: the nearest clear heading is to the right
+
+
+def test_shoulder_obstacle_blocks_the_path_although_no_cone_would_see_it() -> None:
+    # a post at 40 deg, 0.28 m away: lateral 0.18 < 0.2, so driving straight would hit it
+    px, py = 0.28 * math.cos(math.radians(40)), 0.28 * math.sin(math.radians(40))
+    paths = free_paths(scan_of({"circles": [{"x": px, "y": py, "r": 0.02}]}), HALF, horizon=2.0)
+    assert paths.ahead < 0.2
+
+
+def test_heading_to_prefers_the_smallest_turn_and_respects_a_side() -> None:
+    # a corridor bend: wall ahead, open to the left only
+    world = {"segments": [[1.0, -1.0, 1.0, 0.5], [-1.0, -0.5, 1.0, -0.5]]}
+    paths = free_paths(scan_of(world), HALF, horizon=2.0)
+    left = paths.heading_to(1.5)
+    assert left > math.radians(30)
+    assert paths.heading_to(1.5, side=-1) <= 0.0  # forced right: the best there, not a left turn
+    assert paths.side_room(1) > paths.side_room(-1)
+
+
+@given(x=st.floats(0.3, 2.5), y=st.floats(-1.0, 1.0))
+@settings(max_examples=60, deadline=None)
+def test_free_path_never_overshoots_a_point_in_the_corridor(x: float, y: float) -> None:
+    """Driving the free path along a heading never brings the disk's centre within HALF of the post."""
+    paths = free_paths(scan_of({"circles": [{"x": x, "y": y, "r": 0.03}]}), HALF, horizon=3.0)
+    for phi, free in zip(paths.headings, paths.free, strict=True):
+        cx, cy = free * math.cos(phi), free * math.sin(phi)
+        along = np.linspace(0.0, 1.0, 50)
+        gap = np.hypot(along * cx - x, along * cy - y).min() - 0.03
+        assert gap >= HALF - 0.02  # 2 cm: the LiDAR's 1 deg beam spacing at these ranges
