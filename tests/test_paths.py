@@ -71,4 +71,5 @@ def test_free_path_never_overshoots_a_point_in_the_corridor(x: float, y: float) 
         cx, cy = free * math.cos(phi), free * math.sin(phi)
         along = np.linspace(0.0, 1.0, 50)
         gap = np.hypot(along * cx - x, along * cy - y).min() - 0.03
-        assert gap >= HALF - 0.02  # 2 cm: the LiDAR's 1 deg beam spacing at these ranges
+        # a thin post is sampled by beams 1 deg apart: the miss can be up to one beam spacing at its range
+        assert gap >= HALF - 0.01 - math.hypot(x, y) * math.radians(1.0)
