@@ -186,8 +186,8 @@ class TickHarness:
     """The real tree from ``trees/mission.xml``, ticked at ``dt`` on a fake clock.
 
     Every tick: the clock advances, the current synthetic scan is fed (unless ``feed_scans`` is off),
-    perfect odometry integrates the previous command's turn rate (unless ``feed_odom`` is off), the
-    tree ticks, and a :class:`TickRecord` is kept.
+    perfect odometry integrates the previous command (unless ``feed_odom`` is off), the tree ticks, and
+    a :class:`TickRecord` is kept.
     """
 
     def __init__(self, maneuver: str = "none", overrides: dict[str, Any] | None = None, *,
@@ -206,6 +206,7 @@ class TickHarness:
         self.feed_scans = True
         self.feed_odom = True
         self.yaw = 0.0
+        self.x = self.y = 0.0  # odometry position, integrated from the commands like the yaw
         self.records: list[TickRecord] = []
 
     def see(self, *obstacles: tuple[float, float], **scan_kwargs: Any) -> None:
@@ -221,11 +222,14 @@ class TickHarness:
         """Run ``n`` ticks; returns the last record."""
         for _ in range(n):
             self.clock.advance(self.dt)
-            self.yaw = math.remainder(self.yaw + self.core.last_command.angular * self.dt, 2 * math.pi)
+            last = self.core.last_command
+            self.x += last.linear * self.dt * math.cos(self.yaw)
+            self.y += last.linear * self.dt * math.sin(self.yaw)
+            self.yaw = math.remainder(self.yaw + last.angular * self.dt, 2 * math.pi)
             if self.feed_scans and self.scan is not None:
                 self.core.feed_scan(self.scan)
             if self.feed_odom:
-                self.core.feed_odom(self.yaw)
+                self.core.feed_odom(self.yaw, x=self.x, y=self.y)
             command = self.core.tick()
             self.records.append(TickRecord(self.core.ticks, self.clock.now, self.core.tip, command,
                                            self.core.statuses(), self.yaw))

@@ -222,7 +222,7 @@ class LockstepMission:
             self.events.warning(f"collision at ({s.x:.2f}, {s.y:.2f})")
         if out.odom:
             self.referee.observe(t, s.x, s.y, s.yaw)
-            self.core.feed_odom(sim.odom_yaw, t)
+            self.core.feed_odom(sim.odom_yaw, t, x=sim.odom_x, y=sim.odom_y)
             for name, value in (("t", t), ("x", s.x), ("y", s.y), ("yaw", s.yaw), ("branch", self.branch)):
                 getattr(self.samples, name).append(value)
             if self.sink is not None:

@@ -14,6 +14,7 @@ new one clears the blackboard).
 from __future__ import annotations
 
 import logging
+import math
 import re
 from collections.abc import Mapping
 from typing import Any
@@ -104,9 +105,10 @@ class MissionCore:
         self.board.set("/scan", scan)
         self.board.set("/scan_stamp", float(self.clock() if stamp is None else stamp))
 
-    def feed_odom(self, yaw: float, stamp: float | None = None) -> None:
-        """The newest odometry heading (rad) and when it arrived."""
-        self.board.set("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp)))
+    def feed_odom(self, yaw: float, stamp: float | None = None, x: float = math.nan, y: float = math.nan) -> None:
+        """The newest odometry pose (yaw in rad; x, y in m, NaN when the source has none) and when it arrived."""
+        self.board.set("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp),
+                                           float(x), float(y)))
 
     def request_arm(self, data: bool) -> tuple[bool, str]:
         """Same as a call of the ``arm`` service: (success, message)."""

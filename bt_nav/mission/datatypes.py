@@ -49,10 +49,15 @@ def keep_wheels_within(linear: float, angular: float, wheel_limit: float, separa
 
 @dataclass(frozen=True, slots=True)
 class OdomSample:
-    """The robot's heading from odometry and when it was received (mission-clock seconds)."""
+    """The robot's odometry pose (odom frame; NaN where unknown) and when it was received (mission clock s).
+
+    Maneuvers use yaw increments; the maneuver triggers measure how far the robot drove from x, y.
+    """
 
     yaw: float = math.nan
     stamp: float = -math.inf
+    x: float = math.nan
+    y: float = math.nan
 
 
 NO_ODOM = OdomSample()

@@ -121,6 +121,11 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("safety_distance", 0.5, "Trigger distance of maneuvers A (front) and B (left and right).",
               "m", 0.05, 10.0),
     ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
+    ParamSpec("trigger_hysteresis", 0.1, "A maneuver's trigger re-arms once its reading has risen above the "
+              "trigger distance plus this (it fires on the condition's rising edge, see the README).", "m",
+              0.0, 5.0),
+    ParamSpec("trigger_rearm_distance", 3.0, "A maneuver's trigger also re-arms after the robot has driven this "
+              "far since it fired, even if the condition never cleared (0: only on clearing).", "m", 0.0, 100.0),
     ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
               "m", 0.05, 10.0),
     ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): keep driving and "

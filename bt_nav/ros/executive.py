@@ -314,7 +314,8 @@ class Executive:
             self.log.warning(f"dropping odometry with an invalid orientation ({self.bad_odom} so far)",
                              throttle_duration_sec=5.0)
             return
-        self.core.feed_odom(yaw)
+        position = msg.pose.pose.position
+        self.core.feed_odom(yaw, x=float(position.x), y=float(position.y))
 
     # ------------------------------------------------------------------ parameters
     def check_change(self, parameters: list[Parameter]) -> str | None:

@@ -4,7 +4,8 @@
 |---|---|
 | ``control`` | ReactiveSequence, ReactiveFallback, ForceSuccess (BehaviorTree.CPP tags) |
 | ``mission`` | ArmService, IsArmed, MissionDeadline, EvaluateMission |
-| ``perception`` | ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontCloserThan, SidesCloserThan |
+| ``perception`` | ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar |
+| ``triggers`` | FrontTrigger, SqueezeTrigger (the maneuvers' conditions, on their rising edge) |
 | ``motion`` | Stop, DriveForward, TurnAway, RotateInPlace |
 | ``maneuvers`` | ManeuverActive, RandomizerManeuver (A), RetreatManeuver (B), SmartPivotManeuver (C), AlwaysFailure |
 
@@ -28,19 +29,13 @@ from bt_nav.mission.behaviours.maneuvers import (
 )
 from bt_nav.mission.behaviours.mission import ArmService, EvaluateMission, IsArmed, MissionDeadline
 from bt_nav.mission.behaviours.motion import DriveForward, RotateInPlace, Stop, TurnAway
-from bt_nav.mission.behaviours.perception import (
-    FrontCloserThan,
-    ObstacleClose,
-    ObstacleFar,
-    ProcessScan,
-    ScanHealthy,
-    SidesCloserThan,
-)
+from bt_nav.mission.behaviours.perception import ObstacleClose, ObstacleFar, ProcessScan, ScanHealthy
+from bt_nav.mission.behaviours.triggers import FrontTrigger, SqueezeTrigger
 
 _CLASSES: tuple[type[PortsMixin], ...] = (
     ReactiveSequence, ReactiveFallback, ForceSuccess,
     ArmService, IsArmed, MissionDeadline, EvaluateMission,
-    ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontCloserThan, SidesCloserThan,
+    ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontTrigger, SqueezeTrigger,
     Stop, DriveForward, TurnAway, RotateInPlace,
     ManeuverActive, RandomizerManeuver, RetreatManeuver, SmartPivotManeuver, AlwaysFailure,
 )

@@ -29,6 +29,7 @@ class ArmService(Leaf):
     OUTPUT_PORTS = {
         "armed": port(bool, "the robot may move", default=False),
         "first_armed_at": port(float, "mission-clock time of the first arming (nan: never)", default=math.nan),
+        "arm_count": port(int, "how often the robot was armed (a new count is a fresh start)", default=0),
     }
 
     def setup(self, **kwargs: Any) -> None:
@@ -71,6 +72,7 @@ class ArmService(Leaf):
         if armed:
             return True, "already armed"
         self._set_output("armed", True)
+        self._set_output("arm_count", int(self.blackboard_client.get("arm_count") or 0) + 1)
         if math.isnan(first):
             self._set_output("first_armed_at", float(now))
             message = f"armed: mission timer started at t={now:.2f} s"

@@ -32,11 +32,6 @@ UNKNOWN_SECTORS = Sectors(UNKNOWN_READING, UNKNOWN_READING, UNKNOWN_READING)
 SECTORS_PORT = {"sectors": port(Sectors, "front/left/right minima of the latest scan", default=UNKNOWN_SECTORS)}
 
 
-def closer_than(reading: SectorReading, distance: float) -> bool:
-    """True when the sector holds an obstacle nearer than ``distance`` or is unknown."""
-    return (not reading.known) or reading.min_range < distance
-
-
 class ProcessScan(Leaf):
     """Sector minima of the newest scan, and whether the scan can be trusted (``scan_ok``).
 
@@ -172,26 +167,3 @@ class ObstacleFar(_FrontProximity):
     """Front obstacle between ``close_distance`` and ``far_distance``."""
 
     MATCH = frozenset({Proximity.FAR})
-
-
-class FrontCloserThan(Condition):
-    """Front sector nearer than ``distance`` (or unknown): the trigger of maneuvers A and C."""
-
-    INPUT_PORTS = {**SECTORS_PORT, "distance": port(float, default=0.5)}
-    OUTPUT_PORTS = {}
-
-    def answer(self) -> bool:
-        """Front closer than the distance?"""
-        return closer_than(self.get_input("sectors").front, self.get_input("distance"))
-
-
-class SidesCloserThan(Condition):
-    """Left AND right sectors nearer than ``distance`` (or unknown): maneuver B's "squeezed"."""
-
-    INPUT_PORTS = {**SECTORS_PORT, "distance": port(float, default=0.5)}
-    OUTPUT_PORTS = {}
-
-    def answer(self) -> bool:
-        """Both sides closer than the distance?"""
-        sectors, distance = self.get_input("sectors"), self.get_input("distance")
-        return closer_than(sectors.left, distance) and closer_than(sectors.right, distance)
