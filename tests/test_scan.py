@@ -30,8 +30,6 @@ from bt_nav.mission.scan import (
     classify,
     clean_ranges,
     clearer_side,
-    closer_side,
-    index_for_angle,
     sector_indices,
     sector_minima,
     validate_scan,
@@ -84,94 +82,6 @@ def clockwise(ranges=None) -> Scan:
     """360 beams sweeping clockwise from +pi (negative increment)."""
     values = np.ones(360) if ranges is None else ranges
     return make_scan(math.pi, -DEG, values)
-
-
-# --------------------------------------------------------------------------------------------------------
-# index_for_angle, hand-computed
-# --------------------------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize(
-    ("theta_deg", "expected"),
-    [
-        (0.0, 0),
-        (90.0, 90),
-        (-90.0, 270),
-        (270.0, 270),
-        (180.0, 180),
-        (-180.0, 180),
-        (359.6, 0),  # wraps across the seam to the nearer beam 0
-        (359.4, 359),
-        (-0.4, 0),
-        (0.4, 0),
-        (0.6, 1),  # nearest, not floor
-        (450.0, 90),  # modulo 2pi
-        (-450.0, 270),
-    ],
-)
-def test_index_for_angle_lds01(theta_deg: float, expected: int) -> None:
-    assert index_for_angle(lds01(), theta_deg * DEG) == expected
-
-
-@pytest.mark.parametrize(
-    ("theta_deg", "expected"),
-    [
-        (0.0, 320),
-        (90.0, 480),
-        (-90.0, 160),
-        (-180.0, 0),
-        (180.0, 0),  # +pi is the same direction as beam 0 at -pi
-        (180.0 - 360 / 640 / 4, 0),  # a quarter increment below +pi: beam 0 (wrapped) is nearer than 639
-        (180.0 - 360 / 640 * 3 / 4, 639),
-    ],
-)
-def test_index_for_angle_rplidar(theta_deg: float, expected: int) -> None:
-    assert index_for_angle(rplidar(), theta_deg * DEG) == expected
-
-
-@pytest.mark.parametrize(
-    ("theta_deg", "expected"),
-    [(0.0, 180), (90.0, 90), (-90.0, 270), (180.0, 0), (179.6, 0), (179.4, 1), (-179.4, 359)],
-)
-def test_index_for_angle_negative_increment(theta_deg: float, expected: int) -> None:
-    assert index_for_angle(clockwise(), theta_deg * DEG) == expected
-
-
-@pytest.mark.parametrize(
-    ("theta_deg", "expected"),
-    [
-        (0.0, 270),
-        (135.0, 540),
-        (135.2, 540),  # within half an increment of the last beam
-        (135.3, None),  # just beyond: outside the field of view
-        (-135.2, 0),
-        (-135.3, None),
-        (180.0, None),  # straight behind a 270-degree scanner
-        (-170.0, None),
-        (90.0, 450),
-    ],
-)
-def test_index_for_angle_partial_fov(theta_deg: float, expected: int | None) -> None:
-    assert index_for_angle(partial_fov(), theta_deg * DEG) == expected
-
-
-def test_index_for_angle_partial_fov_clockwise() -> None:
-    scan = make_scan(135 * DEG, -0.5 * DEG, np.ones(541))
-    assert index_for_angle(scan, 0.0) == 270
-    assert index_for_angle(scan, 90 * DEG) == 90
-    assert index_for_angle(scan, 180 * DEG) is None
-
-
-def test_index_for_angle_single_beam() -> None:
-    scan = Scan(0.3, 0.3, 0.01, 0.1, 5.0, np.ones(1))
-    assert index_for_angle(scan, 0.3) == 0
-    assert index_for_angle(scan, 0.3 + 0.0049) == 0
-    assert index_for_angle(scan, 0.3 + 0.0051) is None
-
-
-def test_index_for_angle_rejects_nan_theta() -> None:
-    with pytest.raises(ValueError, match="theta"):
-        index_for_angle(lds01(), NAN)
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -321,7 +231,7 @@ def test_sector_minima_defaults_lds01() -> None:
     assert s.front == SectorReading(0.7, 61, 61)
     assert s.left == SectorReading(1.2, 31, 31)
     assert s.right == SectorReading(0.7, 31, 31)
-    assert clearer_side(s) == 1 and closer_side(s) == -1
+    assert clearer_side(s) == 1
 
 
 def test_sector_minima_rep117_cases() -> None:
@@ -385,7 +295,7 @@ def test_sector_minima_float32_and_rplidar() -> None:
     assert s.front.min_range == pytest.approx(0.3)
     assert s.left.min_range == pytest.approx(0.3)
     assert s.right.min_range == pytest.approx(0.4)  # index 320 (0 deg) belongs to both halves
-    assert clearer_side(s) == -1 and closer_side(s) == 1
+    assert clearer_side(s) == -1
 
 
 def test_sector_minima_validates() -> None:
@@ -394,7 +304,7 @@ def test_sector_minima_validates() -> None:
 
 
 # --------------------------------------------------------------------------------------------------------
-# classify, clearer_side, closer_side
+# classify, clearer_side
 # --------------------------------------------------------------------------------------------------------
 
 
@@ -447,10 +357,9 @@ def test_classify_unknown_and_bad_thresholds() -> None:
         (UNKNOWN, reading(0.0), 1),  # unknown counts as 0: tie -> left
     ],
 )
-def test_clearer_and_closer_side(left: SectorReading, right: SectorReading, clearer: int) -> None:
+def test_clearer_side(left: SectorReading, right: SectorReading, clearer: int) -> None:
     s = Sectors(front=reading(1.0), left=left, right=right)
     assert clearer_side(s) == clearer
-    assert closer_side(s) == -clearer
 
 
 def test_reading_known() -> None:
@@ -526,7 +435,6 @@ def test_from_laserscan_duck_typed() -> None:
     buf[0] = 9.0  # message buffer reuse must not change the snapshot
     assert scan.ranges[0] == 1.0
     validate_scan(scan)
-    assert index_for_angle(scan, 0.0) == 1
 
     msg.ranges = [1, 2, 3]
     assert Scan.from_laserscan(msg).ranges.dtype == np.float64
@@ -642,10 +550,10 @@ def test_scan_error_is_value_error() -> None:
     assert issubclass(ScanError, ValueError)
 
 
-@pytest.mark.parametrize("func", [index_for_angle, sector_indices, clean_ranges, beam_angles, sector_minima])
+@pytest.mark.parametrize("func", [sector_indices, clean_ranges, beam_angles, sector_minima])
 def test_public_functions_validate(func) -> None:
     bad = _ok(angle_increment=0.0)
-    args = {index_for_angle: (0.0,), sector_indices: (Sector(0.0, 0.1),)}.get(func, ())
+    args = {sector_indices: (Sector(0.0, 0.1),)}.get(func, ())
     with pytest.raises(ScanError):
         func(bad, *args)
 
@@ -661,11 +569,6 @@ def ref_angdist(a: float, b: float) -> float:
     """|a - b| on the circle, via atan2 rather than the modulo used by the implementation."""
     d = a - b
     return abs(math.atan2(math.sin(d), math.cos(d)))
-
-
-def ref_index(angle_min: float, inc: float, n: int, theta: float) -> tuple[float, list[float]]:
-    dists = [ref_angdist(angle_min + i * inc, theta) for i in range(n)]
-    return min(dists), dists
 
 
 def ref_membership(angle_min: float, inc: float, n: int, sector: Sector) -> tuple[set[int], set[int]]:
@@ -799,43 +702,6 @@ def test_clean_ranges_matches_reference(scan: Scan, config: SectorConfig) -> Non
         c = float(cleaned[i])
         assert (math.isnan(c) and math.isnan(single)) or c == single, (i, r, c, single)
     assert cleaned.shape == (n,)
-
-
-@PROPERTY
-@given(layout=layouts(), data=st.data())
-def test_index_for_angle_matches_reference(layout: tuple[float, float, int, float], data) -> None:
-    angle_min, inc, n, angle_max = layout
-    scan = Scan(angle_min, angle_max, inc, 0.1, 5.0, np.ones(n))
-    near_beam = data.draw(st.booleans())
-    if near_beam:
-        # Favour the first/last beam: that is where the field-of-view edge (None) is decided.
-        i = data.draw(st.one_of(st.sampled_from([0, n - 1]), st.integers(min_value=0, max_value=n - 1)))
-        fraction = st.one_of(st.floats(min_value=-1.0, max_value=1.0), st.sampled_from([-0.55, -0.45, 0.45, 0.55]))
-        jitter = data.draw(fraction) * abs(inc)
-        turns = data.draw(st.integers(min_value=-2, max_value=2))
-        theta = angle_min + i * inc + jitter + turns * 2 * math.pi
-    else:
-        theta = data.draw(st.floats(min_value=-4 * math.pi, max_value=4 * math.pi))
-    got = index_for_angle(scan, theta)
-    best, dists = ref_index(angle_min, inc, n, theta)
-    half = 0.5 * abs(inc) + 1e-9
-    if best > half + BAND:
-        assert got is None
-    elif best < half - BAND:
-        assert got is not None
-        assert 0 <= got < n
-        assert dists[got] <= best + 1e-9
-    elif got is not None:  # borderline: either answer, but an index must still be a nearest beam
-        assert dists[got] <= best + 1e-9
-
-
-@PROPERTY
-@given(layout=layouts(), theta=st.floats(min_value=-10.0, max_value=10.0))
-def test_full_circle_never_none(layout: tuple[float, float, int, float], theta: float) -> None:
-    angle_min, inc, _, _ = layout
-    n = math.ceil(2 * math.pi / abs(inc)) + 1  # at least a full turn of beams
-    scan = Scan(angle_min, angle_min + (n - 1) * inc, inc, 0.1, 5.0, np.ones(n))
-    assert index_for_angle(scan, theta) is not None
 
 
 # --------------------------------------------------------------------------------------------------------

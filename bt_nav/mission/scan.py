@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from bt_nav.mission.geometry import wrap_angle  # re-exported: the scan API speaks of it
+
 __all__ = [
     "MAX_BEAMS",
     "Proximity",
@@ -39,15 +41,11 @@ __all__ = [
     "classify",
     "clean_ranges",
     "clearer_side",
-    "closer_side",
-    "index_for_angle",
     "sector_indices",
     "sector_minima",
     "validate_scan",
     "wrap_angle",
 ]
-
-TWO_PI = 2.0 * math.pi
 
 #: Upper bound on beams per scan.  Real sensors publish at most a few thousand; anything near this limit is a
 #: corrupt or hostile message and would make the per-layout caches allocate absurd amounts of memory.
@@ -56,13 +54,6 @@ MAX_BEAMS = 1_000_000
 #: Slack for "is this beam inside the cone" so that a beam lying exactly on a cone edge (e.g. +30 deg with a
 #: 1 deg increment) is not lost to floating-point rounding of ``angle_min + i * increment``.
 _CONE_EPS = 1e-9
-
-#: Slack for "is theta within half an increment of a beam" in ``index_for_angle``; same rationale.
-_FOV_EPS = 1e-9
-
-#: Above this many 2pi-lifts of theta, ``index_for_angle`` switches from the O(1)-per-lift scalar search to a
-#: vectorised scan over all beams (only reachable for absurd layouts spanning many full turns).
-_MAX_SCALAR_LIFTS = 8
 
 
 class ScanError(ValueError):
@@ -201,24 +192,8 @@ def validate_scan(scan: Scan) -> None:
 
 
 # ----------------------------------------------------------------------------------------------------
-# Angles and indices
+# Beam angles
 # ----------------------------------------------------------------------------------------------------
-
-
-def wrap_angle(a: Any) -> Any:
-    """Wrap an angle (float) or array of angles to ``[-pi, pi)``.
-
-    Needed because beam angles are *not* wrapped (an LDS-01 beam at 350 deg is really -10 deg).  The final
-    correction handles the floating-point case where ``x % 2pi`` rounds up to exactly ``2pi`` for a tiny
-    negative ``x``, which would otherwise yield ``+pi`` and break the half-open interval.
-    Scalars (Python or numpy) come back as ``float``; arrays as float64 ``ndarray``.
-    """
-    if np.ndim(a) == 0:
-        w = (float(a) + math.pi) % TWO_PI - math.pi
-        return w - TWO_PI if w >= math.pi else w
-    w = np.mod(np.asarray(a, dtype=np.float64) + math.pi, TWO_PI) - math.pi
-    w[w >= math.pi] -= TWO_PI
-    return w
 
 
 @lru_cache(maxsize=32)
@@ -245,52 +220,6 @@ def beam_angles(scan: Scan) -> np.ndarray:
     """
     validate_scan(scan)
     return _cached_beam_angles(*_layout(scan)).copy()
-
-
-def index_for_angle(scan: Scan, theta: float) -> int | None:
-    """Index of the beam nearest to direction ``theta``, or ``None`` if theta is outside the field of view.
-
-    This generalises the lab formula ``int((theta - angle_min) / angle_increment)``, which silently breaks
-    for ``[0, 2pi)`` scans asked about negative angles (-90 deg on an LDS-01 is index 270, not -90), for
-    clockwise sweeps, and for partial fields of view.  Theta is compared modulo 2pi, the *nearest* beam wins
-    (rounding, not truncation), and "outside the field of view" means no beam lies within half an increment.
-    A full 360-degree scan therefore never returns ``None`` and wraps across its seam.
-
-    Raises:
-        ScanError: if the scan is malformed.
-        ValueError: if ``theta`` is not finite (a NaN heading is a caller bug, not a direction).
-    """
-    validate_scan(scan)
-    theta = float(theta)
-    if not math.isfinite(theta):
-        raise ValueError(f"theta must be finite, got {theta!r}")
-    angle_min, inc, n_beams = _layout(scan)
-    step = abs(inc)
-    sign = 1.0 if inc > 0.0 else -1.0
-    last = n_beams - 1
-    # Position of theta along the sweep, measured in radians from beam 0 in the sweep direction, in [0, 2pi).
-    offset = (sign * (theta - angle_min)) % TWO_PI
-    # Every lift offset + 2pi*k that lies within pi of the swept arc [0, last*step] is a candidate; for each,
-    # the nearest beam on the line is found by rounding.  Normally k is 0 or -1 (1-3 candidates).
-    k_lo = math.floor((-math.pi - offset) / TWO_PI)
-    k_hi = math.ceil((last * step + math.pi - offset) / TWO_PI)
-
-    best_index = -1
-    best_dist = math.inf
-    if k_hi - k_lo + 1 <= _MAX_SCALAR_LIFTS:
-        for k in range(k_lo, k_hi + 1):
-            idx = min(max(round((offset + TWO_PI * k) / step), 0), last)
-            dist = abs(wrap_angle(angle_min + idx * inc - theta))
-            if dist < best_dist:
-                best_index, best_dist = idx, dist
-    else:
-        dists = np.abs(wrap_angle(_cached_beam_angles(angle_min, inc, n_beams) - theta))
-        best_index = int(np.argmin(dists))
-        best_dist = float(dists[best_index])
-
-    if best_dist > 0.5 * step + _FOV_EPS:
-        return None
-    return best_index
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -559,10 +488,3 @@ def clearer_side(sectors: Sectors) -> int:
     right = sectors.right.min_range if sectors.right.known else 0.0
     return 1 if left >= right else -1
 
-
-def closer_side(sectors: Sectors) -> int:
-    """The side the nearest obstacle is on (+1 left, -1 right).
-
-    Defined as exactly ``-clearer_side`` so the two can never disagree, including on ties.
-    """
-    return -clearer_side(sectors)
