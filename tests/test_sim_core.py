@@ -6,7 +6,8 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.nodes.simulator import Followers, split_ros_args
+from bt_nav_sim.nodes.simulator import split_ros_args
+from bt_nav_sim.pacing import Followers
 
 MS = 1_000_000
 

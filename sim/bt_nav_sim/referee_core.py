@@ -34,7 +34,7 @@ when no pair lying inside it moves; "static at the end" looks at the last ``wind
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 
@@ -54,6 +54,20 @@ class RefereeConfig:
     moving_angular: float = 0.01  # rad/s
     window: float = 0.5  # s, the "static at the end" window
     rate_hz: float = 2.0  # how often the driver calls step()
+
+
+#: RefereeConfig fields that are durations of the schedule, scaled by ``time_scale``. ``window`` is not:
+#: it is how much ground truth the "static at the end" check needs, and at 30 Hz a scaled-down window
+#: would hold no pair of samples to judge.
+TIME_FIELDS = ("static_before", "deactivate_at", "grace", "reactivate_at", "evaluation_deadline",
+               "settle_after_call")
+
+
+def scaled(config: RefereeConfig, scale: float) -> RefereeConfig:
+    """``config`` with every duration multiplied by ``scale`` (thresholds and rates unchanged)."""
+    if scale == 1.0:
+        return config
+    return replace(config, **{name: getattr(config, name) * scale for name in TIME_FIELDS})
 
 
 @dataclass(frozen=True)

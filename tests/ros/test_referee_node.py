@@ -9,8 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from bt_nav_sim.nodes.referee import scaled
-from bt_nav_sim.referee_core import RefereeConfig
+from bt_nav_sim.referee_core import RefereeConfig, scaled
 from simtools import Proc, wait_until
 
 ACTIVATE = "/reactive_control/activate"
