@@ -1,14 +1,15 @@
 """A deterministic harness for ticking the real mission tree step by step, without ROS.
 
 Used by bt_nav's own tick-by-tick tests and meant for users who add leaves: a fake clock, synthetic
-scans for any LiDAR layout, perfect odometry that integrates the commanded turn rate, a local Trigger
-client whose answers a test scripts, and a recorder of what every tick decided.
+scans for any LiDAR layout, perfect odometry that integrates the commands, a local Trigger client whose
+answers a test scripts (:mod:`bt_nav.mission.local_services`, re-exported here), and a recorder of what
+every tick decided.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,6 +17,15 @@ import numpy as np
 
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
+from bt_nav.mission.geometry import wrap_angle
+from bt_nav.mission.local_services import (  # noqa: F401 - re-exported: tests script the evaluation service
+    Handler,
+    LocalFuture,
+    LocalTriggerClient,
+    TriggerRequest,
+    TriggerResponse,
+    TriggerType,
+)
 from bt_nav.mission.scan import Scan
 
 
@@ -50,7 +60,7 @@ def synthetic_scan(obstacles: Iterable[tuple[float, float]] = (), *, layout: Lay
     angles = layout.angle_min + np.arange(layout.num_beams) * layout.angle_increment
     ranges = np.full(layout.num_beams, background, dtype=np.float64)
     for angle_deg, distance in obstacles:
-        offset = np.abs((angles - math.radians(angle_deg) + math.pi) % (2 * math.pi) - math.pi)
+        offset = np.abs(wrap_angle(angles - math.radians(angle_deg)))
         hit = offset <= math.radians(width_deg) / 2 + 1e-9
         if math.isnan(distance):
             ranges[hit] = math.nan
@@ -73,101 +83,6 @@ class FakeClock:
         """Move forward (or back, to simulate a reset) and return the new time."""
         self.now += dt
         return self.now
-
-
-@dataclass
-class TriggerRequest:
-    """Stand-in for std_srvs/Trigger.Request (off-ROS)."""
-
-
-@dataclass
-class TriggerResponse:
-    """Stand-in for std_srvs/Trigger.Response (off-ROS)."""
-
-    success: bool = False
-    message: str = ""
-
-
-class TriggerType:
-    """Stand-in for the std_srvs/Trigger service type: what ``client.srv_type`` gives."""
-
-    Request = TriggerRequest
-    Response = TriggerResponse
-
-
-class LocalFuture:
-    """The part of rclpy's Future the EvaluateMission leaf uses."""
-
-    def __init__(self) -> None:
-        self._done = False
-        self._result: Any = None
-        self._exception: BaseException | None = None
-        self.cancelled = False
-
-    def done(self) -> bool:  # noqa: D102
-        return self._done
-
-    def result(self) -> Any:  # noqa: D102
-        if self._exception is not None:
-            raise self._exception
-        return self._result
-
-    def set_result(self, result: Any) -> None:  # noqa: D102
-        self._result, self._done = result, True
-
-    def set_exception(self, exc: BaseException) -> None:  # noqa: D102
-        self._exception, self._done = exc, True
-
-
-Handler = Callable[[TriggerRequest], TriggerResponse]
-
-
-class LocalTriggerClient:
-    """A Trigger client with rclpy Client's interface, answered in-process.
-
-    ``script`` lists what successive calls get: ``"ok"``, ``"refuse"`` (success=false), ``"hang"``
-    (never answered), ``"raise"`` (the future fails), or a handler function; once the script runs out,
-    ``default`` answers. ``absent_until`` keeps the service "not ready" until that clock time.
-    """
-
-    srv_type = TriggerType
-
-    def __init__(self, script: Sequence[str | Handler] = (), default: str | Handler = "ok",
-                 clock: Callable[[], float] | None = None, absent_until: float = -math.inf) -> None:
-        self.script = list(script)
-        self.default = default
-        self.clock = clock
-        self.absent_until = absent_until
-        self.calls: list[float] = []
-        self.removed: list[LocalFuture] = []
-        self.pending: list[LocalFuture] = []
-
-    def service_is_ready(self) -> bool:  # noqa: D102
-        return self.clock is None or self.clock() >= self.absent_until
-
-    def call_async(self, request: TriggerRequest) -> LocalFuture:  # noqa: D102
-        self.calls.append(self.clock() if self.clock else float(len(self.calls)))
-        action = self.script.pop(0) if self.script else self.default
-        future = LocalFuture()
-        if callable(action):
-            future.set_result(action(request))
-        elif action == "ok":
-            future.set_result(TriggerResponse(True, "evaluation accepted"))
-        elif action == "refuse":
-            future.set_result(TriggerResponse(False, "not now"))
-        elif action == "raise":
-            future.set_exception(RuntimeError("server died mid-call"))
-        elif action == "hang":
-            self.pending.append(future)
-        else:
-            raise ValueError(f"unknown script action {action!r}")
-        return future
-
-    def remove_pending_request(self, future: LocalFuture) -> None:  # noqa: D102
-        future.cancelled = True
-        self.removed.append(future)
-        if future in self.pending:
-            self.pending.remove(future)
 
 
 @dataclass
@@ -225,7 +140,7 @@ class TickHarness:
             last = self.core.last_command
             self.x += last.linear * self.dt * math.cos(self.yaw)
             self.y += last.linear * self.dt * math.sin(self.yaw)
-            self.yaw = math.remainder(self.yaw + last.angular * self.dt, 2 * math.pi)
+            self.yaw = wrap_angle(self.yaw + last.angular * self.dt)
             if self.feed_scans and self.scan is not None:
                 self.core.feed_scan(self.scan)
             if self.feed_odom:

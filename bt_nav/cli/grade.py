@@ -23,8 +23,8 @@ from bt_nav_sim.world import list_worlds
 from tqdm import tqdm
 
 from bt_nav.cli.gridrun import Job, run_dask, run_local
-from bt_nav.cli.lockstep import DEFAULT_JITTER, parse_overrides
-from bt_nav.mission.params import normalise_maneuver
+from bt_nav.cli.lockstep import DEFAULT_JITTER
+from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.mission.profiles import PROFILE_FILES
 
 
@@ -189,7 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     try:
         maneuvers = [normalise_maneuver(m.strip()) for m in args.maneuvers.split(",") if m.strip()]
-        overrides = parse_overrides(args.overrides) or None
+        overrides = parse_assignments(args.overrides) or None
         jobs = make_jobs(worlds, maneuvers, seeds, overrides, args.profile,
                          None if args.no_jitter else DEFAULT_JITTER, args.kinematics)
         if args.resume and not args.json:

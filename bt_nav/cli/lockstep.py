@@ -40,12 +40,12 @@ from bt_nav_sim.world import World, load_world
 
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
-from bt_nav.mission.params import SPECS, normalise_maneuver
+from bt_nav.mission.local_services import LocalTriggerClient, TriggerRequest, TriggerResponse
+from bt_nav.mission.params import SPECS, normalise_maneuver, parse_assignments
 from bt_nav.mission.profiles import PROFILE_FILES
 from bt_nav.mission.profiles import profile_parameters as profile_file_parameters
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.trace import TraceRecorder
-from bt_nav.testing import LocalTriggerClient, TriggerRequest, TriggerResponse
 
 REFEREE_HZ = 2.0
 HARD_STOP = 60.0  # s after t0: the run ends even if the referee has not reported
@@ -336,20 +336,6 @@ class _QuietEvents:
         self._add("error", msg)
 
 
-def parse_overrides(items: list[str]) -> dict[str, Any]:
-    """``name=value`` pairs; values parsed as JSON when possible (numbers, true/false), else strings."""
-    out: dict[str, Any] = {}
-    for item in items:
-        name, sep, raw = item.partition("=")
-        if not sep:
-            raise ValueError(f"--set expects name=value, got {item!r}")
-        try:
-            out[name.strip()] = json.loads(raw)
-        except json.JSONDecodeError:
-            out[name.strip()] = raw
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav lockstep``: one mission; prints the referee's report; exit 0 only if it passed."""
     parser = argparse.ArgumentParser(prog="bt-nav lockstep", description=__doc__.splitlines()[0])
@@ -370,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=None, help="write results (with trajectory) as JSON here")
     args = parser.parse_args(argv)
     try:
-        overrides = parse_overrides(args.overrides)
+        overrides = parse_assignments(args.overrides)
         result = run_mission(args.world, args.maneuver, args.seed, overrides, args.profile, args.trace,
                              args.duration, jitter=None if args.no_jitter else DEFAULT_JITTER,
                              kinematics=args.kinematics, noise=not args.no_noise)

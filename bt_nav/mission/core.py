@@ -115,42 +115,20 @@ class MissionCore:
         return self.arm_leaf.handle(bool(data))
 
     def set_param(self, name: str, value: Any) -> str | None:
-        """Change one parameter; returns why it was refused, or None when applied.
-
-        Parameters that shape the tree (``live=False``) are refused while running.
-        """
-        spec = P.SPECS.get(name)
-        if spec is None:
-            return f"unknown parameter {name!r}"
-        value = P.coerce(spec, value)
-        reason = spec.check(value)
-        if reason:
-            return reason
-        if value == self.params[name]:
-            return None
-        if not spec.live:
-            return f"{name} cannot change while the executive runs (restart it with the new value)"
-        candidate = {**self.params, name: value}
-        reason = P.cross_check(candidate)
-        if reason:
-            return reason
-        self.params[name] = value
-        if spec.in_tree:
-            self.board.set(f"/{name}", value)
-        return None
+        """Change one parameter; returns why it was refused, or None when applied (see :meth:`set_params`)."""
+        return self.set_params({name: value})
 
     def check_params(self, values: Mapping[str, Any]) -> str | None:
         """Why this batch of changes would be refused, or None; nothing is applied.
 
-        The batch is judged as a whole (cross rules on the combined result), so a ROS
-        ``set_parameters_atomically`` of close_distance and far_distance together can move both
-        across each other's old values. Same rules as :meth:`set_param` otherwise.
+        The same gate as at start-up (:func:`bt_nav.mission.params.check_changes`), with the read-only
+        parameters (``live=False``, they shape the tree or the wiring) refused while running.
         """
-        return self._candidate(values)[1]
+        return P.check_changes(self.params, values)[1]
 
     def set_params(self, values: Mapping[str, Any]) -> str | None:
         """Apply a batch of changes all or nothing; returns why it was refused, or None when applied."""
-        candidate, reason = self._candidate(values)
+        candidate, reason = P.check_changes(self.params, values)
         if reason:
             return reason
         for name, value in candidate.items():
@@ -159,26 +137,6 @@ class MissionCore:
                 if P.SPECS[name].in_tree:
                     self.board.set(f"/{name}", value)
         return None
-
-    def _candidate(self, values: Mapping[str, Any]) -> tuple[dict[str, P.Value], str | None]:
-        """The parameters after ``values`` (checked one by one, then together) and the refusal reason."""
-        candidate = dict(self.params)
-        for name, raw in values.items():
-            spec = P.SPECS.get(name)
-            if spec is None:
-                return candidate, f"unknown parameter {name!r}"
-            value = P.coerce(spec, raw)
-            reason = spec.check(value)
-            if reason:
-                return candidate, reason
-            if name == "maneuver":
-                value = P.normalise_maneuver(value)  # "randomizer" is the running "A", not a change
-            if value == self.params[name]:
-                continue
-            if not spec.live:
-                return candidate, f"{name} cannot change while the executive runs (restart it with the new value)"
-            candidate[name] = value
-        return candidate, P.cross_check(candidate)
 
     # ------------------------------------------------------------------ ticking
     def tick(self) -> Command:

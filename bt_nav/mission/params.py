@@ -10,7 +10,8 @@ which is how a live parameter update reaches the tree on the next tick.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -175,6 +176,11 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("frame_id", "base_link", "frame_id of stamped commands.", live=False, in_tree=False),
     ParamSpec("stats_period", 10.0, "Seconds between tick-statistics log lines (0 disables).", "s",
               0.0, 3600.0, in_tree=False),
+    ParamSpec("clock_watchdog", 1.0, "Wall-clock seconds without a tick, while the last command was motion, after "
+              "which the executive publishes a zero twist (a stalled /clock under use_sim_time freezes the ticks "
+              "and a base keeps its last cmd_vel); 0 disables.", "s", 0.0, 60.0, in_tree=False),
+    ParamSpec("trace_path", "", "Write the per-tick JSONL trace (the lock-step format, read by bt-nav replay) to "
+              "this file; empty: no trace.", live=False, in_tree=False),
 )
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in PARAMS}
@@ -200,33 +206,86 @@ def cross_check(values: Mapping[str, Value]) -> str | None:
 
 
 def resolve(overrides: Mapping[str, Any] | None = None) -> dict[str, Value]:
-    """Defaults updated with ``overrides``, every value checked; ints are accepted for floats.
+    """Defaults updated with ``overrides``, checked by :func:`check_changes`; ints are accepted for floats.
 
     Raises:
         ValueError: naming the first unknown parameter or unacceptable value.
     """
-    values = defaults()
-    for name, value in (overrides or {}).items():
-        spec = SPECS.get(name)
-        if spec is None:
-            raise ValueError(f"unknown parameter {name!r}")
-        values[name] = coerce(spec, value)
-    for name, value in values.items():
-        reason = SPECS[name].check(value)
-        if reason:
-            raise ValueError(reason)
-    reason = cross_check(values)
+    values, reason = check_changes(defaults(), overrides or {}, running=False)
     if reason:
         raise ValueError(reason)
-    values["maneuver"] = normalise_maneuver(str(values["maneuver"]))
     return values
 
 
-def coerce(spec: ParamSpec, value: Any) -> Any:
-    """Accept an int where a float is expected (``-p safety_distance:=1`` on the command line)."""
-    if isinstance(spec.default, float) and isinstance(value, int) and not isinstance(value, bool):
+def check_changes(current: Mapping[str, Value], changes: Mapping[str, Any], *,
+                  running: bool = True) -> tuple[dict[str, Value], str | None]:
+    """The one gate every parameter value passes: at start-up, on a live change and off-ROS alike.
+
+    Returns ``current`` updated with ``changes`` and the reason the batch is refused (None when it is
+    accepted). Each value is coerced (:func:`coerce`) and checked on its own, maneuver names are
+    normalised, and the cross rules judge the combined result, so a batch may move close_distance and
+    far_distance across each other's old values. With ``running``, a read-only (``live=False``)
+    parameter may only be "changed" to the value it already has.
+    """
+    candidate: dict[str, Value] = dict(current)
+    for name, raw in changes.items():
+        spec = SPECS.get(name)
+        if spec is None:
+            return candidate, f"unknown parameter {name!r}"
+        value = coerce(spec, raw)
+        reason = spec.check(value)
+        if reason:
+            return candidate, reason
+        if name == "maneuver":
+            value = normalise_maneuver(value)  # "randomizer" is the running "A", not a change
+        if running and not spec.live and value != current[name]:
+            return candidate, f"{name} cannot change while the executive runs (restart it with the new value)"
+        candidate[name] = value
+    return candidate, cross_check(candidate)
+
+
+def coerce(spec: ParamSpec | Value, value: Any) -> Any:
+    """Accept an int where a float is expected (``-p safety_distance:=1`` on the command line).
+
+    ``spec`` is a table entry or, for parameters outside the table (the simulator's, the referee's),
+    just the default value whose type decides.
+    """
+    default = spec.default if isinstance(spec, ParamSpec) else spec
+    if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     return value
+
+
+#: Numbers in exponent form without a dot (``1e-3``): YAML 1.1, which PyYAML follows, reads them as
+#: strings, while ``ros2 run ... -p x:=1e-3`` (rcl's parser) reads a double.
+_EXPONENT_NUMBER = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
+
+
+def parse_assignments(items: Iterable[str]) -> dict[str, Any]:
+    """``NAME=VALUE`` command-line items as a dict, each value read as a YAML scalar, as ROS reads ``-p name:=value``.
+
+    ``50`` is an int, ``0.5`` and ``1e-3`` floats, ``true`` a bool, ``A`` or ``base_link`` a string, an
+    empty value the empty string. Every bt-nav command that takes ``--set`` / ``--sim-param`` uses this.
+
+    Raises:
+        ValueError: for an item without ``=`` or without a name, or a value that is no valid YAML.
+    """
+    import yaml
+
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise ValueError(f"expected NAME=VALUE, got {item!r}")
+        text = text.strip()
+        if _EXPONENT_NUMBER.fullmatch(text):
+            out[name.strip()] = float(text)
+            continue
+        try:
+            out[name.strip()] = yaml.safe_load(text) if text else ""
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{name.strip()}: {text!r} is no YAML value ({exc})".replace("\n", " ")) from None
+    return out
 
 
 def markdown_table() -> str:

@@ -37,6 +37,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import IO, Any
 
+from bt_nav.mission.params import parse_assignments  # noqa: F401 - re-exported (demo, sim-run)
 from bt_nav.mission.profiles import EXECUTIVE_NAME, config_file, file_parameters  # noqa: F401 - re-exported
 
 PROFILES = ("lab", "homework", "eval")
@@ -110,19 +111,6 @@ def param_arg(name: str, value: Any) -> str:
     else:
         raise TypeError(f"parameter {name}: unsupported value type {type(value).__name__}")
     return f"{name}:={text}"
-
-
-def parse_assignments(items: list[str]) -> dict[str, Any]:
-    """``["name=value", ...]`` from the command line into a dict, values read as YAML (``50`` -> 50)."""
-    import yaml
-
-    out: dict[str, Any] = {}
-    for item in items:
-        name, sep, text = item.partition("=")
-        if not sep or not name.strip():
-            raise ValueError(f"expected NAME=VALUE, got {item!r}")
-        out[name.strip()] = yaml.safe_load(text) if text.strip() else ""
-    return out
 
 
 # ---------------------------------------------------------------------------------------------- the table

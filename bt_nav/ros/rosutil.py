@@ -25,6 +25,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from bt_nav.mission import params as P
 from bt_nav.mission.datatypes import Command
+from bt_nav.mission.geometry import yaw_from_quaternion  # noqa: F401 - re-exported for the commands
 
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 
@@ -79,31 +80,36 @@ def parameter_descriptor(spec: P.ParamSpec) -> ParameterDescriptor:
     return descriptor
 
 
-def as_double(spec: P.ParamSpec, parameter: Parameter) -> Parameter:
-    """``parameter`` retyped DOUBLE when it is an INTEGER for a float entry (else unchanged).
+def as_double(default: P.ParamSpec | P.Value, parameter: Parameter) -> Parameter:
+    """``parameter`` retyped DOUBLE when it is an INTEGER for a float parameter (else unchanged).
 
     rclpy types a parameter by its default and refuses an INTEGER value for a DOUBLE parameter;
     users type integers (``-p safety_distance:=1``, ``ros2 param set ... safety_distance 1``) all
-    the time, and :func:`bt_nav.mission.params.coerce` accepts them off-ROS, so the ROS edge does too.
+    the time, so the ROS edge applies :func:`bt_nav.mission.params.coerce`, the rule off-ROS too.
+    ``default`` is a table entry or, for a node's own parameters, the default value.
     """
-    if parameter.type_ == Parameter.Type.INTEGER and isinstance(spec.default, float):
-        return Parameter(parameter.name, Parameter.Type.DOUBLE, float(parameter.value))
+    if parameter.type_ != Parameter.Type.INTEGER:
+        return parameter
+    value = P.coerce(default, parameter.value)
+    if isinstance(value, float):
+        return Parameter(parameter.name, Parameter.Type.DOUBLE, value)
     return parameter
 
 
-def _coerce_overrides(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> None:
-    """Let ``-p safety_distance:=1`` mean 1.0 (see :func:`as_double`).
+def coerce_int_overrides(node: Node, defaults: Mapping[str, Any]) -> None:
+    """Let ``-p safety_distance:=1`` mean 1.0 for every float parameter in ``defaults`` (name -> default).
 
-    rclpy has no public accessor for the overrides, so this reaches into ``_parameter_overrides``
-    (absent: nothing to do).
+    Call it before declaring. rclpy has no public accessor for the overrides, so this edits
+    ``_parameter_overrides`` (absent: nothing to do). The executive and the simulator and referee
+    nodes all use it.
     """
     overrides = getattr(node, "_parameter_overrides", None)
     if not isinstance(overrides, dict):
         return
-    for spec in specs:
-        given = overrides.get(spec.name)
+    for name, default in defaults.items():
+        given = overrides.get(name)
         if given is not None:
-            overrides[spec.name] = as_double(spec, given)
+            overrides[name] = as_double(default, given)
 
 
 def unknown_overrides(node: Node, extra: Iterable[str] = ()) -> list[str]:
@@ -117,46 +123,35 @@ def unknown_overrides(node: Node, extra: Iterable[str] = ()) -> list[str]:
                   and not name.startswith("qos_overrides."))
 
 
-def declare_parameters(node: Node, specs: Iterable[P.ParamSpec] = P.PARAMS) -> dict[str, P.Value]:
-    """Declare every parameter of ``specs`` (default: :data:`bt_nav.mission.params.PARAMS`).
+def declare_parameters(node: Node) -> dict[str, P.Value]:
+    """Declare every parameter of :data:`bt_nav.mission.params.PARAMS`; returns their start-up values.
 
-    Returns their start-up values.
+    The given values (``-p``, params files) pass the same gate as a live change,
+    :func:`bt_nav.mission.params.check_changes` (cross rules included), before anything is declared.
 
     Raises:
-        ConfigError: with one line naming the parameter and why its value is refused (type or range);
-            the caller refuses to start rather than run a robot on a configuration nobody meant.
+        ConfigError: with one line naming the parameter and why its value is refused (type, range or
+            a cross rule); the caller refuses to start rather than run a robot on a configuration
+            nobody meant.
     """
-    specs = tuple(specs)
-    _coerce_overrides(node, specs)
+    coerce_int_overrides(node, P.defaults())
     overrides = getattr(node, "_parameter_overrides", None)
+    if isinstance(overrides, dict):
+        given = {name: overrides[name].value for name in P.SPECS if overrides.get(name) is not None}
+        reason = P.check_changes(P.defaults(), given, running=False)[1]
+        if reason:  # our table's wording ("must be >= 0.05 m, got -1.0") beats rclpy's
+            raise ConfigError(reason)
     values: dict[str, P.Value] = {}
-    for spec in specs:
-        given = overrides.get(spec.name) if isinstance(overrides, dict) else None
-        if given is not None:  # our table's wording ("must be >= 0.05 m, got -1.0") beats rclpy's
-            reason = spec.check(P.coerce(spec, given.value))
-            if reason:
-                raise ConfigError(reason)
+    for spec in P.PARAMS:
         try:
             parameter = node.declare_parameter(spec.name, spec.default, parameter_descriptor(spec))
-        except InvalidParameterTypeException as exc:
-            raise ConfigError(f"parameter {spec.name}: {exc}") from None
-        except InvalidParameterValueException as exc:
+        except (InvalidParameterTypeException, InvalidParameterValueException) as exc:
             raise ConfigError(f"parameter {spec.name}: {exc}") from None
         values[spec.name] = parameter.value
     return values
 
 
 # ---------------------------------------------------------------------------------------------- messages
-def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
-    """Heading (rad, about +z) of an orientation quaternion; NaN when it is not a rotation at all."""
-    # atan2 of two terms that both scale with |q|^2: correct for unnormalised quaternions too.
-    sin_term = 2.0 * (w * z + x * y)
-    cos_term = w * w + x * x - y * y - z * z
-    if not (math.isfinite(sin_term) and math.isfinite(cos_term)) or (sin_term == 0.0 and cos_term == 0.0):
-        return math.nan
-    return math.atan2(sin_term, cos_term)
-
-
 class ThreadedNode:
     """A node in a private rclpy context whose executor spins in a daemon thread.
 

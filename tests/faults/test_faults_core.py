@@ -196,7 +196,8 @@ def test_backward_jump_and_the_evaluation_timeout(faults: FaultCases) -> None:
 
 def test_fault_injection_hook_refuses_bad_specs() -> None:
     """The test-only hook (BT_NAV_FAULT_INJECT) refuses what it cannot arm, so a typo cannot silently test nothing."""
-    from bt_nav.ros.executive import InjectedFaultError, inject_faults
+    from faultinject import InjectedFaultError, inject_faults
+
     from bt_nav.ros.rosutil import ConfigError
 
     th = TickHarness("none", events=Events())

@@ -1,5 +1,6 @@
 """Process-level faults through the real executive: signals mid-maneuver and mid-evaluation, exceptions injected
-into leaves (``BT_NAV_FAULT_INJECT``, see bt_nav/executive.py), and invalid parameter values set at runtime.
+into leaves (``BT_NAV_FAULT_INJECT``, see faultinject.py and faulty_executive.py), and invalid parameter values
+set at runtime.
 
 Expected semantics: SIGINT/SIGTERM -> zero twists acknowledged by the subscriber, exit status 0, one
 ``<SIGNAL> received`` line and the final stats; an exception in a leaf -> a stop on that tick, one
@@ -12,16 +13,21 @@ from __future__ import annotations
 import math
 import os
 import signal
+import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 from conftest import FaultCases
+from faultinject import FAULT_INJECT_ENV
 from faultkit import FREE, EvaluationServer, Run, connect
 from rclpy.parameter import Parameter
 from ros_harness import PERIOD, ExecutiveProcess, Harness, laser_scan
 
 SIGNALS = [signal.SIGINT, signal.SIGTERM]
+#: The real executive with the test-only fault injection (product code has none).
+FAULTY_EXECUTIVE = [sys.executable, str(Path(__file__).with_name("faulty_executive.py"))]
 
 
 def shut_down(run: Run, signum: int) -> int:
@@ -73,7 +79,7 @@ def start_with_faults(start_executive: Callable[..., ExecutiveProcess], make_har
                       spec: str, *ros_args: str) -> Harness:
     """An executive whose leaves raise as ``BT_NAV_FAULT_INJECT=spec`` says, connected to a new harness."""
     h = make_harness()
-    process = start_executive(*ros_args, env={**os.environ, "BT_NAV_FAULT_INJECT": spec})
+    process = start_executive(*ros_args, command=FAULTY_EXECUTIVE, env={**os.environ, FAULT_INJECT_ENV: spec})
     return connect(h, process)
 
 

@@ -16,15 +16,18 @@ from rclpy.parameter import Parameter
 
 from bt_nav.mission import params as P
 from bt_nav.mission.datatypes import Command
-from bt_nav.ros.executive import Executive, TickStats
+from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.ros.executive import Executive
 from bt_nav.ros.rosutil import (
+    ConfigError,
     EventLog,
     claim_domain_id,
     domain_id_for,
     parameter_descriptor,
     route_py_trees_logging,
-    yaw_from_quaternion,
 )
+from bt_nav.ros.safety import ClockWatchdog
+from bt_nav.ros.tick_stats import TickStats
 
 
 @pytest.fixture
@@ -47,6 +50,33 @@ def test_tick_stats_summary() -> None:
     assert stats.window == [] and len(stats.history) == 100
     assert TickStats.describe([]) == "no ticks"
     assert "overruns 1 (period 50.0 ms), exceptions 2" in stats.counters(faults=2)
+
+
+def test_tick_stats_periodic_line_follows_the_mission_clock() -> None:
+    stats = TickStats(period=0.05)
+    assert stats.periodic_line(10.0, 5.0, 0) is None  # the first tick opens the window
+    stats.record(0.001)
+    assert stats.periodic_line(14.9, 5.0, 0) is None
+    line = stats.periodic_line(15.0, 5.0, 0)
+    assert line is not None and line.startswith("stats: tick ms") and "over 1" in line
+    assert stats.periodic_line(3.0, 5.0, 0) is None  # clock jumped back: a new window, no line
+    assert stats.periodic_line(100.0, 0.0, 0) is None  # stats_period 0: never
+    assert stats.final_line(0).startswith("final stats: tick ms")
+
+
+def test_clock_watchdog_stops_once_and_notes_the_resumption() -> None:
+    dog = ClockWatchdog(1.0)
+    assert dog.due(5.0) is None  # no tick yet
+    assert dog.ticked(10.0) is None
+    assert dog.due(12.0) is None  # not moving: nothing to stop
+    dog.moving = True
+    assert dog.due(10.9) is None
+    assert dog.due(11.5) == pytest.approx(1.5) and dog.stops == 1 and not dog.moving
+    assert dog.due(13.0) is None  # one stop per stall
+    assert dog.ticked(14.0) == pytest.approx(4.0)  # the tick that ends the stall says how long it was
+    dog.timeout = 0.0
+    dog.moving = True
+    assert dog.due(100.0) is None  # 0 disables
 
 
 @pytest.mark.parametrize("yaw", [0.0, 0.5, -2.0, math.pi - 1e-9])
@@ -150,15 +180,50 @@ def test_unconvertible_scan_is_dropped_and_counted(executive: Executive) -> None
 
 
 def test_parameter_callbacks_check_then_apply(executive: Executive) -> None:
-    refused = executive._on_set_parameters([Parameter("close_distance", value=0.9)])
+    gate = executive.parameters
+    refused = gate._on_set_parameters([Parameter("close_distance", value=0.9)])
     assert not refused.successful and "far_distance" in refused.reason
     together = [Parameter("far_distance", value=1.2), Parameter("close_distance", value=0.9)]
-    assert executive._on_set_parameters(together).successful
+    assert gate._on_set_parameters(together).successful
     assert executive.core.params["close_distance"] == 0.3  # checked only: nothing applied yet
-    executive._after_set_parameters(together)
+    gate._after_set_parameters(together)
     assert (executive.core.params["close_distance"], executive.core.params["far_distance"]) == (0.9, 1.2)
     assert executive.core.value("far_distance") == 1.2  # the tree sees it
-    assert executive._on_set_parameters([Parameter("use_sim_time", value=True)]).successful
+    assert gate._on_set_parameters([Parameter("use_sim_time", value=True)]).successful
+    assert "cannot change" in gate._on_set_parameters([Parameter("trace_path", value="/tmp/x")]).reason
+
+
+@pytest.mark.parametrize(("overrides", "reason"), [
+    ([Parameter("close_distance", value=0.9)], "close_distance (0.9) must be smaller than far_distance (0.7)"),
+    ([Parameter("safety_distance", value=-1.0)], "safety_distance must be >= 0.05 m, got -1.0"),
+    ([Parameter("maneuver", value="Z")], "unknown maneuver 'Z'"),
+])
+def test_start_up_values_pass_the_same_gate_as_live_changes(ros_context: Any, overrides: list[Parameter],
+                                                            reason: str) -> None:
+    node = Node("bt_nav_executive_gate", context=ros_context, start_parameter_services=False,
+                parameter_overrides=overrides)
+    try:
+        with pytest.raises(ConfigError) as refused:
+            Executive(node)
+        assert reason in str(refused.value)
+        values = {p.name: p.value for p in overrides}
+        live = P.check_changes(P.defaults(), values)[1]
+        assert live is not None and reason in live, "the live gate judges the same values the same way"
+    finally:
+        node.destroy_node()
+
+
+def test_an_integer_for_a_float_is_accepted_at_start_up(ros_context: Any) -> None:
+    node = Node("bt_nav_executive_int", context=ros_context, start_parameter_services=False,
+                parameter_overrides=[Parameter("safety_distance", value=1), Parameter("clock_watchdog", value=2)])
+    try:
+        executive = Executive(node)
+        assert executive.core.params["safety_distance"] == 1.0 and isinstance(executive.core.params["safety_distance"],
+                                                                              float)
+        assert executive.watchdog.timeout == 2.0
+        executive.close()
+    finally:
+        node.destroy_node()
 
 
 def test_an_exception_in_a_leaf_stops_the_robot_and_the_node_lives_on(executive: Executive,

@@ -1,0 +1,180 @@
+"""Run one node as a process: ROS arguments, SIGINT/SIGTERM, the spin loop and a shutdown that stops the robot.
+
+The executive's ``main`` is this plus the node's own wiring. The order matters for safety: a signal
+only ends the spin loop, the wiring's ``close()`` then publishes its stops while the ROS context is
+still up, and only after that is the context shut down (rclpy's own signal handlers would shut it
+down first, so they are off).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from collections.abc import Callable
+from contextlib import suppress
+from types import FrameType
+from typing import Any, Protocol
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
+
+from bt_nav.ros.rosutil import ConfigError
+
+EXIT_OK, EXIT_ERROR, EXIT_CONFIG = 0, 1, 2
+#: Longest wait inside the executor before the loop looks at the shutdown flag again.
+SPIN_TIMEOUT = 0.05
+
+
+class Closable(Protocol):
+    """What a node's wiring offers the runner: a ``close()`` that stops the robot and never raises."""
+
+    def close(self) -> None: ...  # noqa: D102
+
+
+class ShutdownRequest:
+    """SIGINT/SIGTERM handling that leaves the ROS context up until the robot has been stopped.
+
+    The first signal only sets a flag (the spin loop ends and ``finally`` publishes the stop); a
+    second one while still spinning raises KeyboardInterrupt, for a callback that hangs; once
+    closing, further signals are ignored so they cannot cut the stop short.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.closing = False
+        self._previous: dict[int, Any] = {}
+
+    @property
+    def requested(self) -> bool:
+        """A signal arrived."""
+        return self.signum is not None
+
+    def handle(self, signum: int, frame: FrameType | None) -> None:
+        """The signal handler."""
+        if self.closing:
+            return
+        if self.signum is not None:
+            raise KeyboardInterrupt
+        self.signum = signum
+
+    def install(self) -> bool:
+        """Install the handlers (only possible in the main thread); returns whether they were."""
+        if threading.current_thread() is not threading.main_thread():
+            return False
+        for signum in self.SIGNALS:
+            self._previous[signum] = signal.signal(signum, self.handle)
+        return True
+
+    def restore(self) -> None:
+        """Put the previous handlers back (``main`` may run inside another program)."""
+        for signum, previous in self._previous.items():
+            signal.signal(signum, previous)
+        self._previous.clear()
+
+
+def init_ros(name: str, argv: list[str] | None,
+             parse_args: Callable[[list[str]], argparse.Namespace]) -> argparse.Namespace | int:
+    """``rclpy.init`` with the process's arguments; our own options, or the exit status to return now."""
+    args = [name, *(sys.argv[1:] if argv is None else argv)]
+    try:
+        own = remove_ros_args(args=args)[1:]  # rcl parses (and refuses) --ros-args here, params files included
+    except Exception as exc:
+        print(f"{name}: refusing to start: bad ROS arguments: {exc}".replace("\n", " "), file=sys.stderr)
+        return EXIT_CONFIG
+    try:
+        options = parse_args(own)
+    except SystemExit as exc:  # --help, or an unknown option
+        return int(exc.code or 0) if not isinstance(exc.code, str) else EXIT_CONFIG
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except Exception as exc:
+        print(f"{name}: refusing to start: bad ROS arguments: {exc}".replace("\n", " "), file=sys.stderr)
+        return EXIT_CONFIG
+    return options
+
+
+def spin_until_stopped(node: Node, executor: SingleThreadedExecutor, shutdown: ShutdownRequest) -> None:
+    """Spin until a signal or an external shutdown, then say which in one line."""
+    while not shutdown.requested and rclpy.ok():
+        executor.spin_once(timeout_sec=SPIN_TIMEOUT)
+    if shutdown.requested:
+        name = signal.Signals(shutdown.signum).name if shutdown.signum is not None else "signal"
+        node.get_logger().info(f"{name} received: stopping the robot and shutting down")
+    else:
+        node.get_logger().info("ROS shut down from outside: stopping the robot")
+
+
+def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]], argparse.Namespace],
+             build: Callable[[Node, argparse.Namespace], Closable],
+             prepare: Callable[[Node], Callable[[], None]] | None = None) -> int:
+    """Run node ``name`` until SIGINT/SIGTERM or an external shutdown; the process's exit status.
+
+    ``prepare`` runs first on the new node and returns its undo (the executive routes py_trees'
+    logging); ``build`` wires the node and may raise :class:`ConfigError` (or ValueError) to refuse.
+
+    Returns:
+        0 after a clean shutdown (signals included), 2 when the configuration is refused, 1 after an
+        unexpected error (the robot is stopped in every case that still has a ROS context).
+    """
+    options = init_ros(name, argv, parse_args)
+    if isinstance(options, int):
+        return options
+    shutdown = ShutdownRequest()
+    shutdown.install()
+    node: Node | None = None
+    wiring: Closable | None = None
+    executor: SingleThreadedExecutor | None = None
+    undo: Callable[[], None] | None = None
+    code = EXIT_OK
+    try:
+        try:
+            node = Node(name)
+            undo = prepare(node) if prepare is not None else None
+            wiring = build(node, options)
+        except (ConfigError, ValueError) as exc:
+            message = f"refusing to start: {exc}".replace("\n", " ")
+            if node is not None:
+                node.get_logger().fatal(message)
+            else:
+                print(f"{name}: {message}", file=sys.stderr)
+            return EXIT_CONFIG
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        spin_until_stopped(node, executor, shutdown)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        if node is not None:
+            node.get_logger().warning("interrupted: stopping the robot and shutting down")
+    except Exception as exc:
+        code = EXIT_ERROR
+        if node is not None:
+            node.get_logger().fatal(f"unexpected error, shutting down: {exc!r}")
+        else:
+            print(f"{name}: unexpected error: {exc!r}", file=sys.stderr)
+    finally:
+        shutdown.closing = True
+        _tear_down(wiring, executor, node, undo)
+        shutdown.restore()
+    return code
+
+
+def _tear_down(wiring: Closable | None, executor: SingleThreadedExecutor | None, node: Node | None,
+               undo: Callable[[], None] | None) -> None:
+    """Close the wiring (the stop goes out), then the executor, the node and the context; never raises."""
+    if wiring is not None:
+        wiring.close()
+    if executor is not None:
+        with suppress(Exception):
+            executor.shutdown(timeout_sec=0.5)
+    if node is not None:
+        with suppress(Exception):
+            node.destroy_node()
+    if undo is not None:
+        undo()
+    rclpy.try_shutdown()
