@@ -111,6 +111,49 @@ def _wait_verdict(launcher: Launcher, referee: Any) -> tuple[Any, float | None]:
     return None, referee_cpu
 
 
+def _measure_verdict(launcher: Launcher, referee: Any, out: dict[str, Any]) -> tuple[Any, dict[str, dict[str, int]]]:
+    """Wait for the verdict (:func:`_wait_verdict`), measuring each process's CPU over that span into ``out``.
+
+    Returns the child that ended first (None: none in time) and the memory of those still running.
+    """
+    span_start = time.monotonic()
+    cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children if c is not referee}
+    self_start = _self_cpu()
+    ended, referee_cpu = _wait_verdict(launcher, referee)
+    span = time.monotonic() - span_start
+    memory = {c.name: proc_status(c.popen.pid) for c in launcher.children if c.poll() is None}
+    cpu: dict[str, float | None] = {}
+    for c in launcher.children:
+        if c is referee:
+            cpu[c.name] = referee_cpu
+        else:
+            now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
+            cpu[c.name] = None if now is None or before is None else round(now - before, 3)
+    cpu["recorder"] = round(_self_cpu() - self_start, 3)
+    out["cpu_s"] = cpu
+    out["cpu_span_wall_s"] = round(span, 3)
+    return ended, memory
+
+
+def _summarise(out: dict[str, Any], rec: Any, results: dict[str, Any], logs: dict[str, deque[str]]) -> None:
+    """Add the real-time factor over the referee's mission, the executive's tick statistics and the failed
+    checks to ``out`` (and the logs' tails when something went wrong)."""
+    window = _mission_window(rec.t, rec.wall, results)
+    if window is not None:
+        sim_s, wall_s = window
+        out.update({"mission_sim_s": round(sim_s, 3), "mission_wall_s": round(wall_s, 3),
+                    "rtf": round(sim_s / wall_s, 3) if wall_s > 0 else None})
+    else:
+        out.update({"mission_sim_s": None, "mission_wall_s": None, "rtf": None})
+        out.setdefault("error", "no mission window (referee results or ground truth missing)")
+    stats = [m["stats"] for line in logs.get("executive", ()) if (m := _FINAL_STATS.search(line))]
+    out["executive_tick_stats"] = stats[-1] if stats else None
+    checks = results.get("checks") or []
+    out["failed_checks"] = [c.get("name") for c in checks if not c.get("passed")]
+    if "error" in out:
+        out["log_tail"] = {name: list(lines)[-15:] for name, lines in logs.items()}
+
+
 def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: int = 400,
                 profile_to: str | Path | None = None) -> dict[str, Any]:
     """Run one mission; returns its real-time factor, verdict, timings, CPU and memory.
@@ -148,22 +191,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
                 time.sleep(0.02)
             out["startup_wall_s"] = round(time.monotonic() - wall0, 3)
             referee = launcher.start(specs[-1])
-            span_start = time.monotonic()
-            cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children if c is not referee}
-            self_start = _self_cpu()
-            ended, referee_cpu = _wait_verdict(launcher, referee)
-            span = time.monotonic() - span_start
-            memory = {c.name: proc_status(c.popen.pid) for c in launcher.children if c.poll() is None}
-            cpu: dict[str, float | None] = {}
-            for c in launcher.children:
-                if c is referee:
-                    cpu[c.name] = referee_cpu
-                else:
-                    now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
-                    cpu[c.name] = None if now is None or before is None else round(now - before, 3)
-            cpu["recorder"] = round(_self_cpu() - self_start, 3)
-            out["cpu_s"] = cpu
-            out["cpu_span_wall_s"] = round(span, 3)
+            ended, memory = _measure_verdict(launcher, referee, out)
             if ended is referee:
                 referee_code = referee.poll()
             elif ended is not None:
@@ -179,18 +207,5 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
     out["referee_exit"] = referee_code
     out["passed"] = referee_code == 0
     out["memory"] = memory
-    window = _mission_window(rec.t, rec.wall, results)
-    if window is not None:
-        sim_s, wall_s = window
-        out.update({"mission_sim_s": round(sim_s, 3), "mission_wall_s": round(wall_s, 3),
-                    "rtf": round(sim_s / wall_s, 3) if wall_s > 0 else None})
-    else:
-        out.update({"mission_sim_s": None, "mission_wall_s": None, "rtf": None})
-        out.setdefault("error", "no mission window (referee results or ground truth missing)")
-    stats = [m["stats"] for line in logs.get("executive", ()) if (m := _FINAL_STATS.search(line))]
-    out["executive_tick_stats"] = stats[-1] if stats else None
-    checks = results.get("checks") or []
-    out["failed_checks"] = [c.get("name") for c in checks if not c.get("passed")]
-    if "error" in out:
-        out["log_tail"] = {name: list(lines)[-15:] for name, lines in logs.items()}
+    _summarise(out, rec, results, logs)
     return out
