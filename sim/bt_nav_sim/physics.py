@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+from bt_nav.mission.geometry import wrap_angle  # one home for the angle helpers (pure, no ROS)
 from bt_nav_sim.world import World
 
 # Largest centre displacement between two collision checks. 0.02 m is far below the thinnest wall the
@@ -90,11 +91,6 @@ class RobotState:
     v: float = 0.0  # current linear velocity (after accel limits), m/s
     w: float = 0.0  # current angular velocity, rad/s
     colliding: bool = False  # the disk touched an obstacle during the last step
-
-
-def wrap_angle(a: float) -> float:
-    """Wrap to [-pi, pi) so yaw never grows without bound over long runs."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _finite(v: float) -> float:

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import signal
 import sys
 import time
@@ -59,7 +58,9 @@ from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import String
 from std_srvs.srv import SetBool, Trigger
 
-from bt_nav_sim.nodes.simulator import StopSignal, coerce_int_overrides, param_args, split_ros_args
+from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.ros.rosutil import coerce_int_overrides
+from bt_nav_sim.nodes.simulator import StopSignal, param_args, split_ros_args
 from bt_nav_sim.referee_core import Activate, Referee, RefereeConfig, scaled
 
 NODE_NAME = "bt_nav_referee"
@@ -67,11 +68,6 @@ EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
 FINAL_CALL_WAIT = 1.0
-
-
-def _yaw(q: Any) -> float:
-    """Heading of an orientation quaternion (planar robot)."""
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
 _DEFAULTS = RefereeConfig()
@@ -328,7 +324,8 @@ class RefereeNode(Node):
         if self.referee.t0 is not None and t < self.referee.t0:
             return
         pose = msg.pose.pose
-        self.referee.observe(t, pose.position.x, pose.position.y, _yaw(pose.orientation))
+        q = pose.orientation
+        self.referee.observe(t, pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
     def _on_collision(self, msg: Any) -> None:
         if not self.started:

@@ -70,6 +70,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
+from bt_nav.ros.rosutil import coerce_int_overrides
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.pacing import Followers
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
@@ -89,23 +90,6 @@ _CLOCK_REPEAT_S = 0.02
 def _quaternion(yaw: float) -> tuple[float, float, float, float]:
     """(x, y, z, w) of a rotation by ``yaw`` about +z."""
     return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
-
-
-def coerce_int_overrides(node: Any, defaults: dict[str, Any]) -> None:
-    """Let ``-p real_time_factor:=20`` mean 20.0: rclpy refuses an INTEGER override of a DOUBLE parameter.
-
-    rclpy has no public accessor for the overrides, so this edits ``_parameter_overrides`` (absent:
-    nothing to do), before the parameters are declared.
-    """
-    from rclpy.parameter import Parameter
-
-    overrides = getattr(node, "_parameter_overrides", None)
-    if not isinstance(overrides, dict):
-        return
-    for name, default in defaults.items():
-        given = overrides.get(name)
-        if isinstance(default, float) and given is not None and given.type_ == Parameter.Type.INTEGER:
-            overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(given.value))
 
 
 def _sim_config(p: dict[str, Any]) -> SimConfig:
