@@ -63,6 +63,53 @@ def blind_case(run: Run, faults: FaultCases, name: str, msg: Any, checked: str) 
         run.alive()
 
 
+def unusual_layouts(run: Run, faults: FaultCases) -> None:
+    """The legal-but-unusual scans of :func:`test_bad_scans_one_executive` (one executive, armed)."""
+    # Geometry that is legal but unusual.
+    with faults.case("scan: clockwise sweep (negative increment, angle_max < angle_min)", "scan",
+                     "a legal clockwise scan is no fault: free -> full speed; obstacle ahead -> rotates in place"):
+        cw = scan_msg([3.0] * 360, angle_min=math.pi, angle_increment=-2 * math.pi / 360)
+        run.assert_full_speed(run.ticks(2, cw)[-1])
+        ahead = [0.2 if abs(math.remainder(math.pi - i * 2 * math.pi / 360, 2 * math.pi)) < math.radians(30) else 3.0
+                 for i in range(360)]
+        run.assert_rotating(run.ticks(2, scan_msg(ahead, angle_min=math.pi, angle_increment=-2 * math.pi / 360))[-1])
+        run.recover()
+    blind_case(run, faults, "scan: rear only (135..225 deg)",
+               scan_msg([3.0] * 91, angle_min=math.radians(135), angle_increment=math.radians(1)),
+               "91 beams covering the rear only, none in the front sector")
+    with faults.case("scan: 1 beam", "scan", "a single beam straight ahead: at 0.2 m -> rotates in place; at 3 m -> "
+                     "drives (a 1-beam sector counts as known: min(min_valid_beams, beams in the sector))") as case:
+        one_close = scan_msg([0.2], angle_min=0.0, angle_increment=0.01, angle_max=0.0)
+        run.assert_rotating(run.ticks(2, one_close)[-1])
+        one_free = scan_msg([3.0], angle_min=0.0, angle_increment=0.01, angle_max=0.0)
+        sample = run.ticks(2, one_free)[-1]
+        assert sample.linear >= 0.0 and math.isfinite(sample.angular)
+        if sample.linear > 0.0:
+            case.note("finding: drives at full speed on ONE beam (min_valid_beams is waived for a sector with "
+                      "fewer beams, scan.py _reading); design question")
+        run.recover()
+    with faults.case("scan: 100,000 beams", "scan", "100k-beam scans (400 KB) over DDS: free -> full speed, obstacle "
+                     "ahead -> rotates in place; node alive"):
+        n = 100_000
+        big_free = filled(3.0, n)
+        run.assert_full_speed(run.ticks(3, big_free)[-1])
+        ahead = np.full(n, 3.0, dtype=np.float32)
+        angles = np.arange(n) * (2 * math.pi / n)
+        ahead[np.abs(np.remainder(angles + math.pi, 2 * math.pi) - math.pi) <= math.radians(30)] = 0.2
+        run.assert_rotating(run.ticks(3, scan_msg(array.array("f", ahead.tobytes())))[-1])
+        run.recover()
+        run.alive()
+    for label, stamp in (("far in the past (1970)", (0, 0)), ("far in the future (2038)", (2**31 - 1, 999_999_999))):
+        with faults.case(f"scan: header stamp {label}", "scan",
+                         "the executive stamps scans on receipt with its node clock: the header stamp is ignored, "
+                         "a free scan drives at full speed, an obstacle ahead rotates; no complaint"):
+            mark = run.mark()
+            run.assert_full_speed(run.ticks(2, scan_msg([3.0] * 360, stamp=stamp))[-1])
+            run.assert_rotating(run.ticks(2, filled(0.2, stamp=stamp))[-1])
+            run.no_complaints(mark)
+            run.recover()
+
+
 def test_bad_scans_one_executive(executive: Callable[..., Harness], faults: FaultCases) -> None:
     h = executive()
     run = Run(h, EvaluationServer(h))
@@ -108,49 +155,7 @@ def test_bad_scans_one_executive(executive: Callable[..., Harness], faults: Faul
     malformed_case(run, faults, "scan: angle_min +inf", scan_msg([3.0] * 360, angle_min=INF, angle_max=INF),
                    r"angle_min must be finite")
 
-    # Geometry that is legal but unusual.
-    with faults.case("scan: clockwise sweep (negative increment, angle_max < angle_min)", "scan",
-                     "a legal clockwise scan is no fault: free -> full speed; obstacle ahead -> rotates in place"):
-        cw = scan_msg([3.0] * 360, angle_min=math.pi, angle_increment=-2 * math.pi / 360)
-        run.assert_full_speed(run.ticks(2, cw)[-1])
-        ahead = [0.2 if abs(math.remainder(math.pi - i * 2 * math.pi / 360, 2 * math.pi)) < math.radians(30) else 3.0
-                 for i in range(360)]
-        run.assert_rotating(run.ticks(2, scan_msg(ahead, angle_min=math.pi, angle_increment=-2 * math.pi / 360))[-1])
-        run.recover()
-    blind_case(run, faults, "scan: rear only (135..225 deg)",
-               scan_msg([3.0] * 91, angle_min=math.radians(135), angle_increment=math.radians(1)),
-               "91 beams covering the rear only, none in the front sector")
-    with faults.case("scan: 1 beam", "scan", "a single beam straight ahead: at 0.2 m -> rotates in place; at 3 m -> "
-                     "drives (a 1-beam sector counts as known: min(min_valid_beams, beams in the sector))") as case:
-        one_close = scan_msg([0.2], angle_min=0.0, angle_increment=0.01, angle_max=0.0)
-        run.assert_rotating(run.ticks(2, one_close)[-1])
-        one_free = scan_msg([3.0], angle_min=0.0, angle_increment=0.01, angle_max=0.0)
-        sample = run.ticks(2, one_free)[-1]
-        assert sample.linear >= 0.0 and math.isfinite(sample.angular)
-        if sample.linear > 0.0:
-            case.note("finding: drives at full speed on ONE beam (min_valid_beams is waived for a sector with "
-                      "fewer beams, scan.py _reading); design question")
-        run.recover()
-    with faults.case("scan: 100,000 beams", "scan", "100k-beam scans (400 KB) over DDS: free -> full speed, obstacle "
-                     "ahead -> rotates in place; node alive"):
-        n = 100_000
-        big_free = filled(3.0, n)
-        run.assert_full_speed(run.ticks(3, big_free)[-1])
-        ahead = np.full(n, 3.0, dtype=np.float32)
-        angles = np.arange(n) * (2 * math.pi / n)
-        ahead[np.abs(np.remainder(angles + math.pi, 2 * math.pi) - math.pi) <= math.radians(30)] = 0.2
-        run.assert_rotating(run.ticks(3, scan_msg(array.array("f", ahead.tobytes())))[-1])
-        run.recover()
-        run.alive()
-    for label, stamp in (("far in the past (1970)", (0, 0)), ("far in the future (2038)", (2**31 - 1, 999_999_999))):
-        with faults.case(f"scan: header stamp {label}", "scan",
-                         "the executive stamps scans on receipt with its node clock: the header stamp is ignored, "
-                         "a free scan drives at full speed, an obstacle ahead rotates; no complaint"):
-            mark = run.mark()
-            run.assert_full_speed(run.ticks(2, scan_msg([3.0] * 360, stamp=stamp))[-1])
-            run.assert_rotating(run.ticks(2, filled(0.2, stamp=stamp))[-1])
-            run.no_complaints(mark)
-            run.recover()
+    unusual_layouts(run, faults)
 
     with faults.case(f"scan group: deadline after {len(faults.records)} scan cases", "mission",
                      "stop at the deadline, exactly one evaluation call, one 'deadline reached' line, node alive"):

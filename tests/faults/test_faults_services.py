@@ -123,6 +123,60 @@ def call_many(h: Harness, client: Any, requests: list[bool], window: int, timeou
     return [f.result() for f in futures]
 
 
+def arm_bursts(h: Harness, run: Run, faults: FaultCases) -> None:
+    """The burst cases of :func:`test_arm_service_abuse`: many arm/disarm calls, paced and all at once."""
+    bursts = 5 if LONG else 1
+    with faults.case(f"arm/disarm burst ({bursts} x 1,000 calls)", "services",
+                     "1,000 alternating disarm/arm calls, 8 in flight, a tick every 50: every call answered "
+                     "with success, one log line per call that changed something, every tick a stop or full "
+                     "speed, the mission timer never restarted; stopped after a final disarm, drives after arm"):
+        mark = run.mark()
+        changed = 0
+        for _ in range(bursts):
+            for chunk in range(20):
+                responses = call_many(h, h.arm_client, [i % 2 == 1 for i in range(50)], window=8)
+                assert all(r.success for r in responses), [r.message for r in responses if not r.success]
+                assert not any("timer started" in r.message for r in responses)
+                changed += sum(1 for r in responses if r.message != "already armed")
+                sample = run.tick(FREE)
+                assert sample.is_zero or (sample.linear > 0.0 and sample.angular == 0.0), (chunk, sample)
+        run.barrier()
+        logged = len(run.since(mark, r"ArmService: "))
+        assert logged == changed, f"{changed} calls changed something, {logged} ArmService lines"
+        assert h.arm(False).success
+        assert run.tick(FREE).is_zero
+        assert h.arm(True).success
+        run.assert_full_speed(run.tick(FREE))
+        run.alive()
+    with faults.case("arm burst: 200 calls in flight at once", "services",
+                     "200 requests (arm/disarm alternating, the LAST a disarm) sent without waiting, from a "
+                     "KEEP_ALL client: every request answered; the last request wins (robot stopped on the next "
+                     "tick); node alive") as case:
+        all_qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=1, reliability=ReliabilityPolicy.RELIABLE)
+        eager = h.node.create_client(SetBool, "/arm", qos_profile=all_qos)
+        h.wait(eager.service_is_ready, "the KEEP_ALL client to see the arm service")
+        futures = [eager.call_async(SetBool.Request(data=i % 2 == 1)) for i in range(199)]
+        futures.append(eager.call_async(SetBool.Request(data=False)))
+        answered, steady_since = -1, time.monotonic()
+        while time.monotonic() - steady_since < 1.0:  # until no answer came for 1 s
+            h.spin()
+            done = sum(1 for f in futures if f.done())
+            if done != answered:
+                answered, steady_since = done, time.monotonic()
+        stopped = run.tick(FREE)
+        run.alive()
+        for future in futures:
+            if not future.done():
+                eager.remove_pending_request(future)
+        h.node.destroy_client(eager)
+        assert h.arm(True).success
+        run.assert_full_speed(run.tick(FREE))
+        case.bug_check(answered == len(futures),
+                       f"{answered} of {len(futures)} answered; the last (a disarm) "
+                       f"{'took effect' if stopped.is_zero else 'was LOST: the robot kept driving'}")
+        assert stopped.is_zero, "every request answered, yet the final disarm did not stop the robot"
+
+
 def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Callable[..., Harness],
                            faults: FaultCases) -> None:
     h = executive("-p", "maneuver:=C", "-p", "random_seed:=7")
@@ -159,56 +213,7 @@ def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Call
             run.tick_until(lambda: h.samples[-1].linear > 0.0, "the maneuver to complete", stopped=False)
             run.no_complaints(mark)
             assert not run.since(mark, r"ArmService")
-        bursts = 5 if LONG else 1
-        with faults.case(f"arm/disarm burst ({bursts} x 1,000 calls)", "services",
-                         "1,000 alternating disarm/arm calls, 8 in flight, a tick every 50: every call answered "
-                         "with success, one log line per call that changed something, every tick a stop or full "
-                         "speed, the mission timer never restarted; stopped after a final disarm, drives after arm"):
-            mark = run.mark()
-            changed = 0
-            for _ in range(bursts):
-                for chunk in range(20):
-                    responses = call_many(h, h.arm_client, [i % 2 == 1 for i in range(50)], window=8)
-                    assert all(r.success for r in responses), [r.message for r in responses if not r.success]
-                    assert not any("timer started" in r.message for r in responses)
-                    changed += sum(1 for r in responses if r.message != "already armed")
-                    sample = run.tick(FREE)
-                    assert sample.is_zero or (sample.linear > 0.0 and sample.angular == 0.0), (chunk, sample)
-            run.barrier()
-            logged = len(run.since(mark, r"ArmService: "))
-            assert logged == changed, f"{changed} calls changed something, {logged} ArmService lines"
-            assert h.arm(False).success
-            assert run.tick(FREE).is_zero
-            assert h.arm(True).success
-            run.assert_full_speed(run.tick(FREE))
-            run.alive()
-        with faults.case("arm burst: 200 calls in flight at once", "services",
-                         "200 requests (arm/disarm alternating, the LAST a disarm) sent without waiting, from a "
-                         "KEEP_ALL client: every request answered; the last request wins (robot stopped on the next "
-                         "tick); node alive") as case:
-            all_qos = QoSProfile(history=HistoryPolicy.KEEP_ALL, depth=1, reliability=ReliabilityPolicy.RELIABLE)
-            eager = h.node.create_client(SetBool, "/arm", qos_profile=all_qos)
-            h.wait(eager.service_is_ready, "the KEEP_ALL client to see the arm service")
-            futures = [eager.call_async(SetBool.Request(data=i % 2 == 1)) for i in range(199)]
-            futures.append(eager.call_async(SetBool.Request(data=False)))
-            answered, steady_since = -1, time.monotonic()
-            while time.monotonic() - steady_since < 1.0:  # until no answer came for 1 s
-                h.spin()
-                done = sum(1 for f in futures if f.done())
-                if done != answered:
-                    answered, steady_since = done, time.monotonic()
-            stopped = run.tick(FREE)
-            run.alive()
-            for future in futures:
-                if not future.done():
-                    eager.remove_pending_request(future)
-            h.node.destroy_client(eager)
-            assert h.arm(True).success
-            run.assert_full_speed(run.tick(FREE))
-            case.bug_check(answered == len(futures),
-                           f"{answered} of {len(futures)} answered; the last (a disarm) "
-                           f"{'took effect' if stopped.is_zero else 'was LOST: the robot kept driving'}")
-            assert stopped.is_zero, "every request answered, yet the final disarm did not stop the robot"
+        arm_bursts(h, run, faults)
         with faults.case("arm group: deadline after the burst", "mission",
                          "the deadline is 49.5 s after the FIRST arming (the burst never restarted the timer): stop, "
                          "exactly one evaluation call, one 'deadline reached' line"):

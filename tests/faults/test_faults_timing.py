@@ -25,30 +25,8 @@ SCAN_TIMEOUT = 0.5
 ALLOWANCE_C = 90.0 / math.degrees(1.8) + 1.0 + 2.0  # |rotation| / rate + 1 s + maneuver_time_margin
 
 
-def test_sensor_stream_faults(executive: Callable[..., Harness], faults: FaultCases) -> None:
-    h = executive("-p", "maneuver:=C", "-p", f"scan_timeout:={SCAN_TIMEOUT}", "-p", "odom_timeout:=0.5")
-    run = Run(h, EvaluationServer(h))
-    run.odom = "live"
-    run.arm()
-    run.assert_full_speed(run.tick(FREE))
-
-    with faults.case("scans stop", "timing", f"moving until the last scan is {SCAN_TIMEOUT} s old, stopped within "
-                     "scan_timeout + one tick (+ one tick of scan/clock race), stays stopped; one 'stale scan' line"):
-        run.ticks(3, FREE)
-        last_scan = h.sim_time  # the last scan arrived at this tick's time or the previous one's
-        mark = run.mark()
-        samples = run.ticks(16)
-        first_stop = next(i for i, s in enumerate(samples) if s.is_zero)
-        assert all(s.linear > 0.0 for s in samples[:first_stop]), samples[:first_stop]
-        assert all(s.is_zero for s in samples[first_stop:]), samples[first_stop:]
-        age = samples[first_stop].sim_time - last_scan
-        assert age <= SCAN_TIMEOUT + 2 * PERIOD + 1e-6, f"stopped only {age:.2f} s after the last scan"
-        run.expect_one(rf"ProcessScan: stale scan: none newer than {SCAN_TIMEOUT:.2f} s — stopping", mark)
-    with faults.case("scans resume", "timing", "the first fresh scan drives again; one 'usable again' line"):
-        mark = run.mark()
-        run.recover()
-        run.expect_one(r"ProcessScan: ok — scan usable again", mark)
-
+def odometry_faults(h: Harness, run: Run, faults: FaultCases) -> None:
+    """The odometry cases of :func:`test_sensor_stream_faults` (one executive, maneuver C, armed)."""
     with faults.case("odometry stops mid-maneuver", "timing",
                      "maneuver C starts on live odometry, odometry stops after 3 ticks: the turn finishes open loop "
                      "(dead reckoning) within its allowance, linear exactly 0 throughout; one 'starting' and one "
@@ -103,6 +81,33 @@ def test_sensor_stream_faults(executive: Callable[..., Harness], faults: FaultCa
             h.odom_pub.publish(msg)
             run.assert_full_speed(run.tick(FREE))
         run.expect_one(r"dropping odometry with an invalid orientation", mark)
+
+
+def test_sensor_stream_faults(executive: Callable[..., Harness], faults: FaultCases) -> None:
+    h = executive("-p", "maneuver:=C", "-p", f"scan_timeout:={SCAN_TIMEOUT}", "-p", "odom_timeout:=0.5")
+    run = Run(h, EvaluationServer(h))
+    run.odom = "live"
+    run.arm()
+    run.assert_full_speed(run.tick(FREE))
+
+    with faults.case("scans stop", "timing", f"moving until the last scan is {SCAN_TIMEOUT} s old, stopped within "
+                     "scan_timeout + one tick (+ one tick of scan/clock race), stays stopped; one 'stale scan' line"):
+        run.ticks(3, FREE)
+        last_scan = h.sim_time  # the last scan arrived at this tick's time or the previous one's
+        mark = run.mark()
+        samples = run.ticks(16)
+        first_stop = next(i for i, s in enumerate(samples) if s.is_zero)
+        assert all(s.linear > 0.0 for s in samples[:first_stop]), samples[:first_stop]
+        assert all(s.is_zero for s in samples[first_stop:]), samples[first_stop:]
+        age = samples[first_stop].sim_time - last_scan
+        assert age <= SCAN_TIMEOUT + 2 * PERIOD + 1e-6, f"stopped only {age:.2f} s after the last scan"
+        run.expect_one(rf"ProcessScan: stale scan: none newer than {SCAN_TIMEOUT:.2f} s — stopping", mark)
+    with faults.case("scans resume", "timing", "the first fresh scan drives again; one 'usable again' line"):
+        mark = run.mark()
+        run.recover()
+        run.expect_one(r"ProcessScan: ok — scan usable again", mark)
+
+    odometry_faults(h, run, faults)
 
     with faults.case("sensor group: deadline", "mission",
                      "stop at the deadline, exactly one evaluation call, one 'deadline reached' line, node alive"):
