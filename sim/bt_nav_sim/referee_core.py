@@ -37,6 +37,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
+from bt_nav.mission.geometry import wrap_angle  # the +-pi seam is not a 2 pi jump
+
 
 @dataclass(frozen=True)
 class RefereeConfig:
@@ -87,11 +89,6 @@ CHECKS = (
     "evaluation service called",
     "no collision",
 )
-
-
-def _wrap(angle: float) -> float:
-    """Angle difference wrapped to [-pi, pi), so the +-pi seam is not a 2 pi jump."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class Referee:
@@ -246,7 +243,7 @@ class Referee:
                 continue
             pairs += 1
             peak_v = max(peak_v, math.hypot(self._x[i] - self._x[i - 1], self._y[i] - self._y[i - 1]) / dt)
-            peak_w = max(peak_w, abs(_wrap(self._yaw[i] - self._yaw[i - 1])) / dt)
+            peak_w = max(peak_w, abs(wrap_angle(self._yaw[i] - self._yaw[i - 1])) / dt)
         return peak_v, peak_w, pairs
 
     def _static_check(self, name: str, start: float | None, end: float | None, missing: str) -> dict[str, Any]:
