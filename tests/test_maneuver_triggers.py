@@ -14,9 +14,11 @@ CASES = [  # maneuver, its leaf, a scan that meets its condition, one that clear
 
 
 def armed(maneuver: str, **overrides: float) -> TickHarness:
+    """Armed, with one tick of a clear scan: the triggers have seen their conditions clear."""
     h = TickHarness(maneuver, {"side_center_deg": 60.0, "side_half_angle_deg": 30.0, **overrides})
     h.tick()
     assert h.arm()[0]
+    h.tick()
     return h
 
 
@@ -51,21 +53,26 @@ def test_a_fresh_condition_fires_again(maneuver, leaf, condition, clear) -> None
     finish(h, leaf)
 
 
-def test_driving_far_enough_rearms_a_lasting_squeeze() -> None:
+def test_rearming_needs_clearing_away_from_where_it_fired() -> None:
     h = armed("B", trigger_rearm_distance=1.0)
     squeezed = [(60.0, 0.4), (-60.0, 0.4), (0.0, 5.0)]  # a long corridor: both walls near, nothing ahead
+    opening = [(60.0, 0.4), (-60.0, 2.0), (0.0, 5.0)]  # a side opening
+    h.see(*opening)
+    h.tick()
     h.see(*squeezed)
     finish(h, "Retreat")
     x0, y0 = h.x, h.y
-    starts = 0
-    for _ in range(400):
-        r = h.tick()
-        if r.tip == "Retreat" and h.records[-2].tip != "Retreat":
-            starts += 1
-            driven = ((h.x - x0) ** 2 + (h.y - y0) ** 2) ** 0.5
-            assert driven >= 1.0 - 0.02, f"re-fired after only {driven:.2f} m"
-            break
-    assert starts == 1, "a lasting squeeze must re-arm after the documented distance"
+    h.see(*opening)  # cleared on the spot: no re-arm
+    h.tick()
+    h.see(*squeezed)
+    for _ in range(200):  # 10 s down a corridor that never clears: it stays quiet
+        assert h.tick().tip != "Retreat", "re-fired while the squeeze merely lasted"
+    driven = ((h.x - x0) ** 2 + (h.y - y0) ** 2) ** 0.5
+    assert driven > 1.0
+    h.see(*opening)  # an opening, far from the last firing: re-armed
+    h.tick()
+    h.see(*squeezed)
+    assert h.tick().tip == "Retreat"
 
 
 def test_a_maneuver_never_restarts_while_it_runs() -> None:
@@ -84,12 +91,16 @@ def test_a_maneuver_never_restarts_while_it_runs() -> None:
     assert first.tip == "Randomizer"
 
 
-def test_rearming_the_robot_rearms_the_trigger() -> None:
-    h = armed("C", trigger_rearm_distance=0.0)
+def test_a_new_arming_starts_afresh() -> None:
+    h = armed("C", trigger_rearm_distance=5.0)
     h.see((0.0, 0.25), (30.0, 1.0))
     finish(h, "SmartPivot")
     assert h.tick().tip != "SmartPivot"
     h.arm(False)
     h.tick(3)
     h.arm(True)
-    assert h.tick().tip == "SmartPivot", "a new arming is a fresh start: a holding condition fires"
+    assert h.tick().tip != "SmartPivot", "a condition holding at the arming is not a rising edge"
+    h.see()
+    h.tick()  # seen clear once after the new arming: armed again, however near the last firing
+    h.see((0.0, 0.25), (30.0, 1.0))
+    assert h.tick().tip == "SmartPivot"

@@ -73,3 +73,26 @@ def test_free_path_never_overshoots_a_point_in_the_corridor(x: float, y: float) 
         gap = np.hypot(along * cx - x, along * cy - y).min() - 0.03
         # a thin post is sampled by beams 1 deg apart: the miss can be up to one beam spacing at its range
         assert gap >= HALF - 0.01 - math.hypot(x, y) * math.radians(1.0)
+
+
+def test_steer_centres_the_robot_in_a_corridor() -> None:
+    corridor = {"segments": [[-1.0, 0.4, 4.0, 0.4], [-1.0, -0.4, 4.0, -0.4]]}
+    centred = free_paths(scan_of(corridor), HALF, horizon=1.5)
+    assert centred.steer(1.2) == pytest.approx(0.0, abs=math.radians(2.5))
+    off_centre = free_paths(scan_of(corridor, y=0.1), HALF, horizon=1.5)  # nearer the left wall
+    target = off_centre.steer(1.2)
+    assert target is not None and target < 0.0, "steer back towards the middle"
+
+
+def test_steer_turns_no_more_than_needed_past_an_obstacle() -> None:
+    post = free_paths(scan_of({"circles": [{"x": 1.0, "y": 0.05, "r": 0.1}]}), HALF, horizon=1.5)
+    target = post.steer(1.2)
+    assert target is not None and 0.0 < abs(target) <= math.radians(45)
+    assert post.steer(1.2, side=-1) < 0.0 < post.steer(1.2, side=1)
+
+
+def test_steer_is_none_when_no_heading_is_clear() -> None:
+    box = {"segments": [[0.8, -2.0, 0.8, 2.0], [-2.0, 1.0, 0.8, 1.0], [-2.0, -0.6, 0.8, -0.6]]}
+    paths = free_paths(scan_of(box), HALF, horizon=1.5)
+    assert paths.steer(1.2) is None
+    assert paths.side_room(1) > paths.side_room(-1)  # what the leaves fall back on: the side with more room

@@ -125,13 +125,16 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("trigger_hysteresis", 0.1, "A maneuver's trigger re-arms once its reading has risen above the "
               "trigger distance plus this (it fires on the condition's rising edge, see the README).", "m",
               0.0, 5.0),
-    ParamSpec("trigger_rearm_distance", 3.0, "A maneuver's trigger also re-arms after the robot has driven this "
-              "far since it fired, even if the condition never cleared (0: only on clearing).", "m", 0.0, 100.0),
+    ParamSpec("trigger_rearm_distance", 1.5, "A maneuver's trigger re-arms only once the robot is this far "
+              "(straight line) from where it last fired, besides its condition having cleared.", "m", 0.0, 100.0),
     ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
               "m", 0.05, 10.0),
     ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): keep driving and "
               "turn away (the homework profile widens it to 1.2 m so turns start early and gently).", "m",
               0.05, 10.0),
+    ParamSpec("path_half_width", 0.18, "Half the width of the corridor the robot sweeps when it drives: the "
+              "close / far / none decision and the steering look for obstacles inside it along each heading "
+              "(robot radius plus a margin; Burger: 0.105 m circumradius).", "m", 0.05, 1.0),
     ParamSpec("front_half_angle_deg", 30.0, "Half-width of the front sector (homework profile: 20 deg, so "
               "walls beside the path in narrow passages do not read as ahead).", "deg", 1.0, 180.0),
     ParamSpec("side_center_deg", 15.0, "Centre of the left sector (the right one mirrors it); the default "

@@ -25,6 +25,10 @@ from bt_nav.mission.scan import Scan, beam_angles, clean_ranges
 
 #: Candidate headings, robot frame: -90 .. +90 deg every 5 deg (0 is straight ahead, index 18).
 HEADINGS = np.radians(np.arange(-90.0, 90.0 + 1e-9, 5.0))
+#: m of free path a heading must gain per radian of turn to be preferred (turning costs time or speed).
+TURN_COST = 0.25
+#: Neighbouring headings on each side (5 deg apart) whose free path a heading is judged by: 1 = +-5 deg.
+EDGE_HEADINGS = 1
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -37,7 +41,11 @@ class FreePaths:
     @property
     def ahead(self) -> float:
         """Free travel straight ahead."""
-        return float(np.interp(0.0, self.headings, self.free))
+        return self.along(0.0)
+
+    def along(self, heading: float) -> float:
+        """Free travel along ``heading`` (rad; interpolated between the candidate headings)."""
+        return float(np.interp(heading, self.headings, self.free))
 
     def heading_to(self, need: float, side: int = 0) -> float:
         """The smallest turn (rad) onto a heading with at least ``need`` of free path.
@@ -54,6 +62,34 @@ class FreePaths:
                 return float(self.headings[i])
         best = max(candidates, key=lambda i: (self.free[i], -abs(self.headings[i])))
         return float(self.headings[best])
+
+    def steer(self, need: float, side: int = 0, turn_cost: float = TURN_COST,
+              edge: int = EDGE_HEADINGS) -> float | None:
+        """The heading to steer for (rad): clear for ``need`` metres, little turning, not grazing anything.
+
+        A heading is judged by the least free path within ``edge`` neighbouring headings on either side
+        (so one that grazes an obstacle is judged by the obstacle, and in a corridor the middle is best).
+        Of the headings judged clear for ``need``, the one with the most free path less ``turn_cost``
+        metres per radian of turn wins; ties go to the smaller turn, then left. ``side`` +1 / -1 keeps
+        to left / right turns (straight ahead included). None when no heading is clear for ``need``.
+        """
+        h = self.headings
+        padded = np.pad(self.free, edge, mode="edge")  # the grid's own ends are not obstacles
+        safe = np.lib.stride_tricks.sliding_window_view(padded, 2 * edge + 1).min(axis=1)
+        usable = safe >= need
+        if side:
+            usable &= side * h >= 0.0
+        if not usable.any():
+            return None
+        score = np.where(usable, safe - turn_cost * np.abs(h) - 1e-9 * np.abs(h) + 1e-12 * h, -np.inf)
+        return float(h[int(np.argmax(score))])
+
+    def roomiest(self, side: int) -> float:
+        """The heading with the most free path on one side (+1 left, -1 right; straight ahead included);
+        of equal ones the widest turn, since nothing ahead is better than turning away."""
+        h = self.headings
+        score = np.where(side * h >= 0.0, self.free + 1e-9 * np.abs(h), -np.inf)
+        return float(h[int(np.argmax(score))])
 
     def side_room(self, side: int) -> float:
         """The most free path among the headings on one side (+1 left, -1 right, 0 excluded)."""

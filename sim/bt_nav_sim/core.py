@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster
-from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState, step, wrap_angle
+from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState, step, target_twist, wrap_angle
 from bt_nav_sim.world import World, load_world
 
 
@@ -186,18 +186,18 @@ class SimCore:
     def advance(self, cmd_v: float, cmd_w: float, steps: int = 1) -> StepOutput:
         """``steps`` physics steps under (cmd_v, cmd_w), then whatever became due (see :meth:`outputs`).
 
-        Several steps under one command are integrated in one go: the physics is exact for a constant
-        command (closed-form arcs and ramps; contacts are found to 1e-7 m), so a caller that knows nothing
-        falls due in between (lock-step) gets the same trajectory as stepping one at a time, to within
-        1e-4 m (tests/test_sim_core.py). A robot at rest under a zero command cannot move, so the physics
-        is skipped then (before arming and after the deadline).
+        Several steps under one command are integrated in one go once the twist has settled at the
+        command: the physics is exact for a constant twist (closed-form arcs; contacts are found to
+        1e-7 m), so a caller that knows nothing falls due in between (lock-step) gets the same trajectory
+        as stepping one at a time (tests/test_lockstep.py). A robot at rest under a zero command cannot
+        move, so the physics is skipped then (before arming and after the deadline).
         """
         steps = max(1, int(steps))
         before = self.state
         resting = before.v == 0.0 and before.w == 0.0 and cmd_v == 0.0 and cmd_w == 0.0
         collided = self._was_colliding
         if not resting:
-            self.state, collided = step(before, cmd_v, cmd_w, steps * self.step_ns * 1e-9, self.world, self.params)
+            collided = self._integrate(cmd_v, cmd_w, steps)
         self.t_ns += steps * self.step_ns
         self.steps += steps
         out = self.outputs()
@@ -209,6 +209,20 @@ class SimCore:
             self.collisions += 1
         self._was_colliding = collided
         return out
+
+    def _integrate(self, cmd_v: float, cmd_w: float, steps: int) -> bool:
+        """Physics over ``steps`` steps: one at a time while the twist ramps towards the command (a ramp
+        inside a merged step would be followed along one mean arc), the rest in one exact arc."""
+        target = target_twist(cmd_v, cmd_w, self.params)
+        dt = self.step_ns * 1e-9
+        collided = False
+        while steps > 0:
+            settled = (self.state.v, self.state.w) == target
+            n = steps if settled else 1
+            self.state, hit = step(self.state, cmd_v, cmd_w, n * dt, self.world, self.params)
+            collided = collided or hit
+            steps -= n
+        return collided
 
     def steps_until(self, t_ns: int) -> int:
         """Physics steps from now until ``t_ns`` or until the next scan or odometry sample, whichever is

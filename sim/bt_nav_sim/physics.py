@@ -123,6 +123,12 @@ def _arc(x: float, y: float, yaw: float, v: float, w: float, t: float) -> tuple[
     return x + chord * math.cos(heading), y + chord * math.sin(heading), yaw + dth
 
 
+def target_twist(cmd_v: float, cmd_w: float, params: RobotParams) -> tuple[float, float]:
+    """The twist the base settles at under a command: sanitised, clamped, wheel-limited."""
+    return wheel_limited(_clamp(_finite(cmd_v), params.max_linear), _clamp(_finite(cmd_w), params.max_angular),
+                         params)
+
+
 def _velocity_pieces(
     v0: float, w0: float, v1: float, w1: float, dt: float, params: RobotParams
 ) -> list[tuple[float, float, float]]:
@@ -173,8 +179,7 @@ def step(
         touching = world.clearance(state.x, state.y) <= radius + _TOUCH_TOL
         return replace(state, colliding=touching), touching
 
-    v_target, w_target = wheel_limited(_clamp(_finite(cmd_v), params.max_linear),
-                                       _clamp(_finite(cmd_w), params.max_angular), params)
+    v_target, w_target = target_twist(cmd_v, cmd_w, params)
     v0, w0 = _finite(state.v), _finite(state.w)
     dv_max = params.max_linear_accel * dt
     dw_max = params.max_angular_accel * dt

@@ -24,40 +24,55 @@ def sectors(front: float = math.inf, left: float = math.inf, right: float = math
 
 
 # ----------------------------------------------------------------------------------- the latch
-def test_latch_fires_once_on_a_rising_edge() -> None:
+def armed_latch() -> EdgeLatch:
+    """A latch after a new arming that has seen its condition clear once."""
     latch = EdgeLatch()
-    assert latch.step(holds=True, cleared=False, rearm_distance=0.0)
-    assert not any(latch.step(True, False, 0.0) for _ in range(100)), "a lasting condition re-fired"
-
-
-def test_latch_rearms_only_past_the_hysteresis() -> None:
-    latch = EdgeLatch()
-    latch.step(True, False, 0.0)
-    assert not latch.step(False, False, 0.0)  # released but inside the band: no re-arm
-    assert not latch.step(True, False, 0.0)
-    latch.step(False, True, 0.0)  # cleared beyond the band
-    assert latch.step(True, False, 0.0), "a fresh condition after clearing must fire"
-
-
-def test_latch_rearms_after_driving_far_enough() -> None:
-    latch = EdgeLatch()
-    latch.odometry(0.0, 0.0)
-    latch.step(True, False, 1.0)
-    for x in (0.3, 0.6, 0.9):
-        latch.odometry(x, 0.0)
-        assert not latch.step(True, False, 1.0)
-    latch.odometry(float("nan"), 0.0)  # an unknown position adds nothing
-    latch.odometry(1.05, 0.0)
-    assert latch.travelled == pytest.approx(1.05)
-    assert latch.step(True, False, 1.0)
-    assert latch.travelled == 0.0
-
-
-def test_latch_reset_makes_a_holding_condition_a_rising_edge() -> None:
-    latch = EdgeLatch()
-    latch.step(True, False, 0.0)
     latch.reset()
-    assert latch.step(True, False, 0.0)
+    latch.odometry(0.0, 0.0)
+    assert not latch.step(holds=False, cleared=True, rearm_distance=1.0)
+    assert latch.armed
+    return latch
+
+
+def test_a_condition_holding_at_arming_is_not_an_edge() -> None:
+    latch = EdgeLatch()
+    latch.reset()
+    assert not any(latch.step(holds=True, cleared=False, rearm_distance=1.0) for _ in range(10))
+    latch.step(holds=False, cleared=True, rearm_distance=1.0)  # seen clear once: armed, wherever it is
+    assert latch.step(holds=True, cleared=False, rearm_distance=1.0)
+
+
+def test_latch_fires_once_on_a_rising_edge() -> None:
+    latch = armed_latch()
+    assert latch.step(holds=True, cleared=False, rearm_distance=1.0)
+    assert not any(latch.step(True, False, 1.0) for _ in range(100)), "a lasting condition re-fired"
+
+
+def test_latch_rearms_only_when_cleared_away_from_where_it_fired() -> None:
+    latch = armed_latch()
+    latch.step(True, False, 1.0)
+    assert latch.fired_at == (0.0, 0.0)
+    latch.step(False, True, 1.0)  # cleared, but on the spot (a rotation sweeps the sectors)
+    assert not latch.step(True, False, 1.0)
+    latch.odometry(0.6, 0.8)  # 1.0 m away ...
+    assert not latch.step(True, False, 1.0)  # ... but the condition has not cleared there
+    latch.odometry(float("nan"), 5.0)  # an unknown position changes nothing
+    assert latch.away == pytest.approx(1.0)
+    latch.step(False, False, 1.0)  # released inside the hysteresis band: not cleared
+    assert not latch.step(True, False, 1.0)
+    latch.step(False, True, 1.0)
+    assert latch.step(True, False, 1.0), "cleared 1 m away: a fresh condition must fire"
+    assert latch.fired_at == (0.6, 0.8)
+
+
+def test_without_positions_clearing_alone_rearms() -> None:
+    latch = EdgeLatch()
+    latch.reset()
+    latch.step(False, True, 1.0)
+    assert latch.step(True, False, 1.0) and latch.fired_at is None
+    assert latch.away == float("inf")
+    latch.step(False, True, 1.0)
+    assert latch.step(True, False, 1.0)
 
 
 # ----------------------------------------------------------------------------------- the leaves
@@ -72,7 +87,7 @@ class Board:
         self.set(sectors(), OdomSample(0.0, 0.0, 0.0, 0.0), 1)
         self.client.set("distance", 0.5)
         self.client.set("hysteresis", 0.1)
-        self.client.set("rearm_distance", 2.0)
+        self.client.set("rearm_distance", 2.0)  # the leaves re-arm 2 m from where they fired
 
     def set(self, s: Sectors, odom: OdomSample | None = None, arm_count: int | None = None) -> None:
         self.client.set("sectors", s)
@@ -99,11 +114,14 @@ def tick(leaf: py_trees.behaviour.Behaviour) -> Status:
 def test_front_trigger_statuses() -> None:
     board = Board()
     leaf = make(FrontTrigger)
-    assert tick(leaf) == Status.FAILURE
+    board.set(sectors(front=0.4))
+    assert tick(leaf) == Status.FAILURE  # holding at the (new) arming: not an edge
+    board.set(sectors(front=2.0))
+    assert tick(leaf) == Status.FAILURE and leaf.feedback_message == "armed"
     board.set(sectors(front=0.4))
     assert tick(leaf) == Status.SUCCESS and leaf.feedback_message == "fired"
     assert tick(leaf) == Status.FAILURE and "re-arm" in leaf.feedback_message
-    board.set(sectors(front=0.55))  # above 0.5 but inside the 0.1 m hysteresis band
+    board.set(sectors(front=0.55), OdomSample(0.0, 1.0, 3.0, 0.0))  # far away, inside the hysteresis band
     tick(leaf)
     board.set(sectors(front=0.4))
     assert tick(leaf) == Status.FAILURE
@@ -116,34 +134,39 @@ def test_front_trigger_statuses() -> None:
 def test_unknown_front_holds_but_never_clears() -> None:
     board = Board()
     leaf = make(FrontTrigger)
+    tick(leaf)  # clear: armed
     board.set(sectors(front=math.nan))
     assert tick(leaf) == Status.SUCCESS
+    board.set(sectors(front=math.nan), OdomSample(0.0, 1.0, 5.0, 0.0))
     assert tick(leaf) == Status.FAILURE  # still unknown: not a new edge, and unknown is not "cleared"
 
 
 def test_squeeze_trigger_needs_both_sides_and_rearms_on_one_side_clearing() -> None:
     board = Board()
     leaf = make(SqueezeTrigger)
+    tick(leaf)
     board.set(sectors(left=0.4, right=0.9))
     assert tick(leaf) == Status.FAILURE
     board.set(sectors(left=0.4, right=0.4))
     assert tick(leaf) == Status.SUCCESS
     assert tick(leaf) == Status.FAILURE
-    board.set(sectors(left=0.4, right=0.7))  # one side open beyond the band: no longer squeezed
+    board.set(sectors(left=0.4, right=0.7), OdomSample(0.0, 1.0, 2.5, 0.0))  # one side open, 2.5 m on
     tick(leaf)
     board.set(sectors(left=0.4, right=0.4))
     assert tick(leaf) == Status.SUCCESS
 
 
-def test_motion_and_a_new_arming_rearm_the_leaf() -> None:
+def test_a_new_arming_starts_afresh() -> None:
     board = Board()
     leaf = make(SqueezeTrigger)
+    tick(leaf)
     board.set(sectors(left=0.4, right=0.4))
     assert tick(leaf) == Status.SUCCESS
-    for i in range(1, 5):  # 0.5 m per odometry sample, condition held throughout
-        board.set(sectors(left=0.4, right=0.4), OdomSample(0.0, float(i), 0.5 * i, 0.0))
-        status = tick(leaf)
-    assert status == Status.SUCCESS, "2 m driven: the trigger must have re-armed and fired"
+    board.set(sectors(left=0.4, right=0.7))  # cleared, but on the spot: not re-armed
+    tick(leaf)
+    board.set(sectors(left=0.4, right=0.4))
     assert tick(leaf) == Status.FAILURE
-    board.set(sectors(left=0.4, right=0.4), arm_count=2)  # disarmed and armed again
+    board.set(sectors(left=0.4, right=0.7), arm_count=2)  # disarmed and armed again: clearing suffices
+    tick(leaf)
+    board.set(sectors(left=0.4, right=0.4))
     assert tick(leaf) == Status.SUCCESS

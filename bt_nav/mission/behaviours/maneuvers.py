@@ -55,7 +55,10 @@ class RotationManeuver(Leaf, register=False):
     }
     OUTPUT_PORTS = {**CMD_PORT, **ACTIVE_PORT}
 
-    GAIN = 3.0  # 1/s: proportional slow-down over the last ~35 deg, so the sim's inertia does not overshoot
+    # 1/s: proportional slow-down over the last ~25 deg at 2.84 rad/s. At 10 rad/s^2 of angular deceleration
+    # the base needs 0.28 s to stop from 2.84 rad/s; 6 lets it ease into the tolerance in ~0.4 s without
+    # overshooting it (3 took ~0.8 s: a 180 deg spin cost 2.2 s instead of 1.5 s).
+    GAIN = 6.0
     MIN_RATE = 0.3  # rad/s: below this a real base stalls; also bounds the approach time
 
     def __init__(self, name: str, **kwargs: Any) -> None:

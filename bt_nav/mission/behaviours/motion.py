@@ -6,13 +6,14 @@ re-deciding every tick makes a robot facing a wall square-on dither left-right f
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import py_trees
 
 from bt_nav.mission.behaviours.base import CMD_PORT, Leaf, port
-from bt_nav.mission.behaviours.perception import SECTORS_PORT
-from bt_nav.mission.scan import SectorReading, Sectors, clearer_side
+from bt_nav.mission.behaviours.perception import PATHS_PORT
+from bt_nav.mission.paths import FreePaths
 
 Status = py_trees.common.Status
 
@@ -36,52 +37,70 @@ class Stop(Leaf):
 
 
 class DriveForward(Leaf):
-    """Straight ahead at ``speed`` (nothing in front)."""
+    """Full speed: nothing in the robot's path within ``far_distance``.
 
-    INPUT_PORTS = {"speed": port(float, default=0.22)}
+    It still steers, gently, for the heading :meth:`~bt_nav.mission.paths.FreePaths.steer` picks: straight
+    ahead in the open, the middle of a corridor between two walls. Without it a robot that drifts
+    towards a wall finds its path blocked late and has to turn hard.
+    """
+
+    INPUT_PORTS = {
+        "speed": port(float, default=0.22),
+        **PATHS_PORT,
+        "far_distance": port(float, default=0.7),
+        "angular_speed": port(float, default=1.5),
+    }
     OUTPUT_PORTS = dict(CMD_PORT)
+    #: m per rad: at full speed only small corrections pay (keeping clear of a wall), not chasing room.
+    TURN_COST = 1.5
 
     def update(self) -> Status:
-        """Full speed, RUNNING (driving is never "done")."""
-        self.command(self.get_input("speed"), 0.0)
+        """Full speed, steering towards the clear heading; RUNNING (driving is never "done")."""
+        paths: FreePaths = self.get_input("paths")
+        target = paths.steer(self.get_input("far_distance"), turn_cost=self.TURN_COST)
+        self.command(self.get_input("speed"), steering(target or 0.0, self.get_input("angular_speed")))
         return Status.RUNNING
 
 
-def _turn_direction(sectors: Sectors) -> float:
-    """+1 turns left (CCW), -1 right: towards the clearer half of the front."""
-    return float(clearer_side(sectors))
+#: 1/s: turn rate per radian of heading error when steering for a clear heading.
+STEER_GAIN = 2.5
 
 
-def _side_range(reading: SectorReading) -> float:
-    """A side's nearest obstacle for choosing a direction; unknown reads 0 (never turn into the unseen)."""
-    return reading.min_range if reading.known else 0.0
+def steering(target: float, limit: float) -> float:
+    """Turn rate towards ``target`` (rad, robot frame), proportional and capped at ``limit``."""
+    return max(-limit, min(limit, STEER_GAIN * target))
+
+
+def initial_side(paths: FreePaths, need: float) -> float:
+    """+1 (left) or -1 (right): the side of the heading to steer for; when that is straight ahead or no
+    heading is clear, the side with more room (ties go left, as :func:`~bt_nav.mission.scan.clearer_side`)."""
+    target = paths.steer(need)
+    if target:
+        return 1.0 if target > 0.0 else -1.0
+    return 1.0 if paths.side_room(1) >= paths.side_room(-1) else -1.0
 
 
 class TurnAway(Leaf):
-    """Keep driving while turning away from the closer side (obstacle in the far band).
+    """Keep driving while steering for the nearest clear heading (the path is blocked in the far band).
 
-    Speed and turn rate are graded by how deep into the band the obstacle is: at ``far_distance`` the
-    robot drives at ``max_speed`` and turns gently; towards ``close_distance`` it slows to ``slow_speed``
-    and turns at ``angular_speed``. Grading rather than a step keeps the average speed high, which is
-    what the 8 m in 50 s requirement needs: travelled distance counts arcs, so a hard turn at speed
-    costs nothing while a stop or a rotation in place costs its whole duration. The speed falls with
-    the square of the depth so it stays near ``max_speed`` until the obstacle is really close.
+    The heading is the one :meth:`~bt_nav.mission.paths.FreePaths.steer` gives: the smallest turn that
+    clears ``far_distance`` for the robot's whole width, so the robot turns no more than it must (on a
+    wheel-limited base every radian turned at speed costs distance). Speed is graded by how deep into the
+    band the path is blocked: ``max_speed`` at ``far_distance``, falling with the square of the depth to
+    ``slow_speed`` at ``close_distance``, so it stays near full speed until the obstacle is really close.
 
-    The direction is chosen when the leaf starts and kept, with hysteresis: it flips only when the side
-    being turned towards has become nearer than the other by ``SWITCH_MARGIN``. Keeping it blindly
-    (the first version) made the robot sweep across a wide far band from one obstacle into the next;
-    re-deciding every tick makes a robot facing a wall square-on dither.
+    The side (left or right) is chosen when the leaf starts and kept: it flips only when the other side
+    needs ``SWITCH_MARGIN`` less turning. Re-deciding every tick makes a robot facing a wall square-on
+    dither left and right.
     """
 
-    #: m: the side turned towards must be this much nearer than the other before the direction flips.
-    SWITCH_MARGIN = 0.15
-    #: Turn rate at the far edge of the band, as a fraction of ``angular_speed``.
-    MIN_TURN = 0.3
+    #: rad: the other side must need this much less turning before the side flips.
+    SWITCH_MARGIN = math.radians(30.0)
     #: Speed falls as depth ** SPEED_EXPONENT (1: linear in depth).
     SPEED_EXPONENT = 2.0
 
     INPUT_PORTS = {
-        **SECTORS_PORT,
+        **PATHS_PORT,
         "slow_speed": port(float, default=0.12),
         "max_speed": port(float, default=0.22),
         "angular_speed": port(float, default=1.5),
@@ -92,35 +111,35 @@ class TurnAway(Leaf):
 
     def initialise(self) -> None:
         """Pick the side to turn towards (kept unless the other side becomes clearly better)."""
-        self.direction = _turn_direction(self.get_input("sectors"))
+        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
-        """Graded forward speed and turn rate, RUNNING."""
-        sectors: Sectors = self.get_input("sectors")
-        left, right = _side_range(sectors.left), _side_range(sectors.right)
-        chosen, other = (left, right) if self.direction > 0 else (right, left)
-        if other > chosen + self.SWITCH_MARGIN:
-            self.direction = -self.direction
+        """Graded forward speed, steering for the clear heading on the chosen side; RUNNING."""
+        paths: FreePaths = self.get_input("paths")
         close, far = self.get_input("close_distance"), self.get_input("far_distance")
-        front = sectors.front.min_range if sectors.front.known else close
-        depth = min(1.0, max(0.0, (far - front) / max(far - close, 1e-6)))
+        target = paths.steer(far, side=int(self.direction))
+        other = paths.steer(far, side=-int(self.direction))
+        if other is not None and (target is None or abs(other) + self.SWITCH_MARGIN < abs(target)):
+            self.direction, target = -self.direction, other
+        if target is None:  # nothing clear for far_distance either way: towards the most room on this side
+            target = paths.roomiest(int(self.direction))
+        depth = min(1.0, max(0.0, (far - paths.ahead) / max(far - close, 1e-6)))
         slow, fast = self.get_input("slow_speed"), self.get_input("max_speed")
         linear = fast - (fast - slow) * depth ** self.SPEED_EXPONENT
-        angular = self.direction * self.get_input("angular_speed") * (self.MIN_TURN + (1.0 - self.MIN_TURN) * depth)
-        self.command(linear, angular)
-        self.feedback_message = f"turning {'left' if self.direction > 0 else 'right'}"
+        self.command(linear, steering(target, self.get_input("angular_speed")))
+        self.feedback_message = f"steering {math.degrees(target):+.0f} deg"
         return Status.RUNNING
 
 
 class RotateInPlace(Leaf):
-    """Zero forward speed, turn towards the clearer side (obstacle close, or front unknown)."""
+    """Zero forward speed, turn towards the side with the clear heading (path blocked close, or front unknown)."""
 
-    INPUT_PORTS = {**SECTORS_PORT, "angular_speed": port(float, default=1.5)}
+    INPUT_PORTS = {**PATHS_PORT, "angular_speed": port(float, default=1.5), "far_distance": port(float, default=0.7)}
     OUTPUT_PORTS = dict(CMD_PORT)
 
     def initialise(self) -> None:
         """Pick the rotation direction for this whole rotation."""
-        self.direction = _turn_direction(self.get_input("sectors"))
+        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
         """Rotate, RUNNING."""

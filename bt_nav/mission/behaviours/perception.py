@@ -1,9 +1,12 @@
-"""Perception leaves: turn the latest scan into sector minima and answer obstacle questions.
+"""Perception leaves: turn the latest scan into sector minima and free paths, and answer obstacle questions.
 
 The ROS edge (or the lock-step runner) writes the raw :class:`~bt_nav.mission.scan.Scan` and the time it
 arrived to the blackboard; :class:`ProcessScan` does the geometry once per new scan and decides
-whether the scan is usable at all (fresh and well formed). Every question about obstacles treats an
-unknown sector as an obstacle: a blind robot must not drive at full speed.
+whether the scan is usable at all (fresh and well formed). It produces two views: the lab's cones
+(front / left / right minima, which the maneuver triggers read) and the free paths of the robot's width
+along candidate headings (:mod:`bt_nav.mission.paths`), which the close / far / none decision and the
+steering read. Every question about obstacles treats an unknown front as an obstacle: a blind robot
+must not drive at full speed.
 """
 
 from __future__ import annotations
@@ -11,9 +14,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
 import py_trees
 
 from bt_nav.mission.behaviours.base import Condition, Leaf, port
+from bt_nav.mission.paths import HEADINGS, FreePaths, free_paths
 from bt_nav.mission.scan import (
     Proximity,
     Scan,
@@ -21,7 +26,6 @@ from bt_nav.mission.scan import (
     SectorConfig,
     SectorReading,
     Sectors,
-    classify,
     sector_minima,
 )
 
@@ -30,6 +34,8 @@ Status = py_trees.common.Status
 UNKNOWN_READING = SectorReading(math.nan, 0, 0)
 UNKNOWN_SECTORS = Sectors(UNKNOWN_READING, UNKNOWN_READING, UNKNOWN_READING)
 SECTORS_PORT = {"sectors": port(Sectors, "front/left/right minima of the latest scan", default=UNKNOWN_SECTORS)}
+BLOCKED_PATHS = FreePaths(HEADINGS, np.zeros_like(HEADINGS))
+PATHS_PORT = {"paths": port(FreePaths, "free travel of the robot's width along each heading", default=BLOCKED_PATHS)}
 
 
 class ProcessScan(Leaf):
@@ -40,6 +46,9 @@ class ProcessScan(Leaf):
     (:class:`~bt_nav.mission.scan.ScanError`). Each change of that verdict is logged once, in one line.
     """
 
+    #: Free paths are measured up to this many far_distances: beyond, every heading is equally good.
+    HORIZON = 1.25
+
     INPUT_PORTS = {
         "scan": port(Scan, "the newest scan", required=False),
         "scan_stamp": port(float, "mission-clock time the newest scan arrived", default=-math.inf),
@@ -48,9 +57,12 @@ class ProcessScan(Leaf):
         "side_center_deg": port(float, default=15.0),
         "side_half_angle_deg": port(float, default=15.0),
         "min_valid_beams": port(int, default=3),
+        "path_half_width": port(float, default=0.18),
+        "far_distance": port(float, "free paths are measured up to HORIZON times this", default=0.7),
     }
     OUTPUT_PORTS = {
         **SECTORS_PORT,
+        **PATHS_PORT,
         "scan_ok": port(bool, "the newest scan is fresh and well formed", default=False),
         "scan_status": port(str, "why the scan is (not) usable", default="no scan yet"),
     }
@@ -60,6 +72,8 @@ class ProcessScan(Leaf):
         self._last_scan: Scan | None = None
         self._last_config: SectorConfig | None = None
         self._sectors: Sectors = UNKNOWN_SECTORS
+        self._paths: FreePaths = BLOCKED_PATHS
+        self._path_inputs: tuple[float, float] = (0.0, 0.0)
         self._error: str = ""
         self._status = "no scan yet"
         self._front_known: bool | None = None
@@ -83,12 +97,14 @@ class ProcessScan(Leaf):
         if scan is None:
             return self._publish(False, "no scan yet", UNKNOWN_SECTORS)
         config = self._config()
-        if scan is not self._last_scan or config != self._last_config:
-            self._last_scan, self._last_config = scan, config
+        path_inputs = (float(self.get_input("path_half_width")), self.HORIZON * float(self.get_input("far_distance")))
+        if scan is not self._last_scan or config != self._last_config or path_inputs != self._path_inputs:
+            self._last_scan, self._last_config, self._path_inputs = scan, config, path_inputs
             try:
                 self._sectors, self._error = sector_minima(scan, config), ""
+                self._paths = free_paths(scan, *path_inputs)
             except ScanError as exc:
-                self._sectors, self._error = UNKNOWN_SECTORS, f"malformed scan: {exc}"
+                self._sectors, self._paths, self._error = UNKNOWN_SECTORS, BLOCKED_PATHS, f"malformed scan: {exc}"
         if self._error:
             return self._publish(False, self._error, UNKNOWN_SECTORS)
         age = self.clock() - self.get_input("scan_stamp")
@@ -97,7 +113,7 @@ class ProcessScan(Leaf):
             return self._publish(False, f"stale scan: none newer than {timeout:.2f} s", UNKNOWN_SECTORS)
         if age < -timeout:
             return self._publish(False, "scan stamped in the future (clock jumped back?)", UNKNOWN_SECTORS)
-        return self._publish(True, "ok", self._sectors)
+        return self._publish(True, "ok", self._sectors, self._paths)
 
     def _watch_front(self, front: SectorReading) -> None:
         """One line when the front sector becomes unknown (the robot then only rotates) and one when
@@ -111,7 +127,7 @@ class ProcessScan(Leaf):
             self.events.info(f"{self.label}: front sector known again")
         self._front_known = front.known
 
-    def _publish(self, ok: bool, status: str, sectors: Sectors) -> Status:
+    def _publish(self, ok: bool, status: str, sectors: Sectors, paths: FreePaths = BLOCKED_PATHS) -> Status:
         if status != self._status:
             if ok:  # two call sites: rclpy refuses one log call site with two severities
                 self.events.info(f"{self.label}: {status} — scan usable again")
@@ -123,6 +139,7 @@ class ProcessScan(Leaf):
         self._set_output("scan_ok", ok)
         self._set_output("scan_status", status)
         self._set_output("sectors", sectors)
+        self._set_output("paths", paths)
         self.feedback_message = status
         return Status.SUCCESS
 
@@ -139,31 +156,44 @@ class ScanHealthy(Condition):
 
 
 class _FrontProximity(Condition, register=False):
-    """Shared by the close / far questions: classify the front sector."""
+    """Shared by the close / far questions: how far the robot's width can drive straight ahead.
+
+    Unknown when the front cone is unknown (too few valid beams: the robot is blind ahead); otherwise
+    close below ``close_distance`` of free path, far below ``far_distance``, none beyond.
+    """
 
     INPUT_PORTS = {
         **SECTORS_PORT,
+        **PATHS_PORT,
         "close_distance": port(float, default=0.3),
         "far_distance": port(float, default=0.7),
     }
     OUTPUT_PORTS = {}
     MATCH: frozenset[Proximity] = frozenset()
 
+    def proximity(self) -> Proximity:
+        """This tick's class of what lies ahead."""
+        if not self.get_input("sectors").front.known:
+            return Proximity.UNKNOWN
+        ahead = self.get_input("paths").ahead
+        if ahead < self.get_input("close_distance"):
+            return Proximity.CLOSE
+        return Proximity.FAR if ahead < self.get_input("far_distance") else Proximity.NONE
+
     def answer(self) -> bool:
-        """Does the front sector's class match?"""
-        proximity = classify(self.get_input("sectors").front, self.get_input("close_distance"),
-                             self.get_input("far_distance"))
+        """Does this tick's class match?"""
+        proximity = self.proximity()
         self.feedback_message = proximity.value
         return proximity in self.MATCH
 
 
 class ObstacleClose(_FrontProximity):
-    """Front obstacle within ``close_distance``, or the front is unknown."""
+    """An obstacle within ``close_distance`` of the robot's path, or the front is unknown."""
 
     MATCH = frozenset({Proximity.CLOSE, Proximity.UNKNOWN})
 
 
 class ObstacleFar(_FrontProximity):
-    """Front obstacle between ``close_distance`` and ``far_distance``."""
+    """The robot's path is blocked between ``close_distance`` and ``far_distance``."""
 
     MATCH = frozenset({Proximity.FAR})

@@ -4,16 +4,19 @@ The lab says: A and C fire when the front is nearer than their distance, B when 
 Taken literally ("fire whenever it holds"), a condition that persists re-fires the maneuver the moment it
 ends: in a 0.8 m corridor both sides are within 0.5 m everywhere, so B spins 180 deg forever and the
 robot never leaves its spot. A trigger here fires on the condition's rising edge and then stays quiet
-(the reactive close / far / none branches drive meanwhile) until it re-arms, which happens when
+(the reactive close / far / none branches drive meanwhile) until it re-arms, which takes both
 
-- the condition has cleared with hysteresis: the reading rose above ``distance + hysteresis`` (a reading
-  hovering around the threshold does not count as a new situation), or
-- the robot has driven ``rearm_distance`` metres (odometry path length) since the trigger fired: the
-  situation is then a new one even if the condition never cleared (a long corridor); 0 disables this.
+- the condition seen cleared with hysteresis: the reading rose above ``distance + hysteresis`` (a reading
+  hovering around the threshold is not a new situation), and
+- the robot at least ``rearm_distance`` metres (straight line, odometry) from where the trigger last
+  fired: turning on the spot sweeps the sectors across walls and openings, which changes what they
+  read but not where the robot is, and coming back to the same doorway is not a new situation either.
 
-A new arming (``arm_count`` changes) re-arms the trigger too, and a condition that already holds then
-counts as a rising edge. An unknown reading counts as "near" (never drive into what cannot be seen) and
-never as "cleared". The latch is :class:`EdgeLatch`, pure state with no py_trees in it.
+A new arming (``arm_count`` changes) starts afresh: the trigger arms as soon as the condition is seen
+clear, so a condition that already holds when the robot is armed is not a rising edge (a robot armed in
+a corridor does not spin at once). An unknown reading counts as "near" (never drive into what cannot be
+seen) and never as "cleared". Without odometry positions the distance rule is skipped. The latch is
+:class:`EdgeLatch`, pure state with no py_trees in it.
 """
 
 from __future__ import annotations
@@ -33,33 +36,38 @@ Status = py_trees.common.Status
 
 @dataclass
 class EdgeLatch:
-    """Rising-edge detector with two ways to re-arm (see the module docstring)."""
+    """Rising-edge detector that re-arms on clearing away from where it fired (see the module docstring)."""
 
-    armed: bool = True
-    travelled: float = 0.0  # m driven since the latch last fired
-    _last_xy: tuple[float, float] | None = None
+    armed: bool = False
+    fired_at: tuple[float, float] | None = None  # odometry position of the last firing (None: none yet)
+    position: tuple[float, float] | None = None  # latest known odometry position
 
     def odometry(self, x: float, y: float) -> None:
-        """Accumulate the path driven since the last sample (NaN positions are skipped)."""
-        if not (math.isfinite(x) and math.isfinite(y)):
-            return
-        if self._last_xy is not None:
-            self.travelled += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
-        self._last_xy = (x, y)
+        """The robot's latest position (NaN positions are skipped)."""
+        if math.isfinite(x) and math.isfinite(y):
+            self.position = (x, y)
+
+    @property
+    def away(self) -> float:
+        """Straight-line distance from the last firing (inf when there was none or positions are unknown)."""
+        if self.fired_at is None or self.position is None:
+            return math.inf
+        return math.hypot(self.position[0] - self.fired_at[0], self.position[1] - self.fired_at[1])
 
     def step(self, holds: bool, cleared: bool, rearm_distance: float) -> bool:
         """One observation; True when the trigger fires now (and the latch disarms)."""
-        if not self.armed and (cleared or (rearm_distance > 0.0 and self.travelled >= rearm_distance)):
+        if not self.armed and cleared and self.away >= rearm_distance:
             self.armed = True
         if self.armed and holds:
             self.armed = False
-            self.travelled = 0.0
+            self.fired_at = self.position if self.position is not None else None
             return True
         return False
 
     def reset(self) -> None:
-        """A fresh start (a new arming): the next time the condition holds is a rising edge."""
-        self.armed, self.travelled, self._last_xy = True, 0.0, None
+        """A fresh start (a new arming): armed as soon as the condition is seen clear, wherever the robot is,
+        so a condition that already holds when the robot is armed is not a rising edge."""
+        self.armed, self.fired_at = False, None
 
 
 def _near(reading: SectorReading, distance: float) -> bool:
@@ -88,7 +96,7 @@ class _EdgeTrigger(Condition, register=False):
     def __init__(self, name: str, **kwargs: object) -> None:
         super().__init__(name=name, **kwargs)
         self.latch = EdgeLatch()
-        self._arm_count: int | None = None
+        self._arm_count = 0
         self._odom_stamp = -math.inf
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
@@ -113,8 +121,10 @@ class _EdgeTrigger(Condition, register=False):
         fired = self.latch.step(self.holds(sectors, distance),
                                 self.cleared(sectors, distance + float(self.get_input("hysteresis"))),
                                 float(self.get_input("rearm_distance")))
+        away = self.latch.away
         self.feedback_message = ("fired" if fired else "armed" if self.latch.armed else
-                                 f"waiting to re-arm ({self.latch.travelled:.1f} m driven)")
+                                 "waiting to re-arm" + (f" ({away:.1f} m from where it fired)"
+                                                        if math.isfinite(away) else ""))
         return fired
 
 
