@@ -7,6 +7,7 @@ imports a command's module when it runs, so ``bt-nav dump-tree`` does not pay fo
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 #: command -> (module, one-line help)
@@ -21,6 +22,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
     "replay": ("bt_nav.cli.replay", "print a recorded tick trace tick by tick, or render one tick"),
     "watch": ("bt_nav.cli.watch", "print the executive's ~/tree snapshots as they change"),
+    "arm": ("bt_nav.cli.arm", "arm (or --off: disarm) a running executive through its SetBool service"),
 }
 
 
@@ -33,10 +35,32 @@ def usage() -> str:
 
 
 def run(command: str, argv: list[str]) -> int:
-    """Import the command's module and run its ``main``."""
+    """Import the command's module and run its ``main``.
+
+    Every command gets the same two edges: a launcher's watchdog pipe is watched (a node started by
+    ``bt-nav demo``/``sim-run`` stops when its launcher dies, see :mod:`bt_nav.ros.supervise`), and
+    output piped into ``head`` that closes early ends the command quietly (exit 0 on EPIPE: the
+    reader asked for no more) instead of with a BrokenPipeError traceback.
+    """
+    from bt_nav.ros.supervise import watch_parent_pipe
+
+    watch_parent_pipe()
     module_name, _ = COMMANDS[command]
-    module = importlib.import_module(module_name)
-    return int(module.main(argv) or 0)
+    try:
+        module = importlib.import_module(module_name)
+        code = int(module.main(argv) or 0)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+        return 0
+    return code
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush does not raise again (Python docs,
+    "Note on SIGPIPE")."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
 
 
 def main(argv: list[str] | None = None) -> int:

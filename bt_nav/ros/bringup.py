@@ -27,18 +27,24 @@ import argparse
 import json
 import math
 import os
-import random
-import signal
-import subprocess
+import shlex
 import sys
-import threading
-import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import IO, Any
+from pathlib import Path
+from typing import Any
 
 from bt_nav.mission.params import parse_assignments  # noqa: F401 - re-exported (demo, sim-run)
 from bt_nav.mission.profiles import EXECUTIVE_NAME, config_file, file_parameters  # noqa: F401 - re-exported
+
+# Processes and DDS isolation have one home, bt_nav.ros.supervise; re-exported for demo, bench and tests.
+from bt_nav.ros.supervise import (  # noqa: F401
+    Child,
+    Launcher,
+    StopRequest,
+    child_env,
+    choose_domain_id,
+    publish_zero_twist,
+)
 
 PROFILES = ("lab", "homework", "eval")
 
@@ -196,118 +202,6 @@ def nodes(
     return specs
 
 
-# ---------------------------------------------------------------------------------------------- processes
-def choose_domain_id(requested: int | None = None) -> int:
-    """``requested``, else ``$ROS_DOMAIN_ID``, else a random domain in 100-200 (concurrent runs stay apart)."""
-    if requested is not None:
-        return int(requested)
-    env = os.environ.get("ROS_DOMAIN_ID", "").strip()
-    if env.isdigit():
-        return int(env)
-    return random.randint(100, 200)
-
-
-def child_env(domain_id: int) -> dict[str, str]:
-    """Environment of every child: DDS on this machine only, in ``domain_id``, unbuffered output."""
-    env = dict(os.environ)
-    env.pop("ROS_LOCALHOST_ONLY", None)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    env["ROS_DOMAIN_ID"] = str(int(domain_id))
-    env["PYTHONUNBUFFERED"] = "1"
-    env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
-    return env
-
-
-class Child:
-    """One started node: its process and the thread that forwards its output line by line."""
-
-    def __init__(self, spec: NodeSpec, popen: subprocess.Popen, thread: threading.Thread) -> None:
-        self.spec = spec
-        self.popen = popen
-        self.thread = thread
-
-    @property
-    def name(self) -> str:
-        """Short name used as output prefix (the executable: sim, executive, referee)."""
-        return self.spec.executable
-
-    def poll(self) -> int | None:
-        """Exit code, or None while running."""
-        return self.popen.poll()
-
-
-LineSink = Callable[[str, str], None]  # (child name, line without newline)
-
-
-class Launcher:
-    """Starts NodeSpecs as subprocesses and stops them politely.
-
-    Children run in their own sessions, so a terminal Ctrl-C reaches only this process, which then
-    forwards SIGINT to each child, waits, and escalates to SIGTERM and SIGKILL: every node gets the
-    chance to publish its last stop command and flush its files, but nothing outlives the launcher.
-    """
-
-    def __init__(self, env: dict[str, str], sink: LineSink | None = None) -> None:
-        self.env = env
-        self.sink = sink or self.print_line
-        self.children: list[Child] = []
-        self._lock = threading.Lock()
-        width = 9
-        self._width = width
-
-    def print_line(self, name: str, line: str) -> None:
-        """Default sink: ``[name] line`` on stdout."""
-        with self._lock:
-            print(f"[{name:<{self._width}}] {line}", flush=True)
-
-    def start(self, spec: NodeSpec, sink: LineSink | None = None) -> Child:
-        """Start one node; its stdout and stderr go line by line to ``sink`` (default: the launcher's)."""
-        popen = subprocess.Popen(spec.command(), env=self.env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
-                                 errors="replace")
-        out = sink or self.sink
-        thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)
-        thread.start()
-        child = Child(spec, popen, thread)
-        self.children.append(child)
-        return child
-
-    @staticmethod
-    def _pump(name: str, stream: IO[str], sink: LineSink) -> None:
-        for line in stream:
-            sink(name, line.rstrip("\n"))
-
-    def wait_any(self, timeout: float | None = None, poll: float = 0.05) -> Child | None:
-        """Block until a child exits (returned) or ``timeout`` wall seconds pass (None)."""
-        end = None if timeout is None else time.monotonic() + timeout
-        while end is None or time.monotonic() < end:
-            for child in self.children:
-                if child.poll() is not None:
-                    return child
-            time.sleep(poll)
-        return None
-
-    def shutdown(self, grace: float = 5.0) -> None:
-        """SIGINT to every running child, wait up to ``grace`` s, then SIGTERM, then SIGKILL."""
-        for sig, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
-            running = [c for c in self.children if c.poll() is None]
-            if not running:
-                break
-            for child in running:
-                try:
-                    child.popen.send_signal(sig)
-                except ProcessLookupError:
-                    pass
-            end = time.monotonic() + wait
-            for child in running:
-                try:
-                    child.popen.wait(timeout=max(0.0, end - time.monotonic()))
-                except subprocess.TimeoutExpired:
-                    pass
-        for child in self.children:
-            child.thread.join(timeout=2.0)
-
-
 # ---------------------------------------------------------------------------------------------- bt-nav sim-run
 def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
     """Options of ``bt-nav sim-run``."""
@@ -324,46 +218,96 @@ def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
                         help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="extra executive parameter (repeatable), e.g. safety_distance=0.4")
-    parser.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID or random 100-200)")
+    parser.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID, else one no "
+                        "other run on this machine holds, from $BT_NAV_DOMAIN_RANGE or 100-199)")
     parser.add_argument("--print", action="store_true", dest="print_only",
                         help="print the commands instead of running them")
     return parser
 
 
+def bt_nav_command() -> str:
+    """How the user types ``bt-nav`` for this installation: the venv's script (relative to the current
+    directory when inside it, e.g. ``.venv/bin/bt-nav``), ``bt-nav`` when that is what PATH finds, or
+    ``python -m bt_nav.cli``. Users who installed with pip have no ``ros2``; they copy this."""
+    import shutil
+
+    script = Path(sys.executable).parent / "bt-nav"
+    if not script.is_file():
+        return f"{shlex.quote(sys.executable)} -m bt_nav.cli"
+    found = shutil.which("bt-nav")
+    if found and Path(found).resolve() == script.resolve():
+        return "bt-nav"
+    try:
+        return str(script.relative_to(Path.cwd()))
+    except ValueError:
+        return str(script)
+
+
+def arm_hint(specs: list[NodeSpec], domain: int) -> str | None:
+    """The exact command that arms the executive of ``specs`` (None when the referee does the arming)."""
+    if any(spec.executable == "referee" for spec in specs):
+        return None
+    executive = next((spec for spec in specs if spec.executable == "executive"), None)
+    if executive is None:
+        return None
+    service = dict(executive.remappings).get("arm", "arm")
+    service = service if service.startswith("/") else f"/{service}"
+    return f"ROS_DOMAIN_ID={domain} {bt_nav_command()} arm --service {service}"
+
+
+def cmd_vel_stamped(specs: list[NodeSpec]) -> bool:
+    """Whether the executive of ``specs`` publishes TwistStamped (explicit parameter, else its params file)."""
+    for spec in specs:
+        if spec.executable == "executive":
+            if "cmd_vel_stamped" in spec.parameters:
+                return bool(spec.parameters["cmd_vel_stamped"])
+            for path in spec.parameter_files:
+                if "cmd_vel_stamped" in file_parameters(Path(path)):
+                    return bool(file_parameters(Path(path))["cmd_vel_stamped"])
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav sim-run``: exit code of the referee when there is one, else of the first node to exit;
-    130 after Ctrl-C."""
+    128 + the signal number after SIGINT/SIGTERM/SIGHUP."""
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
-    if opts.maneuver is not None:
-        from bt_nav.mission.params import normalise_maneuver
-
-        try:
-            opts.maneuver = normalise_maneuver(opts.maneuver)
-        except ValueError as exc:
-            print(f"bt-nav sim-run: {exc}", file=sys.stderr)
-            return 2
     try:
+        if opts.maneuver is not None:
+            from bt_nav.mission.params import normalise_maneuver
+
+            opts.maneuver = normalise_maneuver(opts.maneuver)
         specs = nodes(opts.profile, world=opts.world, maneuver=opts.maneuver, seed=opts.seed, rtf=opts.rtf,
                       with_referee=True if opts.with_referee else None, results_json=opts.json,
                       executive=parse_assignments(opts.set), sim=parse_assignments(opts.sim_param))
+        domain = choose_domain_id(opts.domain_id)
     except ValueError as exc:
         print(f"bt-nav sim-run: {exc}", file=sys.stderr)
         return 2
-    domain = choose_domain_id(opts.domain_id)
     if opts.print_only:
         print(f"export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_DOMAIN_ID={domain}")
         for spec in specs:
-            print(" ".join(_shell_quote(a) for a in spec.command()))
+            print(" ".join(shlex.quote(a) for a in spec.command()))
         return 0
-    launcher = Launcher(child_env(domain))
-    print(f"bt-nav sim-run: profile {opts.profile}, ROS_DOMAIN_ID={domain} (localhost only); Ctrl-C stops",
-          flush=True)
+    return _run(specs, domain, opts.profile)
+
+
+def _run(specs: list[NodeSpec], domain: int, profile: str) -> int:
+    """Start ``specs`` in ``domain`` and supervise them until one ends or a stop signal arrives."""
+    stop = StopRequest().install()
+    stamped = cmd_vel_stamped(specs)
+    launcher = Launcher(child_env(domain), stop=stop,
+                        last_word=lambda: publish_zero_twist(domain, stamped=stamped))
+    print(f"bt-nav sim-run: profile {profile}, ROS_DOMAIN_ID={domain} (localhost only), pid {os.getpid()}; "
+          "Ctrl-C stops", flush=True)
+    hint = arm_hint(specs, domain)
+    if hint:
+        print(f"bt-nav sim-run: the robot waits to be armed; in another terminal: {hint}", flush=True)
     code = 0
     try:
         for spec in specs:
             launcher.start(spec)
         referee = next((c for c in launcher.children if c.spec.executable == "referee"), None)
-        while True:
+        while not stop.requested:
             ended = launcher.wait_any(timeout=0.5)
             if ended is None:
                 continue
@@ -375,16 +319,15 @@ def main(argv: list[str] | None = None) -> int:
                 code = ended.poll() or 0
             break
     except KeyboardInterrupt:
-        code = 130
+        stop.signum = stop.signum or 2
     finally:
+        stop.closing = True
         launcher.shutdown()
+        stop.restore()
+    if stop.requested:
+        print(f"bt-nav sim-run: {stop.name}: stopped every node", file=sys.stderr, flush=True)
+        code = 128 + int(stop.signum or 2)
     return code
-
-
-def _shell_quote(arg: str) -> str:
-    import shlex
-
-    return shlex.quote(arg)
 
 
 if __name__ == "__main__":

@@ -8,10 +8,8 @@ their ROS plumbing the same way (one place decides how a parameter is declared o
 from __future__ import annotations
 
 import math
-import os
 import re
 import threading
-import zlib
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
@@ -26,6 +24,9 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from bt_nav.mission import params as P
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.geometry import yaw_from_quaternion  # noqa: F401 - re-exported for the commands
+
+# DDS environment and domains: one home, bt_nav.ros.supervise (no rclpy); re-exported for nodes, tests, bench.
+from bt_nav.ros.supervise import claim_domain_id, dds_env, domain_id_for  # noqa: F401
 
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 
@@ -234,65 +235,6 @@ class CommandPublisher:
         from rclpy.duration import Duration
 
         return bool(self.publisher.wait_for_all_acked(Duration(nanoseconds=int(timeout_sec * 1e9))))
-
-
-# ---------------------------------------------------------------------------------------------- DDS env
-def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
-    """A ROS domain in ``[low, high]`` derived from ``key`` (a pid, a worker name): stable per key."""
-    if isinstance(key, int):
-        return low + key % (high - low + 1)
-    return low + zlib.crc32(key.encode()) % (high - low + 1)
-
-
-#: Lock files of the domains this process claimed; kept open so that the claims last until it exits.
-_DOMAIN_CLAIMS: list[Any] = []
-
-
-def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None,
-                    lock_dir: str | os.PathLike[str] | None = None) -> int:
-    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way.
-
-    A claim is an exclusive ``flock`` on ``<lock_dir>/bt_nav_ros_domains/domain-<id>.lock`` held until
-    this process ends (the kernel drops it even after a crash, so nothing needs cleaning up). The
-    search starts at ``start`` (default: the pid) so concurrent claimers rarely contend. Processes that
-    pick a domain another way (a fixed ``ROS_DOMAIN_ID``, a random pick) are invisible here: give them
-    a different range. The default range, 215-232, lies above the Linux ephemeral ports (Fast DDS uses
-    ports 7400 + 250 * domain + ...; 102-214 overlap 32768-60999) and below 233, where the ports would
-    pass 65535. When every domain is claimed, the first candidate is returned unclaimed.
-    """
-    import fcntl
-    import tempfile
-
-    directory = os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(),
-                             "bt_nav_ros_domains")
-    os.makedirs(directory, exist_ok=True)
-    span = high - low + 1
-    first = (os.getpid() if start is None else start) % span
-    for offset in range(span):
-        domain = low + (first + offset) % span
-        handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # held open: the claim
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            handle.close()
-            continue
-        _DOMAIN_CLAIMS.append(handle)
-        return domain
-    return low + first
-
-
-def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
-    """An environment whose DDS traffic stays on this machine, in ``domain_id``.
-
-    ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` keeps discovery off the network (a lab full of
-    robots on one Wi-Fi must not see our test nodes); the domain keeps concurrent runs apart.
-    ``ROS_LOCALHOST_ONLY`` is the pre-Jazzy spelling and is dropped to avoid the deprecation warning.
-    """
-    env = dict(os.environ if base is None else base)
-    env.pop("ROS_LOCALHOST_ONLY", None)
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    env["ROS_DOMAIN_ID"] = str(int(domain_id))
-    return env
 
 
 # ---------------------------------------------------------------------------------------------- logging

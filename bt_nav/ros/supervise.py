@@ -1,0 +1,445 @@
+"""One home for running bt_nav processes: DDS isolation, stop signals and child supervision.
+
+Every launcher (``bt-nav demo``, ``bt-nav sim-run``, the bench) and every node process shares three
+concerns, and each has exactly one implementation here:
+
+- **DDS isolation** (:func:`dds_env`, :func:`child_env`, :func:`choose_domain_id`,
+  :func:`claim_domain_id`, :func:`domain_id_for`): discovery stays on this machine
+  (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``) and every run gets a ROS domain no concurrent run
+  holds, unless the user chose one. Two runs in one domain see each other's ``/clock``,
+  ``ground_truth_odom`` and services, and a referee summing two robots' poses reports distances no
+  robot drove.
+- **Stop signals** (:class:`StopRequest`): SIGINT, SIGTERM and SIGHUP set a flag instead of tearing the
+  process down mid-callback, so a node can publish its last zero twist while its ROS context is
+  still up. Installed explicitly, so a process started in the background by a non-interactive shell
+  (which starts it with SIGINT *ignored*) still reacts to SIGINT.
+- **Children that cannot outlive their launcher** (:class:`Launcher`): each child runs in its own
+  session and process group (a terminal's Ctrl-C reaches only the launcher, which stops the children
+  in order), asks the kernel for SIGTERM when the launcher dies (``PR_SET_PDEATHSIG``, set in the
+  child between fork and exec) and also watches a pipe whose write end only the launcher holds
+  (:func:`watch_parent_pipe`, started by the ``bt-nav`` dispatcher): when the launcher is gone,
+  even by SIGKILL, the child receives SIGTERM, stops the robot and exits; a child that does not exit
+  within :data:`ORPHAN_GRACE` seconds kills itself.
+
+No rclpy at import: launch files and the dispatcher import this module cheaply. Only
+:func:`publish_zero_twist` imports rclpy, when it is called.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import random
+import signal
+import subprocess
+import threading
+import time
+from collections.abc import Callable, Iterable, Mapping
+from types import FrameType
+from typing import IO, Any, Protocol
+
+# ---------------------------------------------------------------------------------------------- DDS env
+#: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
+LAUNCHER_DOMAINS = (100, 199)
+DOMAIN_RANGE_ENV = "BT_NAV_DOMAIN_RANGE"
+
+#: Lock files of the domains this process claimed; kept open so that the claims last until it exits.
+_DOMAIN_CLAIMS: list[Any] = []
+
+
+def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
+    """A ROS domain in ``[low, high]`` derived from ``key`` (a pid, a worker name): stable per key."""
+    import zlib
+
+    if isinstance(key, int):
+        return low + key % (high - low + 1)
+    return low + zlib.crc32(key.encode()) % (high - low + 1)
+
+
+def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None,
+                    lock_dir: str | os.PathLike[str] | None = None) -> int:
+    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way.
+
+    A claim is an exclusive ``flock`` on ``<lock_dir>/bt_nav_ros_domains/domain-<id>.lock`` held until
+    this process ends (the kernel drops it even after a crash, so nothing needs cleaning up). The
+    search starts at ``start`` (default: the pid) so concurrent claimers rarely contend. Processes that
+    pick a domain another way (a fixed ``ROS_DOMAIN_ID``) are invisible here: give them a different
+    range. 215-232 (the tests' default) lies above the Linux ephemeral ports (Fast DDS uses ports
+    7400 + 250 * domain + ...; 102-214 overlap 32768-60999) and below 233, where the ports would pass
+    65535. When every domain is claimed, the first candidate is returned unclaimed.
+    """
+    import fcntl
+    import tempfile
+
+    directory = os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(),
+                             "bt_nav_ros_domains")
+    os.makedirs(directory, exist_ok=True)
+    span = high - low + 1
+    first = (os.getpid() if start is None else start) % span
+    for offset in range(span):
+        domain = low + (first + offset) % span
+        handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # noqa: SIM115 - held open: the claim
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            continue
+        _DOMAIN_CLAIMS.append(handle)
+        return domain
+    return low + first
+
+
+def launcher_domains(env: Mapping[str, str] | None = None) -> tuple[int, int]:
+    """The range launchers claim from: ``$BT_NAV_DOMAIN_RANGE`` (``LOW-HIGH``) or :data:`LAUNCHER_DOMAINS`.
+
+    Raises:
+        ValueError: a malformed range (the launcher says so instead of silently using another).
+    """
+    text = (os.environ if env is None else env).get(DOMAIN_RANGE_ENV, "").strip()
+    if not text:
+        return LAUNCHER_DOMAINS
+    low, sep, high = text.partition("-")
+    if not (sep and low.strip().isdigit() and high.strip().isdigit()) or not 0 <= int(low) <= int(high) <= 232:
+        raise ValueError(f"{DOMAIN_RANGE_ENV}={text!r}: expected LOW-HIGH with 0 <= LOW <= HIGH <= 232")
+    return int(low), int(high)
+
+
+def choose_domain_id(requested: int | None = None) -> int:
+    """The run's ROS domain: ``requested``, else ``$ROS_DOMAIN_ID`` (the user's choice is kept), else a
+    domain of :func:`launcher_domains` claimed for this process, so concurrent runs never share one."""
+    if requested is not None:
+        return int(requested)
+    env = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    if env.isdigit():
+        return int(env)
+    low, high = launcher_domains()
+    return claim_domain_id(low, high, start=random.randrange(high - low + 1))
+
+
+def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """An environment whose DDS traffic stays on this machine, in ``domain_id``.
+
+    ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` keeps discovery off the network (a lab full of
+    robots on one Wi-Fi must not see our test nodes); the domain keeps concurrent runs apart.
+    ``ROS_LOCALHOST_ONLY`` is the pre-Jazzy spelling and is dropped to avoid the deprecation warning.
+    """
+    env = dict(os.environ if base is None else base)
+    env.pop("ROS_LOCALHOST_ONLY", None)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["ROS_DOMAIN_ID"] = str(int(domain_id))
+    return env
+
+
+def child_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """:func:`dds_env` for a launched node: also unbuffered, uncoloured output (it is piped)."""
+    env = dds_env(domain_id, base)
+    env["PYTHONUNBUFFERED"] = "1"
+    env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
+    return env
+
+
+def use_domain_here(domain_id: int) -> None:
+    """Put this process itself (an in-process recorder or probe node) in ``domain_id``, localhost only."""
+    os.environ.update(dds_env(domain_id))
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
+
+
+# ---------------------------------------------------------------------------------------------- signals
+class StopRequest:
+    """SIGINT/SIGTERM/SIGHUP set a flag; the process's own loop then stops the robot and exits.
+
+    rclpy's handlers would shut the ROS context down first, so a node could not publish its final
+    zero twist. With this, the first signal only sets :attr:`signum`; a second one while still
+    running raises KeyboardInterrupt (for a loop that does not come back); once :attr:`closing` is
+    set, further signals are ignored so they cannot cut the stop short. Used by the launchers here,
+    and meant for every node's ``main`` (the simulator's ``StopSignal`` and the executive's
+    ``ShutdownRequest`` have the same contract).
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.closing = False
+        self._previous: dict[int, Any] = {}
+        self._listeners: list[Callable[[int], None]] = []
+
+    def __bool__(self) -> bool:
+        return self.signum is not None
+
+    @property
+    def requested(self) -> bool:
+        """A stop signal arrived."""
+        return self.signum is not None
+
+    @property
+    def name(self) -> str:
+        """The signal's name (``SIGTERM``), or "" before one arrived."""
+        return signal.Signals(self.signum).name if self.signum is not None else ""
+
+    def handle(self, signum: int, frame: FrameType | None) -> None:
+        """The signal handler."""
+        if self.closing:
+            return
+        if self.signum is not None:
+            raise KeyboardInterrupt
+        self.signum = signum
+        for listener in self._listeners:
+            listener(signum)
+
+    def on_signal(self, listener: Callable[[int], None]) -> None:
+        """Call ``listener(signum)`` from the handler on the first signal (keep it tiny: it runs in a handler)."""
+        self._listeners.append(listener)
+
+    def install(self, signals: Iterable[int] | None = None) -> StopRequest:
+        """Install the handlers (main thread only; elsewhere a no-op). Explicit even for SIGINT: a
+        background job of a non-interactive shell starts with SIGINT ignored, and Python then never
+        installs its KeyboardInterrupt handler."""
+        if threading.current_thread() is threading.main_thread():
+            for signum in self.SIGNALS if signals is None else signals:
+                self._previous[signum] = signal.signal(signum, self.handle)
+        return self
+
+    @property
+    def installed(self) -> bool:
+        """Whether :meth:`install` took effect (False off the main thread)."""
+        return bool(self._previous)
+
+    def restore(self) -> None:
+        """Put the previous handlers back (``main`` may run inside another program, e.g. a test)."""
+        for signum, previous in self._previous.items():
+            signal.signal(signum, previous)
+        self._previous.clear()
+
+
+# ---------------------------------------------------------------------------------------------- children
+#: Environment variable naming the read end of the launcher's watchdog pipe in a child.
+WATCHDOG_ENV = "BT_NAV_WATCHDOG_FD"
+#: Seconds an orphaned child may take to stop the robot before it kills itself.
+ORPHAN_GRACE = 3.0
+_PR_SET_PDEATHSIG = 1
+
+
+def _prctl() -> Callable[..., int] | None:
+    """libc's ``prctl``, looked up in the parent (nothing but the call itself may run after fork)."""
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):  # not Linux: the watchdog pipe still covers the launcher's death
+        return None
+
+
+def child_preexec(parent_pid: int, death_signal: int = signal.SIGTERM) -> Callable[[], None]:
+    """What a child runs between fork and exec: default SIGINT/SIGHUP (a background launcher's child
+    would inherit SIGINT ignored), ``PR_SET_PDEATHSIG`` and a check that the launcher did not already
+    die before that took effect.
+
+    Note ``PR_SET_PDEATHSIG`` fires when the *thread* that started the child ends, so start children
+    from the main thread; the watchdog pipe does not have that caveat.
+    """
+    prctl = _prctl()
+
+    def preexec() -> None:
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
+        if prctl is not None:
+            prctl(_PR_SET_PDEATHSIG, int(death_signal), 0, 0, 0)
+        if os.getppid() != parent_pid:  # the launcher died between fork and prctl
+            os.kill(os.getpid(), death_signal)
+
+    return preexec
+
+
+def watch_parent_pipe(env: Mapping[str, str] | None = None, grace: float = ORPHAN_GRACE) -> bool:
+    """In a child: when the launcher's watchdog pipe closes (it died), SIGTERM ourselves, and SIGKILL
+    after ``grace`` s if the graceful stop hangs. Returns whether a pipe was being watched.
+
+    The ``bt-nav`` dispatcher calls this first thing, so every launched node gets it.
+    """
+    source = os.environ if env is None else env
+    text = source.get(WATCHDOG_ENV, "")
+    os.environ.pop(WATCHDOG_ENV, None)  # grandchildren have their own launcher, if any
+    if not text.isdigit():
+        return False
+    fd = int(text)
+    try:
+        os.set_inheritable(fd, False)
+    except OSError:
+        return False
+
+    def watch() -> None:
+        try:
+            while os.read(fd, 64):
+                pass
+        except OSError:
+            pass
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(grace)
+        os.kill(os.getpid(), signal.SIGKILL)
+
+    threading.Thread(target=watch, name="bt_nav-watchdog", daemon=True).start()
+    return True
+
+
+class Startable(Protocol):
+    """What a launcher starts: a name and a command line (``bringup.NodeSpec`` is one)."""
+
+    executable: str
+
+    def command(self, python: str | None = None) -> list[str]: ...  # noqa: D102
+
+
+class Child:
+    """One started process: its spec, its Popen and the thread that forwards its output line by line."""
+
+    def __init__(self, spec: Startable, popen: subprocess.Popen, thread: threading.Thread) -> None:
+        self.spec = spec
+        self.popen = popen
+        self.thread = thread
+
+    @property
+    def name(self) -> str:
+        """Short name used as output prefix (the executable: sim, executive, referee)."""
+        return self.spec.executable
+
+    @property
+    def pid(self) -> int:
+        """Its pid, which is also its process group id."""
+        return self.popen.pid
+
+    def poll(self) -> int | None:
+        """Exit code, or None while running."""
+        return self.popen.poll()
+
+    def signal_group(self, signum: int) -> None:
+        """Send ``signum`` to the child's whole process group (gone already: nothing to do)."""
+        try:
+            os.killpg(self.popen.pid, signum)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
+LineSink = Callable[[str, str], None]  # (child name, line without newline)
+
+
+class Launcher:
+    """Starts processes that cannot outlive it, and stops them politely and in order.
+
+    Children run in their own sessions, so a terminal Ctrl-C reaches only this process; :meth:`shutdown`
+    stops them in reverse start order (the executive before the simulator that consumes its final
+    zero twist), each with SIGINT, then SIGTERM, then SIGKILL to its process group. If the launcher
+    itself dies, the kernel (``PR_SET_PDEATHSIG``) and the watchdog pipe stop the children.
+
+    Args:
+        env: the children's environment (see :func:`child_env`).
+        sink: where output lines go (default: ``[name] line`` on stdout).
+        stop: the process's :class:`StopRequest`; :meth:`wait_any` returns early once it is set.
+        last_word: called at the end of :meth:`shutdown` when the ``driver`` child (the one that
+            commands the robot) did not exit with 0, e.g. ``publish_zero_twist`` for it.
+    """
+
+    def __init__(self, env: dict[str, str], sink: LineSink | None = None, *, stop: StopRequest | None = None,
+                 last_word: Callable[[], object] | None = None, driver: str = "executive") -> None:
+        self.env = env
+        self.sink = sink or self.print_line
+        self.stop = stop
+        self.last_word = last_word
+        self.driver = driver
+        self.children: list[Child] = []
+        self._lock = threading.Lock()
+        self._width = 9
+        self._watch_read, self._watch_write = os.pipe()  # both close-on-exec; the read end is passed on
+
+    def print_line(self, name: str, line: str) -> None:
+        """Default sink: ``[name] line`` on stdout."""
+        with self._lock:
+            print(f"[{name:<{self._width}}] {line}", flush=True)
+
+    def start(self, spec: Startable, sink: LineSink | None = None) -> Child:
+        """Start one process; its stdout and stderr go line by line to ``sink`` (default: the launcher's)."""
+        env = dict(self.env)
+        env[WATCHDOG_ENV] = str(self._watch_read)
+        popen = subprocess.Popen(spec.command(), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
+                                 errors="replace", pass_fds=(self._watch_read,),
+                                 preexec_fn=child_preexec(os.getpid()))  # noqa: PLW1509 - see child_preexec
+        out = sink or self.sink
+        thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)
+        thread.start()
+        child = Child(spec, popen, thread)
+        self.children.append(child)
+        return child
+
+    @staticmethod
+    def _pump(name: str, stream: IO[str], sink: LineSink) -> None:
+        for line in stream:
+            sink(name, line.rstrip("\n"))
+
+    def wait_any(self, timeout: float | None = None, poll: float = 0.05) -> Child | None:
+        """Block until a child exits (returned), ``timeout`` wall seconds pass or a stop signal arrives (None)."""
+        end = None if timeout is None else time.monotonic() + timeout
+        while end is None or time.monotonic() < end:
+            for child in self.children:
+                if child.poll() is not None:
+                    return child
+            if self.stop is not None and self.stop.requested:
+                return None
+            time.sleep(poll)
+        return None
+
+    def shutdown(self, grace: float = 5.0) -> None:
+        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group)."""
+        for child in reversed(self.children):
+            for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
+                if child.poll() is not None:
+                    break
+                child.signal_group(signum)
+                try:
+                    child.popen.wait(timeout=wait)
+                except subprocess.TimeoutExpired:
+                    pass
+            child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
+        unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
+        if unclean and self.last_word is not None:
+            self.last_word()  # the driver may not have sent its stop: say it for it
+        for child in self.children:
+            child.thread.join(timeout=2.0)
+        for fd in (self._watch_read, self._watch_write):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        self._watch_read = self._watch_write = -1
+
+
+# ---------------------------------------------------------------------------------------------- the last word
+def publish_zero_twist(domain_id: int, *, topic: str = "/cmd_vel", stamped: bool = False,
+                       frame_id: str = "base_link", wait: float = 0.5) -> int:
+    """Publish zero twists on ``topic`` for ``wait`` s from a short-lived node of this process; returns
+    how many subscribers matched.
+
+    A launcher's last word after an executive that did not stop cleanly (killed, crashed): a robot
+    driver keeps its last command, so someone must say stop. Imports rclpy, in a private context.
+    """
+    import rclpy
+    from geometry_msgs.msg import Twist, TwistStamped
+    from rclpy.signals import SignalHandlerOptions
+
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(domain_id), signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        node = rclpy.create_node("bt_nav_launcher_stop", context=context)
+        kind = TwistStamped if stamped else Twist
+        publisher = node.create_publisher(kind, topic, 10)
+        end = time.monotonic() + wait
+        while time.monotonic() < end:
+            msg = kind()
+            if stamped:
+                msg.header.stamp = node.get_clock().now().to_msg()
+                msg.header.frame_id = frame_id
+            publisher.publish(msg)
+            time.sleep(0.05)
+        matched = publisher.get_subscription_count()
+        node.destroy_node()
+        return matched
+    finally:
+        rclpy.try_shutdown(context=context)
