@@ -23,9 +23,17 @@ class ArmService(Leaf):
     The service callback answers at once, saying what happened; the tree reacts on its next tick.
     Arming after the mission ended is refused: the mission is one-shot, its evaluation has been
     requested, and a robot that starts moving again would spoil the referee's "static at the end".
+    Arming without a usable scan is accepted (the scan may come a moment later) but said, as a
+    warning and in the reply, with the reason the robot will not move yet. Replies give mission
+    time (seconds since the first arming) and the clock only when it is sim time: an epoch reading
+    means nothing to the person arming.
     """
 
-    INPUT_PORTS = {"mission_over": port(bool, "the deadline has passed", default=False)}
+    INPUT_PORTS = {
+        "mission_over": port(bool, "the deadline has passed", default=False),
+        "scan_ok": port(bool, "the newest scan is fresh and usable (ProcessScan, last tick)", default=False),
+        "scan_status": port(str, "why the scan is (not) usable", default="no scan yet"),
+    }
     OUTPUT_PORTS = {
         "armed": port(bool, "the robot may move", default=False),
         "first_armed_at": port(float, "mission-clock time of the first arming (nan: never)", default=math.nan),
@@ -65,7 +73,7 @@ class ArmService(Leaf):
             self.events.warning(f"{self.label}: {message}")
             return False, message
         if self.get_input("mission_over"):
-            message = (f"refused: the mission ended (first armed at t={first:.2f} s); "
+            message = (f"refused: the mission ended (mission t={now - first:.2f} s); "
                        "the robot stays stopped — restart the executive for a new mission")
             self.events.warning(f"{self.label}: {message}")
             return False, message
@@ -75,16 +83,31 @@ class ArmService(Leaf):
         self._set_output("arm_count", int(self.blackboard_client.get("arm_count") or 0) + 1)
         if math.isnan(first):
             self._set_output("first_armed_at", float(now))
-            message = f"armed: mission timer started at t={now:.2f} s"
+            message = f"armed: mission timer started at {clock_text(now)} (mission t=0.00 s)"
         else:
-            message = f"armed again ({now - first:.1f} s since the first arming)"
-        self.events.info(f"{self.label}: {message}")
+            message = f"armed again at mission t={now - first:.2f} s"
+        if not self.get_input("scan_ok"):
+            message += (f"; no usable scan yet ({self.get_input('scan_status')}): the robot will not move until "
+                        "one arrives")
+            self.events.warning(f"{self.label}: {message}")
+        else:
+            self.events.info(f"{self.label}: {message}")
         return True, message
 
     def update(self) -> Status:
         """Always SUCCESS: this leaf's work happens in the service callback."""
         self.feedback_message = "armed" if self.blackboard_client.get("armed") else "disarmed"
         return Status.SUCCESS
+
+
+#: Clock readings above this are wall-clock epoch seconds, not sim time (about three years).
+EPOCH_THRESHOLD = 1e8
+
+
+def clock_text(now: float) -> str:
+    """``t=12.34 s`` for a sim-time clock (whose readings mean something to the user: the referee and
+    the logs use them); ``wall clock`` for an epoch reading (1.7e9 s says nothing)."""
+    return "wall clock" if now > EPOCH_THRESHOLD else f"t={now:.2f} s"
 
 
 class IsArmed(Condition):
