@@ -1,0 +1,258 @@
+"""A mission as a rosbag2 bag (MCAP storage), written through the maintained ``rosbags`` library.
+
+Why rosbags: it writes real rosbag2 directories (``metadata.yaml``, an ``.mcap`` file with ``ros2msg``
+schemas, CDR payloads and the offered QoS profiles) without a ROS install, so ``ros2 bag info/play``,
+Foxglove and PlotJuggler open what lock-step writes in-process and what ``bt-nav record`` writes from
+DDS. Nothing here encodes MCAP or CDR by hand, and nothing imports rclpy.
+
+Every message is a standard ROS 2 type (:data:`TOPICS`). Timestamps are sim time in nanoseconds (the
+bag's receive time, and each header stamp where the type has one), so a lock-step bag and a DDS bag of
+the same mission look alike.
+
+How lock-step uses it (``bt-nav lockstep --bag DIR``): :class:`MissionBag` satisfies
+:class:`bt_nav.cli.lockstep.MissionSink`, so pass it as ``sink``::
+
+    with MissionBag(path, mission={"world": ..., "maneuver": ..., "seed": ..., "profile": ...}) as bag:
+        result = run_mission(..., sink=bag)
+        bag.event(result.sim_time, f"verdict: {'PASSED' if result.passed else 'FAILED'}")
+
+``scan(t, Scan)``, ``odom(t, x, y, yaw, v, w)``, ``ground_truth(t, ...)``, ``cmd(t, v, w)``,
+``clock(t)``, ``tree(t, snapshot_text)`` (written only when the text changes, as the executive
+publishes ``~/tree``) and ``event(t, text)`` take sim seconds. ``close()`` writes ``metadata.yaml``;
+a writer killed before that leaves an ``.mcap`` that :func:`bt_nav.media.bagread.read_bag` still reads
+up to the last chunk written (:meth:`MissionBag.flush` closes a chunk early; the bag does so every
+``flush_every`` sim seconds, and ``bt-nav record`` also every wall second).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Topic names (absolute, as the default bringup publishes them).
+CLOCK, SCAN, ODOM, TRUTH, CMD = "/clock", "/scan", "/odom", "/ground_truth_odom", "/cmd_vel"
+TREE, EVENTS, MISSION, COLLISIONS, ROSOUT = ("/bt_nav_executive/tree", "/bt_nav/events", "/bt_nav/mission",
+                                             "/collisions", "/rosout")
+
+
+@dataclass(frozen=True)
+class TopicSpec:
+    """Type and offered QoS of one topic (QoS as the publishing node offers it)."""
+
+    msgtype: str
+    reliable: bool = True
+    transient_local: bool = False
+    depth: int = 10
+
+
+#: What a mission bag holds. /bt_nav/events are the mission's log lines (arm call and reply, maneuver
+#: start/end, deadline, evaluation, verdict); /bt_nav/mission is JSON about the run (world, seed, ...).
+TOPICS: dict[str, TopicSpec] = {
+    CLOCK: TopicSpec("rosgraph_msgs/msg/Clock", reliable=False, depth=1),
+    SCAN: TopicSpec("sensor_msgs/msg/LaserScan", reliable=False, depth=5),
+    ODOM: TopicSpec("nav_msgs/msg/Odometry"),
+    TRUTH: TopicSpec("nav_msgs/msg/Odometry", depth=100),
+    CMD: TopicSpec("geometry_msgs/msg/Twist"),
+    TREE: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
+    EVENTS: TopicSpec("std_msgs/msg/String", depth=100),
+    MISSION: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
+    COLLISIONS: TopicSpec("std_msgs/msg/String", depth=50),
+}
+
+
+class BagError(RuntimeError):
+    """A bag that cannot be written or read; the message names the file."""
+
+
+_TYPESTORE: Any = None
+
+
+def typestore() -> Any:
+    """The ROS 2 Jazzy message types of ``rosbags`` (built once: it is not free)."""
+    global _TYPESTORE
+    if _TYPESTORE is None:
+        from rosbags.typesys import Stores, get_typestore
+
+        _TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+    return _TYPESTORE
+
+
+def qos_of(spec: TopicSpec) -> Any:
+    """The rosbags ``Qos`` record of a :class:`TopicSpec` (what goes into ``offered_qos_profiles``)."""
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+
+    never = QosTime(0x7FFFFFFF, 0xFFFFFFFF)  # rmw's "infinite" duration, as ros2 bag writes it
+    return Qos(QosHistory.KEEP_LAST, spec.depth,
+               QosReliability.RELIABLE if spec.reliable else QosReliability.BEST_EFFORT,
+               QosDurability.TRANSIENT_LOCAL if spec.transient_local else QosDurability.VOLATILE,
+               never, never, QosLiveliness.AUTOMATIC, never, False)
+
+
+def to_ns(t: float) -> int:
+    """Sim seconds -> non-negative integer nanoseconds (a bag's timestamps are unsigned)."""
+    return max(0, round(float(t) * 1e9))
+
+
+class MissionBag:
+    """Write one mission into a new rosbag2 directory ``path`` (MCAP storage); see the module docstring.
+
+    Args:
+        path: the bag directory; it must not exist (rosbag2 never overwrites a bag).
+        mission: JSON-able facts about the run (world, maneuver, seed, profile), written on /bt_nav/mission.
+        flush_every: sim seconds between two :meth:`flush` calls (what a kill can lose at most; 0: never).
+
+    Raises:
+        BagError: when the directory exists or cannot be created.
+    """
+
+    def __init__(self, path: str | Path, mission: dict[str, Any] | None = None, flush_every: float = 1.0) -> None:
+        from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+
+        self.path = Path(path)
+        self.ts = typestore()
+        try:
+            self._writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
+            self._writer.open()
+        except (WriterError, OSError) as exc:
+            raise BagError(f"cannot write bag {self.path}: {exc}") from exc
+        self._connections: dict[str, Any] = {}
+        self._last_tree: str | None = None
+        self.counts: dict[str, int] = {}
+        self.closed = False
+        self._flush_ns = to_ns(flush_every)
+        self._flushed_at = 0
+        T = self.ts.types
+        self._Time, self._Header, self._String = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"], \
+            T["std_msgs/msg/String"]
+        if mission is not None:
+            self.mission(0.0, mission)
+
+    # ------------------------------------------------------------------ low level
+    def connection(self, topic: str, msgtype: str | None = None, qos: Any = None) -> Any:
+        """The writer's connection for ``topic`` (created on first use with :data:`TOPICS`' type and QoS)."""
+        conn = self._connections.get(topic)
+        if conn is None:
+            spec = TOPICS.get(topic)
+            msgtype = msgtype or (spec.msgtype if spec else None)
+            if msgtype is None:
+                raise BagError(f"{self.path}: no message type known for topic {topic}")
+            profiles = [qos] if qos is not None else ([qos_of(spec)] if spec else [])
+            conn = self._writer.add_connection(topic, msgtype, typestore=self.ts, offered_qos_profiles=profiles)
+            self._connections[topic] = conn
+        return conn
+
+    def write_raw(self, topic: str, t_ns: int, data: bytes, msgtype: str | None = None, qos: Any = None) -> None:
+        """One already serialised (CDR) message, e.g. from an rclpy ``raw=True`` subscription."""
+        self._writer.write(self.connection(topic, msgtype, qos), int(t_ns), data)
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+        if self._flush_ns and t_ns - self._flushed_at >= self._flush_ns:
+            self._flushed_at = int(t_ns)
+            self.flush()
+
+    def write(self, topic: str, t: float, msg: Any) -> None:
+        """One rosbags message object, serialised to CDR by rosbags."""
+        self.write_raw(topic, to_ns(t), bytes(self.ts.serialize_cdr(msg, msg.__msgtype__)), msg.__msgtype__)
+
+    def _header(self, t: float, frame: str) -> Any:
+        ns = to_ns(t)
+        return self._Header(stamp=self._Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id=frame)
+
+    # ------------------------------------------------------------------ the mission's messages
+    def clock(self, t: float) -> None:
+        """/clock (rosgraph_msgs/Clock)."""
+        ns = to_ns(t)
+        clock = self.ts.types["rosgraph_msgs/msg/Clock"]
+        self.write(CLOCK, t, clock(clock=self._Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)))
+
+    def scan(self, t: float, scan: Any) -> None:
+        """/scan (sensor_msgs/LaserScan) from a :class:`bt_nav.mission.scan.Scan` (or anything shaped like one)."""
+        T = self.ts.types
+        msg = T["sensor_msgs/msg/LaserScan"](
+            header=self._header(t, "base_scan"), angle_min=float(scan.angle_min), angle_max=float(scan.angle_max),
+            angle_increment=float(scan.angle_increment), time_increment=0.0, scan_time=0.0,
+            range_min=float(scan.range_min), range_max=float(scan.range_max),
+            ranges=np.asarray(scan.ranges, dtype=np.float32), intensities=np.zeros(0, dtype=np.float32))
+        self.write(SCAN, t, msg)
+
+    def _odometry(self, t: float, frame: str, x: float, y: float, yaw: float, v: float, w: float) -> Any:
+        T = self.ts.types
+        Vector3 = T["geometry_msgs/msg/Vector3"]
+        pose = T["geometry_msgs/msg/Pose"](
+            position=T["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=0.0),
+            orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(0.5 * yaw), w=math.cos(0.5 * yaw)))
+        twist = T["geometry_msgs/msg/Twist"](linear=Vector3(x=float(v), y=0.0, z=0.0),
+                                             angular=Vector3(x=0.0, y=0.0, z=float(w)))
+        cov = np.zeros(36, dtype=np.float64)
+        return T["nav_msgs/msg/Odometry"](
+            header=self._header(t, frame), child_frame_id="base_footprint",
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=cov),
+            twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=cov.copy()))
+
+    def odom(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None:
+        """/odom (nav_msgs/Odometry, frame ``odom``): what the executive sees, slip included."""
+        self.write(ODOM, t, self._odometry(t, "odom", x, y, yaw, v, w))
+
+    def ground_truth(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None:
+        """/ground_truth_odom (nav_msgs/Odometry, frame ``world``): the referee's view."""
+        self.write(TRUTH, t, self._odometry(t, "world", x, y, yaw, v, w))
+
+    def cmd(self, t: float, v: float, w: float) -> None:
+        """/cmd_vel (geometry_msgs/Twist)."""
+        T = self.ts.types
+        Vector3 = T["geometry_msgs/msg/Vector3"]
+        self.write(CMD, t, T["geometry_msgs/msg/Twist"](linear=Vector3(x=float(v), y=0.0, z=0.0),
+                                                         angular=Vector3(x=0.0, y=0.0, z=float(w))))
+
+    def string(self, topic: str, t: float, text: str) -> None:
+        """A std_msgs/String on ``topic``."""
+        self.write(topic, t, self._String(data=str(text)))
+
+    def tree(self, t: float, snapshot: str) -> None:
+        """/bt_nav_executive/tree, only when the text changed (as the executive publishes ``~/tree``)."""
+        if snapshot != self._last_tree:
+            self._last_tree = snapshot
+            self.string(TREE, t, snapshot)
+
+    def event(self, t: float, text: str) -> None:
+        """/bt_nav/events: one mission log line."""
+        self.string(EVENTS, t, text)
+
+    def collision(self, t: float, x: float, y: float, yaw: float = 0.0) -> None:
+        """/collisions: the simulator's JSON collision event."""
+        self.string(COLLISIONS, t, json.dumps({"t": round(t, 4), "x": x, "y": y, "yaw": yaw}))
+
+    def mission(self, t: float, info: dict[str, Any]) -> None:
+        """/bt_nav/mission: JSON facts about the run (world, maneuver, seed, profile, verdict...)."""
+        self.string(MISSION, t, json.dumps(info, sort_keys=True, default=str))
+
+    # ------------------------------------------------------------------ life cycle
+    def flush(self) -> None:
+        """Put everything written so far on disk as a complete MCAP chunk, so a kill loses nothing before it.
+
+        rosbags keeps the open chunk in memory until it reaches 1 MiB; closing it early costs one small
+        chunk record. (Uses the MCAP storage's ``close_chunk``; a no-op if a rosbags version lacks it.)
+        """
+        storage = getattr(self._writer, "storage", None)
+        chunk = getattr(storage, "chunk", None)
+        if storage is None or chunk is None or not hasattr(storage, "close_chunk"):
+            return
+        if chunk.bio.tell():
+            storage.close_chunk()
+        storage.bio.flush()
+
+    def close(self) -> None:
+        """Finish the MCAP file and write ``metadata.yaml``; idempotent."""
+        if not self.closed:
+            self.closed = True
+            self._writer.close()
+
+    def __enter__(self) -> MissionBag:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

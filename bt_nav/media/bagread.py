@@ -1,0 +1,254 @@
+"""Read a mission bag back: :func:`read_bag` -> :class:`MissionRecord`, plain numpy arrays for replay, plots,
+the video and the browser view.
+
+Two ways in, both through maintained libraries:
+
+1. a complete bag (``metadata.yaml`` + ``.mcap``): the ``rosbags`` reader;
+2. a bag cut short (the recorder was killed: no ``metadata.yaml``, or an ``.mcap`` without its summary):
+   the ``mcap`` package's stream reader walks the file record by record and stops at the cut, so
+   everything up to the last complete chunk is kept; :attr:`MissionRecord.truncated` says so.
+
+Either way the CDR payloads are decoded by rosbags' typestore. A file that yields nothing raises
+:class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bt_nav.media.bag import CMD, COLLISIONS, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, BagError, typestore
+from bt_nav.mission.geometry import yaw_from_quaternion
+
+
+@dataclass
+class Poses:
+    """Odometry samples: time (sim s), pose and body twist, one entry per message."""
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    yaw: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+
+    @classmethod
+    def from_rows(cls, rows: list[tuple[float, ...]]) -> Poses:
+        """From (t, x, y, yaw, v, w) rows."""
+        a = np.asarray(rows, dtype=np.float64).reshape(-1, 6)
+        return cls(*(a[:, i].copy() for i in range(6)))
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def distance(self) -> np.ndarray:
+        """Distance travelled up to each sample, m."""
+        if len(self) < 2:
+            return np.zeros(len(self))
+        steps = np.hypot(np.diff(self.x), np.diff(self.y))
+        return np.concatenate(([0.0], np.cumsum(steps)))
+
+
+@dataclass
+class Scans:
+    """LaserScans: times, beam angles (from the first scan) and one row of ranges per scan (NaN = no return)."""
+
+    t: np.ndarray
+    angles: np.ndarray
+    ranges: np.ndarray  # (n_scans, n_beams) float32
+    range_max: float = 3.5
+
+
+@dataclass
+class MissionRecord:
+    """Everything a mission bag holds, decoded."""
+
+    path: Path
+    counts: dict[str, int]
+    truth: Poses
+    odom: Poses
+    scans: Scans
+    cmd: np.ndarray  # (n, 3): t, v, w
+    trees: list[tuple[float, str]] = field(default_factory=list)
+    events: list[tuple[float, str]] = field(default_factory=list)
+    collisions: list[dict[str, Any]] = field(default_factory=list)
+    mission: dict[str, Any] = field(default_factory=dict)
+    start: float = 0.0
+    end: float = 0.0
+    truncated: bool = False
+
+    @property
+    def duration(self) -> float:
+        """Sim seconds from the first to the last message."""
+        return max(0.0, self.end - self.start)
+
+
+def bag_files(path: str | Path) -> tuple[Path, list[Path]]:
+    """(bag directory or file, its .mcap files); BagError naming ``path`` when there is none."""
+    p = Path(path)
+    if p.is_file():
+        return p, [p]
+    if p.is_dir():
+        files = sorted(p.glob("*.mcap"))
+        if files:
+            return p, files
+        raise BagError(f"{p}: no .mcap file in this directory (not an MCAP rosbag2 bag)")
+    raise BagError(f"{p}: no such bag (directory or .mcap file)")
+
+
+def _rosbags_messages(bag: Path) -> Iterator[tuple[str, str, int, bytes]]:
+    """(topic, msgtype, t_ns, cdr) through the rosbags reader (complete bags only)."""
+    from rosbags.rosbag2 import Reader
+
+    with Reader(bag) as reader:
+        for conn, t_ns, data in reader.messages():
+            yield conn.topic, conn.msgtype, t_ns, bytes(data)
+
+
+def _stream_messages(files: list[Path], status: dict[str, Any]) -> Iterator[tuple[str, str, int, bytes]]:
+    """(topic, msgtype, t_ns, cdr) record by record with the ``mcap`` stream reader, stopping at a cut."""
+    from mcap.exceptions import McapError
+    from mcap.records import Channel, Message, Schema
+    from mcap.stream_reader import StreamReader
+
+    for file in files:
+        schemas: dict[int, str] = {}
+        channels: dict[int, tuple[str, str]] = {}
+        with file.open("rb") as stream:
+            try:
+                for record in StreamReader(stream, skip_magic=False).records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record.name
+                    elif isinstance(record, Channel):
+                        channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
+                    elif isinstance(record, Message) and record.channel_id in channels:
+                        topic, msgtype = channels[record.channel_id]
+                        yield topic, msgtype, record.log_time, record.data
+            except (McapError, EOFError, ValueError, OSError) as exc:
+                status["truncated"] = True
+                detail = str(exc) or "the file ends inside a record"
+                status["reason"] = f"{file}: cut short or damaged ({type(exc).__name__}: {detail})"
+
+
+def iter_messages(path: str | Path, status: dict[str, Any] | None = None) -> Iterator[tuple[str, str, int, bytes]]:
+    """Every message of a bag as (topic, msgtype, t_ns, cdr), complete or cut short (see the module docstring).
+
+    ``status`` (a dict) receives ``truncated`` and ``reason`` when the stream reader had to stop early.
+    """
+    from rosbags.rosbag2 import ReaderError
+
+    bag, files = bag_files(path)
+    status = status if status is not None else {}
+    if bag.is_dir() and (bag / "metadata.yaml").is_file():
+        try:
+            yield from _rosbags_messages(bag)
+            return
+        except (ReaderError, OSError, ValueError, KeyError) as exc:
+            status["reason"] = f"{bag}: {exc}"  # fall through: read what the file holds
+    status.setdefault("truncated", True)  # no (usable) metadata: the writer did not finish
+    yield from _stream_messages(files, status)
+
+
+def _pose_row(t: float, msg: Any) -> tuple[float, ...]:
+    p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
+    return t, p.x, p.y, yaw_from_quaternion(q.x, q.y, q.z, q.w), tw.linear.x, tw.angular.z
+
+
+class _Collector:
+    """Decoded messages sorted into the record's fields."""
+
+    def __init__(self) -> None:
+        self.truth: list[tuple[float, ...]] = []
+        self.odom: list[tuple[float, ...]] = []
+        self.scan_t: list[float] = []
+        self.scan_rows: list[np.ndarray] = []
+        self.scan_meta: tuple[float, float, float] | None = None
+        self.cmd: list[tuple[float, float, float]] = []
+        self.trees: list[tuple[float, str]] = []
+        self.events: list[tuple[float, str]] = []
+        self.collisions: list[dict[str, Any]] = []
+        self.mission: dict[str, Any] = {}
+        self.counts: dict[str, int] = {}
+        self.t_min, self.t_max = float("inf"), float("-inf")
+
+    def add(self, topic: str, t: float, msg: Any) -> None:
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+        self.t_min, self.t_max = min(self.t_min, t), max(self.t_max, t)
+        if topic == TRUTH:
+            self.truth.append(_pose_row(t, msg))
+        elif topic == ODOM:
+            self.odom.append(_pose_row(t, msg))
+        elif topic == SCAN:
+            self._scan(t, msg)
+        elif topic == CMD:
+            self.cmd.append((t, msg.linear.x, msg.angular.z))
+        elif topic == TREE:
+            self.trees.append((t, msg.data))
+        elif topic == EVENTS:
+            self.events.append((t, msg.data))
+        elif topic == COLLISIONS:
+            self.collisions.append(_json_or_text(msg.data))
+        elif topic == MISSION:
+            info = _json_or_text(msg.data)
+            self.mission.update(info)
+
+    def _scan(self, t: float, msg: Any) -> None:
+        ranges = np.asarray(msg.ranges, dtype=np.float32)
+        if self.scan_meta is None:
+            self.scan_meta = (msg.angle_min, msg.angle_increment, msg.range_max)
+        if self.scan_rows and ranges.shape != self.scan_rows[0].shape:
+            return  # a scan of another geometry cannot share the table; the first one wins
+        self.scan_t.append(t)
+        self.scan_rows.append(ranges)
+
+    def record(self, path: Path, truncated: bool) -> MissionRecord:
+        n_beams = self.scan_rows[0].shape[0] if self.scan_rows else 0
+        a0, da, rmax = self.scan_meta or (0.0, 0.0, 3.5)
+        scans = Scans(np.asarray(self.scan_t), a0 + da * np.arange(n_beams),
+                      np.vstack(self.scan_rows) if self.scan_rows else np.zeros((0, 0), np.float32), float(rmax))
+        return MissionRecord(path=path, counts=self.counts, truth=Poses.from_rows(self.truth),
+                             odom=Poses.from_rows(self.odom), scans=scans,
+                             cmd=np.asarray(self.cmd, dtype=np.float64).reshape(-1, 3), trees=self.trees,
+                             events=self.events, collisions=self.collisions, mission=self.mission,
+                             start=self.t_min if self.counts else 0.0, end=self.t_max if self.counts else 0.0,
+                             truncated=truncated)
+
+
+def _json_or_text(text: str) -> dict[str, Any]:
+    try:
+        value = json.loads(text)
+    except ValueError:
+        return {"text": text}
+    return value if isinstance(value, dict) else {"value": value}
+
+
+def read_bag(path: str | Path) -> MissionRecord:
+    """Decode a mission bag (a rosbag2 directory or its ``.mcap`` file) into a :class:`MissionRecord`.
+
+    Raises:
+        BagError: no such bag, not MCAP, or not one message could be read (the message names the file).
+    """
+    ts = typestore()
+    status: dict[str, Any] = {}
+    rec = _Collector()
+    try:
+        for topic, msgtype, t_ns, data in iter_messages(path, status):
+            try:
+                msg = ts.deserialize_cdr(data, msgtype)
+            except Exception:  # noqa: BLE001 - a corrupt payload or an unknown type: skip that message
+                status["skipped"] = status.get("skipped", 0) + 1
+                continue
+            rec.add(topic, t_ns * 1e-9, msg)
+    except BagError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - whatever a damaged file makes a library raise
+        raise BagError(f"{path}: cannot read this bag: {exc}") from exc
+    if not rec.counts:
+        why = status.get("reason", "no messages")
+        raise BagError(f"{path}: no readable message in this bag ({why})")
+    return rec.record(Path(path), bool(status.get("truncated")))

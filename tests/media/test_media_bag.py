@@ -1,0 +1,104 @@
+"""Mission bags: lock-step writes a real rosbag2 (MCAP) bag that rosbags and mcap both read; bad bags fail clearly."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from bt_nav.media.bag import CLOCK, COLLISIONS, EVENTS, SCAN, TOPICS, TREE, BagError, MissionBag
+from bt_nav.media.bagread import read_bag
+
+EXPECTED = [topic for topic in TOPICS if topic != COLLISIONS]  # no collision in this mission
+
+
+def test_rosbags_reader_counts_every_topic(mission_bag: Path) -> None:
+    from rosbags.rosbag2 import Reader
+
+    with Reader(mission_bag) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+        types = {c.topic: c.msgtype for c in reader.connections}
+    for topic in EXPECTED:
+        assert counts.get(topic, 0) > 0, topic
+        assert types[topic] == TOPICS[topic].msgtype
+
+
+def test_mcap_reader_agrees(mission_bag: Path) -> None:
+    from mcap.reader import make_reader
+
+    (file,) = mission_bag.glob("*.mcap")
+    with file.open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    counts = {ch.topic: summary.statistics.channel_message_counts[cid] for cid, ch in summary.channels.items()}
+    assert counts == read_bag(mission_bag).counts
+    schemas = {summary.schemas[ch.schema_id].encoding for ch in summary.channels.values()}
+    assert schemas == {"ros2msg"}
+
+
+def test_metadata_has_mcap_storage_and_qos(mission_bag: Path) -> None:
+    meta = yaml.safe_load((mission_bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert meta["storage_identifier"] == "mcap"
+    qos = {t["topic_metadata"]["name"]: t["topic_metadata"]["offered_qos_profiles"]
+           for t in meta["topics_with_message_count"]}
+    assert "reliability: 2" in str(qos[SCAN]) or "best_effort" in str(qos[SCAN])  # scans are best effort
+    assert qos[TREE]  # every topic carries its offered QoS
+
+
+def test_timestamps_are_sim_time(mission_bag: Path) -> None:
+    rec = read_bag(mission_bag)
+    assert rec.start == pytest.approx(0.0, abs=0.02)
+    assert rec.end == pytest.approx(12.0, abs=0.1)
+    assert rec.truth.t[-1] <= rec.end and rec.scans.t.size > 10
+    assert any("armed" in text for _, text in rec.events)
+    assert rec.mission["world"] == "stage_4" and not rec.truncated
+    assert all(a[1] != b[1] for a, b in zip(rec.trees, rec.trees[1:], strict=False)), "tree written on change only"
+
+
+def test_cut_bag_reads_up_to_the_cut(mission_bag: Path, tmp_path: Path) -> None:
+    (file,) = mission_bag.glob("*.mcap")
+    data = file.read_bytes()
+    cut = tmp_path / "cut"
+    cut.mkdir()
+    (cut / "cut.mcap").write_bytes(data[: len(data) * 2 // 3])  # no summary, no metadata.yaml
+    rec = read_bag(cut)
+    full = read_bag(mission_bag)
+    assert rec.truncated
+    assert 0 < rec.counts[CLOCK] < full.counts[CLOCK]
+    assert 0 < rec.duration < full.duration
+
+
+@pytest.mark.parametrize("content", [b"", b"\x89MCAP0\r\n" + b"\x00" * 7, b"not a bag at all" * 20])
+def test_corrupt_bag_names_the_file(tmp_path: Path, content: bytes) -> None:
+    file = tmp_path / "broken.mcap"
+    file.write_bytes(content)
+    with pytest.raises(BagError, match="broken.mcap"):
+        read_bag(file)
+
+
+def test_missing_bag_names_the_path(tmp_path: Path) -> None:
+    with pytest.raises(BagError, match="nowhere"):
+        read_bag(tmp_path / "nowhere")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(BagError, match="empty"):
+        read_bag(tmp_path / "empty")
+
+
+def test_killed_writer_leaves_a_readable_bag(tmp_path: Path) -> None:
+    """A writer that dies without close() (os._exit, as after SIGKILL) keeps what flush() put on disk."""
+    bag = tmp_path / "killed"
+    code = (f"import os\nfrom bt_nav.media.bag import MissionBag\nb = MissionBag({str(bag)!r}, flush_every=0)\n"
+            "for i in range(50):\n    b.clock(i * 0.1)\n    b.event(i * 0.1, f'line {i}')\n"
+            "b.flush()\nb.clock(99.0)\nos._exit(0)\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+    assert not (bag / "metadata.yaml").exists()
+    rec = read_bag(bag)
+    assert rec.truncated and rec.counts[CLOCK] == 50 and rec.counts[EVENTS] == 50
+    assert rec.end == pytest.approx(4.9)
+
+
+def test_existing_directory_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(BagError, match="exists"):
+        MissionBag(tmp_path)
