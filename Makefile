@@ -7,9 +7,9 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.bt_nav-installed
 
-# DDS never leaves this machine; each target gets its own domain (tests pick their own per process).
+# DDS never leaves this machine. No fixed ROS_DOMAIN_ID here: every run claims a domain of its own
+# (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
-export ROS_DOMAIN_ID ?= 57
 
 .PHONY: all venv test lint demo bench faults tree-svg colcon-check clean
 

@@ -121,3 +121,38 @@ def test_with_real_launch_ros_when_available() -> None:
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
         assert module.generate_launch_description().entities
+
+
+def _bringup_default(declared: dict, node, parameter: str):
+    """The value ``parameter`` of the executive gets when the launch runs with default arguments."""
+    value = node.kwargs["parameters"][-1][parameter]
+    argument = value.args[0].args[0]
+    text = declared[argument]["default_value"]
+    kind = value.kwargs["value_type"]
+    return kind(text == "true") if kind is bool else kind(text)
+
+
+def test_bringup_publishes_the_cmd_vel_type_the_turtlebot3_jazzy_stack_expects(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The launch file states (and cites) what the TurtleBot3 Jazzy stack subscribes to on /cmd_vel; the
+    executive it starts, with default arguments, must publish exactly that type with the stated frame."""
+    import re
+
+    from bt_nav.mission.profiles import file_parameters
+
+    path = LAUNCH / "turtlebot_bringup.launch.py"
+    module, description = run_launch_file(path, monkeypatch)
+    stated = re.search(r"subscribes to (geometry_msgs/\w+) on /cmd_vel", module.__doc__)
+    assert stated, "the launch file must state the /cmd_vel type it targets"
+    assert "enable_stamped_cmd_vel" in module.__doc__ and "turtlebot3_simulations" in module.__doc__  # cited
+    entities = description.args[0]
+    declared = {e.args[0]: e.kwargs for e in entities if type(e).__name__ == "DeclareLaunchArgument"}
+    (node,) = [e for e in entities if type(e).__name__ == "Node"]
+    stamped = _bringup_default(declared, node, "cmd_vel_stamped")
+    published = "geometry_msgs/TwistStamped" if stamped else "geometry_msgs/Twist"
+    assert published == stated.group(1)
+    assert _bringup_default(declared, node, "frame_id") == "base_footprint"
+    assert node.kwargs["parameters"][-1]["cmd_vel_stamped"].kwargs["value_type"] is bool
+    # the TurtleBot3 params file says the same (one story for launch and file users)
+    tb3 = file_parameters(ROOT / "config" / "turtlebot3.yaml")
+    assert (tb3["cmd_vel_stamped"], tb3["frame_id"]) == (stamped, "base_footprint")

@@ -22,8 +22,20 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
     "replay": ("bt_nav.cli.replay", "print a recorded tick trace tick by tick, or render one tick"),
     "watch": ("bt_nav.cli.watch", "print the executive's ~/tree snapshots as they change"),
+    "record": ("bt_nav.cli.record", "record the live graph into a rosbag2 (MCAP) bag"),
+    "video": ("bt_nav.cli.video", "film a recorded mission (bag) as an H.264 MP4"),
+    "view": ("bt_nav.cli.view", "serve the live (or recorded) mission in a browser on 127.0.0.1"),
     "arm": ("bt_nav.cli.arm", "arm (or --off: disarm) a running executive through its SetBool service"),
 }
+
+
+def plain(text: str) -> str:
+    """Docstring text as plain ``--help`` text: reStructuredText roles and literals (``:func:`x```,
+    double backquotes) reduced to their words, so help reads as prose in a terminal."""
+    import re
+
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", text)
+    return text.replace("``", "")
 
 
 def usage() -> str:

@@ -19,7 +19,12 @@ EXTRA_ARGUMENTS: dict[str, tuple[str, str]] = {
     "seed": ("0", "seed of the simulator's noise and generated worlds"),
     "real_time_factor": ("1.0", "simulator speed (0: as fast as the executive keeps up)"),
     "results_json": ("", "where the referee writes its verdict (empty: not written)"),
+    "stamped": ("true", "cmd_vel as geometry_msgs/TwistStamped (what the TurtleBot3 Jazzy stack expects); "
+                "false: Twist, for turtlebot3_node with enable_stamped_cmd_vel: false (e.g. Humble)"),
+    "stamped_frame_id": ("base_footprint", "header.frame_id of stamped commands (TurtleBot3's base frame)"),
 }
+#: Launch arguments that are not in the parameter table but are not strings either.
+_EXTRA_TYPES: dict[str, type] = {"use_sim_time": bool, "stamped": bool}
 
 _TYPES = {bool: bool, int: int, float: float, str: str}
 
@@ -53,7 +58,7 @@ def typed(name: str) -> Any:
     from launch.substitutions import LaunchConfiguration
     from launch_ros.parameter_descriptions import ParameterValue
 
-    python_type = type(SPECS[name].default) if name in SPECS else bool if name == "use_sim_time" else str
+    python_type = type(SPECS[name].default) if name in SPECS else _EXTRA_TYPES.get(name, str)
     return ParameterValue(LaunchConfiguration(name), value_type=_TYPES[python_type])
 
 

@@ -129,7 +129,7 @@ class RefereeNode(Node):
         """The activate client, the evaluate server, the inputs, and the sim_sync heartbeat if ``sync``."""
         self.activate_client = self.create_client(SetBool, self.activate_name)
         self.create_service(Trigger, str(p["evaluate_service"]), self._on_evaluate)
-        self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,
+        self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,  # (msg, info): see _own_truth
                                  QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(String, "collisions", self._on_collision, QoSProfile(depth=50))
         self._cmd_vel_seen = not bool(p["wait_for_cmd_vel"])
@@ -154,6 +154,8 @@ class RefereeNode(Node):
         self.exit_code = EXIT_FAILED
         self.timed_out = False
         self.calls = 0
+        self._truth_seq: int | None = None  # publication sequence number of the last ground truth
+        self.foreign: str | None = None  # why the judged messages cannot all be this run's
 
     # -------------------------------------------------------------- time
     def now(self) -> float:
@@ -165,7 +167,7 @@ class RefereeNode(Node):
         """Called between executor spins: start, wall timeout, finishing."""
         if self.finished:
             return
-        if time.monotonic() - self.wall_start > self.timeout:
+        if time.monotonic() - self.wall_start > self.timeout or self.foreign is not None:
             self._give_up()
             return
         self._expire_calls()
@@ -316,7 +318,25 @@ class RefereeNode(Node):
                                f"{response.message}")
         return response
 
-    def _on_truth(self, msg: Any) -> None:
+    def _own_truth(self, info: Any) -> bool:
+        """Ground truth must come from one simulator: a second publisher in this ROS domain (another
+        run sharing ROS_DOMAIN_ID) interleaves its robot's poses, and summing two robots' poses reports
+        distances nobody drove. One publisher's sequence numbers only grow; a step back is someone else."""
+        seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+        if seq is None or self.foreign is not None:
+            return self.foreign is None
+        if self._truth_seq is not None and seq <= self._truth_seq:
+            names = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                           for i in self.get_publishers_info_by_topic("ground_truth_odom"))
+            self.foreign = (f"ground_truth_odom comes from more than one simulator ({', '.join(names) or 'unknown'}):"
+                            " another run shares this ROS_DOMAIN_ID")
+            return False
+        self._truth_seq = seq
+        return True
+
+    def _on_truth(self, msg: Any, info: Any = None) -> None:
+        if not self._own_truth(info):
+            return
         if not self.started:
             self._truth_seen = True
             return
@@ -352,12 +372,16 @@ class RefereeNode(Node):
     def _give_up(self) -> None:
         self.leave()
         self.finished = True
-        self.timed_out = True
+        self.timed_out = self.foreign is None
         self.exit_code = EXIT_TIMEOUT
         state = "before t0 (the activate service or /clock never came)" if not self.started else \
             f"at t={self.now() - (self.referee.t0 or 0.0):.2f} s of the schedule"
-        print(f"TIMEOUT: no verdict after {self.timeout:g} s wall, {state}; provisional report:")
-        lines = self.referee.report_lines()
+        if self.foreign is not None:  # nothing measured can be trusted: no figures at all
+            print(f"NO VERDICT: {self.foreign}; set a ROS_DOMAIN_ID of its own for each run")
+            lines = []
+        else:
+            print(f"TIMEOUT: no verdict after {self.timeout:g} s wall, {state}; provisional report:")
+            lines = self.referee.report_lines()
         for line in lines:
             print(line)
         sys.stdout.flush()
@@ -370,6 +394,7 @@ class RefereeNode(Node):
         results.update({
             "report_lines": lines,
             "timed_out": self.timed_out,
+            "foreign": self.foreign,
             "config": asdict(self.config),
             "wall_time_s": round(time.monotonic() - self.wall_start, 3),
             "activate_calls": self.calls,
