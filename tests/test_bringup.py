@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from bt_nav.cli.demo import tip_from_snapshot
-from bt_nav.ros import bringup
+from bt_nav.ros import bringup, supervise
 from bt_nav.ros.bringup import NodeSpec, choose_domain_id, nodes, param_arg, parse_assignments
 
 
@@ -84,12 +84,31 @@ def test_parse_assignments() -> None:
         parse_assignments(["novalue"])
 
 
-def test_domain_id(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_domain_id(monkeypatch: pytest.MonkeyPatch, tmp_path) -> None:
     assert choose_domain_id(42) == 42
     monkeypatch.setenv("ROS_DOMAIN_ID", "7")
-    assert choose_domain_id() == 7
+    assert choose_domain_id() == 7  # the user's choice is kept
     monkeypatch.delenv("ROS_DOMAIN_ID")
-    assert all(100 <= choose_domain_id() <= 200 for _ in range(50))
+    monkeypatch.setenv("TMPDIR", str(tmp_path))  # private lock files: this test's claims only
+    monkeypatch.setenv("BT_NAV_DOMAIN_RANGE", "140-142")
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    claimed = {choose_domain_id() for _ in range(3)}
+    assert claimed == {140, 141, 142}, "concurrent runs (claims held by this process) never share a domain"
+    monkeypatch.setenv("BT_NAV_DOMAIN_RANGE", "9-x")
+    with pytest.raises(ValueError, match="BT_NAV_DOMAIN_RANGE"):
+        choose_domain_id()
+    monkeypatch.delenv("BT_NAV_DOMAIN_RANGE")
+    assert supervise.launcher_domains() == (100, 199)
+
+
+def test_arm_hint_names_the_domain_and_the_service() -> None:
+    hint = bringup.arm_hint(nodes("homework"), 123)
+    assert hint is not None and hint.startswith("ROS_DOMAIN_ID=123 ")
+    assert hint.endswith(" arm --service /reactive_control/activate")
+    assert bringup.arm_hint(nodes("lab"), 5).endswith("arm --service /toggle_navigation")
+    assert bringup.arm_hint(nodes("eval"), 5) is None  # the referee arms
 
 
 def test_child_env_is_local(monkeypatch: pytest.MonkeyPatch) -> None:

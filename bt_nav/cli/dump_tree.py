@@ -18,6 +18,7 @@ from typing import Any
 
 import py_trees
 
+from bt_nav.cli import plain
 from bt_nav.mission.behaviours import LEAF_CLASSES
 from bt_nav.mission.behaviours.base import Condition
 from bt_nav.mission.core import strip_ansi
@@ -153,7 +154,8 @@ def render(maneuver: str = "none", fmt: str = "unicode") -> str | bytes:
 
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav dump-tree``."""
-    parser = argparse.ArgumentParser(prog="bt-nav dump-tree", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="bt-nav dump-tree", description=plain(__doc__),
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--maneuver", default="none", help="none, A, B, C (or their names)")
     parser.add_argument("--format", default="unicode", choices=FORMATS)
     parser.add_argument("-o", "--output", help="write to this file instead of stdout")

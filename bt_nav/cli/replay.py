@@ -14,6 +14,7 @@ from typing import Any
 
 import py_trees
 
+from bt_nav.cli import plain
 from bt_nav.cli.dump_tree import GraphvizMissingError, graphviz, tree_to_dot
 from bt_nav.mission.core import strip_ansi
 from bt_nav.mission.trace import read_trace
@@ -37,17 +38,29 @@ def summary(line: dict[str, Any]) -> str:
     return text + (f"  | {changed}" if changed else "")
 
 
+def picture_format(path: str) -> str | None:
+    """The graphviz format a picture file's extension asks for (svg, png), None for anything else: a
+    ``.png`` that holds SVG text opens nowhere."""
+    suffix = Path(path).suffix.lower().lstrip(".")
+    return suffix if suffix in ("svg", "png") else None
+
+
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav replay``."""
-    parser = argparse.ArgumentParser(prog="bt-nav replay", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="bt-nav replay", description=plain(__doc__),
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("trace", help="a JSON-lines trace written by a lock-step or ROS run")
     parser.add_argument("--tick", type=int, help="only this tick")
     parser.add_argument("--from", dest="first", type=int, default=0, help="first tick to show")
     parser.add_argument("--to", dest="last", type=int, default=None, help="last tick to show")
     parser.add_argument("--compact", action="store_true", help="one line per tick, no tree")
     parser.add_argument("--changes-only", action="store_true", help="skip ticks whose tip and command repeat")
-    parser.add_argument("--svg", help="render --tick as svg with statuses coloured (needs graphviz)")
+    parser.add_argument("--svg", metavar="FILE", help="render --tick as a picture with statuses coloured, "
+                        "in the format of FILE's extension: .svg or .png (needs graphviz)")
     args = parser.parse_args(argv)
+    fmt = picture_format(args.svg) if args.svg else None
+    if args.svg and fmt is None:
+        parser.error(f"--svg {args.svg}: unknown picture format; use a .svg or .png file name")
     try:
         header, ticks = read_trace(args.trace)
     except (OSError, ValueError) as exc:
@@ -56,6 +69,13 @@ def main(argv: list[str] | None = None) -> int:
     if not ticks:
         print(f"bt-nav replay: {args.trace} holds no ticks", file=sys.stderr)
         return 2
+    known = sorted(t["tick"] for t in ticks)
+    for option, value in (("--tick", args.tick), ("--from", args.first if args.first else None),
+                          ("--to", args.last)):
+        if value is not None and not known[0] <= value <= known[-1]:
+            print(f"bt-nav replay: {option} {value} is outside the trace's ticks {known[0]}..{known[-1]}",
+                  file=sys.stderr)
+            return 2
     root = load_tree(str(header.get("maneuver", "none")))
     feedback: dict[str, str] = {}
     if args.svg:
@@ -67,11 +87,11 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         statuses = line["statuses"]
         try:
-            svg = graphviz(tree_to_dot(root, statuses, title=summary(line)), "svg")
+            picture = graphviz(tree_to_dot(root, statuses, title=summary(line)), fmt)
         except GraphvizMissingError as exc:
             print(f"bt-nav replay: {exc}", file=sys.stderr)
             return 2
-        Path(args.svg).write_bytes(svg)
+        Path(args.svg).write_bytes(picture)
         print(f"wrote {args.svg}")
         return 0
     previous: tuple[str, Any] | None = None

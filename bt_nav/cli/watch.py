@@ -11,6 +11,8 @@ import argparse
 import sys
 import time
 
+from bt_nav.cli import plain
+
 
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav watch [--topic T] [--once] [--timeout S]`` (ROS arguments are passed to rclpy)."""
@@ -20,7 +22,8 @@ def main(argv: list[str] | None = None) -> int:
     from std_msgs.msg import String
 
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = argparse.ArgumentParser(prog="bt-nav watch", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="bt-nav watch", description=plain(__doc__),
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--topic", default="/bt_nav_executive/tree", help="the executive's ~/tree topic")
     parser.add_argument("--once", action="store_true", help="print the first snapshot and exit")
     parser.add_argument("--timeout", type=float, default=0.0, help="give up after this many seconds (0: never)")
