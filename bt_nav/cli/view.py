@@ -1,0 +1,144 @@
+"""``bt-nav view``: watch the mission in a browser: robot, scan, trajectory and the tree, live or from a bag.
+
+Live (default): a private node taps the graph (:class:`bt_nav.ros.graphtap.GraphTap`) and feeds
+:class:`bt_nav.media.view.LiveScene`; the world is the one the simulator's parameters name. With
+``--bag BAG`` the page plays the recorded mission back with a time slider instead (no ROS needed).
+The page is served on 127.0.0.1 unless ``--host`` says otherwise (standard-library HTTP server,
+server-sent events; :mod:`bt_nav.media.view`).
+
+``--foxglove`` also starts a Foxglove WebSocket server (``foxglove-sdk``, port ``--foxglove-port``)
+that forwards the same messages as ROS 2 CDR with their ``ros2msg`` schemas, so Foxglove shows them
+with its own panels (LaserScan, Odometry, ...).
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from typing import Any
+
+from bt_nav.media.bag import TOPICS, BagError, typestore
+
+
+class FoxgloveBridge:
+    """Forwards (topic, msgtype, t_ns, cdr) to a Foxglove WebSocket server, one channel per topic."""
+
+    def __init__(self, host: str, port: int) -> None:
+        import foxglove
+
+        self._foxglove = foxglove
+        self.server = foxglove.start_server(name="bt_nav", host=host, port=port)
+        self.channels: dict[str, Any] = {}
+        self.lock = threading.Lock()
+
+    def feed(self, topic: str, msgtype: str, t_ns: int, data: bytes, _qos: Any = None) -> None:
+        """One message (the GraphTap handler signature)."""
+        with self.lock:
+            channel = self.channels.get(topic)
+            if channel is None:
+                text, _ = typestore().generate_msgdef(msgtype)
+                schema = self._foxglove.Schema(name=msgtype, encoding="ros2msg", data=text.encode())
+                channel = self.channels[topic] = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr")
+        channel.log(data, log_time=int(t_ns))
+
+    def close(self) -> None:
+        """Stop the server."""
+        self.server.stop()
+
+
+def _world(name: str | None, seed: int) -> Any:
+    from bt_nav_sim.world import load_world
+
+    if not name:
+        return None
+    try:
+        return load_world(name, seed=seed)
+    except (OSError, ValueError, KeyError) as exc:
+        print(f"bt-nav view: cannot load world {name!r}: {exc}", file=sys.stderr)
+        return None
+
+
+def _live(args: argparse.Namespace, feeds: list[Any]) -> tuple[Any, Any]:
+    """A LiveScene fed from the graph (and the Foxglove bridge); returns (scene, node to close)."""
+    from bt_nav.cli.record import DEFAULT_TOPICS, ask_simulator
+    from bt_nav.media.view import LiveScene
+    from bt_nav.ros.graphtap import GraphTap
+    from bt_nav.ros.rosutil import ThreadedNode
+
+    ros = ThreadedNode("bt_nav_viewer")
+    scene = LiveScene()
+    handlers = [scene.feed, *feeds]
+
+    def feed(*message: Any) -> None:
+        for handler in handlers:
+            try:
+                handler(*message)
+            except Exception as exc:  # noqa: BLE001 - one undecodable message must not stop the view
+                ros.node.get_logger().warning(f"dropped a message on {message[0]}: {exc!r}",
+                                              throttle_duration_sec=5.0)
+
+    GraphTap(ros.node, DEFAULT_TOPICS, feed)
+    ros.start()
+    info = {} if args.world else ask_simulator(ros.node)
+    scene.world = _world(args.world or info.get("world"), int(args.seed if args.seed is not None
+                                                               else info.get("seed", 0) or 0))
+    return scene, ros
+
+
+def _bag(args: argparse.Namespace, feeds: list[Any]) -> Any:
+    from bt_nav.media.bagread import iter_messages, read_bag
+    from bt_nav.media.video import world_of
+    from bt_nav.media.view import BagScene
+
+    record = read_bag(args.bag)
+    for feed in feeds:  # Foxglove gets the whole bag at once (its own player shows the time line)
+        for topic, msgtype, t_ns, data in iter_messages(args.bag):
+            if topic in TOPICS:
+                feed(topic, msgtype, t_ns, data)
+    world = _world(args.world, args.seed or 0) if args.world else world_of(record)
+    return BagScene(record, world)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav view [--port P] [--host H] [--bag BAG] [--foxglove]``; runs until Ctrl-C."""
+    from bt_nav.media.view import ViewServer
+
+    parser = argparse.ArgumentParser(prog="bt-nav view", description=__doc__.splitlines()[0])
+    parser.add_argument("--port", type=int, default=8000, help="HTTP port (default 8000; 0: any free one)")
+    parser.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1: this machine)")
+    parser.add_argument("--bag", help="play this recorded bag back instead of the live graph")
+    parser.add_argument("--world", help="world to draw (default: the simulator's, or the bag's)")
+    parser.add_argument("--seed", type=int, default=None, help="seed of a generated --world")
+    parser.add_argument("--foxglove", action="store_true", help="also serve Foxglove's WebSocket protocol")
+    parser.add_argument("--foxglove-port", type=int, default=8765, help="Foxglove WebSocket port (default 8765)")
+    args = parser.parse_args(argv)
+    bridge = FoxgloveBridge(args.host, args.foxglove_port) if args.foxglove else None
+    feeds = [bridge.feed] if bridge else []
+    ros = None
+    try:
+        if args.bag:
+            scene = _bag(args, feeds)
+        else:
+            scene, ros = _live(args, feeds)
+        server = ViewServer(scene, args.host, args.port)
+    except (BagError, OSError) as exc:
+        print(f"bt-nav view: {exc}", file=sys.stderr)
+        if bridge:
+            bridge.close()
+        return 2
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    server.start()
+    print(f"bt-nav view: {server.url}" + (f"  (Foxglove: ws://{args.host}:{args.foxglove_port})" if bridge else ""),
+          flush=True)
+    while not stop.wait(0.5):
+        pass
+    server.close()
+    if ros is not None:
+        ros.close()
+    if bridge:
+        bridge.close()
+    return 0
