@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import os
+import re
 import shutil
+import signal
+import subprocess
+import sys
 import time
 from pathlib import Path
 
 import pytest
-from simtools import Proc
+from simtools import REPO, Proc
 
 WALL_LIMIT = 60.0
 
@@ -40,3 +45,53 @@ def test_demo_passes_and_writes_its_files(tmp_path: Path) -> None:
     assert (run / "trajectory.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the demo reports the speed of the mission
     assert any("x real time" in line for line in demo.stdout), demo.output()
+
+
+def _demo_env(**extra: str) -> dict[str, str]:
+    """The user's environment without a ROS_DOMAIN_ID: the demo must find a domain of its own."""
+    env = {k: v for k, v in os.environ.items() if k not in ("ROS_DOMAIN_ID", "BT_NAV_WATCHDOG_FD")}
+    env.update(extra)
+    return env
+
+
+@pytest.mark.slow
+def test_two_demos_at_once_are_isolated_and_both_pass(tmp_path: Path) -> None:
+    """Two demos started together (as two terminals would) claim different domains and run directories,
+    and each referee judges only its own robot: both pass, with distances one robot can drive."""
+    env = _demo_env(BT_NAV_DOMAIN_RANGE="140-159")  # this engineer's test range; users get 100-199
+    demos = [subprocess.Popen([sys.executable, "-m", "bt_nav.cli", "demo", "--out", str(tmp_path), "--quiet",
+                               "--timeout", "200"], cwd=REPO, env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, start_new_session=True) for _ in range(2)]
+    try:
+        outputs = [demo.communicate(timeout=300)[0] for demo in demos]
+    finally:
+        for demo in demos:
+            if demo.poll() is None:
+                os.killpg(demo.pid, signal.SIGKILL)
+    domains = [re.search(r"ROS_DOMAIN_ID=(\d+)", out)[1] for out in outputs]
+    dirs = [re.search(r"run directory (\S+)/", out)[1] for out in outputs]
+    assert domains[0] != domains[1] and all(140 <= int(d) <= 159 for d in domains), domains
+    assert dirs[0] != dirs[1] and all(Path(d).parent == tmp_path for d in dirs), dirs
+    for demo, out, run in zip(demos, outputs, dirs, strict=True):
+        assert demo.returncode == 0 and "overall: PASSED" in out, out
+        results = json.loads((Path(run) / "results.json").read_text())
+        assert results["passed"] and results["foreign"] is None
+        assert 8.0 <= results["travelled"] < 9.5, f"{results['travelled']} m: more than one robot can drive"
+        assert re.search(r"maneuvers fired: \d+", out), out
+        assert json.loads((Path(run) / "trajectory.json").read_text())["foreign_truth"] == 0
+
+
+def test_a_second_simulator_in_the_domain_means_no_verdict() -> None:
+    """One publisher's sequence numbers only grow: a step back is another simulator, and the referee
+    stops judging (no distance summed over two robots is ever reported)."""
+    from types import SimpleNamespace
+
+    from bt_nav_sim.nodes.referee import RefereeNode
+
+    info = SimpleNamespace(node_namespace="/", node_name="bt_nav_sim")
+    referee = SimpleNamespace(foreign=None, _truth_seq=None, get_publishers_info_by_topic=lambda topic: [info, info])
+    own = [RefereeNode._own_truth(referee, {"publication_sequence_number": n}) for n in (1, 2, 3)]
+    assert own == [True, True, True] and referee.foreign is None
+    assert RefereeNode._own_truth(referee, {"publication_sequence_number": 1}) is False  # the other run's first
+    assert "more than one simulator (/bt_nav_sim, /bt_nav_sim)" in referee.foreign
+    assert RefereeNode._own_truth(referee, {"publication_sequence_number": 4}) is False  # and stays refused
