@@ -11,7 +11,7 @@ STAMP := $(VENV)/.bt_nav-installed
 # (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean
+.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean browser
 
 all: test
 
@@ -26,7 +26,13 @@ venv: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
-test: $(STAMP) lint
+# The browser test drives Debian's chromium (never a downloaded browser): install it when missing.
+browser:
+	@command -v chromium >/dev/null 2>&1 || { test "$$(id -u)" = 0 && apt-get update -qq && \
+		DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; } || \
+		echo "warning: chromium missing and not installable here; tests/ros/test_view_browser.py will fail"
+
+test: $(STAMP) lint browser
 	$(BIN)/python -m pytest -q
 
 demo: $(STAMP)
