@@ -7,6 +7,7 @@ Benchmarks (``--only`` picks some, comma-separated):
 ``sim``      LiDAR scans/s, lock-step mission wall time, ROS-path real-time factor (:mod:`bench.sim_throughput`)
 ``quality``  referee verdicts over worlds x maneuvers x seeds (:mod:`bench.quality`)
 ``memory``   peak RSS of the executive during a ROS-path mission (:mod:`bench.memory`)
+``video``    bag a lock-step mission and film it: render time of a 55 s mission at 10 fps (:mod:`bench.video`)
 
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
 ``<out>/latest.md`` (the same as tables). With ``--only``, the sections not run this time are
@@ -35,9 +36,9 @@ from typing import Any
 
 from .common import DOMAIN_RANGE, REPO, Target, load_average, machine, now_iso
 
-BENCHMARKS = ("tick", "latency", "sim", "quality", "memory")
+BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video")
 #: The order they run in: the quiet single-process measurements first, the process pool last.
-ORDER = ("tick", "sim", "latency", "memory", "quality")
+ORDER = ("tick", "sim", "video", "latency", "memory", "quality")
 SCHEMA = 1
 DEFAULT_OUT = REPO / "bench" / "results"
 
@@ -128,6 +129,12 @@ class Session:
         self.latency_result = latency.run(domain, switches=switches)
         return self.latency_result
 
+    def video(self) -> dict[str, Any]:
+        """Benchmark 6."""
+        from . import video
+
+        return video.run(quick=self.quick)
+
     def quality(self) -> dict[str, Any]:
         """Benchmark 4."""
         from . import quality
@@ -147,6 +154,8 @@ def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
         from .sim_throughput import targets
     elif name == "quality":
         from .quality import targets
+    elif name == "video":
+        from .video import targets
     else:
         return []
     return targets(result)
