@@ -39,6 +39,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from bt_nav.cli import plain
+from bt_nav.cli.record import start_process as record_start
+from bt_nav.cli.record import stop_process as record_stop
 from bt_nav.ros.bringup import EXECUTIVE_NAME, cmd_vel_stamped, config_file, file_parameters, nodes, parse_assignments
 from bt_nav.ros.supervise import (
     Launcher,
@@ -206,6 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
                         help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
     parser.add_argument("--quiet", action="store_true", help="print only the verdict lines")
+    parser.add_argument("--bag", metavar="DIR", help="also record the run as a rosbag2 (MCAP) bag (bt-nav record)")
     return parser
 
 
@@ -323,6 +326,7 @@ def main(argv: list[str] | None = None) -> int:
     recorder = Recorder()
     logs = _Logs(run_dir, echo_logs=not opts.quiet, sim_time=recorder.sim_time)
     stamped = cmd_vel_stamped(specs)
+    bag = record_start(opts.bag, env, "--seed", str(opts.seed)) if opts.bag else None  # a process of its own
     launcher = Launcher(env, sink=logs.sink, stop=stop,
                         last_word=lambda: publish_zero_twist(domain, stamped=stamped))
     try:
@@ -331,6 +335,8 @@ def main(argv: list[str] | None = None) -> int:
         logs.quiet_from_now = True  # the shutdown's lines go to the log files only
         stop.closing = True
         launcher.shutdown()
+        if bag is not None:
+            print(f"bt-nav demo: bag {opts.bag}: {record_stop(bag)}", flush=True)
         rec = recorder.close()
         logs.close()
         stop.restore()

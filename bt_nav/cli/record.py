@@ -120,3 +120,27 @@ def main(argv: list[str] | None = None) -> int:
         counts = recorder.close()
     print(f"bag {args.bag}: " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items())), flush=True)
     return 0
+
+
+def start_process(bag: str, env: dict[str, str] | None = None, *extra: str) -> Any:
+    """``bt-nav record BAG`` as a process of its own (for ``bt-nav demo --bag``): recording never runs in
+    the executive's process, nor in the demo's. Stop it with :func:`stop_process`."""
+    import subprocess
+
+    return subprocess.Popen([sys.executable, "-m", "bt_nav.cli", "record", str(bag), *extra], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def stop_process(proc: Any, timeout: float = 10.0) -> str:
+    """SIGINT (the bag is closed properly), SIGKILL after ``timeout``; returns a one-line outcome."""
+    import subprocess
+
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5.0)
+    err = (proc.stderr.read() if proc.stderr else "").strip()
+    return "bag closed" if proc.returncode == 0 else f"recorder exited with {proc.returncode}: {err[-300:]}"

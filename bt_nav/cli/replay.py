@@ -15,6 +15,7 @@ from typing import Any
 import py_trees
 
 from bt_nav.cli import plain
+from bt_nav.cli.bagreplay import is_bag, replay_bag
 from bt_nav.cli.dump_tree import GraphvizMissingError, graphviz, tree_to_dot
 from bt_nav.mission.core import strip_ansi
 from bt_nav.mission.trace import read_trace
@@ -49,7 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     """``bt-nav replay``."""
     parser = argparse.ArgumentParser(prog="bt-nav replay", description=plain(__doc__),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("trace", help="a JSON-lines trace written by a lock-step or ROS run")
+    parser.add_argument("trace", help="a JSON-lines trace written by a lock-step or ROS run, or a rosbag2 bag "
+                        "(directory or .mcap: --from/--to are then sim seconds)")
     parser.add_argument("--tick", type=int, help="only this tick")
     parser.add_argument("--from", dest="first", type=int, default=0, help="first tick to show")
     parser.add_argument("--to", dest="last", type=int, default=None, help="last tick to show")
@@ -58,6 +60,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--svg", metavar="FILE", help="render --tick as a picture with statuses coloured, "
                         "in the format of FILE's extension: .svg or .png (needs graphviz)")
     args = parser.parse_args(argv)
+    if is_bag(args.trace):
+        return replay_bag(args.trace, args.first, args.last, args.compact)
     fmt = picture_format(args.svg) if args.svg else None
     if args.svg and fmt is None:
         parser.error(f"--svg {args.svg}: unknown picture format; use a .svg or .png file name")

@@ -17,7 +17,7 @@ How lock-step uses it (``bt-nav lockstep --bag DIR``): :class:`MissionBag` satis
         bag.event(result.sim_time, f"verdict: {'PASSED' if result.passed else 'FAILED'}")
 
 ``scan(t, Scan)``, ``odom(t, x, y, yaw, v, w)``, ``ground_truth(t, ...)``, ``cmd(t, v, w)``,
-``clock(t)``, ``tree(t, snapshot_text)`` (written only when the text changes, as the executive
+``clock(t)``, ``tree(t, snapshot_text)`` (written only when a status changes, as the executive
 publishes ``~/tree``) and ``event(t, text)`` take sim seconds. ``close()`` writes ``metadata.yaml``;
 a writer killed before that leaves an ``.mcap`` that :func:`bt_nav.media.bagread.read_bag` still reads
 up to the last chunk written (:meth:`MissionBag.flush` closes a chunk early; the bag does so every
@@ -33,6 +33,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from bt_nav.media.treetext import parse_snapshot
 
 #: Topic names (absolute, as the default bringup publishes them).
 CLOCK, SCAN, ODOM, TRUTH, CMD = "/clock", "/scan", "/odom", "/ground_truth_odom", "/cmd_vel"
@@ -121,7 +123,7 @@ class MissionBag:
         except (WriterError, OSError) as exc:
             raise BagError(f"cannot write bag {self.path}: {exc}") from exc
         self._connections: dict[str, Any] = {}
-        self._last_tree: str | None = None
+        self._last_tree: Any = None
         self.counts: dict[str, int] = {}
         self.closed = False
         self._flush_ns = to_ns(flush_every)
@@ -213,9 +215,12 @@ class MissionBag:
         self.write(topic, t, self._String(data=str(text)))
 
     def tree(self, t: float, snapshot: str) -> None:
-        """/bt_nav_executive/tree, only when the text changed (as the executive publishes ``~/tree``)."""
-        if snapshot != self._last_tree:
-            self._last_tree = snapshot
+        """/bt_nav_executive/tree when a status or the tip changed, as the executive publishes ``~/tree``
+        (feedback-only changes are not written, so lock-step and DDS bags hold the same snapshots)."""
+        rows = parse_snapshot(snapshot)
+        key = tuple((r.name, r.status) for r in rows) if rows else snapshot
+        if key != self._last_tree:
+            self._last_tree = key
             self.string(TREE, t, snapshot)
 
     def event(self, t: float, text: str) -> None:
