@@ -13,7 +13,7 @@ World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
     circles: [{x: 2, y: 2, r: 0.12}]   # optional, cylinders
     bounds: [xmin, ymin, xmax, ymax]   # optional, plotting extent; default: obstacles + margin
     generator:                         # optional, random clutter drawn from a seed
-      kind: cluttered                  # the only kind so far
+      kind: cluttered                  # cluttered (below), forest or maze (see their sections)
       count: 12                        # number of obstacles to add
       min_r: 0.1                       # obstacle size range (circle radius / half box length), m
       max_r: 0.3
@@ -27,6 +27,26 @@ World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
 The generator keeps every pair of obstacles (and obstacles vs. the static walls) at least ``min_gap``
 apart using bounding circles. With ``min_gap`` larger than the robot diameter the inflated obstacles are
 disjoint islands inside the room, so the free space is connected: the spawn can never be boxed in.
+
+``kind: forest`` is the same sampler restricted to round posts, sized by ``density`` (posts per square
+metre of ``room``; ``count`` wins when given) with post-like defaults (min_r 0.05, max_r 0.15, min_gap 0.4,
+keep_clear 0.5). Same guarantee: every gap is at least ``min_gap`` wide.
+
+``kind: maze`` draws a perfect maze (every cell reachable, one path between any two) on a grid by a
+seeded depth-first search, then knocks out a share of the remaining inner walls (``loops``) so that
+some dead ends become loops. Walls are boxes, so corridors are ``cell - wall`` wide::
+
+      kind: maze
+      cols: 6                          # cells along x
+      rows: 5                          # cells along y
+      cell: 1.1                        # cell pitch (wall centre to wall centre), m
+      wall: 0.1                        # wall thickness, m
+      origin: [0, 0]                   # outer corner (xmin, ymin) of the grid, on the wall centre lines
+      loops: 0.1                       # optional, share of inner walls removed after the maze is carved
+      seed: 3
+
+The outer walls are generated too. Put the spawn at a cell centre (``origin + (i + 0.5) * cell``): its
+clearance is then ``(cell - wall) / 2`` whatever the seed.
 """
 
 from __future__ import annotations
@@ -222,6 +242,108 @@ def _generate_cluttered(
     return new_circles, new_boxes
 
 
+_Generated = tuple[list[list[float]], list[tuple[float, float, float, float, float]]]
+
+
+def _generate_forest(
+    gen: dict,
+    seed: int,
+    spawn: tuple[float, float, float],
+    segments: np.ndarray,
+    circles: np.ndarray,
+    name: str,
+) -> _Generated:
+    """Round posts only: the cluttered sampler with post sizes and a count derived from ``density``.
+
+    Reusing the cluttered sampler keeps one home for the gap/keep-clear guarantees; a forest only differs
+    in what it draws and in being sized per square metre, so a bigger room gets proportionally more posts.
+    """
+    where = f"world {name!r} generator"
+    room = gen.get("room", [4.0, 4.0])
+    if len(room) != 2:
+        raise ValueError(f"{where}: room must be [w, h]")
+    params = {"min_r": 0.05, "max_r": 0.15, "min_gap": 0.4, "keep_clear": 0.5, **gen, "box_fraction": 0.0}
+    if "count" not in gen:
+        density = _num(gen, "density", where, 1.0)
+        if density < 0:
+            raise ValueError(f"{where}: density must be >= 0")
+        params["count"] = int(round(density * float(room[0]) * float(room[1])))
+    return _generate_cluttered(params, seed, spawn, segments, circles, name)
+
+
+def _maze_open_edges(cols: int, rows: int, rng: np.random.Generator) -> set[tuple[int, int, int, int]]:
+    """Edges between neighbouring cells carved by a depth-first search from cell (0, 0).
+
+    Iterative so that large grids cannot hit the recursion limit; the result is a spanning tree, so every
+    cell is reachable from every other one.
+    """
+    seen = {(0, 0)}
+    stack = [(0, 0)]
+    open_edges: set[tuple[int, int, int, int]] = set()
+    while stack:
+        i, j = stack[-1]
+        nbrs = [(i + di, j + dj) for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1))]
+        nbrs = [(a, b) for a, b in nbrs if 0 <= a < cols and 0 <= b < rows and (a, b) not in seen]
+        if not nbrs:
+            stack.pop()
+            continue
+        a, b = nbrs[int(rng.integers(len(nbrs)))]
+        open_edges.add((min(i, a), min(j, b), max(i, a), max(j, b)))
+        seen.add((a, b))
+        stack.append((a, b))
+    return open_edges
+
+
+def _generate_maze(
+    gen: dict,
+    seed: int,
+    spawn: tuple[float, float, float],
+    segments: np.ndarray,
+    circles: np.ndarray,
+    name: str,
+) -> _Generated:
+    """Walls (as boxes) of a seeded grid maze with its outer walls; see the module docstring.
+
+    ``spawn``, ``segments`` and ``circles`` are unused (same signature as the other generators): a carved
+    maze is connected by construction, and the spawn belongs at a cell centre.
+    """
+    del spawn, segments, circles
+    where = f"world {name!r} generator"
+    cols, rows = int(gen.get("cols", 6)), int(gen.get("rows", 5))
+    cell, wall = _num(gen, "cell", where, 1.1), _num(gen, "wall", where, 0.1)
+    loops = _num(gen, "loops", where, 0.0)
+    origin = gen.get("origin", [0.0, 0.0])
+    if cols < 1 or rows < 1 or not (0 < wall < cell) or not (0.0 <= loops <= 1.0) or len(origin) != 2:
+        raise ValueError(f"{where}: need cols, rows >= 1, 0 < wall < cell, 0 <= loops <= 1, origin [x, y]")
+    x0, y0 = float(origin[0]), float(origin[1])
+    rng = np.random.default_rng(seed)
+    open_edges = _maze_open_edges(cols, rows, rng)
+    inner = [(i, j, i + 1, j) for i in range(cols - 1) for j in range(rows)]
+    inner += [(i, j, i, j + 1) for i in range(cols) for j in range(rows - 1)]
+    closed = [e for e in inner if e not in open_edges]
+    # Knock out a share of the remaining walls, chosen per seed, so some dead ends turn into loops.
+    drop = set(rng.permutation(len(closed))[: int(round(loops * len(closed)))].tolist())
+    boxes: list[tuple[float, float, float, float, float]] = []
+    for k, (i, j, a, _b) in enumerate(closed):
+        if k in drop:
+            continue
+        if a != i:  # wall between (i, j) and (i + 1, j): vertical, at x of the shared edge
+            boxes.append((x0 + (i + 1) * cell, y0 + (j + 0.5) * cell, cell + wall, wall, 0.5 * math.pi))
+        else:  # wall between (i, j) and (i, j + 1): horizontal
+            boxes.append((x0 + (i + 0.5) * cell, y0 + (j + 1) * cell, cell + wall, wall, 0.0))
+    w, h = cols * cell, rows * cell
+    boxes += [
+        (x0 + 0.5 * w, y0, w + wall, wall, 0.0),
+        (x0 + 0.5 * w, y0 + h, w + wall, wall, 0.0),
+        (x0, y0 + 0.5 * h, h + wall, wall, 0.5 * math.pi),
+        (x0 + w, y0 + 0.5 * h, h + wall, wall, 0.5 * math.pi),
+    ]
+    return [], boxes
+
+
+_GENERATORS = {"cluttered": _generate_cluttered, "forest": _generate_forest, "maze": _generate_maze}
+
+
 def world_from_dict(d: dict, seed: int | None = None) -> World:
     """Build a World from a parsed YAML mapping (schema in the module docstring).
 
@@ -274,11 +396,11 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
     gen = d.get("generator")
     if gen:
         kind = gen.get("kind", "cluttered")
-        if kind != "cluttered":
-            raise ValueError(f"{where}: unknown generator kind {kind!r}")
+        if kind not in _GENERATORS:
+            raise ValueError(f"{where}: unknown generator kind {kind!r}; known: {', '.join(sorted(_GENERATORS))}")
         if seed is None:
             seed = int(gen.get("seed", d.get("seed", 0)))
-        extra_circles, extra_boxes = _generate_cluttered(
+        extra_circles, extra_boxes = _GENERATORS[kind](
             gen, int(seed), spawn, _segments(), np.asarray(circle_rows).reshape(-1, 3), name
         )
         circle_rows += extra_circles
