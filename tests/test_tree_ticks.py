@@ -34,8 +34,8 @@ class Events:
 
 
 def armed_harness(maneuver: str = "none", **kwargs) -> TickHarness:
-    """Armed, and one tick with whatever the scan shows (clear by default), so that the maneuver
-    triggers have seen their conditions clear: a condition already holding at the arming is no edge."""
+    """Armed, and one tick with whatever the scan shows (clear by default): a maneuver's condition
+    that holds at the arming fires at once (trigger_at_arming), so tests arm with a clear view."""
     h = TickHarness(maneuver, **kwargs)
     h.tick()
     ok, message = h.arm()
@@ -429,7 +429,7 @@ def test_evaluation_retry_delay_survives_a_clock_jump_back() -> None:
 
 def test_blind_front_and_open_loop_are_said_in_one_line_each() -> None:
     events = Events()
-    h = armed_harness("C", overrides={"trigger_rearm_distance": 0.0}, events=events)
+    h = armed_harness("C", overrides={"trigger_rearm_distance": 0.0, "trigger_clear_away": 0.0}, events=events)
     h.see((0.0, math.nan), width_deg=70.0)
     h.tick(5)
     assert sum("front sector unknown" in m for _, m in events.lines) == 1
@@ -443,3 +443,111 @@ def test_blind_front_and_open_loop_are_said_in_one_line_each() -> None:
     h.see()
     h.run_until(lambda r: r.tip == "FullSpeed", limit=200)
     assert sum("open loop" in m for _, m in events.lines) == 1
+
+
+# ---------------------------------------------------------------- maneuver triggers (rising edge, re-arm)
+SIDES = {"side_center_deg": 60.0, "side_half_angle_deg": 30.0}
+TRIGGER_CASES = [  # maneuver, its leaf, a scan meeting its condition, one clearing it beyond the hysteresis
+    ("A", "Randomizer", [(0.0, 0.45)], [(0.0, 0.8)]),
+    ("B", "Retreat", [(60.0, 0.4), (-60.0, 0.4), (0.0, 0.9)], [(60.0, 0.4), (-60.0, 0.9), (0.0, 0.9)]),
+    ("C", "SmartPivot", [(0.0, 0.25), (30.0, 1.0)], [(0.0, 0.5), (30.0, 1.0)]),
+]
+SQUEEZED = [(60.0, 0.4), (-60.0, 0.4), (0.0, 5.0)]  # a long corridor: both walls near, nothing ahead
+OPENING = [(60.0, 0.4), (-60.0, 2.0), (0.0, 5.0)]  # a side opening
+
+
+def finish(h: TickHarness, leaf: str) -> list:
+    """Ticks from the maneuver's start to its end (the scan stays as it is); all rotation only."""
+    records = [h.tick()]
+    assert records[0].tip == leaf, f"{leaf} did not start: tip {records[0].tip}"
+    while records[-1].statuses[leaf] == "RUNNING" or len(records) == 1:
+        records.append(h.tick())
+        assert len(records) < 300
+    assert all(r.command.linear == 0.0 for r in records), "rotation only"
+    return records
+
+
+@pytest.mark.parametrize(("maneuver", "leaf", "condition", "clear"), TRIGGER_CASES)
+def test_a_persisting_condition_does_not_refire(maneuver, leaf, condition, clear) -> None:
+    h = armed_harness(maneuver, overrides={**SIDES, "trigger_rearm_distance": 0.0})
+    h.see(*condition)
+    finish(h, leaf)
+    after = [h.tick() for _ in range(60)]  # 3 s with the same condition: the reactive branches act
+    assert all(r.tip != leaf for r in after), "the maneuver re-fired while its condition merely persisted"
+
+
+@pytest.mark.parametrize(("maneuver", "leaf", "condition", "clear"), TRIGGER_CASES)
+def test_a_fresh_condition_fires_again_after_clearing_beyond_the_hysteresis(maneuver, leaf, condition,
+                                                                            clear) -> None:
+    h = armed_harness(maneuver, overrides={**SIDES, "trigger_rearm_distance": 0.0, "trigger_clear_away": 0.0})
+    h.see(*condition)
+    finish(h, leaf)
+    h.see(*clear)
+    h.tick(3)
+    h.see(*condition)
+    finish(h, leaf)
+
+
+def test_a_reading_inside_the_hysteresis_band_does_not_rearm() -> None:
+    h = armed_harness("A", overrides={"trigger_rearm_distance": 0.0, "trigger_clear_away": 0.0,
+                                      "trigger_hysteresis": 0.2})
+    h.see((0.0, 0.45))
+    finish(h, "Randomizer")
+    h.see((0.0, 0.65))  # above safety_distance, not above safety_distance + hysteresis
+    h.tick(3)
+    h.see((0.0, 0.45))
+    assert all(h.tick().tip != "Randomizer" for _ in range(20))
+
+
+def test_driving_rearms_a_squeeze_that_never_clears_and_a_clearing_on_the_spot_does_not() -> None:
+    h = armed_harness("B", overrides={**SIDES, "trigger_rearm_distance": 2.0, "trigger_clear_away": 1.0})
+    h.see(*SQUEEZED)
+    finish(h, "Retreat")
+    x0, y0 = h.x, h.y
+    h.see(*OPENING)  # cleared on the spot (as a spin sweeps the sectors): no re-arm
+    h.tick()
+    h.see(*SQUEEZED)
+    fired_at = None
+    for _ in range(400):
+        r = h.tick()
+        if r.tip == "Retreat":
+            fired_at = ((h.x - x0) ** 2 + (h.y - y0) ** 2) ** 0.5
+            break
+    assert fired_at is not None, "a squeeze lasting 2 m of driving must fire again"
+    assert 2.0 <= fired_at <= 2.0 + 0.22 * 2 * h.dt
+
+
+def test_a_maneuver_never_restarts_while_it_runs() -> None:
+    h = armed_harness("A", overrides={"trigger_rearm_distance": 0.0, "trigger_clear_away": 0.0})
+    h.see((0.0, 0.45))
+    assert h.tick().tip == "Randomizer"
+    leaf = next(n for n in h.core.root.iterate() if n.name == "Randomizer")
+    rotation, turned = leaf.rotation, []
+    for _ in range(5):  # the condition flickers: cleared and fresh again, mid-turn
+        h.see((0.0, 0.8))
+        r = h.tick()
+        h.see((0.0, 0.45))
+        r2 = h.tick()
+        assert r.tip == r2.tip == "Randomizer" and leaf.rotation == rotation
+        assert r.command.linear == r2.command.linear == 0.0
+        turned.append(leaf.turned)
+    assert turned == sorted(turned, key=abs), "the turn went on, it did not start over"
+
+
+@pytest.mark.parametrize("at_arming", [True, False])
+def test_disarm_and_rearm_reset_the_trigger(at_arming: bool) -> None:
+    h = armed_harness("C", overrides={"trigger_rearm_distance": 50.0, "trigger_clear_away": 50.0,
+                                      "trigger_at_arming": at_arming})
+    h.see((0.0, 0.25), (30.0, 1.0))
+    finish(h, "SmartPivot")
+    assert all(h.tick().tip != "SmartPivot" for _ in range(5))
+    h.arm(False)
+    h.tick(3)
+    h.arm(True)
+    r = h.tick()
+    assert (r.tip == "SmartPivot") == at_arming, "a condition holding at a new arming"
+    if not at_arming:
+        h.see()
+        h.tick()  # seen clear once after the new arming: armed, however near the last firing
+        h.see((0.0, 0.25), (30.0, 1.0))
+        assert h.tick().tip == "SmartPivot"

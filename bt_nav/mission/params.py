@@ -122,11 +122,18 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("safety_distance", 0.5, "Trigger distance of maneuvers A (front) and B (left and right).",
               "m", 0.05, 10.0),
     ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
-    ParamSpec("trigger_hysteresis", 0.1, "A maneuver's trigger re-arms once its reading has risen above the "
-              "trigger distance plus this (it fires on the condition's rising edge, see the README).", "m",
-              0.0, 5.0),
-    ParamSpec("trigger_rearm_distance", 1.5, "A maneuver's trigger re-arms only once the robot is this far "
-              "(straight line) from where it last fired, besides its condition having cleared.", "m", 0.0, 100.0),
+    ParamSpec("trigger_hysteresis", 0.1, "A maneuver fires on the rising edge of its condition; a clearing "
+              "re-arms it only once its reading has risen above the trigger distance plus this (see the "
+              "README).", "m", 0.0, 5.0),
+    ParamSpec("trigger_at_arming", True, "A maneuver's condition that already holds when the robot is "
+              "armed (or armed again) fires at once: a new arming is a new situation. false: the trigger "
+              "waits until it has seen its condition clear."),
+    ParamSpec("trigger_clear_away", 1.5, "A clearing re-arms a maneuver's trigger only this far (straight "
+              "line, odometry) from where it last fired: spinning on the spot or shuttling around one spot is "
+              "no new situation.", "m", 0.0, 100.0),
+    ParamSpec("trigger_rearm_distance", 5.0, "A maneuver's trigger also re-arms after the robot has driven "
+              "this far since it fired, even if its condition never cleared (0: only by clearing).", "m",
+              0.0, 100.0),
     ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
               "m", 0.05, 10.0),
     ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): keep driving and "

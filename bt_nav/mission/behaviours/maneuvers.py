@@ -126,8 +126,8 @@ class RotationManeuver(Leaf, register=False):
                     self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
                                         "(integrating the commanded turn rate)")
         else:
-            if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned
-                self._odom_turned += self._since_sample
+            if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned, to now
+                self._odom_turned += self._since_sample + self._last_rate * dt
             else:
                 self._odom_turned += float(wrap_angle(odom.yaw - self._last_yaw))
             self._since_sample = 0.0

@@ -4,19 +4,21 @@ The lab says: A and C fire when the front is nearer than their distance, B when 
 Taken literally ("fire whenever it holds"), a condition that persists re-fires the maneuver the moment it
 ends: in a 0.8 m corridor both sides are within 0.5 m everywhere, so B spins 180 deg forever and the
 robot never leaves its spot. A trigger here fires on the condition's rising edge and then stays quiet
-(the reactive close / far / none branches drive meanwhile) until it re-arms, which takes both
+(the reactive close / far / none branches drive meanwhile) until it re-arms, which takes either
 
 - the condition seen cleared with hysteresis: the reading rose above ``distance + hysteresis`` (a reading
-  hovering around the threshold is not a new situation), and
-- the robot at least ``rearm_distance`` metres (straight line, odometry) from where the trigger last
-  fired: turning on the spot sweeps the sectors across walls and openings, which changes what they
-  read but not where the robot is, and coming back to the same doorway is not a new situation either.
+  hovering around the threshold is not a new situation; for B one side is enough: no longer squeezed), or
+- ``rearm_distance`` metres driven since it fired (0 turns this rule off). The maneuvers rotate on the
+  spot, so this is the distance driven since the maneuver ended; it bounds how often a condition that
+  never clears (an endless corridor) can fire: once per ``rearm_distance``. Odometry positions measure
+  it (the path length, sample to sample); while the odometry has no position (NaN) or is older than
+  ``odom_timeout`` the commanded speed is integrated instead (the command in force since the previous
+  tick), so the rule works on a robot without odometry too, never counting a stop as motion.
 
-A new arming (``arm_count`` changes) starts afresh: the trigger arms as soon as the condition is seen
-clear, so a condition that already holds when the robot is armed is not a rising edge (a robot armed in
-a corridor does not spin at once). An unknown reading counts as "near" (never drive into what cannot be
-seen) and never as "cleared". Without odometry positions the distance rule is skipped. The latch is
-:class:`EdgeLatch`, pure state with no py_trees in it.
+A new arming (``arm_count`` changes) is a fresh start: the trigger is armed, so a condition that already
+holds then fires at once (a robot armed beside a wall meets a new situation). A trigger that has never
+been ticked is armed too. An unknown reading counts as "near" (never drive into what cannot be seen) and
+never as "cleared". The latch is :class:`EdgeLatch`, pure state with no py_trees in it.
 """
 
 from __future__ import annotations
@@ -28,46 +30,86 @@ import py_trees
 
 from bt_nav.mission.behaviours.base import Condition, port
 from bt_nav.mission.behaviours.perception import SECTORS_PORT
-from bt_nav.mission.datatypes import NO_ODOM, OdomSample
+from bt_nav.mission.datatypes import NO_ODOM, Command, OdomSample
 from bt_nav.mission.scan import SectorReading, Sectors
 
 Status = py_trees.common.Status
 
 
+@dataclass(frozen=True)
+class Rearm:
+    """When a fired trigger re-arms: ``clear_away`` metres from where it fired for a clearing to count,
+    or after ``distance`` metres driven (0: never by driving)."""
+
+    clear_away: float
+    distance: float
+
+
 @dataclass
 class EdgeLatch:
-    """Rising-edge detector that re-arms on clearing away from where it fired (see the module docstring)."""
+    """Rising-edge detector that re-arms on clearing or after driving (see the module docstring)."""
 
-    armed: bool = False
-    fired_at: tuple[float, float] | None = None  # odometry position of the last firing (None: none yet)
+    armed: bool = True
+    driven: float = 0.0  # metres driven since the last firing (path length)
+    fired_at: tuple[float, float] | None = None  # odometry position of the last firing (None: unknown)
     position: tuple[float, float] | None = None  # latest known odometry position
-
-    def odometry(self, x: float, y: float) -> None:
-        """The robot's latest position (NaN positions are skipped)."""
-        if math.isfinite(x) and math.isfinite(y):
-            self.position = (x, y)
+    fresh: bool = True  # not fired since the last arming: a clearing anywhere arms
 
     @property
     def away(self) -> float:
-        """Straight-line distance from the last firing (inf when there was none or positions are unknown)."""
+        """Straight-line distance from the last firing; the path driven when positions are unknown."""
         if self.fired_at is None or self.position is None:
-            return math.inf
+            return self.driven
         return math.hypot(self.position[0] - self.fired_at[0], self.position[1] - self.fired_at[1])
 
-    def step(self, holds: bool, cleared: bool, rearm_distance: float) -> bool:
+    def step(self, holds: bool, cleared: bool, rearm: Rearm) -> bool:
         """One observation; True when the trigger fires now (and the latch disarms)."""
-        if not self.armed and cleared and self.away >= rearm_distance:
+        if not self.armed and ((cleared and (self.fresh or self.away >= rearm.clear_away))
+                               or 0.0 < rearm.distance <= self.driven):
             self.armed = True
         if self.armed and holds:
-            self.armed = False
-            self.fired_at = self.position if self.position is not None else None
+            self.armed, self.fresh, self.driven, self.fired_at = False, False, 0.0, self.position
             return True
         return False
 
-    def reset(self) -> None:
-        """A fresh start (a new arming): armed as soon as the condition is seen clear, wherever the robot is,
-        so a condition that already holds when the robot is armed is not a rising edge."""
-        self.armed, self.fired_at = False, None
+    def reset(self, fire_at_once: bool = True) -> None:
+        """A fresh start (a new arming). ``fire_at_once``: armed, so a condition that already holds fires
+        now; otherwise the latch waits until it sees the condition clear (anywhere) first."""
+        self.armed, self.fresh, self.driven, self.fired_at = fire_at_once, True, 0.0, None
+
+
+class Odometer:
+    """Metres driven: odometry path length, or the commanded speed integrated when positions are unknown.
+
+    One observation per tick. A position counts only when it is finite and its sample fresh; a gap (no
+    position, stale odometry) is bridged by dead reckoning, and the first position after a gap starts a
+    new chain instead of adding the jump, so nothing is counted twice.
+    """
+
+    #: A longer pause between observations (a stalled clock, a leaf not ticked) is not counted as motion.
+    MAX_DT = 0.5
+
+    def __init__(self) -> None:
+        self.position: tuple[float, float] | None = None  # the latest fresh position (None: unknown)
+        self._stamp = -math.inf
+        self._time: float | None = None
+
+    def observe(self, now: float, odom: OdomSample, odom_timeout: float, command: Command) -> float:
+        """Advance to ``now``; returns the metres added."""
+        dt = 0.0 if self._time is None else min(max(0.0, now - self._time), self.MAX_DT)
+        self._time = now
+        fresh = abs(now - odom.stamp) <= odom_timeout
+        added = 0.0
+        if fresh and math.isfinite(odom.x) and math.isfinite(odom.y):
+            if odom.stamp != self._stamp:
+                if self.position is not None:
+                    added = math.hypot(odom.x - self.position[0], odom.y - self.position[1])
+                self.position, self._stamp = (odom.x, odom.y), odom.stamp
+        else:
+            self.position = None
+            speed = abs(command.linear) if math.isfinite(command.linear) else 0.0
+            added = speed * dt
+        return added
 
 
 def _near(reading: SectorReading, distance: float) -> bool:
@@ -87,17 +129,25 @@ class _EdgeTrigger(Condition, register=False):
         **SECTORS_PORT,
         "distance": port(float, "the lab's trigger distance", default=0.5),
         "hysteresis": port(float, "re-arm once the reading exceeds distance + hysteresis", default=0.1),
-        "rearm_distance": port(float, "re-arm after driving this far (0: only on clearing)", default=3.0),
-        "odom": port(OdomSample, "odometry pose (path driven since firing)", default=NO_ODOM),
+        "clear_away": port(float, "a clearing re-arms only this far (straight line) from the last firing",
+                           default=1.5),
+        "rearm_distance": port(float, "re-arm after driving this far since firing (0: only on clearing)",
+                               default=5.0),
+        "odom": port(OdomSample, "odometry pose (metres driven since firing)", default=NO_ODOM),
+        "odom_timeout": port(float, "older odometry: integrate the commanded speed instead", default=0.5),
+        "cmd_vel": port(Command, "the command in force since the previous tick (dead reckoning)",
+                        default=Command()),
         "arm_count": port(int, "a new arming re-arms the trigger", default=0),
+        "fire_at_arming": port(bool, "a condition already holding at an arming fires (else: wait for a clear)",
+                               default=True),
     }
     OUTPUT_PORTS = {}
 
     def __init__(self, name: str, **kwargs: object) -> None:
         super().__init__(name=name, **kwargs)
         self.latch = EdgeLatch()
+        self.odometer = Odometer()
         self._arm_count = 0
-        self._odom_stamp = -math.inf
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
         """The lab's condition."""
@@ -108,23 +158,26 @@ class _EdgeTrigger(Condition, register=False):
         raise NotImplementedError
 
     def answer(self) -> bool:
-        """Observe this tick's readings and odometry; fire on a rising edge."""
+        """Observe this tick's readings and motion; fire on a rising edge."""
         arm_count = int(self.get_input("arm_count"))
         if arm_count != self._arm_count:
-            self.latch.reset()
+            self.latch.reset(bool(self.get_input("fire_at_arming")))
             self._arm_count = arm_count
-        odom: OdomSample = self.get_input("odom")
-        if odom.stamp != self._odom_stamp:
-            self._odom_stamp = odom.stamp
-            self.latch.odometry(odom.x, odom.y)
+        self.latch.driven += self.odometer.observe(self.clock(), self.get_input("odom"),
+                                                   float(self.get_input("odom_timeout")),
+                                                   self.get_input("cmd_vel"))
+        self.latch.position = self.odometer.position
         sectors, distance = self.get_input("sectors"), float(self.get_input("distance"))
+        rearm = Rearm(float(self.get_input("clear_away")), float(self.get_input("rearm_distance")))
         fired = self.latch.step(self.holds(sectors, distance),
-                                self.cleared(sectors, distance + float(self.get_input("hysteresis"))),
-                                float(self.get_input("rearm_distance")))
-        away = self.latch.away
-        self.feedback_message = ("fired" if fired else "armed" if self.latch.armed else
-                                 "waiting to re-arm" + (f" ({away:.1f} m from where it fired)"
-                                                        if math.isfinite(away) else ""))
+                                self.cleared(sectors, distance + float(self.get_input("hysteresis"))), rearm)
+        if fired:
+            self.feedback_message = "fired"
+        elif self.latch.armed:
+            self.feedback_message = "armed"
+        else:
+            self.feedback_message = (f"waiting to re-arm ({self.latch.away:.1f} m from the last firing, "
+                                     f"{self.latch.driven:.1f} of {rearm.distance:.1f} m driven)")
         return fired
 
 
