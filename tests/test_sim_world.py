@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
 
 import numpy as np
 import pytest
 from bt_nav_sim import LidarModel, World, cast_rays, list_worlds, load_world
 from bt_nav_sim.world import box_corners, box_segments, world_from_dict
-
-ROBOT_RADIUS = 0.12
 
 
 def _corner_set(segs: np.ndarray) -> set[tuple[float, float]]:
@@ -163,39 +160,3 @@ def test_cluttered_invariants(seed: int) -> None:
         assert abs(xi) + ri + 0.35 <= 2.35 + 1e-9 and abs(yi) + ri + 0.35 <= 2.35 + 1e-9  # gap to walls
         for xj, yj, rj in bounding[i + 1 :]:
             assert math.hypot(xi - xj, yi - yj) >= ri + rj + 0.35 - 1e-9  # gap between obstacles
-
-
-@pytest.mark.parametrize("seed", [0, 1, 42])
-def test_cluttered_free_space_connected(seed: int) -> None:
-    """Every cell where the robot disk fits is reachable from the spawn (flood fill on a 5 cm grid).
-
-    Box interiors are excluded: walls are bare segments, so the middle of a big box has positive clearance
-    even though the robot can never get there.
-    """
-    w = load_world("cluttered", seed=seed)
-    res = 0.05
-    xs = np.arange(-2.3, 2.3 + 1e-9, res)
-    boxes = list(w.boxes[4:])
-
-    def inside_box(x: float, y: float) -> bool:
-        for bx, by, length, th, yaw in boxes:
-            dx, dy = x - bx, y - by
-            along = dx * math.cos(yaw) + dy * math.sin(yaw)
-            across = -dx * math.sin(yaw) + dy * math.cos(yaw)
-            if abs(along) <= length / 2 and abs(across) <= th / 2:
-                return True
-        return False
-
-    free = np.array([[w.clearance(x, y) >= ROBOT_RADIUS and not inside_box(x, y) for y in xs] for x in xs])
-    start = (int(round((w.spawn[0] + 2.3) / res)), int(round((w.spawn[1] + 2.3) / res)))
-    assert free[start]
-    seen = np.zeros_like(free)
-    seen[start] = True
-    todo = deque([start])
-    while todo:
-        i, j = todo.popleft()
-        for a, b in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
-            if 0 <= a < len(xs) and 0 <= b < len(xs) and free[a, b] and not seen[a, b]:
-                seen[a, b] = True
-                todo.append((a, b))
-    assert np.array_equal(seen, free)

@@ -176,6 +176,10 @@ def _static_world(name: str, segments: np.ndarray, circles: np.ndarray) -> World
     return World(name=name, segments=segments, circles=circles, spawn=(0.0, 0.0, 0.0), bounds=(0, 0, 0, 0))
 
 
+# What a generator adds: circles [x, y, r] and boxes (x, y, length, thickness, yaw).
+_Generated = tuple[list[list[float]], list[tuple[float, float, float, float, float]]]
+
+
 def _generate_cluttered(
     gen: dict,
     seed: int,
@@ -183,7 +187,7 @@ def _generate_cluttered(
     segments: np.ndarray,
     circles: np.ndarray,
     name: str,
-) -> tuple[list[list[float]], list[tuple[float, float, float, float, float]]]:
+) -> _Generated:
     """Draw ``count`` random circles/boxes that keep ``min_gap`` from each other, the walls and the spawn.
 
     Rejection sampling over bounding circles keeps it simple and deterministic per seed; raising when the
@@ -240,9 +244,6 @@ def _generate_cluttered(
         else:
             new_circles.append([x, y, r])
     return new_circles, new_boxes
-
-
-_Generated = tuple[list[list[float]], list[tuple[float, float, float, float, float]]]
 
 
 def _generate_forest(

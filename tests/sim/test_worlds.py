@@ -197,6 +197,17 @@ def test_checkpoints_reachable_through_documented_passages(name: str, seed: int 
         assert near <= fat_r + GRID_SLACK, f"{name}: {(x, y)} only reachable through a gap narrower than {passage} m"
 
 
+@pytest.mark.parametrize(("name", "seed"), [(n, s) for n in ("cluttered", "forest") for s in (None, 0, 1, 7)])
+def test_generated_room_has_no_pockets(name: str, seed: int | None) -> None:
+    """Every cell of the generator's room where the robot fits is reachable from the spawn: the min_gap
+    guarantee (obstacles are disjoint islands once inflated by the robot) holds in the result."""
+    gen = _generator(name) or {}
+    (w_, h_), (cx, cy) = gen["room"], gen.get("center", [0.0, 0.0])
+    g = Grid(load_world(name, seed=seed))
+    room = (np.abs(g.px - cx) < w_ / 2) & (np.abs(g.py - cy) < h_ / 2)
+    assert np.array_equal(g.reach & room, g.free & room)
+
+
 def test_office_doors_are_door_sized() -> None:
     """The 0.8-1.0 m doorways: a 1.1 m wide robot could not leave the spawn room, a 0.7 m one can."""
     w = load_world("office")
