@@ -12,6 +12,7 @@ import math
 from bt_nav.cli.lockstep import profile_parameters
 from bt_nav.mission import params as P
 from bt_nav.mission.behaviours.motion import STEER_GAIN, TurnAway
+from bt_nav.mission.behaviours.perception import ProcessScan
 from bt_nav.mission.paths import free_paths
 from bt_nav.testing import TickHarness, synthetic_scan
 
@@ -29,7 +30,8 @@ def armed() -> TickHarness:
 
 def ahead(*obstacles: tuple[float, float], **kwargs: float) -> float:
     """The free path straight ahead that the tree computes for this scan."""
-    paths = free_paths(synthetic_scan(obstacles, **kwargs), D["path_half_width"], 1.25 * D["far_distance"])
+    horizon = ProcessScan.HORIZON * D["far_distance"]
+    paths = free_paths(synthetic_scan(obstacles, **kwargs), D["path_half_width"], horizon)
     return paths.ahead
 
 
@@ -51,25 +53,25 @@ def test_speed_stays_near_max_until_deep_in_the_band() -> None:
 
 def test_turn_is_proportional_to_the_heading_and_capped() -> None:
     h = armed()
-    h.see((0.0, 0.9), width_deg=10.0)  # a post ahead: a small turn clears it
+    h.see((0.0, 0.65), width_deg=10.0)  # a post ahead: a small turn clears it
     small = h.tick()
     assert small.tip == "TurnAway" and 0.0 < abs(small.command.angular) < D["angular_speed"]
     assert abs(small.command.angular) / STEER_GAIN <= math.radians(45)
-    h.see((0.0, 0.9), width_deg=200.0)  # a wall wrapping around: the clear heading is far to the side
+    h.see((0.0, 0.65), width_deg=200.0)  # a wall wrapping around: the clear heading is far to the side
     wide = h.tick()
     assert abs(wide.command.angular) == D["angular_speed"]
 
 
 def test_direction_has_hysteresis() -> None:
     h = armed()
-    h.see((8.0, 0.9), width_deg=20.0)  # obstacle ahead, a little to the left: turn right
+    h.see((8.0, 0.65), width_deg=20.0)  # obstacle ahead, a little to the left: turn right
     first = h.tick()
     assert first.tip == "TurnAway" and first.command.angular < 0
-    h.see((-4.0, 0.9), width_deg=20.0)  # now a little to the right: the right turn is kept
+    h.see((-4.0, 0.65), width_deg=20.0)  # now a little to the right: the right turn is kept
     for _ in range(5):
         r = h.tick()
         assert r.tip == "TurnAway" and r.command.angular < 0
-    h.see((-8.0, 0.9), (-60.0, 0.6), width_deg=40.0)  # the right is walled in: flip to the left
+    h.see((-8.0, 0.65), (-60.0, 0.5), width_deg=40.0)  # the right is walled in: flip to the left
     r = h.tick()
     assert r.tip == "TurnAway" and r.command.angular > 0
 
@@ -77,11 +79,11 @@ def test_direction_has_hysteresis() -> None:
 def test_square_on_wall_does_not_dither() -> None:
     """Readings that alternate by a few centimetres around a symmetric wall never flip the turn."""
     h = armed()
-    h.see((0.0, 0.85), width_deg=130.0)
+    h.see((0.0, 0.6), width_deg=130.0)
     first = h.tick().command.angular
     assert first != 0.0
     for i in range(40):
-        h.see((-25.0, 0.85 + 0.03 * (i % 2)), (25.0, 0.85 + 0.03 * ((i + 1) % 2)), (0.0, 0.85), width_deg=50.0)
+        h.see((-25.0, 0.6 + 0.03 * (i % 2)), (25.0, 0.6 + 0.03 * ((i + 1) % 2)), (0.0, 0.6), width_deg=50.0)
         r = h.tick()
         assert r.tip in ("TurnAway", "RotateInPlace") and r.command.angular * first > 0
 

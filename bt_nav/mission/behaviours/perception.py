@@ -47,7 +47,7 @@ class ProcessScan(Leaf):
     """
 
     #: Free paths are measured up to this many far_distances: beyond, every heading is equally good.
-    HORIZON = 1.25
+    HORIZON = 1.5
 
     INPUT_PORTS = {
         "scan": port(Scan, "the newest scan", required=False),
