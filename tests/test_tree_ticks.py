@@ -238,7 +238,8 @@ def test_maneuver_fails_after_its_time_allowance() -> None:
     assert "out of time" in leaf.feedback_message
     assert h.core.value("maneuver_active") is False
     assert h.core.tip == "FullSpeed", "the failed branch hands over to the next priority in the same tick"
-    allowance = abs(leaf.rotation) / h.core.params["maneuver_angular_speed"] + 1.0 + h.core.params["maneuver_time_margin"]
+    allowance = (abs(leaf.rotation) / h.core.params["maneuver_angular_speed"] + 1.0
+                 + h.core.params["maneuver_time_margin"])
     assert ticks * h.dt == pytest.approx(allowance, abs=2 * h.dt)
 
 
