@@ -336,8 +336,7 @@ class _QuietEvents:
         self._add("error", msg)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``bt-nav lockstep``: one mission; prints the referee's report; exit 0 only if it passed."""
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="bt-nav lockstep", description=__doc__.splitlines()[0])
     parser.add_argument("--world", default="stage_4", help="bundled world name or YAML path")
     parser.add_argument("--maneuver", default="none", help="none, A, B or C")
@@ -354,12 +353,48 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trace", default=None, help="write the per-tick JSONL trace here")
     parser.add_argument("--plot", default=None, help="write the trajectory picture here (.png/.svg)")
     parser.add_argument("--json", default=None, help="write results (with trajectory) as JSON here")
+    parser.add_argument("--bag", default=None, metavar="DIR", help="write the mission as a rosbag2 (MCAP) bag here")
+    parser.add_argument("--video", default=None, metavar="FILE.mp4", help="film the mission (needs --bag or "
+                        "writes a bag next to the video)")
+    parser.add_argument("--fps", type=float, default=10.0, help="frames per second of --video")
+    return parser
+
+
+def _run(args: argparse.Namespace) -> MissionResult:
+    """The mission, written to a bag while it runs when one is asked for."""
+    overrides = parse_assignments(args.overrides)
+    kwargs = {"jitter": None if args.no_jitter else DEFAULT_JITTER, "kinematics": args.kinematics,
+              "noise": not args.no_noise}
+    bag_dir = args.bag or (str(Path(args.video).with_suffix("")) + "_bag" if args.video else None)
+    if bag_dir is None:
+        return run_mission(args.world, args.maneuver, args.seed, overrides, args.profile, args.trace,
+                           args.duration, **kwargs)
+    from bt_nav.media.bag import MissionBag
+
+    mission = {"world": args.world, "maneuver": args.maneuver, "seed": args.seed, "profile": args.profile}
+    with MissionBag(bag_dir, mission=mission) as bag:
+        result = run_mission(args.world, args.maneuver, args.seed, overrides, args.profile, args.trace,
+                             args.duration, sink=bag, **kwargs)
+        bag.event(result.sim_time, f"verdict: {'PASSED' if result.passed else 'FAILED'}")
+    args.bag = bag_dir
+    return result
+
+
+def _film(bag_dir: str, out: str, fps: float) -> None:
+    from bt_nav.media.bagread import read_bag
+    from bt_nav.media.video import world_of, write_video
+
+    record = read_bag(bag_dir)
+    stats = write_video(record, out, fps, world_of(record))
+    print(f"video: {out} ({stats.frames} frames at {fps:g} fps, rendered in {stats.seconds:.1f} s)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav lockstep``: one mission; prints the referee's report; exit 0 only if it passed."""
+    parser = _parser()
     args = parser.parse_args(argv)
     try:
-        overrides = parse_assignments(args.overrides)
-        result = run_mission(args.world, args.maneuver, args.seed, overrides, args.profile, args.trace,
-                             args.duration, jitter=None if args.no_jitter else DEFAULT_JITTER,
-                             kinematics=args.kinematics, noise=not args.no_noise)
+        result = _run(args)
     except (ValueError, FileNotFoundError) as exc:
         parser.error(str(exc))
     for line in result.report_lines:
@@ -380,6 +415,9 @@ def main(argv: list[str] | None = None) -> int:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(result.to_dict(trajectory=True), indent=1))
         print(f"results: {args.json}")
-    if args.trace:
-        print(f"trace: {args.trace}")
+    for name in ("trace", "bag"):
+        if getattr(args, name):
+            print(f"{name}: {getattr(args, name)}")
+    if args.video:
+        _film(args.bag, args.video, args.fps)
     return 0 if result.passed else 1
