@@ -72,3 +72,14 @@ def test_numeric_defaults_pass_their_own_checks() -> None:
     for spec in NUMERIC:
         assert spec.check(spec.default) is None, spec.name
     assert P.cross_check(P.defaults()) is None
+
+
+def test_the_executive_names_its_params_files() -> None:
+    from bt_nav.mission.profiles import params_files_note
+
+    assert params_files_note(["x", "--ros-args", "--params-file", "/a/config/homework.yaml"]).endswith(
+        "(profile homework)")
+    note = params_files_note(["--params-file", "h/homework.yaml", "--params-file", "t/turtlebot3.yaml"])
+    assert note == "params files h/homework.yaml, t/turtlebot3.yaml (profile turtlebot3)"
+    assert params_files_note(["--params-file", "mine.yaml"]) == "params files mine.yaml"
+    assert params_files_note([]).startswith("no params file: the package defaults")

@@ -66,3 +66,14 @@ def profile_parameters(profile: str) -> dict[str, Any]:
     for path in profile_files(profile):
         merged.update(file_parameters(path))
     return merged
+
+
+def params_files_note(argv: list[str]) -> str:
+    """What the executive says at start about its params files (``--params-file X`` in ``argv``)."""
+    files = [argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "--params-file"]
+    if not files:
+        return ("no params file: the package defaults (the homework tuning on an ideal robot, no maneuver); "
+                "on a TurtleBot3 add config/turtlebot3.yaml")
+    names = [Path(f).name for f in files]
+    matches = [p for p, wanted in PROFILE_FILES.items() if list(wanted) == names]
+    return f"params files {', '.join(files)}" + (f" (profile {matches[0]})" if matches else "")

@@ -42,8 +42,8 @@ context goes down and exit with status 0 (:mod:`bt_nav.ros.runner`).
 from __future__ import annotations
 
 import argparse
+import sys
 from contextlib import suppress
-from pathlib import Path
 from time import monotonic, perf_counter
 from typing import Any
 
@@ -55,6 +55,7 @@ from bt_nav.mission import params as P
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.mission.profiles import params_files_note
 from bt_nav.mission.resources import tree_file
 from bt_nav.mission.scan import Scan, ScanError
 from bt_nav.mission.trace import TraceRecorder
@@ -147,7 +148,7 @@ class Executive:
                 f"arm server {getattr(arm, 'service_name', '-')}, evaluation client "
                 f"{getattr(evaluation, 'service_name', '-')}, cmd_vel "
                 f"{self.node.resolve_topic_name('cmd_vel')} as {'TwistStamped' if self.cmd.stamped else 'Twist'}; "
-                f"tree {tree_path or tree_file()}; bt_nav from {Path(__file__).resolve().parents[1]}"
+                f"tree {tree_path or tree_file()}; {params_files_note(sys.argv)}"
                 + (f"; trace {params['trace_path']}" if self.trace is not None else ""))
 
     # ------------------------------------------------------------------ inputs
