@@ -85,10 +85,10 @@ class FreePaths:
         return float(h[int(np.argmax(score))])
 
     def roomiest(self, side: int) -> float:
-        """The heading with the most free path on one side (+1 left, -1 right; straight ahead included);
-        of equal ones the widest turn, since nothing ahead is better than turning away."""
+        """The heading with the most free path on one side (+1 left, -1 right; never straight ahead: the
+        caller wants to turn); of equal ones the widest turn."""
         h = self.headings
-        score = np.where(side * h >= 0.0, self.free + 1e-9 * np.abs(h), -np.inf)
+        score = np.where(side * h > 0.0, self.free + 1e-9 * np.abs(h), -np.inf)
         return float(h[int(np.argmax(score))])
 
     def side_room(self, side: int) -> float:

@@ -23,7 +23,9 @@ from rclpy.parameter import Parameter
 from ros_harness import PERIOD, V_MAX, Harness, Sample, laser_scan
 
 FREE = laser_scan()  # nothing within 3 m: full speed
-W_TURN = 1.5  # angular_speed: rotating in place and the Close branch
+from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402
+
+W_TURN = float(_SPECS["angular_speed"].default)  # rotating in place and the Close branch
 DUE_MARGIN = 0.5  # stop_margin default
 #: A WARN/ERROR/FATAL line of rclpy's console output.
 COMPLAINT = r"\[(WARN|ERROR|FATAL)\]"
@@ -357,3 +359,22 @@ def wait_wall(h: Harness, seconds: float) -> None:
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         h.spin()
+
+
+def expected_proximity(scan: Any) -> str:
+    """What the tree must do with a scan: 'stop' (malformed), or the class of the robot's path ahead as
+    ProcessScan computes it with the default parameters (unknown when the front cone is unknown)."""
+    from bt_nav.mission.behaviours.perception import ProcessScan
+    from bt_nav.mission.paths import free_paths
+    from bt_nav.mission.scan import Proximity, ScanError, SectorConfig, sector_minima
+
+    try:
+        sectors = sector_minima(scan, SectorConfig())
+        far = float(_SPECS["far_distance"].default)
+        ahead = free_paths(scan, float(_SPECS["path_half_width"].default), ProcessScan.HORIZON * far).ahead
+    except ScanError:
+        return "stop"
+    if not sectors.front.known:
+        return Proximity.UNKNOWN.value
+    close = float(_SPECS["close_distance"].default)
+    return (Proximity.CLOSE if ahead < close else Proximity.FAR if ahead < far else Proximity.NONE).value

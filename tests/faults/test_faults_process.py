@@ -45,7 +45,7 @@ def shut_down(run: Run, signum: int) -> int:
                    "status 0, one '<SIGNAL> received: stopping the robot' line, final stats line")
 @pytest.mark.parametrize("signum", SIGNALS, ids=[s.name for s in SIGNALS])
 def test_signal_mid_maneuver(executive: Callable[..., Harness], signum: signal.Signals) -> None:
-    h = executive("-p", "maneuver:=A", "-p", "random_seed:=7")
+    h = executive("-p", "maneuver:=A", "-p", "trigger_at_arming:=true", "-p", "random_seed:=7")
     run = Run(h)
     run.arm()
     turning = run.ticks(3, laser_scan(front=0.4))
@@ -91,7 +91,8 @@ def exception_line(name: str) -> str:
 def test_exceptions_in_leaves(start_executive: Callable[..., ExecutiveProcess],
                               make_harness: Callable[..., Harness], faults: FaultCases) -> None:
     spec = "FullSpeed@3,TurnAway@2,SmartPivot@3,StopAtDeadline@1"
-    h = start_with_faults(start_executive, make_harness, spec, "-p", "maneuver:=C", "-p", "random_seed:=7")
+    h = start_with_faults(start_executive, make_harness, spec, "-p", "maneuver:=C", "-p", "trigger_at_arming:=true",
+                          "-p", "random_seed:=7")
     run = Run(h, EvaluationServer(h))
     run.odom = "live"
     assert run.process.has_line(rf"test-only fault injection armed \(BT_NAV_FAULT_INJECT\): {spec.replace(',', ', ')}")

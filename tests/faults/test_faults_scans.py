@@ -21,14 +21,18 @@ from typing import Any
 
 import numpy as np
 from conftest import LONG, FaultCases
-from faultkit import FREE, EvaluationServer, Run, filled, scan_msg
+from faultkit import FREE, EvaluationServer, Run, expected_proximity, filled, scan_msg
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import V_MAX, Harness
 from sensor_msgs.msg import LaserScan
 
-from bt_nav.mission.scan import Proximity, Scan, ScanError, SectorConfig, classify, sector_minima
+from bt_nav.mission.params import SPECS as _SPECS
+from bt_nav.mission.scan import Proximity, Scan, ScanError, SectorConfig, sector_minima
+
+_W_TURN = float(_SPECS["angular_speed"].default)
+_W_MAX = max(_W_TURN, float(_SPECS["maneuver_angular_speed"].default))
 
 NAN, INF = math.nan, math.inf
 GAP_UNKNOWN_FRONT = ("gap: no log line says the front is unknown (it rotates in place without a word); proposed: "
@@ -215,23 +219,26 @@ def expected(msg: Any) -> tuple[str, Any]:
     """What the tree must do with this scan, from the bytes the executive receives (float32 on the wire)."""
     received = deserialize_message(serialize_message(msg), LaserScan)
     try:
-        sectors = sector_minima(Scan.from_laserscan(received), SectorConfig())
+        scan = Scan.from_laserscan(received)
+        sectors = sector_minima(scan, SectorConfig())
     except ScanError:
         return "stop", None
-    return classify(sectors.front, 0.3, 0.7).value, sectors
+    return expected_proximity(scan), sectors
 
 
 def check_command(kind: str, linear: float, angular: float) -> None:
     """The oracle: malformed -> stop; unknown/close front -> rotate in place; far -> slow and turn; none -> full."""
-    assert math.isfinite(linear) and math.isfinite(angular) and abs(linear) <= V_MAX + 1e-9 and abs(angular) <= 1.8
+    assert math.isfinite(linear) and math.isfinite(angular)
+    assert abs(linear) <= V_MAX + 1e-9 and abs(angular) <= _W_MAX + 1e-9
     if kind == "stop":
         assert linear == 0.0 and angular == 0.0, "moved on a malformed scan"
     elif kind in (Proximity.UNKNOWN.value, Proximity.CLOSE.value):
-        assert linear == 0.0 and abs(abs(angular) - 1.5) < 1e-6, "not rotating in place with the front blocked/unknown"
+        assert linear == 0.0 and abs(abs(angular) - _W_TURN) < 1e-6, "not rotating in place, front blocked/unknown"
     elif kind == Proximity.FAR.value:
-        assert 0.12 - 1e-6 <= linear <= V_MAX + 1e-6 and angular != 0.0, "far band: should slow down and turn away"
+        slow = float(_SPECS["slow_linear_speed"].default)
+        assert slow - 1e-6 <= linear <= V_MAX + 1e-6 and angular != 0.0, "far band: should slow down and turn away"
     else:
-        assert abs(linear - V_MAX) < 1e-6 and angular == 0.0, "free front: should drive at full speed"
+        assert abs(linear - V_MAX) < 1e-6 and abs(angular) <= _W_TURN + 1e-9, "free front: should drive at full speed"
 
 
 FUZZ_CHECKED = ("hypothesis: any LaserScan (0-3 geometry fields replaced by any float32 incl. NaN/+-inf, "

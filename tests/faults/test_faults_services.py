@@ -179,7 +179,7 @@ def arm_bursts(h: Harness, run: Run, faults: FaultCases) -> None:
 
 def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Callable[..., Harness],
                            faults: FaultCases) -> None:
-    h = executive("-p", "maneuver:=C", "-p", "random_seed:=7")
+    h = executive("-p", "maneuver:=C", "-p", "trigger_at_arming:=true", "-p", "random_seed:=7")
     run = Run(h, EvaluationServer(h))
     run.odom = "live"
     other = rclpy.create_node("bt_nav_fault_second_client", context=h.context)

@@ -22,7 +22,10 @@ from ros_harness import PERIOD, Harness, laser_scan
 
 CLOSE = laser_scan(front=0.25)  # nearer than pivot_distance (0.3): maneuver C starts
 SCAN_TIMEOUT = 0.5
-ALLOWANCE_C = 90.0 / math.degrees(1.8) + 1.0 + 2.0  # |rotation| / rate + 1 s + maneuver_time_margin
+from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402
+
+# |rotation| / rate + 1 s + maneuver_time_margin
+ALLOWANCE_C = 90.0 / math.degrees(float(_SPECS["maneuver_angular_speed"].default)) + 1.0 + 2.0
 
 
 def odometry_faults(h: Harness, run: Run, faults: FaultCases) -> None:
@@ -84,7 +87,8 @@ def odometry_faults(h: Harness, run: Run, faults: FaultCases) -> None:
 
 
 def test_sensor_stream_faults(executive: Callable[..., Harness], faults: FaultCases) -> None:
-    h = executive("-p", "maneuver:=C", "-p", f"scan_timeout:={SCAN_TIMEOUT}", "-p", "odom_timeout:=0.5")
+    h = executive("-p", "maneuver:=C", "-p", "trigger_at_arming:=true", "-p", "trigger_clear_away:=0.0",
+                  "-p", f"scan_timeout:={SCAN_TIMEOUT}", "-p", "odom_timeout:=0.5")
     run = Run(h, EvaluationServer(h))
     run.odom = "live"
     run.arm()

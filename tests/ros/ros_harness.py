@@ -53,7 +53,11 @@ PERIOD = 0.05
 #: ``T0 + k * PERIOD``) triggers exactly one timer callback (rcl fires twice after a jump that lands
 #: exactly on the grid).
 T0 = 1.0 + PERIOD / 2
-V_MAX, W_MAX = 0.22, 1.8  # default limits: max_linear_speed, max(angular_speed, maneuver_angular_speed)
+from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402 - after the DDS environment is set
+
+# default limits: max_linear_speed, max(angular_speed, maneuver_angular_speed)
+V_MAX = float(_SPECS["max_linear_speed"].default)
+W_MAX = max(float(_SPECS["angular_speed"].default), float(_SPECS["maneuver_angular_speed"].default))
 STARTUP_TIMEOUT = 20.0
 
 

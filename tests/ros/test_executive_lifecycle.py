@@ -15,7 +15,8 @@ from ros_harness import REPO, ExecutiveProcess, Harness, laser_scan, wait_until
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_signal_mid_maneuver_publishes_zero_and_exits_0(executive: Callable[..., Harness],
                                                          signum: signal.Signals) -> None:
-    h = executive("-p", "maneuver:=A", "-p", "random_seed:=7", "-p", "safety_distance:=0.5")
+    h = executive("-p", "maneuver:=A", "-p", "trigger_at_arming:=true",
+                  "-p", "random_seed:=7", "-p", "safety_distance:=0.5")
     assert h.arm(True).success
     turning = h.ticks(3, scan=laser_scan(front=0.4))  # within safety_distance: maneuver A rotates
     assert all(s.linear == 0.0 and s.angular != 0.0 for s in turning), turning

@@ -15,7 +15,8 @@ from bt_nav.mission.trace import read_trace
 
 def test_trace_path_writes_a_trace_that_replay_reads(executive: Callable[..., Harness], tmp_path: Path) -> None:
     trace = tmp_path / "runs" / "executive.jsonl"  # a folder that does not exist yet
-    h = executive("-p", f"trace_path:={trace}", "-p", "maneuver:=A", "-p", "random_seed:=7")
+    h = executive("-p", f"trace_path:={trace}", "-p", "maneuver:=A", "-p", "trigger_at_arming:=true",
+                  "-p", "random_seed:=7")
     assert h.arm(True).success
     driving = h.ticks(3, scan=laser_scan())
     turning = h.ticks(3, scan=laser_scan(front=0.4))
