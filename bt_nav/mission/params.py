@@ -143,8 +143,9 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("path_half_width", 0.18, "Half the width of the corridor the robot sweeps when it drives: the "
               "close / far / none decision and the steering look for obstacles inside it along each heading "
               "(robot radius plus a margin; Burger: 0.105 m circumradius).", "m", 0.05, 1.0),
-    ParamSpec("front_half_angle_deg", 30.0, "Half-width of the front sector (homework profile: 20 deg, so "
-              "walls beside the path in narrow passages do not read as ahead).", "deg", 1.0, 180.0),
+    ParamSpec("front_half_angle_deg", 20.0, "Half-width of the lab's front sector (maneuvers A and C look "
+              "there): at 30 deg, walls beside the path in narrow passages read as ahead and A fires ~3x as "
+              "often (measured: A passes 92 % of the grid at 30 deg, 100 % at 20 deg).", "deg", 1.0, 180.0),
     ParamSpec("side_center_deg", 15.0, "Centre of the left sector (the right one mirrors it); the default "
               "left/right sectors are the halves of the front cone, as the homework suggests.", "deg",
               0.0, 180.0),
