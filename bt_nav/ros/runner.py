@@ -11,11 +11,9 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
-import threading
 from collections.abc import Callable
 from contextlib import suppress
-from types import FrameType
-from typing import Any, Protocol
+from typing import Protocol
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -24,6 +22,7 @@ from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
 from bt_nav.ros.rosutil import ConfigError
+from bt_nav.ros.supervise import StopRequest
 
 EXIT_OK, EXIT_ERROR, EXIT_CONFIG = 0, 1, 2
 #: Longest wait inside the executor before the loop looks at the shutdown flag again.
@@ -34,49 +33,6 @@ class Closable(Protocol):
     """What a node's wiring offers the runner: a ``close()`` that stops the robot and never raises."""
 
     def close(self) -> None: ...  # noqa: D102
-
-
-class ShutdownRequest:
-    """SIGINT/SIGTERM handling that leaves the ROS context up until the robot has been stopped.
-
-    The first signal only sets a flag (the spin loop ends and ``finally`` publishes the stop); a
-    second one while still spinning raises KeyboardInterrupt, for a callback that hangs; once
-    closing, further signals are ignored so they cannot cut the stop short.
-    """
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self) -> None:
-        self.signum: int | None = None
-        self.closing = False
-        self._previous: dict[int, Any] = {}
-
-    @property
-    def requested(self) -> bool:
-        """A signal arrived."""
-        return self.signum is not None
-
-    def handle(self, signum: int, frame: FrameType | None) -> None:
-        """The signal handler."""
-        if self.closing:
-            return
-        if self.signum is not None:
-            raise KeyboardInterrupt
-        self.signum = signum
-
-    def install(self) -> bool:
-        """Install the handlers (only possible in the main thread); returns whether they were."""
-        if threading.current_thread() is not threading.main_thread():
-            return False
-        for signum in self.SIGNALS:
-            self._previous[signum] = signal.signal(signum, self.handle)
-        return True
-
-    def restore(self) -> None:
-        """Put the previous handlers back (``main`` may run inside another program)."""
-        for signum, previous in self._previous.items():
-            signal.signal(signum, previous)
-        self._previous.clear()
 
 
 def init_ros(name: str, argv: list[str] | None,
@@ -100,7 +56,7 @@ def init_ros(name: str, argv: list[str] | None,
     return options
 
 
-def spin_until_stopped(node: Node, executor: SingleThreadedExecutor, shutdown: ShutdownRequest) -> None:
+def spin_until_stopped(node: Node, executor: SingleThreadedExecutor, shutdown: StopRequest) -> None:
     """Spin until a signal or an external shutdown, then say which in one line."""
     while not shutdown.requested and rclpy.ok():
         executor.spin_once(timeout_sec=SPIN_TIMEOUT)
@@ -126,7 +82,7 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
     options = init_ros(name, argv, parse_args)
     if isinstance(options, int):
         return options
-    shutdown = ShutdownRequest()
+    shutdown = StopRequest()
     shutdown.install()
     node: Node | None = None
     wiring: Closable | None = None

@@ -151,9 +151,8 @@ class StopRequest:
     rclpy's handlers would shut the ROS context down first, so a node could not publish its final
     zero twist. With this, the first signal only sets :attr:`signum`; a second one while still
     running raises KeyboardInterrupt (for a loop that does not come back); once :attr:`closing` is
-    set, further signals are ignored so they cannot cut the stop short. Used by the launchers here,
-    and meant for every node's ``main`` (the simulator's ``StopSignal`` and the executive's
-    ``ShutdownRequest`` have the same contract).
+    set, further signals are ignored so they cannot cut the stop short. The one stop-signal handler:
+    the launchers, the executive's runner and the simulator and referee nodes all use it.
     """
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)

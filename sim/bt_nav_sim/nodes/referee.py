@@ -60,7 +60,8 @@ from std_srvs.srv import SetBool, Trigger
 
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.rosutil import coerce_int_overrides
-from bt_nav_sim.nodes.simulator import StopSignal, param_args, split_ros_args
+from bt_nav.ros.supervise import StopRequest
+from bt_nav_sim.nodes.simulator import param_args, split_ros_args
 from bt_nav_sim.referee_core import Activate, Referee, RefereeConfig, scaled
 
 NODE_NAME = "bt_nav_referee"
@@ -427,7 +428,7 @@ def main(argv: list[str] | None = None) -> int:
     # use_sim_time defaults to true here; a later -p use_sim_time:=false (the user's) wins.
     rclpy.init(args=[NODE_NAME, "--ros-args", "-p", "use_sim_time:=true", "--", *ros, *extra],
                signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopSignal().install()
+    stop = StopRequest().install()
     node = None
     try:
         try:

@@ -51,7 +51,6 @@ import argparse
 import array
 import json
 import math
-import signal
 import sys
 import threading
 import time
@@ -71,6 +70,7 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from bt_nav.ros.rosutil import coerce_int_overrides
+from bt_nav.ros.supervise import StopRequest
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.pacing import Followers
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
@@ -452,33 +452,6 @@ def make_node(parameter_overrides: list | None = None) -> SimulatorNode:
 
 
 # ---------------------------------------------------------------------------------------------- command line
-class StopSignal:
-    """SIGINT/SIGTERM set a flag instead of tearing the ROS context down under the node's feet.
-
-    rclpy's own handlers shut the context down first, so the node could not log its last line or send
-    a final message; with this the main loop ends, the node cleans up, and only then does rclpy go. A
-    second signal raises KeyboardInterrupt, for a loop that does not come back.
-    """
-
-    def __init__(self) -> None:
-        self.signum: int | None = None
-
-    def __bool__(self) -> bool:
-        return self.signum is not None
-
-    def _handle(self, signum: int, frame: Any) -> None:
-        if self.signum is not None:
-            raise KeyboardInterrupt
-        self.signum = signum
-
-    def install(self) -> StopSignal:
-        """Install the handlers (main thread only; elsewhere this is a no-op)."""
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                signal.signal(sig, self._handle)
-        return self
-
-
 def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
     """(our own options, the ``--ros-args ... [--]`` parts) of a command line, order kept in each."""
     ours: list[str] = []
@@ -528,7 +501,7 @@ def main(argv: list[str] | None = None) -> int:
 
     sys.setswitchinterval(1e-4)  # see the module docstring: command latency under load
     rclpy.init(args=[NODE_NAME, *ros, *extra], signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopSignal().install()
+    stop = StopRequest().install()
     node = None
     code = 0
     try:
