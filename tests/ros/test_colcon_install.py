@@ -60,4 +60,4 @@ def test_colcon_build_and_run_the_installed_executive(tmp_path: Path, start_exec
     assert harness.tick().is_zero  # armed, but no scan yet: stopped
     assert process.has_line("arm server /toggle_navigation"), process.tail()
     assert process.has_line(f"tree {share}/trees/mission.xml"), process.tail()
-    assert process.has_line(f"params files {share}/config/lab.yaml (profile lab)"), process.tail()
+    assert process.has_line(f"params files {share}/config/lab.yaml"), process.tail()

@@ -167,7 +167,7 @@ def test_vet_stops_anything_the_robot_may_not_do(executive: Executive) -> None:
     assert executive.vet(Command(0.1, 0.5, "x")) == Command(0.1, 0.5, "x")
     assert executive.vet(Command(math.nan, 0.0, "x")).is_zero
     assert executive.vet(Command(0.5, 0.0, "x")).is_zero  # beyond max_linear_speed
-    assert executive.vet(Command(0.0, -2.5, "x")).is_zero  # beyond the turn rates
+    assert executive.vet(Command(0.0, -3.0, "x")).is_zero  # beyond the turn rates (2.5 and 2.84 rad/s)
     assert executive.stats.vetoed == 4
 
 
