@@ -135,11 +135,10 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("trigger_rearm_distance", 5.0, "A maneuver's trigger also re-arms after the robot has driven "
               "this far since it fired, even if its condition never cleared (0: only by clearing).", "m",
               0.0, 100.0),
-    ParamSpec("close_distance", 0.3, "Front obstacle nearer than this: stop and rotate in place.",
-              "m", 0.05, 10.0),
-    ParamSpec("far_distance", 0.7, "Front obstacle nearer than this (but not close): keep driving and "
-              "turn away (the homework profile widens it to 1.2 m so turns start early and gently).", "m",
-              0.05, 10.0),
+    ParamSpec("close_distance", 0.3, "The robot's free path ahead shorter than this (or the front unknown): "
+              "stop and rotate in place towards the side with room.", "m", 0.05, 10.0),
+    ParamSpec("far_distance", 0.7, "The robot's free path ahead shorter than this (but not close): keep driving "
+              "and steer for the smallest turn that clears it.", "m", 0.05, 10.0),
     ParamSpec("path_half_width", 0.18, "Half the width of the corridor the robot sweeps when it drives: the "
               "close / far / none decision and the steering look for obstacles inside it along each heading "
               "(robot radius plus a margin; Burger: 0.105 m circumradius).", "m", 0.05, 1.0),
