@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 from leafkit import Board, Status, make, tick
 
-from bt_nav.mission.behaviours.motion import SIDE_MEMORY, DriveForward, RotateInPlace, Stop, TurnAway
+from bt_nav.mission.behaviours.motion import DriveForward, RotateInPlace, Stop, TurnAway
 from bt_nav.mission.behaviours.perception import ProcessScan
 from bt_nav.mission.datatypes import Command
 from bt_nav.testing import FakeClock, synthetic_scan
@@ -91,8 +91,7 @@ def test_rotate_in_place_has_no_forward_speed_and_turns_away(obstacle: tuple[flo
 
 def test_rotate_in_place_keeps_its_direction_while_running_and_rechooses_after_preemption() -> None:
     board = scene((-10.0, 0.2))
-    clock = FakeClock(1.0)
-    leaf = make(RotateInPlace, "RotateInPlace", clock=clock)
+    leaf = make(RotateInPlace, "RotateInPlace")
     tick(leaf)
     assert command(board).angular > 0.0
     rescan(board, (10.0, 0.2))  # the scene mirrors mid-rotation (a square-on wall would dither)
@@ -100,11 +99,7 @@ def test_rotate_in_place_keeps_its_direction_while_running_and_rechooses_after_p
     assert command(board).angular > 0.0, "the direction chosen at the start is kept while running"
     leaf.stop(Status.INVALID)
     tick(leaf)
-    assert command(board).angular > 0.0, "a turn right after the last one keeps its side (SIDE_MEMORY)"
-    leaf.stop(Status.INVALID)
-    clock.advance(SIDE_MEMORY + 0.1)
-    tick(leaf)
-    assert command(board).angular < 0.0, "a new rotation later chooses afresh"
+    assert command(board).angular < 0.0, "a new rotation chooses afresh"
 
 
 @pytest.mark.parametrize("cls", [DriveForward, TurnAway, RotateInPlace])

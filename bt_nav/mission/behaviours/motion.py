@@ -71,33 +71,6 @@ def steering(target: float, limit: float) -> float:
     return max(-limit, min(limit, STEER_GAIN * target))
 
 
-#: The turning leaves share the side they last turned to (blackboard ``turn_side``, ``turn_side_at``).
-SIDE_PORTS = {
-    "turn_side": port(float, "+1 / -1: the side the robot last turned to (0: none yet)", default=0.0),
-    "turn_side_at": port(float, "mission-clock time of that turn", default=-math.inf),
-}
-#: s: a turn started this soon after the last one keeps its side. Alternating between steering one way
-#: (far band) and rotating the other (close) in a corner wastes seconds.
-SIDE_MEMORY = 1.5
-
-
-class _Turning(Leaf, register=False):
-    """A leaf that turns to a side: it keeps the side the robot turned to a moment ago."""
-
-    def choose_side(self) -> float:
-        """The remembered side if recent, else :func:`initial_side`."""
-        side = self.blackboard_client.get("turn_side") if self.blackboard_client.exists("turn_side") else 0.0
-        at = self.blackboard_client.get("turn_side_at") if self.blackboard_client.exists("turn_side_at") else None
-        if side and at is not None and 0.0 <= self.clock() - at <= SIDE_MEMORY:
-            return float(side)
-        return initial_side(self.get_input("paths"), self.get_input("far_distance"))
-
-    def remember(self, side: float) -> None:
-        """Note the side turned to now."""
-        self._set_output("turn_side", float(side))
-        self._set_output("turn_side_at", float(self.clock()))
-
-
 def initial_side(paths: FreePaths, need: float) -> float:
     """+1 (left) or -1 (right): the side of the heading to steer for; when that is straight ahead or no
     heading is clear, the side with more room (ties go left, as :func:`~bt_nav.mission.scan.clearer_side`)."""
@@ -107,7 +80,7 @@ def initial_side(paths: FreePaths, need: float) -> float:
     return 1.0 if paths.side_room(1) >= paths.side_room(-1) else -1.0
 
 
-class TurnAway(_Turning):
+class TurnAway(Leaf):
     """Keep driving while steering for the nearest clear heading (the path is blocked in the far band).
 
     The heading is the one :meth:`~bt_nav.mission.paths.FreePaths.steer` gives: the smallest turn that
@@ -134,11 +107,11 @@ class TurnAway(_Turning):
         "close_distance": port(float, default=0.3),
         "far_distance": port(float, default=0.7),
     }
-    OUTPUT_PORTS = {**CMD_PORT, **SIDE_PORTS}
+    OUTPUT_PORTS = dict(CMD_PORT)
 
     def initialise(self) -> None:
         """Pick the side to turn towards (kept unless the other side becomes clearly better)."""
-        self.direction = self.choose_side()
+        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
         """Graded forward speed, steering for the clear heading on the chosen side; RUNNING."""
@@ -154,24 +127,22 @@ class TurnAway(_Turning):
         slow, fast = self.get_input("slow_speed"), self.get_input("max_speed")
         linear = fast - (fast - slow) * depth ** self.SPEED_EXPONENT
         self.command(linear, steering(target, self.get_input("angular_speed")))
-        self.remember(self.direction)
         self.feedback_message = f"steering {math.degrees(target):+.0f} deg"
         return Status.RUNNING
 
 
-class RotateInPlace(_Turning):
+class RotateInPlace(Leaf):
     """Zero forward speed, turn towards the side with the clear heading (path blocked close, or front unknown)."""
 
     INPUT_PORTS = {**PATHS_PORT, "angular_speed": port(float, default=1.5), "far_distance": port(float, default=0.7)}
-    OUTPUT_PORTS = {**CMD_PORT, **SIDE_PORTS}
+    OUTPUT_PORTS = dict(CMD_PORT)
 
     def initialise(self) -> None:
-        """Pick the rotation direction for this whole rotation (the recent turn's side, if any)."""
-        self.direction = self.choose_side()
+        """Pick the rotation direction for this whole rotation."""
+        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
         """Rotate, RUNNING."""
         self.command(0.0, self.direction * self.get_input("angular_speed"))
-        self.remember(self.direction)
         self.feedback_message = f"rotating {'left' if self.direction > 0 else 'right'}"
         return Status.RUNNING
