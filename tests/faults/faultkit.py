@@ -361,15 +361,25 @@ def wait_wall(h: Harness, seconds: float) -> None:
         h.spin()
 
 
+def default_sectors() -> Any:
+    """The cones ProcessScan uses with the default parameters."""
+    from bt_nav.mission.scan import SectorConfig
+
+    d = {name: _SPECS[name].default for name in ("front_half_angle_deg", "side_center_deg", "side_half_angle_deg",
+                                                 "min_valid_beams")}
+    return SectorConfig.from_degrees(front_half_deg=d["front_half_angle_deg"], side_center_deg=d["side_center_deg"],
+                                     side_half_deg=d["side_half_angle_deg"], min_valid_beams=d["min_valid_beams"])
+
+
 def expected_proximity(scan: Any) -> str:
     """What the tree must do with a scan: 'stop' (malformed), or the class of the robot's path ahead as
     ProcessScan computes it with the default parameters (unknown when the front cone is unknown)."""
     from bt_nav.mission.behaviours.perception import ProcessScan
     from bt_nav.mission.paths import free_paths
-    from bt_nav.mission.scan import Proximity, ScanError, SectorConfig, sector_minima
+    from bt_nav.mission.scan import Proximity, ScanError, sector_minima
 
     try:
-        sectors = sector_minima(scan, SectorConfig())
+        sectors = sector_minima(scan, default_sectors())
         far = float(_SPECS["far_distance"].default)
         ahead = free_paths(scan, float(_SPECS["path_half_width"].default), ProcessScan.HORIZON * far).ahead
     except ScanError:

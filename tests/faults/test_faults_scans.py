@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 from conftest import LONG, FaultCases
-from faultkit import FREE, EvaluationServer, Run, expected_proximity, filled, scan_msg
+from faultkit import FREE, EvaluationServer, Run, default_sectors, expected_proximity, filled, scan_msg
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rclpy.serialization import deserialize_message, serialize_message
@@ -29,7 +29,7 @@ from ros_harness import V_MAX, Harness
 from sensor_msgs.msg import LaserScan
 
 from bt_nav.mission.params import SPECS as _SPECS
-from bt_nav.mission.scan import Proximity, Scan, ScanError, SectorConfig, sector_minima
+from bt_nav.mission.scan import Proximity, Scan, ScanError, sector_minima
 
 _W_TURN = float(_SPECS["angular_speed"].default)
 _W_MAX = max(_W_TURN, float(_SPECS["maneuver_angular_speed"].default))
@@ -220,7 +220,7 @@ def expected(msg: Any) -> tuple[str, Any]:
     received = deserialize_message(serialize_message(msg), LaserScan)
     try:
         scan = Scan.from_laserscan(received)
-        sectors = sector_minima(scan, SectorConfig())
+        sectors = sector_minima(scan, default_sectors())
     except ScanError:
         return "stop", None
     return expected_proximity(scan), sectors
