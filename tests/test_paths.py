@@ -26,7 +26,7 @@ def scan_of(world: dict, x: float = 0.0, y: float = 0.0, yaw: float = 0.0) -> Sc
 def test_nothing_around_means_the_horizon_everywhere() -> None:
     paths = free_paths(scan_of({}), HALF, horizon=2.0)
     assert np.all(paths.free == 2.0) and paths.ahead == 2.0
-    assert paths.heading_to(1.0) == 0.0  # no turn needed
+    assert paths.steer(1.0) == 0.0  # no turn needed
 
 
 def test_wall_ahead_stops_the_front_of_the_disk() -> None:
@@ -42,7 +42,7 @@ def test_a_post_beside_the_path_does_not_block_it_but_one_in_it_does() -> None:
     assert beside.ahead == 2.0  # 0.30 m off the centre line: the 0.2 m half width passes it
     inside = free_paths(scan_of({"circles": [{"x": 0.6, "y": 0.1, "r": 0.05}]}), HALF, horizon=2.0)
     assert 0.3 < inside.ahead < 0.6
-    assert inside.heading_to(1.5) < 0  # the post is on the left: the nearest clear heading is to the right
+    assert inside.steer(1.5) < 0  # the post is on the left: the nearest clear heading is to the right
 
 
 def test_shoulder_obstacle_blocks_the_path_although_no_cone_would_see_it() -> None:
@@ -52,13 +52,13 @@ def test_shoulder_obstacle_blocks_the_path_although_no_cone_would_see_it() -> No
     assert paths.ahead < 0.2
 
 
-def test_heading_to_prefers_the_smallest_turn_and_respects_a_side() -> None:
+def test_steer_prefers_the_smallest_turn_and_the_fallback_respects_a_side() -> None:
     # a corridor bend: wall ahead, open to the left only
     world = {"segments": [[1.0, -1.0, 1.0, 0.5], [-1.0, -0.5, 1.0, -0.5]]}
     paths = free_paths(scan_of(world), HALF, horizon=2.0)
-    left = paths.heading_to(1.5)
+    left = paths.steer(1.5)
     assert left > math.radians(30)
-    assert paths.heading_to(1.5, side=-1) <= 0.0  # forced right: the best there, not a left turn
+    assert paths.roomiest(-1) <= 0.0  # forced right: the best there, not a left turn
     assert paths.side_room(1) > paths.side_room(-1)
 
 

@@ -86,9 +86,5 @@ def run_dask(jobs: Sequence[Job], scheduler: str, retries: int = 3) -> Iterator[
         futures = [client.submit(run_job, job, key=f"bt-nav-grade-{job.key}", pure=False, retries=retries)
                    for job in jobs]
         by_key = {future.key: job for future, job in zip(futures, jobs, strict=True)}
-        seen: set[str] = set()
-        for future in dask_completed(futures):
-            if future.key in seen:  # as_completed never repeats a future; this guards the invariant anyway
-                continue
-            seen.add(future.key)
+        for future in dask_completed(futures):  # each future once, whichever worker finished it
             yield by_key[future.key], future.result()

@@ -47,22 +47,6 @@ class FreePaths:
         """Free travel along ``heading`` (rad; interpolated between the candidate headings)."""
         return float(np.interp(heading, self.headings, self.free))
 
-    def heading_to(self, need: float, side: int = 0) -> float:
-        """The smallest turn (rad) onto a heading with at least ``need`` of free path.
-
-        ``side`` +1 / -1 restricts the search to left / right turns (0: either, left on a tie); when no
-        heading has ``need``, the heading with the most free path (on that side) is returned.
-        """
-        h = self.headings
-        # smallest turn first; of two equal turns the left one, as scan.clearer_side breaks ties
-        candidates = sorted((i for i in range(h.size) if side == 0 or side * h[i] >= 0),
-                            key=lambda i: (abs(h[i]), -h[i]))
-        for i in candidates:
-            if self.free[i] >= need:
-                return float(self.headings[i])
-        best = max(candidates, key=lambda i: (self.free[i], -abs(self.headings[i])))
-        return float(self.headings[best])
-
     def steer(self, need: float, side: int = 0, turn_cost: float = TURN_COST,
               edge: int = EDGE_HEADINGS) -> float | None:
         """The heading to steer for (rad): clear for ``need`` metres, little turning, not grazing anything.
