@@ -155,16 +155,18 @@ class LockstepMission:
                  overrides: dict[str, Any] | None = None, profile_name: str = "homework", *,
                  kinematics: str = "", noise: bool = True, jitter: tuple[float, float] | None = DEFAULT_JITTER,
                  referee_config: RefereeConfig | None = None, sink: MissionSink | None = None,
-                 merge_steps: bool = True) -> None:
+                 merge_steps: bool = True, sim: SimCore | None = None) -> None:
+        """``sim``: a robot of a :class:`bt_nav_sim.multi.MultiSimCore` to drive instead of a core of its own
+        (the multi-robot runner steps the shared clock, :mod:`bt_nav.cli.lockstep_multi`)."""
         profile(profile_name)  # ValueError for an unknown profile, before any work
         self.profile = profile_name
         self.maneuver = normalise_maneuver(maneuver)
         self.seed = int(seed)
         world_obj = world if isinstance(world, World) else load_world(world, seed=self.seed)
         jitter_m, jitter_deg = jitter or (0.0, 0.0)
-        self.sim = SimCore(SimConfig(world=world_obj.name, profile=profile_name, seed=self.seed, noise=noise,
-                                     kinematics=kinematics, spawn_jitter_m=jitter_m, spawn_jitter_deg=jitter_deg),
-                           world=world_obj)
+        self.sim = sim if sim is not None else SimCore(
+            SimConfig(world=world_obj.name, profile=profile_name, seed=self.seed, noise=noise, kinematics=kinematics,
+                      spawn_jitter_m=jitter_m, spawn_jitter_deg=jitter_deg), world=world_obj)
         self.clock = _Clock()
         self.referee = Referee(referee_config or RefereeConfig())
         self.events = _QuietEvents(self.clock, sink)
@@ -199,22 +201,22 @@ class LockstepMission:
         try:
             while sim.t_ns <= end_ns:
                 self.clock.now = sim.t
-                self._deliver(out)
+                self.deliver(out)
                 if sim.t_ns >= next_referee:
                     next_referee += self.referee_ns
-                    self._referee_step()
+                    self.referee_step()
                     if self.referee.done and duration is None:
                         break
                 if sim.t_ns >= next_tick:
                     next_tick += self.tick_ns
-                    self._tick(recorder)
+                    self.tick(recorder)
                 steps = sim.steps_until(min(next_tick, next_referee)) if self.merge_steps else 1
                 out = sim.advance(self.command.linear, self.command.angular, steps)
         finally:
             if recorder is not None:
                 recorder.close()
 
-    def _deliver(self, out: Any) -> None:
+    def deliver(self, out: Any) -> None:
         """Odometry and ground truth, a scan and a collision event, as the simulator node publishes them."""
         sim, t, s = self.sim, self.sim.t, self.sim.state
         if out.collision:
@@ -237,14 +239,16 @@ class LockstepMission:
         if self.sink is not None:
             self.sink.clock(t)
 
-    def _referee_step(self) -> None:
+    def referee_step(self) -> None:
+        """The referee's step at the current instant; its activate calls go to the tree."""
         t = self.clock.now
         for action in self.referee.step(t):
             ok, message = self.core.request_arm(action.data)
             self.referee.on_activate_result(t, action.data, ok)
             self.events.info(f"referee: activate({str(action.data).lower()}) -> {ok}: {message}")
 
-    def _tick(self, recorder: TraceRecorder | None) -> None:
+    def tick(self, recorder: TraceRecorder | None = None) -> None:
+        """One tree tick; its command drives the physics from the next step on."""
         command = self.core.tick()
         t, s = self.clock.now, self.sim.state
         if recorder is not None:
@@ -357,6 +361,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--video", default=None, metavar="FILE.mp4", help="film the mission (needs --bag or "
                         "writes a bag next to the video)")
     parser.add_argument("--fps", type=float, default=10.0, help="frames per second of --video")
+    parser.add_argument("--robots", type=int, default=1, help="robots in the world, each with its own tree and "
+                        "referee (robot1, robot2, ...; default 1)")
     return parser
 
 
@@ -389,10 +395,28 @@ def _film(bag_dir: str, out: str, fps: float) -> None:
     print(f"video: {out} ({stats.frames} frames at {fps:g} fps, rendered in {stats.seconds:.1f} s)")
 
 
+def _main_multi(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``bt-nav lockstep --robots N``: N robots in one world (:mod:`bt_nav.cli.lockstep_multi`)."""
+    from bt_nav.cli.lockstep_multi import print_multi, run_multi_mission
+
+    if args.bag or args.video or args.trace:
+        parser.error("--bag, --video and --trace record one robot: not with --robots > 1")
+    try:
+        result = run_multi_mission(args.world, args.maneuver, args.seed, args.robots,
+                                   parse_assignments(args.overrides), args.profile,
+                                   jitter=None if args.no_jitter else DEFAULT_JITTER, kinematics=args.kinematics,
+                                   noise=not args.no_noise, duration=args.duration)
+    except (ValueError, FileNotFoundError) as exc:
+        parser.error(str(exc))
+    return print_multi(result, args.plot, args.json)
+
+
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav lockstep``: one mission; prints the referee's report; exit 0 only if it passed."""
     parser = _parser()
     args = parser.parse_args(argv)
+    if args.robots != 1:
+        return _main_multi(parser, args)
     try:
         result = _run(args)
     except (ValueError, FileNotFoundError) as exc:

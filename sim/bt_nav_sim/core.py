@@ -126,10 +126,28 @@ def spawn_pose(world: World, config: SimConfig) -> tuple[float, float, float]:
     return x + float(dx), y + float(dy), math.remainder(yaw + dyaw, 2 * math.pi)
 
 
+class CrowdedWorld:
+    """The static world plus other robots as circles, for the physics' contact checks (its only use of a
+    world is ``clearance``): a robot is stopped by another robot the way it is stopped by a wall."""
+
+    def __init__(self, world: World, crowd: np.ndarray) -> None:
+        self.world = world
+        self.crowd = crowd
+
+    def clearance(self, x: float, y: float) -> float:
+        """Distance from (x, y) to the nearest wall, obstacle or other robot's disk."""
+        crowd = self.crowd
+        others = np.hypot(x - crowd[:, 0], y - crowd[:, 1]) - crowd[:, 2]
+        return min(self.world.clearance(x, y), float(others.min()) if len(others) else math.inf)
+
+
 class SimCore:
     """Sim time, physics, sensor schedules and odometry: deterministic for a seed and command sequence."""
 
-    def __init__(self, config: SimConfig, world: World | None = None) -> None:
+    def __init__(self, config: SimConfig, world: World | None = None, *, index: int = 0,
+                 spawn: tuple[float, float, float] | None = None) -> None:
+        """``index`` > 0 and ``spawn``: the further robots of a :class:`bt_nav_sim.multi.MultiSimCore`
+        (noise streams of their own, their own start pose); robot 0 is exactly the single-robot core."""
         config.check()
         self.config = config
         seed = None if config.seed < 0 else int(config.seed)
@@ -138,9 +156,11 @@ class SimCore:
         self.caster = RayCaster(self.world, self.model)
         self.params = config.robot()
         # Two independent streams so that turning LiDAR noise off does not change the odometry drift.
-        self.lidar_rng = np.random.default_rng(seed)
-        self.odom_rng = np.random.default_rng(None if seed is None else seed + 1)
-        self.spawn = spawn_pose(self.world, config)
+        self.lidar_rng = np.random.default_rng(seed if index == 0 or seed is None else [seed, index, 0])
+        self.odom_rng = np.random.default_rng(None if seed is None else seed + 1 if index == 0 else [seed, index, 1])
+        self.spawn = spawn_pose(self.world, config) if spawn is None else spawn
+        # The other robots as circles (K, 3), set by MultiSimCore before each step; None: alone.
+        self.crowd: np.ndarray | None = None
         self.state = RobotState(*self.spawn)
         self.step_ns = max(1, round(1e9 / config.physics_rate_hz))
         self.scan_period_ns = max(1, round(1e9 / self.model.rate_hz))
@@ -181,7 +201,7 @@ class SimCore:
         """A scan from the current true pose (noise and dropouts from the seeded stream)."""
         s = self.state
         rng = self.lidar_rng if (self.model.noise_sigma > 0 or self.model.dropout_prob > 0) else None
-        return self.caster.cast(s.x, s.y, s.yaw, rng)
+        return self.caster.cast(s.x, s.y, s.yaw, rng, self.crowd)
 
     def advance(self, cmd_v: float, cmd_w: float, steps: int = 1) -> StepOutput:
         """``steps`` physics steps under (cmd_v, cmd_w), then whatever became due (see :meth:`outputs`).
@@ -193,11 +213,21 @@ class SimCore:
         move, so the physics is skipped then (before arming and after the deadline).
         """
         steps = max(1, int(steps))
+        return self.finish_step(self.move(cmd_v, cmd_w, steps), steps)
+
+    def move(self, cmd_v: float, cmd_w: float, steps: int = 1) -> bool:
+        """The physics half of :meth:`advance` (no time, no outputs); returns whether the robot collided.
+
+        Among other robots (``crowd`` set) a robot at rest is stepped too: another robot may touch it.
+        """
         before = self.state
         resting = before.v == 0.0 and before.w == 0.0 and cmd_v == 0.0 and cmd_w == 0.0
-        collided = self._was_colliding
-        if not resting:
-            collided = self._integrate(cmd_v, cmd_w, steps)
+        if resting and self.crowd is None:
+            return self._was_colliding
+        return self._integrate(cmd_v, cmd_w, steps)
+
+    def finish_step(self, collided: bool, steps: int = 1) -> StepOutput:
+        """The bookkeeping half of :meth:`advance`: time, outputs, odometry and the collision edge."""
         self.t_ns += steps * self.step_ns
         self.steps += steps
         out = self.outputs()
@@ -216,10 +246,11 @@ class SimCore:
         target = target_twist(cmd_v, cmd_w, self.params)
         dt = self.step_ns * 1e-9
         collided = False
+        world = self.world if self.crowd is None else CrowdedWorld(self.world, self.crowd)
         while steps > 0:
             settled = (self.state.v, self.state.w) == target
             n = steps if settled else 1
-            self.state, hit = step(self.state, cmd_v, cmd_w, n * dt, self.world, self.params)
+            self.state, hit = step(self.state, cmd_v, cmd_w, n * dt, world, self.params)
             collided = collided or hit
             steps -= n
         return collided

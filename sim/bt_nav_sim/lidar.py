@@ -99,10 +99,13 @@ class RayCaster:
         self._best = np.empty(nb)
         self._cbest = np.empty(nb)
 
-    def true_ranges(self, x: float, y: float, yaw: float) -> np.ndarray:
+    def true_ranges(self, x: float, y: float, yaw: float, extra: np.ndarray | None = None) -> np.ndarray:
         """Exact distance to the first obstacle along every beam (float64, +inf if none).
 
-        Returns an internal buffer that the next call overwrites; copy it to keep it.
+        ``extra``: moving circles (K, 3: cx, cy, r) that are not part of the static world, such as the
+        other robots of a multi-robot run; they are cast after the world's obstacles, so without them
+        the result is exactly the single-robot one. Returns an internal buffer that the next call
+        overwrites; copy it to keep it.
         """
         cy, sy = math.cos(yaw), math.sin(yaw)
         ux, uy = self._ux, self._uy
@@ -161,18 +164,22 @@ class RayCaster:
             tmp[c2[:, 0] < 0.0] = 0.0  # inside a cylinder: every beam is blocked at once
             np.minimum.reduce(tmp, axis=0, out=self._cbest)
             np.minimum(best, self._cbest, out=best)
+        if extra is not None and len(extra):
+            np.minimum(best, circle_ranges(x, y, ux, uy, np.asarray(extra, dtype=np.float64)), out=best)
         return best
 
-    def cast(self, x: float, y: float, yaw: float, rng: np.random.Generator | None = None) -> np.ndarray:
+    def cast(self, x: float, y: float, yaw: float, rng: np.random.Generator | None = None,
+             extra: np.ndarray | None = None) -> np.ndarray:
         """One scan from pose (x, y, yaw): float32 ranges of length num_beams (see module docstring).
 
         Noise and dropouts are drawn only when ``rng`` is given, and always for every beam in the same
         order (noise, then dropout), so a seed reproduces the same scan regardless of what was hit.
         Noisy valid readings are clipped to [range_min, range_max] so a consumer's validity test agrees
         with the too-close (0.0) / out-of-range (inf) classification made on the true distance.
+        ``extra``: moving circles seen besides the world (see :meth:`true_ranges`).
         """
         model = self.model
-        true = self.true_ranges(float(x), float(y), float(yaw))
+        true = self.true_ranges(float(x), float(y), float(yaw), extra)
         valid = true <= model.range_max
         near = true < model.range_min
         out = true.copy()
@@ -184,6 +191,24 @@ class RayCaster:
         if rng is not None and model.dropout_prob > 0.0:
             out[rng.random(out.shape) < model.dropout_prob] = np.nan
         return out.astype(np.float32)
+
+
+def circle_ranges(x: float, y: float, ux: np.ndarray, uy: np.ndarray, circles: np.ndarray) -> np.ndarray:
+    """Distance along each beam (unit directions ux, uy from (x, y)) to the nearest of ``circles``
+    (K, 3), +inf where none is hit; 0 for every beam when the sensor is inside one.
+
+    Few circles (the other robots), so plain allocating numpy is fine here, unlike the world's obstacles.
+    """
+    wx = circles[:, 0:1] - x
+    wy = circles[:, 1:2] - y
+    c2 = wx * wx + wy * wy - circles[:, 2:3] ** 2
+    b = wx * ux + wy * uy
+    disc = b * b - c2
+    with np.errstate(invalid="ignore"):
+        t = b - np.sqrt(np.where(disc < 0.0, np.inf, disc))
+    t = np.where((disc < 0.0) | (t < 0.0), np.inf, t)
+    t[c2[:, 0] < 0.0] = 0.0
+    return t.min(axis=0)
 
 
 # One caster per (world, model), dropped automatically when the world is garbage collected.

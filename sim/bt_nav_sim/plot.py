@@ -188,4 +188,62 @@ def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: 
     return out
 
 
-__all__ = ["BRANCHES", "BRANCH_COLOURS", "Trajectory", "branch_of_tip", "plot_run"]
+#: One colour per robot of a multi-robot picture (and video), in robot order; reused cyclically.
+ROBOT_COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
+
+
+def robot_colour(index: int) -> str:
+    """The colour of robot ``index`` (0-based) in pictures and videos."""
+    return ROBOT_COLOURS[index % len(ROBOT_COLOURS)]
+
+
+def plot_robots(world: World, runs: list[tuple[str, Trajectory | Mapping[str, Any], Mapping[str, Any]]],
+                path: str | Path, title: str | None = None) -> Path:
+    """Several robots of one world in one picture, each path in its robot's colour (a branch colouring
+    would make two crossing paths unreadable); ``runs`` is (name, trajectory, referee results) per robot."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    fig, ax = plt.subplots(figsize=(7.5, 7.5), dpi=110)
+    try:
+        _draw_world(ax, world)
+        handles, lines = [], [title or world.name]
+        for i, (name, trajectory, results) in enumerate(runs):
+            traj = trajectory if isinstance(trajectory, Trajectory) else Trajectory.from_dict(trajectory)
+            colour = robot_colour(i)
+            if len(traj):
+                ax.plot(traj.x, traj.y, color=colour, lw=2.0, zorder=4)
+                ax.plot(traj.x[0], traj.y[0], marker="o", ms=9, color=colour, zorder=7)
+                ax.plot(traj.x[-1], traj.y[-1], marker="s", ms=8, color=colour, mec="black", zorder=7)
+            for start, _ in traj.segments_of("Maneuver"):
+                ax.plot(traj.x[start], traj.y[start], marker="D", ms=6, mfc="none", mec=colour, mew=1.5, zorder=6)
+            for event in results.get("collision_events", ()):
+                ax.plot(event["x"], event["y"], marker="X", ms=13, color=colour, mec="black", zorder=8)
+            verdict = "PASSED" if results.get("passed") else "FAILED"
+            handles.append(Line2D([], [], color=colour, lw=3, label=f"{name}: {verdict}"))
+            lines.append(f"{name}: {verdict}, travelled {results.get('travelled', 0.0):.2f} m, "
+                         f"{results.get('collisions', 0)} collisions")
+        handles += [Line2D([], [], marker="o", ls="", color="black", label="start"),
+                    Line2D([], [], marker="s", ls="", color="black", label="end")]
+        ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
+        xmin, ymin, xmax, ymax = world.bounds
+        ax.set_xlim(xmin, xmax)
+        ax.set_ylim(ymin, ymax)
+        ax.set_aspect("equal")
+        ax.grid(True, lw=0.3, alpha=0.5)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_title("\n".join(lines), fontsize=10)
+        out = Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(out, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+    return out
+
+
+__all__ = ["BRANCHES", "BRANCH_COLOURS", "ROBOT_COLOURS", "Trajectory", "branch_of_tip", "plot_robots", "plot_run",
+           "robot_colour"]
