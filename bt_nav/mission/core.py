@@ -24,11 +24,14 @@ import py_trees
 from bt_nav.mission import params as P
 from bt_nav.mission.behaviours import ArmService, EvaluateMission
 from bt_nav.mission.behaviours.base import EventLogger
+from bt_nav.mission.behaviours.control import compile_tick
 from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample, keep_wheels_within
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.tree import load_tree
 
 Status = py_trees.common.Status
+_BLACKBOARD = py_trees.blackboard.Blackboard
+_STORAGE = _BLACKBOARD.storage  # the process-global key -> value dict
 
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -50,12 +53,16 @@ def find_leaf(root: py_trees.behaviour.Behaviour, cls: type) -> Any:
 
 
 def culprit(exc: BaseException) -> str:
-    """Name of the innermost behaviour on the exception's traceback ("?" when none)."""
+    """Name of the innermost behaviour on the exception's traceback ("?" when none): the ``self`` of a
+    behaviour's method, or the ``node`` a compiled tick function
+    (:func:`~bt_nav.mission.behaviours.control.compile_tick`) works on."""
     name, tb = "?", exc.__traceback__
     while tb is not None:
-        owner = tb.tb_frame.f_locals.get("self")
-        if isinstance(owner, py_trees.behaviour.Behaviour):
-            name = owner.name
+        frame_locals = tb.tb_frame.f_locals
+        for owner in (frame_locals.get("self"), frame_locals.get("node")):  # a method, or a compiled tick
+            if isinstance(owner, py_trees.behaviour.Behaviour):
+                name = owner.name
+                break
         tb = tb.tb_next
     return name
 
@@ -93,6 +100,8 @@ class MissionCore:
         seed = int(self.params["random_seed"])
         self.tree.setup(node=node, clock=clock, events=self.events, evaluation_client=evaluation_client,
                         random_seed=None if seed < 0 else seed)
+        self._fast_tick = compile_tick(self.root)
+        self.nodes: list[py_trees.behaviour.Behaviour] = list(self.root.iterate())  # the shape is fixed from here on
         self.arm_leaf: ArmService = find_leaf(self.root, ArmService)
         self.evaluate_leaf: EvaluateMission | None = find_leaf(self.root, EvaluateMission)
         self.ticks = 0
@@ -100,15 +109,23 @@ class MissionCore:
         self.last_command: Command = STOP
 
     # ------------------------------------------------------------------ inputs
+    def _put(self, key: str, value: Any) -> None:
+        """Write one of the keys this core registered for writing (absolute ``key``): straight into the
+        blackboard's storage, as py_trees' client would after its permission check (done once, at
+        registration), unless py_trees' activity stream is on and wants to see the write."""
+        if _BLACKBOARD.activity_stream is None:
+            _STORAGE[key] = value
+        else:
+            self.board.set(key, value)
+
     def feed_scan(self, scan: Scan, stamp: float | None = None) -> None:
         """The newest scan and when it arrived (default: now on the mission clock)."""
-        self.board.set("/scan", scan)
-        self.board.set("/scan_stamp", float(self.clock() if stamp is None else stamp))
+        self._put("/scan", scan)
+        self._put("/scan_stamp", float(self.clock() if stamp is None else stamp))
 
     def feed_odom(self, yaw: float, stamp: float | None = None, x: float = math.nan, y: float = math.nan) -> None:
         """The newest odometry pose (yaw in rad; x, y in m, NaN when the source has none) and when it arrived."""
-        self.board.set("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp),
-                                           float(x), float(y)))
+        self._put("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp), float(x), float(y)))
 
     def request_arm(self, data: bool) -> tuple[bool, str]:
         """Same as a call of the ``arm`` service: (success, message)."""
@@ -147,8 +164,8 @@ class MissionCore:
         """
         self.ticks += 1
         try:
-            self.tree.tick()
-            command = self.board.get("/cmd_vel") if self.board.exists("/cmd_vel") else STOP
+            self._tick_tree()
+            command = self.value("cmd_vel", STOP)
         except Exception as exc:  # one bad tick must not kill the node or leave the robot moving
             self.faults += 1
             self.events.error(f"tick {self.ticks}: exception in leaf '{culprit(exc)}': {exc!r}; "
@@ -160,6 +177,18 @@ class MissionCore:
             command = Command(0.0, 0.0, f"exception in {culprit(exc)}")
         self.last_command = self.limit(command)
         return self.last_command
+
+    def _tick_tree(self) -> None:
+        """One tick of the tree: the compiled ticker (:func:`~bt_nav.mission.behaviours.control.compile_tick`)
+        unless py_trees' own tick has something more to do (visitors or tick handlers on the tree, debug
+        logging on: then its debug lines are wanted), where py_trees ticks it."""
+        tree = self.tree
+        if (tree.visitors or tree.pre_tick_handlers or tree.post_tick_handlers
+                or py_trees.logging.level == py_trees.logging.Level.DEBUG):
+            tree.tick()
+            return
+        self._fast_tick()
+        tree.count += 1
 
     def limit(self, command: Command) -> Command:
         """Clamp to the configured limits (per wheel too, when set); anything non-finite becomes a stop."""
@@ -189,8 +218,11 @@ class MissionCore:
 
     # ------------------------------------------------------------------ introspection
     def value(self, key: str, default: Any = None) -> Any:
-        """A blackboard value the core reads (see OUTPUT_KEYS) or writes."""
-        return self.board.get(f"/{key}") if self.board.exists(f"/{key}") else default
+        """A blackboard value the core reads (see OUTPUT_KEYS) or writes (a plain lookup: the core's
+        client has every such key registered and no remapping, so py_trees' checks add nothing)."""
+        if _BLACKBOARD.activity_stream is not None:
+            return self.board.get(f"/{key}") if self.board.exists(f"/{key}") else default
+        return _STORAGE.get(f"/{key}", default)
 
     @property
     def tip(self) -> str:
@@ -200,7 +232,12 @@ class MissionCore:
 
     def statuses(self) -> dict[str, str]:
         """Every node's status after the last tick, by name."""
-        return {node.name: node.status.value for node in self.root.iterate()}
+        return {node.name: node.status.value for node in self.nodes}
+
+    def status_key(self) -> tuple[Any, ...]:
+        """Every node's status and the tip, as a cheap comparable value: it changes exactly when
+        :meth:`statuses` or :attr:`tip` does (for deciding whether a new snapshot is worth making)."""
+        return (*(node.status for node in self.nodes), self.root.tip())
 
     def snapshot(self, show_status: bool = True) -> str:
         """The tree as unicode art, without colour codes (for logs, ``~/tree`` and golden tests)."""

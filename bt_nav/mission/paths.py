@@ -21,7 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from bt_nav.mission.scan import Scan, beam_angles, clean_ranges
+from bt_nav.mission.scan import Scan, beam_trig, clean_ranges
 
 #: Candidate headings, robot frame: -90 .. +90 deg every 5 deg (0 is straight ahead, index 18).
 HEADINGS = np.radians(np.arange(-90.0, 90.0 + 1e-9, 5.0))
@@ -87,23 +87,46 @@ def _trig(headings: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
     return np.cos(h)[:, None], np.sin(h)[:, None]
 
 
+_HEADINGS_TRIG = _trig(tuple(float(h) for h in HEADINGS))
+
+
 def free_paths(scan: Scan, half_width: float, horizon: float, headings: np.ndarray = HEADINGS) -> FreePaths:
     """The free path along every heading for a robot of ``half_width`` (see the module docstring).
 
     Raises:
         ScanError: if the scan is malformed.
     """
-    ranges = clean_ranges(scan)
-    angles = beam_angles(scan)
-    near = np.isfinite(ranges) & (ranges < horizon + half_width)
-    r, theta = ranges[near], angles[near]
+    return free_paths_from_clean(scan, clean_ranges(scan), half_width, horizon, headings)
+
+
+def free_paths_from_clean(scan: Scan, ranges: np.ndarray, half_width: float, horizon: float,
+                          headings: np.ndarray = HEADINGS) -> FreePaths:
+    """:func:`free_paths` from the scan's cleaned ranges (:func:`~bt_nav.mission.scan.clean_validated`; the
+    caller has validated the scan), so one cleaning serves the cones and the paths.
+
+    The same arithmetic in the same order as the plain formula (so the same bits), in place where it
+    can be: per scan only the beams near enough count, and their directions come from the per-layout
+    cache (:func:`~bt_nav.mission.scan.beam_trig`).
+    """
+    near = ranges < horizon + half_width  # False for NaN and +inf; -inf is range_min after cleaning
+    r = ranges[near]
     if r.size == 0:
         return FreePaths(headings, np.full(headings.shape, float(horizon)))
-    x, y = r * np.cos(theta), r * np.sin(theta)
-    cos_h, sin_h = _trig(tuple(float(h) for h in headings))
-    along = x[None, :] * cos_h + y[None, :] * sin_h
-    lateral = y[None, :] * cos_h - x[None, :] * sin_h
-    inside = (np.abs(lateral) < half_width) & (along > 0.0)
-    reach = along - np.sqrt(np.maximum(half_width * half_width - lateral * lateral, 0.0))
-    free = np.where(inside, reach, math.inf).min(axis=1)
+    cos_b, sin_b = beam_trig(scan)
+    x, y = r * cos_b[near], r * sin_b[near]
+    cos_h, sin_h = _HEADINGS_TRIG if headings is HEADINGS else _trig(tuple(float(h) for h in headings))
+    along = x * cos_h
+    along += y * sin_h
+    lateral = y * cos_h
+    lateral -= x * sin_h
+    outside = np.abs(lateral) < half_width  # inside the corridor ...
+    outside &= along > 0.0  # ... and ahead
+    np.logical_not(outside, out=outside)
+    np.multiply(lateral, lateral, out=lateral)
+    np.subtract(half_width * half_width, lateral, out=lateral)
+    np.maximum(lateral, 0.0, out=lateral)
+    np.sqrt(lateral, out=lateral)
+    along -= lateral  # the reach
+    along[outside] = math.inf
+    free = along.min(axis=1)
     return FreePaths(headings, np.clip(free, 0.0, float(horizon)))

@@ -38,11 +38,14 @@ __all__ = [
     "SectorReading",
     "Sectors",
     "beam_angles",
+    "beam_trig",
     "classify",
     "clean_ranges",
+    "clean_validated",
     "clearer_side",
     "sector_indices",
     "sector_minima",
+    "sectors_from_clean",
     "validate_scan",
     "wrap_angle",
 ]
@@ -222,6 +225,25 @@ def beam_angles(scan: Scan) -> np.ndarray:
     return _cached_beam_angles(*_layout(scan)).copy()
 
 
+@lru_cache(maxsize=8)
+def _cached_beam_trig(angle_min: float, inc: float, n_beams: int) -> tuple[np.ndarray, np.ndarray]:
+    angles = _cached_beam_angles(angle_min, inc, n_beams)
+    cos, sin = np.cos(angles), np.sin(angles)
+    cos.setflags(write=False)
+    sin.setflags(write=False)
+    return cos, sin
+
+
+def beam_trig(scan: Scan) -> tuple[np.ndarray, np.ndarray]:
+    """(cos, sin) of every beam angle, cached per layout and read-only, for a scan the caller has validated.
+
+    The free paths need every beam's direction as a unit vector on every scan; the layout repeats,
+    so the trigonometry is done once per layout instead of once per scan. ``np.cos`` is elementwise,
+    so ``cos[mask]`` equals ``np.cos(angles[mask])`` bit for bit.
+    """
+    return _cached_beam_trig(*_layout(scan))
+
+
 # ----------------------------------------------------------------------------------------------------
 # Range cleaning (REP 117)
 # ----------------------------------------------------------------------------------------------------
@@ -247,6 +269,12 @@ def clean_ranges(scan: Scan) -> np.ndarray:
         ScanError: if the scan is malformed.
     """
     validate_scan(scan)
+    return clean_validated(scan)
+
+
+def clean_validated(scan: Scan) -> np.ndarray:
+    """:func:`clean_ranges` for a scan the caller has validated already (one validation per scan, not
+    one per consumer)."""
     raw = np.array(scan.ranges, dtype=np.float64, copy=True)
     return _rep117(raw, float(scan.range_min), float(scan.range_max))
 
@@ -435,6 +463,28 @@ def sector_minima(scan: Scan, config: SectorConfig = SectorConfig()) -> Sectors:
         return _reading(ranges, _sector_indices(scan, sector), range_min, range_max, min_valid)
 
     return Sectors(front=read(config.front), left=read(config.left), right=read(config.right))
+
+
+def _clean_reading(clean: np.ndarray, indices: np.ndarray, min_valid: int) -> SectorReading:
+    """``_reading`` on REP 117-cleaned ranges: valid is not NaN, and the minimum of the valid values is
+    ``range_min`` for a -inf beam, else the nearest in-range value, else +inf, as ``_reading`` says."""
+    total = int(indices.size)
+    if total == 0:
+        return SectorReading(math.nan, 0, 0)
+    cone = clean[indices]
+    valid = total - int(np.count_nonzero(np.isnan(cone)))
+    if valid < min(min_valid, total) or valid == 0:
+        return SectorReading(math.nan, valid, total)
+    return SectorReading(float(np.fmin.reduce(cone)), valid, total)  # fmin skips NaN
+
+
+def sectors_from_clean(scan: Scan, clean: np.ndarray, config: SectorConfig = SectorConfig()) -> Sectors:
+    """:func:`sector_minima` from ranges the caller has validated and cleaned (:func:`clean_validated`):
+    the same readings, with the scan's single cleaning shared with the free paths."""
+    min_valid = int(config.min_valid_beams)
+    return Sectors(front=_clean_reading(clean, _sector_indices(scan, config.front), min_valid),
+                   left=_clean_reading(clean, _sector_indices(scan, config.left), min_valid),
+                   right=_clean_reading(clean, _sector_indices(scan, config.right), min_valid))
 
 
 # ----------------------------------------------------------------------------------------------------

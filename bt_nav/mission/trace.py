@@ -55,7 +55,7 @@ class TraceRecorder:
         changed = {k: v for k, v in values.items() if self._last_values.get(k, object()) != v}
         self._last_values = values
         feedback = {}
-        for node in self.core.root.iterate():
+        for node in self.core.nodes:
             if node.feedback_message and self._last_feedback.get(node.name) != node.feedback_message:
                 feedback[node.name] = node.feedback_message
                 self._last_feedback[node.name] = node.feedback_message

@@ -239,7 +239,7 @@ class Executive:
 
     def _publish_tree(self) -> None:
         """``~/tree`` when a status or the tip changed (not every tick: the text is large)."""
-        key = (tuple(self.core.statuses().items()), self.core.tip)
+        key = self.core.status_key()
         if key != self._tree_key:
             self._tree_key = key
             self.tree_publisher.publish(self._string(data=self.core.snapshot()))

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any, Protocol
+from typing import Any, Protocol, get_origin
 
 import py_trees
 from py_trees.ports import BehaviourWithPorts, PortInformation
@@ -18,7 +18,8 @@ from py_trees.ports import BehaviourWithPorts, PortInformation
 from bt_nav.mission.datatypes import Clock, Command
 
 _DEFAULT_EVENTS = logging.getLogger("bt_nav")
-_STORAGE = py_trees.blackboard.Blackboard.storage  # the process-global key -> value dict
+_BLACKBOARD = py_trees.blackboard.Blackboard
+_STORAGE = _BLACKBOARD.storage  # the process-global key -> value dict
 
 
 class EventLogger(Protocol):
@@ -52,6 +53,7 @@ class Leaf(BehaviourWithPorts):
         self.events: EventLogger = _DEFAULT_EVENTS
         self.node: Any = None
         self._port_keys: dict[str, str] = {}
+        self._output_keys: dict[str, tuple[str, type]] = {}
 
     def get_input(self, port_name: str, default: Any = None) -> Any:
         """Read an input port: a direct blackboard lookup once the port's key is known.
@@ -70,6 +72,35 @@ class Leaf(BehaviourWithPorts):
         if value is None:
             return super().get_input(port_name, default)
         return value
+
+    def read_optional(self, port_name: str) -> Any:
+        """An input port's value, or None when its key holds nothing (no default, no exception): for
+        optional inputs such as the newest scan, which py_trees' client would look up twice."""
+        key = self._port_keys.get(port_name)
+        if key is None:
+            if not self.blackboard_client.exists(port_name):
+                return None
+            return self.get_input(port_name)  # resolves and remembers the key
+        return _STORAGE.get(key)
+
+    def _set_output(self, port_name: str, value: Any) -> None:
+        """Write an output port: a direct blackboard store once the port has been written through py_trees.
+
+        py_trees' ``_set_output`` re-checks the port, its type and the client's write permission and
+        resolves the remapping on every write (a few microseconds, several writes a tick). The first
+        write of each port takes that full path (which raises for an undeclared port or a missing
+        permission); later writes keep the type check (same TypeError as py_trees) and store directly.
+        With py_trees' activity stream on, every write takes the full path, so the stream sees it.
+        """
+        cached = self._output_keys.get(port_name)
+        if cached is None or _BLACKBOARD.activity_stream is not None or not isinstance(value, cached[1]):
+            super()._set_output(port_name, value)
+            if cached is None:
+                port_type = self.output_ports()[port_name].data_type
+                if isinstance(port_type, type) and get_origin(port_type) is None:
+                    self._output_keys[port_name] = (self._get_blackboard_key(port_name), port_type)
+            return
+        _STORAGE[cached[0]] = value
 
     def setup(self, **kwargs: Any) -> None:
         """Take the clock, the event logger and (on the ROS path) the node."""

@@ -18,7 +18,7 @@ import numpy as np
 import py_trees
 
 from bt_nav.mission.behaviours.base import Condition, Leaf, port
-from bt_nav.mission.paths import HEADINGS, FreePaths, free_paths
+from bt_nav.mission.paths import HEADINGS, FreePaths, free_paths_from_clean
 from bt_nav.mission.scan import (
     Proximity,
     Scan,
@@ -26,7 +26,9 @@ from bt_nav.mission.scan import (
     SectorConfig,
     SectorReading,
     Sectors,
-    sector_minima,
+    clean_validated,
+    sectors_from_clean,
+    validate_scan,
 )
 
 Status = py_trees.common.Status
@@ -93,16 +95,18 @@ class ProcessScan(Leaf):
 
     def update(self) -> Status:
         """Always SUCCESS; the verdict goes to ``scan_ok``."""
-        scan = self.blackboard_client.get("scan") if self.blackboard_client.exists("scan") else None
+        scan = self.read_optional("scan")
         if scan is None:
             return self._publish(False, "no scan yet", UNKNOWN_SECTORS)
         config = self._config()
         path_inputs = (float(self.get_input("path_half_width")), self.HORIZON * float(self.get_input("far_distance")))
         if scan is not self._last_scan or config != self._last_config or path_inputs != self._path_inputs:
             self._last_scan, self._last_config, self._path_inputs = scan, config, path_inputs
-            try:
-                self._sectors, self._error = sector_minima(scan, config), ""
-                self._paths = free_paths(scan, *path_inputs)
+            try:  # one validation and one REP 117 cleaning per scan, shared by the cones and the paths
+                validate_scan(scan)
+                clean = clean_validated(scan)
+                self._sectors, self._error = sectors_from_clean(scan, clean, config), ""
+                self._paths = free_paths_from_clean(scan, clean, *path_inputs)
             except ScanError as exc:
                 self._sectors, self._paths, self._error = UNKNOWN_SECTORS, BLOCKED_PATHS, f"malformed scan: {exc}"
         if self._error:
