@@ -9,13 +9,13 @@ from launch import LaunchDescription
 from bt_nav.ros.bringup import nodes
 from bt_nav.ros.launching import declare, to_actions
 
-ARGUMENTS = ["maneuver", "safety_distance", "world", "seed", "real_time_factor"]
+ARGUMENTS = ["maneuver", "safety_distance", "world", "seed", "real_time_factor", "namespace"]
 
 
 def generate_launch_description() -> LaunchDescription:
     """sim + executive in the homework profile."""
-    specs = nodes("homework")
+    specs = nodes("homework", namespace="")
     return LaunchDescription(declare(ARGUMENTS) + to_actions(specs, {
         "executive": ["maneuver", "safety_distance"],
         "sim": ["world", "seed", "real_time_factor"],
-    }))
+    }, namespace="namespace"))

@@ -26,12 +26,12 @@ from launch import LaunchDescription
 from bt_nav.ros.bringup import nodes
 from bt_nav.ros.launching import declare, to_actions
 
-ARGUMENTS = ["safety_distance", "maneuver", "use_sim_time", "stamped", "stamped_frame_id"]
+ARGUMENTS = ["safety_distance", "maneuver", "use_sim_time", "stamped", "stamped_frame_id", "namespace"]
 
 
 def generate_launch_description() -> LaunchDescription:
     """The executive only (no simulator): the real robot provides scan, odom and consumes cmd_vel."""
-    specs = nodes("lab", include_sim=False)
+    specs = nodes("lab", include_sim=False, namespace="")
     return LaunchDescription(declare(ARGUMENTS) + to_actions(specs, {"executive": [
         "safety_distance", "maneuver", "use_sim_time",
-        ("cmd_vel_stamped", "stamped"), ("frame_id", "stamped_frame_id")]}))
+        ("cmd_vel_stamped", "stamped"), ("frame_id", "stamped_frame_id")]}, namespace="namespace"))

@@ -79,6 +79,8 @@ def test_every_argument_is_declared_used_and_typed(path: Path, monkeypatch: pyte
         for value in node.kwargs["parameters"][-1].values():
             if type(value).__name__ == "ParameterValue":
                 used.add(value.args[0].args[0])
+        if type(node.kwargs.get("namespace")).__name__ == "LaunchConfiguration":
+            used.add(node.kwargs["namespace"].args[0])
     assert used == set(declared), "every declared argument reaches a node, and only declared ones"
     for name, kwargs in declared.items():
         assert kwargs["description"], f"{name} has no description"
@@ -105,8 +107,26 @@ def test_eval_launch_has_sim_executive_and_referee(monkeypatch: pytest.MonkeyPat
     nodes = {e.kwargs["executable"]: e for e in description.args[0] if type(e).__name__ == "Node"}
     assert set(nodes) == {"sim", "executive", "referee"}
     remaps = dict(nodes["executive"].kwargs["remappings"])
-    assert remaps == {"arm": "/reactive_control/activate", "evaluate_mission": "/reactive_control/evaluate_mission"}
+    # relative, so with the default empty namespace they are /reactive_control/..., in robot1 /robot1/...
+    assert remaps == {"arm": "reactive_control/activate", "evaluate_mission": "reactive_control/evaluate_mission"}
     assert nodes["executive"].kwargs["parameters"][-1]["use_sim_time"] is True
+    referee = nodes["referee"].kwargs["parameters"][-1]
+    assert (referee["activate_service"], referee["evaluate_service"]) == tuple(remaps.values())
+
+
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)
+def test_every_node_takes_the_namespace_argument(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """One robot of several: every node of the launch file goes into the ``namespace`` argument's
+    namespace (default empty: none), and no node keeps an absolute name that would escape it."""
+    _, description = run_launch_file(path, monkeypatch)
+    entities = description.args[0]
+    declared = {e.args[0]: e.kwargs for e in entities if type(e).__name__ == "DeclareLaunchArgument"}
+    assert declared["namespace"]["default_value"] == ""
+    for node in (e for e in entities if type(e).__name__ == "Node"):
+        assert node.kwargs["namespace"].args[0] == "namespace"
+        assert not any(dst.startswith("/") for _, dst in node.kwargs["remappings"])
+        assert not any(str(v).startswith("/") for k, v in node.kwargs["parameters"][-1].items()
+                       if k.endswith("_service"))
 
 
 def test_launch_files_are_installed_by_setup_py() -> None:

@@ -10,7 +10,7 @@ py_trees' blackboard is one per process (its storage lives on the ``Blackboard``
 tree gets a blackboard of its own (:class:`Boards`), switched in before anything touches that robot's tree.
 
 Each robot has its own referee (its own arming, 50 s, evaluation call and verdict); the run ends when every
-referee has reported. Robot ``i`` > 0 gets maneuver A's random seed ``seed + i * 1000003`` so two robots do
+referee has reported. Robot ``i`` > 0 gets maneuver A's random seed ``seed + i * ROBOT_SEED_STRIDE`` so two robots do
 not make the same random choices.
 """
 
@@ -24,15 +24,12 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav_sim.core import SimConfig
-from bt_nav_sim.multi import MultiSimCore
+from bt_nav_sim.multi import ROBOT_SEED_STRIDE, MultiSimCore
 from bt_nav_sim.plot import plot_robots
 from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, load_world
 
 from bt_nav.cli.lockstep import DEFAULT_JITTER, HARD_STOP, LockstepMission, MissionResult
-
-#: Offset between the robots' maneuver-A seeds (a prime, so seeds of neighbouring runs do not collide).
-SEED_STRIDE = 1_000_003
 
 
 @dataclass
@@ -138,7 +135,7 @@ def run_multi_mission(world: str | World = "stage_4", maneuver: str = "none", se
         missions = []
         for i, core in enumerate(multi.cores):
             boards.add()
-            robot_overrides = {"random_seed": (int(seed) + i * SEED_STRIDE) % 2**31, **(overrides or {})}
+            robot_overrides = {"random_seed": (int(seed) + i * ROBOT_SEED_STRIDE) % 2**31, **(overrides or {})}
             missions.append(LockstepMission(world_obj, maneuver, seed, robot_overrides, profile,
                                             kinematics=kinematics, noise=noise, jitter=jitter,
                                             referee_config=referee_config, sim=core))

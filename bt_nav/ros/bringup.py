@@ -18,6 +18,11 @@ Profiles:
               the homework LiDAR;
 ``eval``      ``homework`` plus the referee.
 
+Namespaces (``namespace=``, one robot of several): every node of the profile goes into it and the service
+names become relative (``reactive_control/activate`` is ``/robot1/reactive_control/activate`` there); without
+a namespace the names stay today's absolute ones. :func:`robot_nodes` is the several-robots graph: one
+simulator hosting every robot, and an executive and a referee per robot, each in its robot's namespace.
+
 This module imports neither rclpy nor launch, so launch files and tools can read it anywhere.
 """
 
@@ -72,11 +77,14 @@ class NodeSpec:
     remappings: list[tuple[str, str]] = field(default_factory=list)
     arguments: list[str] = field(default_factory=list)  # non-ROS arguments, before ``--ros-args``
     parameter_files: list[str] = field(default_factory=list)  # applied before ``parameters``
+    namespace: str = ""  # the node's namespace, without the leading slash (empty: none)
 
     def ros_args(self) -> list[str]:
-        """``--ros-args`` for this node: name, parameter files, parameters, remappings (in that order,
-        so explicit parameters override the files)."""
+        """``--ros-args`` for this node: name, namespace, parameter files, parameters, remappings (in that
+        order, so explicit parameters override the files)."""
         args = ["--ros-args", "-r", f"__node:={self.name}"]
+        if self.namespace:
+            args += ["-r", f"__ns:=/{self.namespace.strip('/')}"]
         for path in self.parameter_files:
             args += ["--params-file", str(path)]
         for name, value in self.parameters.items():
@@ -133,6 +141,7 @@ def nodes(
     executive: dict[str, Any] | None = None,
     sim: dict[str, Any] | None = None,
     referee: dict[str, Any] | None = None,
+    namespace: str | None = None,
 ) -> list[NodeSpec]:
     """The nodes of ``profile`` (lab | homework | eval), with the given overrides.
 
@@ -148,6 +157,8 @@ def nodes(
         executive: further executive parameters (override the params file and the profile's values).
         sim: further simulator parameters.
         referee: further referee parameters.
+        namespace: put every node in this namespace, with relative service names ("" for a namespace
+            chosen later, e.g. by a launch argument); None: no namespace, the homework's absolute names.
     """
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
@@ -166,8 +177,14 @@ def nodes(
     if seed is not None:
         exe_params["random_seed"] = int(seed)
     exe_params.update(executive or {})
+    if namespace is not None:
+        # rcl matches a params file's ``bt_nav_executive:`` section against the fully qualified node name,
+        # so inside a namespace the file would silently not apply: its values are passed explicitly too.
+        exe_params = {**{k: v for f in files for k, v in file_parameters(f).items()}, **exe_params}
+    activate, evaluate = (HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE) if namespace is None else \
+        (HOMEWORK_ACTIVATE.lstrip("/"), HOMEWORK_EVALUATE.lstrip("/"))
     if homework:
-        remaps = [("arm", HOMEWORK_ACTIVATE), ("evaluate_mission", HOMEWORK_EVALUATE)]
+        remaps = [("arm", activate), ("evaluate_mission", evaluate)]
     else:
         remaps = [("arm", LAB_ARM)]
     specs = [NodeSpec("executive", EXECUTIVE_NAME, exe_params, remaps, parameter_files=files)]
@@ -193,12 +210,41 @@ def nodes(
         # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many
         # times real time, a process still starting up would otherwise lose seconds of the schedule.
         ref_params: dict[str, Any] = {"use_sim_time": include_sim, "wait_for_cmd_vel": True}
+        if namespace is not None:
+            ref_params.update({"activate_service": activate, "evaluate_service": evaluate})
         if stamped:
             ref_params["cmd_vel_stamped"] = True
         if results_json:
             ref_params["json"] = str(results_json)
         ref_params.update(referee or {})
         specs.append(NodeSpec("referee", REFEREE_NAME, ref_params))
+    for spec in specs:
+        spec.namespace = (namespace or "").strip("/")
+    return specs
+
+
+def robot_nodes(profile: str, names: list[str], *, seed: int | None = None,
+                results_json: dict[str, str] | None = None, executive: dict[str, Any] | None = None,
+                **kwargs: Any) -> list[NodeSpec]:
+    """Several robots in one world: one simulator (no namespace) hosting ``names``, then per robot the
+    executive (and referee) of ``profile`` in the robot's namespace; ``results_json`` maps a robot to
+    its referee's verdict file. Robot ``i`` > 0 gets maneuver A's seed ``seed + i * ROBOT_SEED_STRIDE``
+    (as lock-step), so two robots do not make the same random choices."""
+    from bt_nav_sim.multi import ROBOT_SEED_STRIDE
+
+    specs: list[NodeSpec] = []
+    for i, name in enumerate(names):
+        exe = dict(executive or {})
+        if seed is not None:
+            exe.setdefault("random_seed", (int(seed) + i * ROBOT_SEED_STRIDE) % 2**31)
+        per_robot = nodes(profile, seed=seed, executive=exe, namespace=name,
+                          results_json=(results_json or {}).get(name), **kwargs)
+        sims = [s for s in per_robot if s.executable == "sim"]
+        if i == 0 and sims:
+            sims[0].namespace = ""
+            sims[0].parameters.update({"robots": len(names), "robot_names": ",".join(names)})
+            specs.extend(sims)
+        specs.extend(s for s in per_robot if s.executable != "sim")
     return specs
 
 

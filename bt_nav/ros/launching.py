@@ -22,6 +22,8 @@ EXTRA_ARGUMENTS: dict[str, tuple[str, str]] = {
     "stamped": ("true", "cmd_vel as geometry_msgs/TwistStamped (what the TurtleBot3 Jazzy stack expects); "
                 "false: Twist, for turtlebot3_node with enable_stamped_cmd_vel: false (e.g. Humble)"),
     "stamped_frame_id": ("base_footprint", "header.frame_id of stamped commands (TurtleBot3's base frame)"),
+    "namespace": ("", "namespace of every node, e.g. robot1 for one robot of several (empty: none); the "
+                  "service names are relative, so inside it they are /<namespace>/reactive_control/..."),
 }
 #: Launch arguments that are not in the parameter table but are not strings either.
 _EXTRA_TYPES: dict[str, type] = {"use_sim_time": bool, "stamped": bool}
@@ -65,10 +67,12 @@ def typed(name: str) -> Any:
 Wiring = dict[str, list[str | tuple[str, str]]]
 
 
-def to_actions(specs: list[NodeSpec], from_arguments: Wiring) -> list[Any]:
+def to_actions(specs: list[NodeSpec], from_arguments: Wiring, namespace: str | None = None) -> list[Any]:
     """A ``launch_ros.actions.Node`` per spec; ``from_arguments[executable]`` lists the parameters of
     that node whose values come from launch arguments: a name (argument of the same name) or a
-    ``(parameter, argument)`` pair."""
+    ``(parameter, argument)`` pair. ``namespace``: the launch argument that names every node's namespace
+    (build the specs with ``nodes(..., namespace="")`` then, so their service names are relative)."""
+    from launch.substitutions import LaunchConfiguration
     from launch_ros.actions import Node
 
     actions = []
@@ -77,7 +81,9 @@ def to_actions(specs: list[NodeSpec], from_arguments: Wiring) -> list[Any]:
         for item in from_arguments.get(spec.executable, []):
             parameter, argument = (item, item) if isinstance(item, str) else item
             parameters[parameter] = typed(argument)
+        extra = {"namespace": LaunchConfiguration(namespace)} if namespace else \
+            ({"namespace": spec.namespace} if spec.namespace else {})
         actions.append(Node(package="bt_nav", executable=spec.executable, name=spec.name, output="screen",
                             arguments=spec.arguments, parameters=[*spec.parameter_files, parameters],
-                            remappings=spec.remappings))
+                            remappings=spec.remappings, **extra))
     return actions

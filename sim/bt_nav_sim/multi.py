@@ -24,6 +24,9 @@ import numpy as np
 from bt_nav_sim.core import SimConfig, SimCore, StepOutput, spawn_pose
 from bt_nav_sim.world import World, load_world
 
+#: Offset between the robots' maneuver-A seeds (robot i > 0: seed + i * stride; a prime, so the seeds of
+#: neighbouring runs do not collide); lock-step and the ROS bringup use the same.
+ROBOT_SEED_STRIDE = 1_000_003
 #: Contact tolerance between two robots' disks (m), as the physics' wall contact tolerance.
 _TOUCH_TOL = 1e-6
 #: Free space wanted around an automatically placed start: the robot plus a margin (m).

@@ -30,6 +30,12 @@ or turn a service round trip into seconds of sim time; at 1x this changes nothin
 A wall-clock ``timeout`` bounds the whole run, so a broken simulation cannot hang a test or a CI job:
 it prints a ``TIMEOUT`` line and the provisional report and exits 2.
 
+Namespaces: every name but ``/clock`` is relative, so ``--ros-args -r __ns:=/robot1`` with relative
+service names (``-p activate_service:=reactive_control/activate``, ``-p
+evaluate_service:=reactive_control/evaluate_mission``, what :func:`bt_nav.ros.bringup.nodes` sets for a
+namespace) judges that robot alone: its ground truth, collisions and services, on its own timeline; its
+``sim_sync`` name is then its fully qualified node name, so one simulator can follow several referees.
+
 Timings can be shortened for tests: ``time_scale`` multiplies every duration of the schedule
 (``static_before`` ... ``settle_after_call``, not the sampling ``window``) after the individual
 parameters are applied.
@@ -138,6 +144,8 @@ class RefereeNode(Node):
         if not self._cmd_vel_seen:
             self._cmd_sub = self.create_subscription(TwistStamped if p["cmd_vel_stamped"] else Twist, "cmd_vel",
                                                      self._on_first_cmd, 10)
+        # Its name on sim_sync: several robots' referees (one per namespace) must not be one follower.
+        self.who = NODE_NAME if self.get_namespace() == "/" else self.get_fully_qualified_name()
         self.sync = bool(p["sync"])
         self.sync_pub = self.create_publisher(String, "sim_sync", QoSProfile(depth=50)) if self.sync else None
         if self.sync_pub is not None:
@@ -298,14 +306,14 @@ class RefereeNode(Node):
         """Tell the simulator where this node's clock is and whether a call is in flight."""
         if self.sync_pub is None or self.finished:
             return
-        payload = {"who": NODE_NAME, "t": round(self.now(), 9), "hold": bool(self._pending)}
+        payload = {"who": self.who, "t": round(self.now(), 9), "hold": bool(self._pending)}
         self.sync_pub.publish(String(data=json.dumps(payload)))
 
     def leave(self) -> None:
         """Tell the simulator to stop waiting for this node (after the verdict, or when stopping)."""
         if self.sync_pub is None:
             return
-        self.sync_pub.publish(String(data=json.dumps({"who": NODE_NAME, "leave": True})))
+        self.sync_pub.publish(String(data=json.dumps({"who": self.who, "leave": True})))
         try:  # the process exits right after this: make sure the simulator got it
             self.sync_pub.wait_for_all_acked(Duration(nanoseconds=300_000_000))
         except Exception as exc:  # informational only: the simulator times the follower out anyway

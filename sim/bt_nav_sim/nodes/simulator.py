@@ -10,6 +10,13 @@ What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
 
 Every stamp is sim time. The node itself never uses ``use_sim_time``: it is the clock source.
 
+Several robots (``robots`` > 1, or ``robot_names``): one :class:`bt_nav_sim.multi.MultiSimCore` world, one
+``/clock``, and per robot ``<name>/scan``, ``<name>/odom``, ``<name>/ground_truth_odom``,
+``<name>/collisions`` and ``<name>/cmd_vel`` (names relative, so a robot ``robot1`` of a simulator in no
+namespace is ``/robot1/scan``), plus ``<name>/sim_sync`` for that robot's referee. Each robot's
+``cmd_vel`` publisher is a follower of its own. Start poses: ``starts`` (``"x,y,yaw_deg; ..."``) or
+placed beside the world's spawn. One robot without names keeps the single-robot topic names.
+
 Threading, and why: the physics loop runs in its own thread and the node's executor spins in the
 main thread, serving the ``cmd_vel`` subscription. Polling the executor from inside the loop instead
 (``spin_once(timeout_sec=0)`` per step) was measured at ~130 us per call even when nothing is ready,
@@ -72,6 +79,7 @@ from std_msgs.msg import String
 from bt_nav.ros.rosutil import coerce_int_overrides
 from bt_nav.ros.supervise import StopRequest
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
+from bt_nav_sim.multi import MultiSimCore, parse_starts
 from bt_nav_sim.pacing import Followers
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 
@@ -138,20 +146,25 @@ class SimulatorNode(Node):
         "solo_rtf": (0.0, "real_time_factor 0: upper bound while only cmd_vel is followed, no sim_sync "
                           "follower such as the referee (0: none)"),
         "duration": (0.0, "stop after this much sim time, s (0: run until shut down)"),
+        "robots": (1, "robots in the world; > 1: their topics under robot1/, robot2/, ... (one /clock)"),
+        "robot_names": ("", "comma-separated robot namespaces (their count wins over robots); empty: robot1, ..."),
+        "starts": ("", "start poses 'x,y,yaw_deg; ...' one per robot (empty: the spawn, others beside it)"),
     }
 
     def __init__(self, parameter_overrides: list | None = None) -> None:
         super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
         p = self._declare_parameters()
-        self.core = SimCore(_sim_config(p))
+        names = [n for n in str(p["robot_names"]).split(",") if n.strip()]
+        count = int(p["robots"])
+        self.sim = MultiSimCore(_sim_config(p), count, names, parse_starts(str(p["starts"])))
+        self.core: SimCore = self.sim.cores[0]
+        # One robot without names: today's topic names (no prefix); else each robot under its name.
+        prefixes = [""] if count == 1 and not names else [f"{n}/" for n in self.sim.names]
         self._read_pacing(p)
-        self._create_publishers()
-        self._create_subscriptions(bool(p["cmd_vel_stamped"]))
-        # Messages are reused: publish() serialises synchronously, so only the fields change.
         self._clock_msg = Clock()
-        self._scan_msg = self._scan_template()
-        self._odom_msg = self._odom_template("odom")
-        self._truth_msg = self._odom_template("world")
+        self._create_publishers()
+        self.robots = [_RobotIO(self, prefix, i, bool(p["cmd_vel_stamped"])) for i, prefix in enumerate(prefixes)]
+        self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
         self._init_shared_state()
         self.get_logger().info(self._describe())
 
@@ -174,29 +187,14 @@ class SimulatorNode(Node):
         self.duration_ns = int(max(0.0, float(p["duration"])) * 1e9)
 
     def _create_publishers(self) -> None:
-        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
         # /clock as rclcpp's ClockQoS (best effort, depth 1), what every time source subscribes with: a
         # reliable writer measured ~2.5x the publish cost with the executive and referee listening.
         self.clock_pub = self.create_publisher(Clock, "/clock",
                                                QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
-        self.scan_pub = self.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
-        self.odom_pub = self.create_publisher(Odometry, "odom", reliable)
-        # Deeper history for the referee's and recorders' sake: a reader that falls a little behind
-        # under load gets the samples resent instead of losing them.
-        self.truth_pub = self.create_publisher(Odometry, "ground_truth_odom",
-                                               QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
-        self.collision_pub = self.create_publisher(String, "collisions", QoSProfile(depth=50))
-
-    def _create_subscriptions(self, stamped: bool) -> None:
-        self.create_subscription(TwistStamped if stamped else Twist, "cmd_vel",
-                                 self._on_cmd_stamped if stamped else self._on_cmd, 10)
-        self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
 
     def _init_shared_state(self) -> None:
         """Command and follower state, shared with the executor thread (guarded by ``_cond``), and the loop thread."""
         self._cond = threading.Condition()
-        self._cmd = (0.0, 0.0)
-        self._cmd_arrival_ns = -1  # sim time at which the latest command arrived
         self._bad_commands = 0
         self._bad_sync = 0
         self.commands = 0
@@ -212,7 +210,9 @@ class SimulatorNode(Node):
         pace = f"{self.rtf:g}x real time" if self.rtf > 0 else \
             (f"as fast as the followers keep up ({self.idle_rtf:g}x without any"
              + (f", <= {self.afap_max_rtf:g}x" if self.afap_max_rtf else "") + ")")
-        return (f"world {w.name} spawn ({c.spawn[0]:.2f}, {c.spawn[1]:.2f}, {math.degrees(c.spawn[2]):.0f} deg); "
+        spawns = "; ".join(f"{r.prefix or ''}spawn ({r.core.spawn[0]:.2f}, {r.core.spawn[1]:.2f}, "
+                           f"{math.degrees(r.core.spawn[2]):.0f} deg)" for r in self.robots)
+        return (f"world {w.name} {spawns}; "
                 f"profile {config.profile}: {m.num_beams} beams, {m.range_min}-{m.range_max} m, {m.rate_hz:g} Hz, "
                 f"noise {'on' if config.noise else 'off'}; {c.params.kinematics} kinematics; "
                 f"physics {config.physics_rate_hz:g} Hz; {pace}")
@@ -234,19 +234,14 @@ class SimulatorNode(Node):
     def stats(self) -> str:
         """One line: how much sim time ran in how much wall time."""
         wall = max(1e-9, time.monotonic() - self._wall_start)
-        c = self.core
+        c = self.sim
         return (f"simulated {c.t:.2f} s in {wall:.2f} s wall ({c.t / wall:.1f}x real time): {c.steps} steps, "
-                f"{c.scans} scans, {self.commands} commands, {c.collisions} collision events")
+                f"{c.scans} scans, {self.commands} commands, {c.collisions} collision events"
+                + (f", {len(self.robots)} robots" if len(self.robots) > 1 else ""))
 
     # -------------------------------------------------------------- commands (executor thread)
-    def _on_cmd(self, msg: Twist) -> None:
-        self._set_cmd(msg.linear.x, msg.angular.z)
-
-    def _on_cmd_stamped(self, msg: TwistStamped) -> None:
-        self._set_cmd(msg.twist.linear.x, msg.twist.angular.z)
-
-    def _set_cmd(self, v: float, w: float) -> None:
-        """Store the command; a non-finite one is kept as a stop (the physics sanitises it anyway)."""
+    def _set_cmd(self, robot: _RobotIO, v: float, w: float) -> None:
+        """Store a robot's command; a non-finite one is kept as a stop (the physics sanitises it anyway)."""
         v, w = float(v), float(w)
         if not (math.isfinite(v) and math.isfinite(w)):
             self._bad_commands += 1
@@ -255,11 +250,11 @@ class SimulatorNode(Node):
                                           f"({self._bad_commands} so far)")
             v, w = 0.0, 0.0
         with self._cond:
-            self._cmd = (v, w)
-            self._cmd_arrival_ns = self.core.t_ns
+            robot.cmd = (v, w)
+            robot.arrival_ns = self.core.t_ns
             self.commands += 1
-            if self.follow and self.followers.report("cmd_vel", self.core.t_ns, False, time.monotonic()):
-                self.get_logger().info(f"following cmd_vel (t={self.core.t:.2f} s)")
+            if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, time.monotonic()):
+                self.get_logger().info(f"following {robot.follower} (t={self.core.t:.2f} s)")
             self._cond.notify_all()
 
     def _on_sync(self, msg: String) -> None:
@@ -299,7 +294,7 @@ class SimulatorNode(Node):
     def _loop(self) -> None:
         """Step until stopped, shut down or ``duration``: wait for the followers, keep the pace, advance."""
         core = self.core
-        self._publish(core.outputs())
+        self._publish_all(self.sim.outputs())
         self._anchor_wall, self._anchor_ns, self._anchor_rate = time.monotonic(), core.t_ns, -1.0
         while not self._stop.is_set() and rclpy.ok(context=self.context):
             if self.duration_ns and core.t_ns >= self.duration_ns:
@@ -310,16 +305,19 @@ class SimulatorNode(Node):
             # more than _REANCHOR_S wall seconds is written off.
             self._wait_for_followers()
             with self._cond:
-                v, w = self._cmd
-                arrival = self._cmd_arrival_ns
+                commands = [(r.cmd, r.arrival_ns) for r in self.robots]
                 following = self.followers.any_active()
-                synced = self.followers.any_active(exclude=("cmd_vel",))
+                synced = self.followers.any_active(exclude=tuple(r.follower for r in self.robots))
             if not self._keep_pace(self._rate(following, synced)):
                 break
-            timeout = core.config.cmd_vel_timeout
-            if timeout > 0.0 and (arrival < 0 or core.t_ns - arrival > timeout * 1e9):
-                v, w = 0.0, 0.0
-            self._publish(core.advance(v, w))
+            self._publish_all(self.sim.advance([self._live(cmd, arrival) for cmd, arrival in commands]))
+
+    def _live(self, cmd: tuple[float, float], arrival: int) -> tuple[float, float]:
+        """A robot's command, or a stop once it is older than ``cmd_vel_timeout`` (when set)."""
+        timeout = self.core.config.cmd_vel_timeout
+        if timeout > 0.0 and (arrival < 0 or self.core.t_ns - arrival > timeout * 1e9):
+            return 0.0, 0.0
+        return cmd
 
     def _rate(self, following: bool, synced: bool) -> float:
         """Sim seconds per wall second for the next step (0: no pacing, only the followers bound it).
@@ -376,6 +374,48 @@ class SimulatorNode(Node):
         return waited
 
     # -------------------------------------------------------------- messages
+    def _publish_all(self, outs: list[StepOutput]) -> None:
+        """Publish what this step made due: /clock always, then each robot's messages."""
+        sec, nanosec = divmod(outs[0].t_ns, 1_000_000_000)
+        clock = self._clock_msg
+        clock.clock.sec, clock.clock.nanosec = sec, nanosec
+        self.clock_pub.publish(clock)
+        for robot, out in zip(self.robots, outs, strict=True):
+            robot.publish(out, sec, nanosec)
+
+
+class _RobotIO:
+    """One simulated robot's topics: publishers, reused messages and the latest command (``prefix`` is
+    ``""`` for the single robot of today's topic names, else ``"<name>/"``)."""
+
+    def __init__(self, node: SimulatorNode, prefix: str, index: int, stamped: bool) -> None:
+        self.node = node
+        self.prefix = prefix
+        self.core: SimCore = node.sim.cores[index]
+        self.follower = f"{prefix}cmd_vel"
+        self.cmd = (0.0, 0.0)
+        self.arrival_ns = -1  # sim time at which the latest command arrived
+        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        self.scan_pub = node.create_publisher(LaserScan, f"{prefix}scan", qos_profile_sensor_data)
+        self.odom_pub = node.create_publisher(Odometry, f"{prefix}odom", reliable)
+        # Deeper history for the referee's and recorders' sake: a reader that falls a little behind
+        # under load gets the samples resent instead of losing them.
+        self.truth_pub = node.create_publisher(Odometry, f"{prefix}ground_truth_odom",
+                                               QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.collision_pub = node.create_publisher(String, f"{prefix}collisions", QoSProfile(depth=50))
+        if stamped:
+            node.create_subscription(TwistStamped, f"{prefix}cmd_vel",
+                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), 10)
+        else:
+            node.create_subscription(Twist, f"{prefix}cmd_vel",
+                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), 10)
+        if prefix:  # this robot's referee speaks on its own namespace's sim_sync
+            node.create_subscription(String, f"{prefix}sim_sync", node._on_sync, QoSProfile(depth=50))
+        # Messages are reused: publish() serialises synchronously, so only the fields change.
+        self._scan_msg = self._scan_template()
+        self._odom_msg = self._odom_template("odom")
+        self._truth_msg = self._odom_template("world")
+
     def _scan_template(self) -> LaserScan:
         m = self.core.model
         msg = LaserScan()
@@ -404,12 +444,8 @@ class SimulatorNode(Node):
         msg.twist.covariance = twist_cov
         return msg
 
-    def _publish(self, out: StepOutput) -> None:
-        """Publish what this step made due: /clock always, then a collision event, odometry, a scan."""
-        sec, nanosec = divmod(out.t_ns, 1_000_000_000)
-        clock = self._clock_msg
-        clock.clock.sec, clock.clock.nanosec = sec, nanosec
-        self.clock_pub.publish(clock)
+    def publish(self, out: StepOutput, sec: int, nanosec: int) -> None:
+        """Publish what this step made due for this robot: a collision event, odometry, a scan."""
         state = self.core.state
         if out.collision:
             self._publish_collision(out.t_ns, state)
@@ -432,7 +468,8 @@ class SimulatorNode(Node):
         event = {"t": round(t_ns * 1e-9, 6), "x": round(state.x, 4), "y": round(state.y, 4),
                  "yaw": round(state.yaw, 4)}
         self.collision_pub.publish(String(data=json.dumps(event)))
-        self.get_logger().warning(f"collision at t={event['t']:.2f} s, ({state.x:.2f}, {state.y:.2f})")
+        self.node.get_logger().warning(f"{self.prefix}collision at t={event['t']:.2f} s, "
+                                       f"({state.x:.2f}, {state.y:.2f})")
 
     @staticmethod
     def _fill_odom(msg: Odometry, sec: int, nanosec: int, x: float, y: float, yaw: float,
