@@ -121,9 +121,12 @@ class Recording:
 
 
 class Recorder:
-    """A node of the demo's own, spinning in a thread: ground truth, commands and the tree tip."""
+    """A node of the demo's own, spinning in a thread: ground truth, commands and the tree tip.
 
-    def __init__(self) -> None:
+    ``robot``: the namespace of the robot to record (one of several); empty: today's root topics.
+    """
+
+    def __init__(self, robot: str = "") -> None:
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -131,16 +134,17 @@ class Recorder:
 
         from bt_nav.ros.rosutil import ThreadedNode
 
-        self.ros = ThreadedNode("bt_nav_demo_recorder")
+        self.ros = ThreadedNode(f"bt_nav_demo_recorder{'_' + robot if robot else ''}")
+        ns = f"/{robot}/" if robot else ""
         self.node = self.ros.node
         self.data = Recording()
         self.lock = threading.Lock()
         reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.node.create_subscription(Odometry, "ground_truth_odom", self._on_truth, reliable)
-        self.node.create_subscription(Twist, "cmd_vel", self._on_cmd, reliable)
-        self.node.create_subscription(String, f"/{EXECUTIVE_NAME}/tree", self._on_tree, latched)
+        self.node.create_subscription(Odometry, f"{ns}ground_truth_odom", self._on_truth, reliable)
+        self.node.create_subscription(Twist, f"{ns}cmd_vel", self._on_cmd, reliable)
+        self.node.create_subscription(String, f"{ns or '/'}{EXECUTIVE_NAME}/tree", self._on_tree, latched)
         self.ros.start()
 
     def _on_truth(self, msg: Any, info: Any = None) -> None:
@@ -209,6 +213,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
     parser.add_argument("--quiet", action="store_true", help="print only the verdict lines")
     parser.add_argument("--bag", metavar="DIR", help="also record the run as a rosbag2 (MCAP) bag (bt-nav record)")
+    parser.add_argument("--robots", type=int, default=1, help="robots in the world (default 1); > 1: robot1, "
+                        "robot2, ... each with its executive and referee in its namespace, a verdict each")
     return parser
 
 
@@ -256,7 +262,7 @@ class _Logs:
                 stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
             is_log = line.startswith("[")
             stream.write((f"{self.stamp()} {line}" if is_log else line) + "\n")
-            if name == "referee" and not is_log:
+            if (name == "referee" or name.endswith("_referee")) and not is_log:
                 self.verdict.append(line)
                 print(line, flush=True)
             elif self.echo_logs and not self.quiet_from_now and (
@@ -300,6 +306,10 @@ def _mission_slice(rec: Recording, results: dict[str, Any]) -> tuple[int, int]:
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav demo``; returns the referee's exit code (0 PASSED, 1 FAILED, 2 no verdict)."""
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    if opts.robots != 1:
+        from bt_nav.cli.demo_multi import main_multi
+
+        return main_multi(opts)
     try:
         maneuver = effective_maneuver(opts.maneuver)
         domain = choose_domain_id(opts.domain_id)
