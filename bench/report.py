@@ -139,6 +139,13 @@ def sim_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
                     [[len(lock["runs"]), sum(1 for r in lock["runs"] if r["passed"]), lock["sim_s_median"],
                       lock["wall_s"]["p50"], lock["wall_s"]["min"], lock["wall_s"]["max"],
                       lock["wall_per_55s_mission"], lock["rtf_median"]]])
+    split = lock.get("split")
+    if split:
+        lines += ["", f"Without a profiler (median of seeds 0-{split['seeds'] - 1}): {split['wall_s']} s per mission, "
+                  f"of which the tree's ticks {split['tree_tick_s']} s ({split['tick_share'] * 100:.0f} %, "
+                  f"{split['tick_ms_mean']} ms per tick) and everything else (simulator physics and collision "
+                  f"clearance, LiDAR, referee, the loop) {split['rest_s']} s: the lock-step target can only be "
+                  "met when both parts fit in it."]
     prof = lock.get("profile")
     if prof:
         wall = lock["wall_s"]["p50"]
@@ -235,6 +242,31 @@ SECTIONS = (
 )
 
 
+def history_section(history: list[dict[str, Any]]) -> list[str]:
+    """The last runs (``bench/results/history.jsonl``) side by side: one row per target, one column per run,
+    newest last, so a regression shows as a change along a row."""
+    if not history:
+        return []
+    ids: list[str] = []
+    for run in history:
+        ids += [key for key in run.get("targets", {}) if key not in ids]
+    head = ["target", "goal"] + [f"{run['started'][:16].replace('T', ' ')} {run.get('mode', '')} "
+                                 f"`{run.get('commit', '?')}` load {(run.get('load_start') or ['?'])[0]}"
+                                 for run in history]
+    rows = []
+    for key in ids:
+        known = next(run["targets"][key] for run in reversed(history) if key in run.get("targets", {}))
+        cells = []
+        for run in history:
+            t = run.get("targets", {}).get(key)
+            cells.append("" if t is None else f"{_fmt(t['value'])} {MET[t['met']]}")
+        rows.append([known["description"], known["goal"], *cells])
+    return ["", "## History", "",
+            f"The last {len(history)} runs of `make bench` / `python -m bench.run` (oldest first; each line of "
+            "`bench/results/history.jsonl` is one run; an empty cell: not measured in that run). The machine is "
+            "shared: compare along a row with the load in mind.", "", *_table(head, rows)]
+
+
 def render(doc: dict[str, Any]) -> str:
     """The whole markdown document."""
     m = doc["machine"]
@@ -251,6 +283,7 @@ def render(doc: dict[str, Any]) -> str:
     lines += _table(["benchmark", "measure", "target", "value", "result"],
                     [[t["benchmark"], t["description"], t["goal"], f"{_fmt(t['value'])} {t['unit']}".strip(),
                       MET[t["met"]]] for t in doc["targets"]])
+    lines += history_section(doc.get("history") or [])
     for key, title, render_section in SECTIONS:
         section = doc["benchmarks"].get(key)
         if section is None:

@@ -12,6 +12,9 @@ Benchmarks (``--only`` picks some, comma-separated):
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
 ``<out>/latest.md`` (the same as tables). With ``--only``, the sections not run this time are
 carried over from the previous ``latest.json`` in ``<out>``, each marked with the run it comes from.
+Every run also appends one line to ``<out>/history.jsonl`` (when, which commit, the load, and the value
+and verdict of every target it measured), and ``latest.md`` shows the last few runs side by side, so a
+regression shows as a change between columns instead of needing an old report.
 Missed targets do not fail the command (a benchmark is a measurement, not a test); a benchmark that
 crashes does (exit 1), after the others have run and the files are written.
 
@@ -41,6 +44,8 @@ BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video")
 ORDER = ("tick", "sim", "video", "latency", "memory", "quality")
 SCHEMA = 1
 DEFAULT_OUT = REPO / "bench" / "results"
+#: Runs of the history shown in latest.md.
+HISTORY_SHOWN = 6
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -214,6 +219,8 @@ def main(argv: list[str] | None = None) -> int:
         "targets": targets,
         "benchmarks": {name: sections[name] for name in BENCHMARKS if name in sections},
     }
+    fresh = [t for t in targets if t["benchmark"] in args.chosen]
+    doc["history"] = append_history(out_dir / "history.jsonl", doc, fresh)[-HISTORY_SHOWN:]
     json_path.write_text(json.dumps(_clean(doc), indent=1, allow_nan=False) + "\n", encoding="utf-8")
     from .report import render
 
@@ -223,6 +230,44 @@ def main(argv: list[str] | None = None) -> int:
     if crashed:
         print(f"bench: crashed: {', '.join(crashed)}", file=sys.stderr)
     return 1 if crashed else 0
+
+
+def git_commit() -> str:
+    """The checked-out commit (short), with ``+dirty`` when tracked files differ from it; ``?`` without git."""
+    import subprocess
+
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True,
+                              timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO,
+                               capture_output=True, text=True, timeout=10, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "?"
+    return head + ("+dirty" if dirty else "")
+
+
+def append_history(path: Path, doc: dict[str, Any], targets: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Append this run's line to ``path`` (JSON lines) and return every line, oldest first.
+
+    One line per run, whatever it measured: when, the mode, the commit, the load, and for each target
+    it measured its value, unit and verdict. Lines that cannot be read are skipped, not fatal: a
+    history is a convenience, the measurement is ``latest.json``.
+    """
+    run = doc["run"]
+    line = {"started": run["started"], "mode": run["mode"], "only": run["only"], "commit": git_commit(),
+            "load_start": run["load_start"], "cores": doc["machine"].get("cores"),
+            "targets": {t["id"]: {"value": t["value"], "unit": t["unit"], "met": t["met"], "goal": t["goal"],
+                                  "description": t["description"]} for t in targets}}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a", encoding="utf-8") as stream:
+        stream.write(json.dumps(_clean(line), allow_nan=False) + "\n")
+    lines = []
+    for raw in path.read_text(encoding="utf-8").splitlines():
+        try:
+            lines.append(json.loads(raw))
+        except ValueError:
+            continue
+    return lines
 
 
 def _clean(value: Any) -> Any:

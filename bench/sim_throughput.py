@@ -45,16 +45,18 @@ from .common import (
 RosRunner = Callable[[int, Path | None], dict[str, Any]]
 
 TARGET_SCANS_PER_S = 5000.0
-TARGET_LOCKSTEP_S = 0.25  # wall seconds per 55 s mission
-TARGET_RTF = 10.0
+TARGET_LOCKSTEP_S = 0.15  # wall seconds per 55 s mission
+TARGET_RTF = 25.0
 LOCKSTEP_AREAS = (
     ("py_trees/", "py_trees framework"),
-    ("bt_nav/behaviours", "bt_nav leaves"),
-    ("bt_nav/scan.py", "scan processing (bt_nav.mission.scan)"),
-    ("sim/lidar.py", "LiDAR ray casting (Python side)"),
-    ("sim/physics.py", "physics"),
-    ("sim/world.py", "world geometry (collision clearance)"),
-    ("sim/referee_core.py", "referee"),
+    ("behaviours/control.py", "compiled ticker (composites)"),
+    ("bt_nav/mission/behaviours", "bt_nav leaves"),
+    ("bt_nav/mission/scan.py", "scan processing (bt_nav.mission.scan)"),
+    ("bt_nav/mission/paths.py", "free paths and steering (bt_nav.mission.paths)"),
+    ("bt_nav_sim/lidar.py", "LiDAR ray casting (Python side)"),
+    ("bt_nav_sim/physics.py", "physics"),
+    ("bt_nav_sim/world.py", "world geometry (collision clearance)"),
+    ("bt_nav_sim/referee_core.py", "referee"),
     ("numpy", "numpy kernels"),
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core, lock-step loop"),
@@ -136,9 +138,41 @@ def lockstep(seeds: int = 10, world: str = "stage_4", profile: bool = True) -> d
         "rtf_median": round(median([s / w for s, w in zip(sims, walls, strict=True)]), 1),
         "wall_per_55s_mission": round(median(walls) * 55.0 / median(sims), 4),
     }
+    out["split"] = _split_mission(world, maneuver, seeds=min(seeds, 5))
     if profile:
         out["profile"] = _profile_mission(world, maneuver)
     return out
+
+
+def _split_mission(world: str, maneuver: str, seeds: int) -> dict[str, Any]:
+    """Wall seconds of a mission in the tree's ticks and in everything else (the simulator, mostly), without
+    a profiler (which inflates the many small Python calls of the tick): median over seeds 0..seeds-1.
+    Says how much of the lock-step target the tree alone could reach."""
+    from bt_nav.mission.core import MissionCore
+
+    spent = [0.0]
+    original = MissionCore.tick
+
+    def timed(self: MissionCore) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return original(self)
+        finally:
+            spent[0] += time.perf_counter() - t0
+
+    rows = []
+    MissionCore.tick = timed  # type: ignore[method-assign]
+    try:
+        for seed in range(seeds):
+            spent[0] = 0.0
+            result = run_mission(world, maneuver, seed, homework_overrides())
+            rows.append((result.wall_time, spent[0], result.sim_time))
+    finally:
+        MissionCore.tick = original  # type: ignore[method-assign]
+    total, tick, sim = (median([r[i] for r in rows]) for i in range(3))
+    return {"seeds": seeds, "wall_s": round(total, 4), "tree_tick_s": round(tick, 4),
+            "rest_s": round(total - tick, 4), "tick_share": round(tick / total, 3) if total else None,
+            "tick_ms_mean": round(tick / max(1, round(sim * float(P.SPECS["tick_rate_hz"].default))) * 1e3, 4)}
 
 
 def _profile_mission(world: str, maneuver: str) -> dict[str, Any]:
@@ -212,12 +246,13 @@ def run(quick: bool = False, run_ros: RosRunner | None = None) -> dict[str, Any]
 def targets(result: dict[str, Any]) -> list[Target]:
     """Scans/s, lock-step wall time per mission, ROS-path real-time factor."""
     scans = result["lidar"]["scans_per_s"]
-    mission = result["lockstep"]["wall_s"]["p50"]
+    mission = result["lockstep"].get("wall_per_55s_mission", result["lockstep"]["wall_s"]["p50"])
     rtf = result["ros"].get("rtf_median")
     return [
         Target("lidar_scans_per_s", "sim", "LiDAR scans/s (360 beams, stage_4, RayCaster.cast)",
                f">= {TARGET_SCANS_PER_S:g}", scans, "scans/s", at_least(scans, TARGET_SCANS_PER_S)),
-        Target("lockstep_mission_wall", "sim", "lock-step mission wall time (stage_4, median over seeds)",
+        Target("lockstep_mission_wall", "sim",
+               "lock-step mission wall time per 55 s of mission (stage_4, median over seeds)",
                f"<= {TARGET_LOCKSTEP_S} s", mission, "s", at_most(mission, TARGET_LOCKSTEP_S)),
         Target("ros_rtf", "sim", "ROS-path real-time factor (sim + executive + referee, rtf 0, median)",
                f">= {TARGET_RTF:g}x", rtf, "x", at_least(rtf, TARGET_RTF)),

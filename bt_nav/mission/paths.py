@@ -108,12 +108,15 @@ def free_paths_from_clean(scan: Scan, ranges: np.ndarray, half_width: float, hor
     can be: per scan only the beams near enough count, and their directions come from the per-layout
     cache (:func:`~bt_nav.mission.scan.beam_trig`).
     """
-    near = ranges < horizon + half_width  # False for NaN and +inf; -inf is range_min after cleaning
-    r = ranges[near]
-    if r.size == 0:
-        return FreePaths(headings, np.full(headings.shape, float(horizon)))
     cos_b, sin_b = beam_trig(scan)
-    x, y = r * cos_b[near], r * sin_b[near]
+    x_all = ranges * cos_b
+    # Near enough (False for NaN and +inf; -inf is range_min after cleaning), and not behind the robot by
+    # more than its half width: a point in a corridor of a heading within +-90 deg has x > -half_width,
+    # so beams further behind never count (the slack keeps rounding on the safe side).
+    near = (ranges < horizon + half_width) & (x_all > -half_width - 1e-9)
+    if not near.any():
+        return FreePaths(headings, np.full(headings.shape, float(horizon)))
+    x, y = x_all[near], ranges[near] * sin_b[near]
     cos_h, sin_h = _HEADINGS_TRIG if headings is HEADINGS else _trig(tuple(float(h) for h in headings))
     along = x * cos_h
     along += y * sin_h
