@@ -109,6 +109,18 @@ def test_turn_direction_is_kept_while_rotating() -> None:
         assert r.tip == "RotateInPlace" and r.command.angular == first
 
 
+def test_rotating_in_place_right_after_steering_keeps_the_steering_side() -> None:
+    """TurnAway steering left hands its side to the rotation in place that follows it at once, even
+    where the close obstacle alone would say right (a cornered robot alternated sides for seconds)."""
+    h = armed_harness()
+    h.see((-10.0, 0.5))
+    r = h.tick()
+    assert r.tip == "TurnAway" and r.command.angular > 0
+    h.see((5.0, 0.25))  # alone: rotate right (clear at -55 deg vs +65 deg: within SWITCH_MARGIN)
+    r = h.tick()
+    assert r.tip == "RotateInPlace" and r.command.angular > 0
+
+
 def test_unknown_front_is_treated_as_close() -> None:
     h = armed_harness()
     h.see((0.0, math.nan), width_deg=70.0)

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from bt_nav.mission.behaviours.maneuvers import RandomizerManeuver, RetreatManeuver, SmartPivotManeuver
 from bt_nav.mission.datatypes import OdomSample
+from bt_nav.mission.paths import HEADINGS, FreePaths
 from bt_nav.mission.scan import SectorReading, Sectors
 from bt_nav.testing import FakeClock
 from tests.behaviours.leafkit import Board, Status, make, tick
@@ -54,3 +56,20 @@ def test_rotations_are_the_labs_and_never_drive(cls: type, s: Sectors, check, od
     assert check(leaf.rotation)
     assert leaf.status == Status.SUCCESS and board.get("cmd_vel").linear == 0.0
     assert abs(yaw - leaf.rotation) <= math.radians(3.0) + 1e-9
+
+
+@pytest.mark.parametrize(("left_free", "right_free", "expected"), [
+    (0.3, 1.05, -1.0),  # the cones beside the front say left, the room at +-90 deg says right: right
+    (1.05, 0.3, 1.0),
+    (1.05, 1.05, 1.0),  # equal readings: the cones decide (left reads 1.0 m, right 0.5 m)
+])
+def test_smart_pivot_turns_towards_the_side_it_will_face(left_free: float, right_free: float, expected: float) -> None:
+    """The "clearer side" is read where the robot faces after the quarter turn: the free path along
+    +-90 deg, not the cones beside the front (which turned a cornered robot towards the near wall)."""
+    free = np.where(HEADINGS > 0, left_free, right_free)
+    board = maneuver_board(sectors(front=0.25, left=1.0, right=0.5))
+    board.set(paths=FreePaths(HEADINGS, free))
+    leaf = make(SmartPivotManeuver, clock=FakeClock(1.0))
+    tick(leaf)
+    assert leaf.rotation == pytest.approx(expected * math.pi / 2)
+    assert board.get("cmd_vel").linear == 0.0

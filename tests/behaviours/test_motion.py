@@ -14,7 +14,15 @@ from typing import Any
 import pytest
 from leafkit import Board, Status, make, tick
 
-from bt_nav.mission.behaviours.motion import DriveForward, RotateInPlace, Stop, TurnAway
+from bt_nav.mission.behaviours.motion import (
+    SIDE_MEMORY,
+    SWITCH_MARGIN,
+    DriveForward,
+    RotateInPlace,
+    Stop,
+    TurnAway,
+    TurnSide,
+)
 from bt_nav.mission.behaviours.perception import ProcessScan
 from bt_nav.mission.datatypes import Command
 from bt_nav.testing import FakeClock, synthetic_scan
@@ -91,7 +99,8 @@ def test_rotate_in_place_has_no_forward_speed_and_turns_away(obstacle: tuple[flo
 
 def test_rotate_in_place_keeps_its_direction_while_running_and_rechooses_after_preemption() -> None:
     board = scene((-10.0, 0.2))
-    leaf = make(RotateInPlace, "RotateInPlace")
+    clock = FakeClock(1.0)
+    leaf = make(RotateInPlace, "RotateInPlace", clock=clock)
     tick(leaf)
     assert command(board).angular > 0.0
     rescan(board, (10.0, 0.2))  # the scene mirrors mid-rotation (a square-on wall would dither)
@@ -99,7 +108,32 @@ def test_rotate_in_place_keeps_its_direction_while_running_and_rechooses_after_p
     assert command(board).angular > 0.0, "the direction chosen at the start is kept while running"
     leaf.stop(Status.INVALID)
     tick(leaf)
-    assert command(board).angular < 0.0, "a new rotation chooses afresh"
+    assert command(board).angular > 0.0, "a rotation right after the last one keeps its side (SIDE_MEMORY)"
+    leaf.stop(Status.INVALID)
+    clock.now += SIDE_MEMORY + 0.05
+    tick(leaf)
+    assert command(board).angular < 0.0, "a later rotation chooses afresh"
+
+
+@pytest.mark.parametrize(("first", "then"), [(TurnAway, RotateInPlace), (RotateInPlace, TurnAway)])
+def test_the_avoiding_leaves_hand_their_side_over(first: Any, then: Any) -> None:
+    """One leaf starting right after the other keeps its side, even when the scene alone says otherwise;
+    after SIDE_MEMORY without either, the side is chosen afresh."""
+    board = scene((-10.0, 0.5) if first is TurnAway else (-10.0, 0.2))  # obstacle right: turn left
+    clock = FakeClock(1.0)
+    leader = make(first, first.__name__, clock=clock)
+    follower = make(then, then.__name__, clock=clock)  # (made first: making a leaf resets its output keys)
+    tick(leader)
+    assert command(board).angular > 0.0 and board.get("turn_side").side == 1.0
+    leader.stop(Status.INVALID)
+    rescan(board, (10.0, 0.5) if then is TurnAway else (10.0, 0.2))  # mirrored: alone it would turn right
+    clock.now += 0.1
+    tick(follower)
+    assert command(board).angular > 0.0, "the side is handed over"
+    follower.stop(Status.INVALID)
+    clock.now += SIDE_MEMORY + 0.05
+    tick(follower)
+    assert command(board).angular < 0.0, "chosen afresh after SIDE_MEMORY"
 
 
 @pytest.mark.parametrize("cls", [DriveForward, TurnAway, RotateInPlace])
@@ -112,3 +146,19 @@ def test_preempting_a_motion_leaf_leaves_the_winners_command_alone(cls: Any) -> 
     leaf.stop(Status.INVALID)
     assert leaf.status == Status.INVALID
     assert command(board) == winner
+
+
+def test_a_remembered_side_gives_way_to_a_much_smaller_turn() -> None:
+    """Memory is a preference, not a lock: when the other side's clear heading needs SWITCH_MARGIN less
+    turning, a rotation starts that way (a lock turned a robot 200 deg the long way round)."""
+    board = scene((-10.0, 0.2))
+    clock = FakeClock(1.0)
+    leaf = make(RotateInPlace, "RotateInPlace", clock=clock)
+    board.set(turn_side=TurnSide(-1.0, clock()))  # the last avoiding tick turned right, just now
+    board.set(scan=synthetic_scan([(-60.0, 0.4), (-30.0, 0.3), (0.0, 0.25)]), scan_stamp=clock())
+    tick(make(ProcessScan, "ProcessScan", clock=clock))
+    paths = board.get("paths")
+    left, right = paths.steer(0.7, side=1), paths.steer(0.7, side=-1)
+    assert left is not None and (right is None or abs(left) + SWITCH_MARGIN < abs(right))
+    tick(leaf)
+    assert command(board).angular > 0.0

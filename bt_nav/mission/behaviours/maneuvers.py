@@ -16,9 +16,11 @@ from typing import Any
 import py_trees
 
 from bt_nav.mission.behaviours.base import CMD_PORT, Condition, Leaf, port
-from bt_nav.mission.behaviours.perception import SECTORS_PORT
+from bt_nav.mission.behaviours.perception import PATHS_PORT, SECTORS_PORT
 from bt_nav.mission.datatypes import NO_ODOM, OdomSample
-from bt_nav.mission.scan import Sectors, clearer_side, wrap_angle
+from bt_nav.mission.paths import FreePaths
+from bt_nav.mission.scan import Sectors, clearer_side
+from bt_nav.mission.turning import TurnMeter, approach_rate
 
 Status = py_trees.common.Status
 
@@ -64,17 +66,19 @@ class RotationManeuver(Leaf, register=False):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
         self.rotation = 0.0
-        self.turned = 0.0
-        self.open_loop_ticks = 0
-        self._odom_turned = 0.0  # sum of yaw increments between odometry samples
-        self._since_sample = 0.0  # commanded rate integrated since the last sample (dead reckoning)
-        self._last_yaw: float | None = None
-        self._last_stamp = -math.inf
-        self._last_rate = 0.0
-        self._last_time = 0.0
-        self._elapsed = 0.0  # seconds since the start, summed per update so a clock jumping back cannot stretch it
+        self.meter = TurnMeter()
         self._allowance = 0.0
         self._open_loop_logged = False
+
+    @property
+    def turned(self) -> float:
+        """Angle turned so far (rad)."""
+        return self.meter.turned
+
+    @property
+    def open_loop_ticks(self) -> int:
+        """Updates without fresh odometry past the timeout."""
+        return self.meter.open_loop_ticks
 
     def choose_rotation(self, sectors: Sectors) -> float:
         """Signed angle to turn (rad, + is CCW / left), decided when the maneuver starts."""
@@ -83,78 +87,34 @@ class RotationManeuver(Leaf, register=False):
     def initialise(self) -> None:
         """Decide the rotation and start the clock."""
         self.rotation = self.choose_rotation(self.get_input("sectors"))
-        self.turned = self._odom_turned = self._since_sample = 0.0
-        self.open_loop_ticks = 0
-        now = self.clock()
-        self._last_time = now
-        self._elapsed = 0.0
+        self.meter.start(self.clock(), self.get_input("odom"), self.get_input("odom_timeout"))
         self._open_loop_logged = False
-        self._last_rate = 0.0
-        odom = self._new_odom(now)
-        self._last_yaw = odom.yaw if odom is not None else None
-        self._last_stamp = odom.stamp if odom is not None else -math.inf
         rate = self.get_input("angular_speed")
         self._allowance = abs(self.rotation) / rate + 1.0 + self.get_input("time_margin")
         self._set_output("active", True)
         self.events.info(f"{self.label}: starting a {math.degrees(self.rotation):+.0f} deg rotation")
 
-    def _new_odom(self, now: float) -> OdomSample | None:
-        """The latest odometry sample if it is usable and not the one already counted."""
-        odom: OdomSample = self.get_input("odom")
-        timeout = self.get_input("odom_timeout")
-        if odom.stamp == self._last_stamp or not math.isfinite(odom.yaw):
-            return None
-        if not -timeout <= now - odom.stamp <= timeout:
-            return None
-        return odom
-
-    def _measure(self, now: float) -> None:
-        """Update ``turned``: odometry yaw increments, dead reckoning between (or without) samples.
-
-        A new sample's increment covers the interval that dead reckoning bridged, so the bridge is
-        dropped then; when samples stop coming the bridge simply keeps growing (open loop).
-        """
-        odom = self._new_odom(now)
-        dt = max(0.0, now - self._last_time)
-        self._elapsed += dt
-        if odom is None:
-            self._since_sample += self._last_rate * dt
-            if now - self._last_stamp > self.get_input("odom_timeout"):
-                self.open_loop_ticks += 1
-                if not self._open_loop_logged:
-                    self._open_loop_logged = True
-                    self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
-                                        "(integrating the commanded turn rate)")
-        else:
-            if self._last_yaw is None:  # first sample of this maneuver: keep what was dead-reckoned, to now
-                self._odom_turned += self._since_sample + self._last_rate * dt
-            else:
-                self._odom_turned += float(wrap_angle(odom.yaw - self._last_yaw))
-            self._since_sample = 0.0
-            self._last_yaw, self._last_stamp = odom.yaw, odom.stamp
-        self._last_time = now
-        self.turned = self._odom_turned + self._since_sample
-
     def update(self) -> Status:
         """Advance the turn; RUNNING until within tolerance or out of time."""
-        now = self.clock()
-        self._measure(now)
+        self.meter.measure(self.clock(), self.get_input("odom"), self.get_input("odom_timeout"))
+        if self.meter.open_loop and not self._open_loop_logged:
+            self._open_loop_logged = True
+            self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
+                                "(integrating the commanded turn rate)")
         remaining = self.rotation - self.turned
         if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
             return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
-        if self._elapsed > self._allowance:
-            return self._finish(Status.FAILURE, f"out of time after {self._elapsed:.1f} s, "
+        if self.meter.elapsed > self._allowance:
+            return self._finish(Status.FAILURE, f"out of time after {self.meter.elapsed:.1f} s, "
                                 f"{math.degrees(remaining):+.0f} deg short")
-        peak = self.get_input("angular_speed")
-        rate = math.copysign(min(peak, max(self.MIN_RATE, self.GAIN * abs(remaining))), remaining)
-        self._last_rate = rate
-        self.command(0.0, rate)
+        self.meter.rate = approach_rate(remaining, self.get_input("angular_speed"), self.GAIN, self.MIN_RATE)
+        self.command(0.0, self.meter.rate)
         self.feedback_message = f"{math.degrees(remaining):+.0f} deg to go"
         return Status.RUNNING
 
     def _finish(self, status: Status, message: str) -> Status:
         self.command(0.0, 0.0)
-        self._last_rate = 0.0
+        self.meter.rate = 0.0
         self._set_output("active", False)
         self.feedback_message = message
         if status == Status.SUCCESS:  # two call sites: rclpy refuses one call site with two severities
@@ -201,11 +161,22 @@ class RetreatManeuver(RotationManeuver):
 
 
 class SmartPivotManeuver(RotationManeuver):
-    """C — The Smart Pivot: 90 deg towards whichever side reads the larger distance."""
+    """C — The Smart Pivot: 90 deg towards whichever side reads the larger distance.
+
+    The lab's "distance reading" of a side is taken where the robot will face after the quarter turn:
+    the free path of the robot's width along +-90 deg. Comparing the side cones beside the front instead
+    turned a robot in a corner towards the near wall, and the rotation in place that followed undid the
+    pivot and more. Equal readings (both clear to the horizon, or no paths yet) fall back to the cones.
+    """
+
+    INPUT_PORTS = {**RotationManeuver.INPUT_PORTS, **PATHS_PORT}
 
     def choose_rotation(self, sectors: Sectors) -> float:
         """A quarter turn to the clearer side."""
-        return clearer_side(sectors) * math.pi / 2
+        paths: FreePaths = self.get_input("paths")
+        left, right = paths.along(math.pi / 2), paths.along(-math.pi / 2)
+        side = clearer_side(sectors) if math.isclose(left, right, abs_tol=1e-3) else (1 if left > right else -1)
+        return side * math.pi / 2
 
 
 class AlwaysFailure(Leaf):

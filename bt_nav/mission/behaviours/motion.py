@@ -7,6 +7,7 @@ re-deciding every tick makes a robot facing a wall square-on dither left-right f
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import py_trees
@@ -80,6 +81,47 @@ def initial_side(paths: FreePaths, need: float) -> float:
     return 1.0 if paths.side_room(1) >= paths.side_room(-1) else -1.0
 
 
+@dataclass(frozen=True, slots=True)
+class TurnSide:
+    """The side (+1 left, -1 right) the last avoiding leaf turned to, and when (mission clock s)."""
+
+    side: float = 0.0
+    stamp: float = -math.inf
+
+
+#: Written by both avoiding leaves and read back by both (an output port: py_trees refuses a port that is
+#: both input and output).
+TURN_SIDE_PORT = {"turn_side": port(TurnSide, "the side the last avoiding leaf turned to, and when",
+                                    default=TurnSide())}
+#: s: an avoiding leaf (TurnAway, RotateInPlace) that starts within this of the last avoiding tick of
+#: either starts on that side (unless :func:`keep_or_switch` finds the other side much better). Each
+#: choosing afresh made a robot in a corner rotate one way in place, steer the other way at speed, and
+#: again, for seconds.
+SIDE_MEMORY = 0.5
+
+
+#: rad: the other side must need this much less turning to override a remembered side (or, in
+#: :class:`TurnAway`, the side it runs with).
+SWITCH_MARGIN = math.radians(30.0)
+
+
+def remembered_side(leaf: Leaf, paths: FreePaths, need: float) -> float:
+    """The side an avoiding leaf starts with: the recent one of the other leaf unless the other side needs
+    ``SWITCH_MARGIN`` less turning to a heading clear for ``need``; else :func:`initial_side`."""
+    memory = py_trees.blackboard.Blackboard.storage.get(leaf._get_blackboard_key("turn_side"), TurnSide())
+    if not memory.side or leaf.clock() - memory.stamp > SIDE_MEMORY:
+        return initial_side(paths, need)
+    return keep_or_switch(paths, need, memory.side)
+
+
+def keep_or_switch(paths: FreePaths, need: float, side: float) -> float:
+    """``side``, unless the other side has a heading clear for ``need`` that is ``SWITCH_MARGIN`` less turn."""
+    kept, other = paths.steer(need, side=int(side)), paths.steer(need, side=-int(side))
+    if other is not None and (kept is None or abs(other) + SWITCH_MARGIN < abs(kept)):
+        return -side
+    return side
+
+
 class TurnAway(Leaf):
     """Keep driving while steering for the nearest clear heading (the path is blocked in the far band).
 
@@ -90,12 +132,10 @@ class TurnAway(Leaf):
     ``slow_speed`` at ``close_distance``, so it stays near full speed until the obstacle is really close.
 
     The side (left or right) is chosen when the leaf starts and kept: it flips only when the other side
-    needs ``SWITCH_MARGIN`` less turning. Re-deciding every tick makes a robot facing a wall square-on
-    dither left and right.
+    needs :data:`SWITCH_MARGIN` less turning (:func:`keep_or_switch`). Re-deciding every tick makes a
+    robot facing a wall square-on dither left and right.
     """
 
-    #: rad: the other side must need this much less turning before the side flips.
-    SWITCH_MARGIN = math.radians(30.0)
     #: Speed falls as depth ** SPEED_EXPONENT (1: linear in depth).
     SPEED_EXPONENT = 2.0
 
@@ -107,26 +147,25 @@ class TurnAway(Leaf):
         "close_distance": port(float, default=0.3),
         "far_distance": port(float, default=0.7),
     }
-    OUTPUT_PORTS = dict(CMD_PORT)
+    OUTPUT_PORTS = {**CMD_PORT, **TURN_SIDE_PORT}
 
     def initialise(self) -> None:
         """Pick the side to turn towards (kept unless the other side becomes clearly better)."""
-        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
+        self.direction = remembered_side(self, self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
         """Graded forward speed, steering for the clear heading on the chosen side; RUNNING."""
         paths: FreePaths = self.get_input("paths")
         close, far = self.get_input("close_distance"), self.get_input("far_distance")
+        self.direction = keep_or_switch(paths, far, self.direction)
         target = paths.steer(far, side=int(self.direction))
-        other = paths.steer(far, side=-int(self.direction))
-        if other is not None and (target is None or abs(other) + self.SWITCH_MARGIN < abs(target)):
-            self.direction, target = -self.direction, other
         if target is None:  # nothing clear for far_distance either way: towards the most room on this side
             target = paths.roomiest(int(self.direction))
         depth = min(1.0, max(0.0, (far - paths.ahead) / max(far - close, 1e-6)))
         slow, fast = self.get_input("slow_speed"), self.get_input("max_speed")
         linear = fast - (fast - slow) * depth ** self.SPEED_EXPONENT
         self.command(linear, steering(target, self.get_input("angular_speed")))
+        self._set_output("turn_side", TurnSide(self.direction, self.clock()))
         self.feedback_message = f"steering {math.degrees(target):+.0f} deg"
         return Status.RUNNING
 
@@ -135,14 +174,15 @@ class RotateInPlace(Leaf):
     """Zero forward speed, turn towards the side with the clear heading (path blocked close, or front unknown)."""
 
     INPUT_PORTS = {**PATHS_PORT, "angular_speed": port(float, default=1.5), "far_distance": port(float, default=0.7)}
-    OUTPUT_PORTS = dict(CMD_PORT)
+    OUTPUT_PORTS = {**CMD_PORT, **TURN_SIDE_PORT}
 
     def initialise(self) -> None:
         """Pick the rotation direction for this whole rotation."""
-        self.direction = initial_side(self.get_input("paths"), self.get_input("far_distance"))
+        self.direction = remembered_side(self, self.get_input("paths"), self.get_input("far_distance"))
 
     def update(self) -> Status:
         """Rotate, RUNNING."""
+        self._set_output("turn_side", TurnSide(self.direction, self.clock()))
         self.command(0.0, self.direction * self.get_input("angular_speed"))
         self.feedback_message = f"rotating {'left' if self.direction > 0 else 'right'}"
         return Status.RUNNING
