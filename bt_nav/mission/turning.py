@@ -72,6 +72,7 @@ class TurnMeter:
         return self.open_loop_ticks > 0
 
 
-def approach_rate(remaining: float, peak: float, gain: float, floor: float) -> float:
-    """Signed turn rate for ``remaining`` rad still to turn: ``gain`` per rad, within [floor, peak]."""
-    return math.copysign(min(peak, max(floor, gain * abs(remaining))), remaining)
+def approach_rate(remaining: float, peak: float, decel: float, floor: float) -> float:
+    """Signed turn rate for ``remaining`` rad still to turn: the fastest that can still stop on the angle
+    at ``decel`` rad/s^2 (``sqrt(2 decel remaining)``), within [floor, peak]."""
+    return math.copysign(min(peak, max(floor, math.sqrt(2.0 * decel * abs(remaining)))), remaining)

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from bt_nav.mission.behaviours.maneuvers import RandomizerManeuver, RetreatManeuver, SmartPivotManeuver
-from bt_nav.mission.datatypes import OdomSample
+from bt_nav.mission.datatypes import Command, OdomSample
 from bt_nav.mission.paths import HEADINGS, FreePaths
 from bt_nav.mission.scan import SectorReading, Sectors
+from bt_nav.mission.turning import approach_rate
 from bt_nav.testing import FakeClock
 from tests.behaviours.leafkit import Board, Status, make, tick
 
@@ -73,3 +74,27 @@ def test_smart_pivot_turns_towards_the_side_it_will_face(left_free: float, right
     tick(leaf)
     assert leaf.rotation == pytest.approx(expected * math.pi / 2)
     assert board.get("cmd_vel").linear == 0.0
+
+
+@pytest.mark.parametrize(("turning", "expected"), [
+    (2.5, 1.0),  # already turning left: the spin goes on that way, though the right reads clearer
+    (-2.5, -1.0),
+    (0.0, -1.0),  # not turning: towards the clearer side (right reads 0.45 m, left 0.4 m)
+])
+def test_retreat_spins_the_way_the_robot_already_turns(turning: float, expected: float) -> None:
+    """Either way round ends facing back; reversing a rotation in place first costs time and turn."""
+    board = maneuver_board(sectors(left=0.4, right=0.45))
+    leaf = make(RetreatManeuver, clock=FakeClock(1.0))
+    board.set(cmd_vel=Command(0.0, turning, "RotateInPlace"))  # the previous tick's command
+    tick(leaf)
+    assert leaf.rotation == pytest.approx(expected * math.pi)
+
+
+def test_the_approach_brakes_as_late_as_it_can() -> None:
+    """Full rate until the braking distance at DECEL, then sqrt(2 DECEL remaining), never below the floor."""
+    decel, peak, floor = RetreatManeuver.DECEL, 2.84, RetreatManeuver.MIN_RATE
+    assert approach_rate(math.pi, peak, decel, floor) == peak
+    assert approach_rate(-0.2, peak, decel, floor) == pytest.approx(-math.sqrt(2 * decel * 0.2))
+    assert approach_rate(1e-4, peak, decel, floor) == floor
+    braking = peak ** 2 / (2 * decel)
+    assert approach_rate(braking * 0.99, peak, decel, floor) < peak <= approach_rate(braking * 1.01, peak, decel, floor)
