@@ -233,14 +233,16 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def git_commit() -> str:
-    """The checked-out commit (short), with ``+dirty`` when tracked files differ from it; ``?`` without git."""
+    """The checked-out commit (short), with ``+dirty`` when tracked files other than the benchmark results
+    differ from it; ``?`` without git."""
     import subprocess
 
     try:
         head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True,
                               timeout=10, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=REPO,
-                               capture_output=True, text=True, timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":(exclude)bench/results"],  # the benchmark's own output is not the code
+                               cwd=REPO, capture_output=True, text=True, timeout=10, check=True).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "?"
     return head + ("+dirty" if dirty else "")
