@@ -8,7 +8,6 @@ their ROS plumbing the same way (one place decides how a parameter is declared o
 from __future__ import annotations
 
 import math
-import os
 import re
 import threading
 from collections.abc import Callable, Iterable, Mapping
@@ -153,44 +152,6 @@ def declare_parameters(node: Node) -> dict[str, P.Value]:
     return values
 
 
-# ---------------------------------------------------------------------------------------------- executors
-#: Environment variable choosing the executor: ``single`` (default) or ``events``.
-EXECUTOR_ENV = "BT_NAV_EXECUTOR"
-EXECUTORS = ("single", "events")
-
-
-def make_executor(kind: str | None = None, context: Any = None) -> Any:
-    """The executor a node spins in: rclpy's SingleThreadedExecutor, or its experimental EventsExecutor
-    when ``kind`` (default: ``$BT_NAV_EXECUTOR``) says ``events``.
-
-    Why not the events executor by default, although it is the cheaper one (it queues middleware events
-    in C++ instead of rebuilding a wait set in Python for every ``spin_once``; the executive's and the
-    recorder's CPU fell by a third with it): under ``use_sim_time`` the Jazzy wheel's events executor
-    runs a timer of the node clock late. The simulator holds ``/clock`` until the executive's command
-    for a tick arrives, so every late tick waits for the simulator's next ``/clock`` republication
-    (20 ms of wall time): measured on the full stack (``bench/ros_mission.py``, one 2-core machine,
-    same load) 1.8x real time with the events executor against 5.6x with this one, and in a two-node
-    ``/clock``-and-reply test 3.4-8.5x against 17-19x. ``events`` stays selectable to measure it again
-    on a newer rclpy; a Python without the experimental executor falls back to ``single``.
-
-    Raises:
-        ValueError: for an unknown ``kind``.
-    """
-    kind = (kind or os.environ.get(EXECUTOR_ENV) or "single").strip().lower()
-    if kind not in EXECUTORS:
-        raise ValueError(f"{EXECUTOR_ENV}={kind!r}: choose one of {', '.join(EXECUTORS)}")
-    if kind == "events":
-        try:
-            from rclpy.experimental import EventsExecutor
-        except ImportError:
-            pass
-        else:
-            return EventsExecutor(context=context)
-    from rclpy.executors import SingleThreadedExecutor
-
-    return SingleThreadedExecutor(context=context)
-
-
 # ---------------------------------------------------------------------------------------------- messages
 class ThreadedNode:
     """A node in a private rclpy context whose executor spins in a daemon thread.
@@ -201,12 +162,13 @@ class ThreadedNode:
     """
 
     def __init__(self, name: str) -> None:
+        from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
 
         self.context = rclpy.Context()
         rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node(name, context=self.context)
-        self.executor = make_executor(context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._spin, name=name, daemon=True)
@@ -239,9 +201,6 @@ class CommandPublisher:
     """``cmd_vel`` as ``geometry_msgs/Twist`` or ``TwistStamped`` (TurtleBot3 on Jazzy wants the latter).
 
     The rest of the node publishes a :class:`~bt_nav.mission.datatypes.Command` and does not care which.
-    One message is allocated up front and refilled for every command: rclpy serialises a message
-    inside ``publish``, so the object is free again when ``publish`` returns, and building a Twist
-    (three Python message objects) per tick is avoidable work on the hot path.
     """
 
     def __init__(self, node: Node, topic: str = "cmd_vel", *, stamped: bool = False,
@@ -254,21 +213,15 @@ class CommandPublisher:
         self._type = TwistStamped if stamped else Twist
         self.publisher = node.create_publisher(self._type, topic, depth)
         self.published = 0
-        self._msg = self._type()
-        twist = self._msg.twist if stamped else self._msg
-        self._linear, self._angular = twist.linear, twist.angular
-        if stamped:
-            self._msg.header.frame_id = frame_id
 
     def message(self, command: Command) -> Any:
-        """The message for ``command`` (stamped with the node clock when stamped): the publisher's one
-        preallocated message, refilled, so valid until the next call."""
-        msg = self._msg
-        self._linear.x = float(command.linear)
-        self._angular.z = float(command.angular)
+        """The message for ``command`` (stamped with the node clock when stamped)."""
+        msg = self._type()
+        twist = msg.twist if self.stamped else msg
+        twist.linear.x = float(command.linear)
+        twist.angular.z = float(command.angular)
         if self.stamped:
-            sec, nanosec = divmod(self.node.get_clock().now().nanoseconds, 1_000_000_000)
-            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            msg.header.stamp = self.node.get_clock().now().to_msg()
             msg.header.frame_id = self.frame_id
         return msg
 

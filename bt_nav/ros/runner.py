@@ -13,20 +13,22 @@ import signal
 import sys
 from collections.abc import Callable
 from contextlib import suppress
-from typing import Any, Protocol
+from typing import Protocol
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from bt_nav.ros.rosutil import ConfigError, make_executor
+from bt_nav.ros.rosutil import ConfigError
 from bt_nav.ros.supervise import StopRequest
 
 EXIT_OK, EXIT_ERROR, EXIT_CONFIG = 0, 1, 2
 #: Longest wait inside the executor before the loop looks at the shutdown flag again.
 SPIN_TIMEOUT = 0.05
+
+
 class Closable(Protocol):
     """What a node's wiring offers the runner: a ``close()`` that stops the robot and never raises."""
 
@@ -54,7 +56,7 @@ def init_ros(name: str, argv: list[str] | None,
     return options
 
 
-def spin_until_stopped(node: Node, executor: Any, shutdown: StopRequest) -> None:
+def spin_until_stopped(node: Node, executor: SingleThreadedExecutor, shutdown: StopRequest) -> None:
     """Spin until a signal or an external shutdown, then say which in one line."""
     while not shutdown.requested and rclpy.ok():
         executor.spin_once(timeout_sec=SPIN_TIMEOUT)
@@ -84,7 +86,7 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
     shutdown.install()
     node: Node | None = None
     wiring: Closable | None = None
-    executor: Any = None
+    executor: SingleThreadedExecutor | None = None
     undo: Callable[[], None] | None = None
     code = EXIT_OK
     try:
@@ -99,7 +101,7 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
             else:
                 print(f"{name}: {message}", file=sys.stderr)
             return EXIT_CONFIG
-        executor = make_executor()
+        executor = SingleThreadedExecutor()
         executor.add_node(node)
         spin_until_stopped(node, executor, shutdown)
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -118,7 +120,7 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
     return code
 
 
-def _tear_down(wiring: Closable | None, executor: Any, node: Node | None,
+def _tear_down(wiring: Closable | None, executor: SingleThreadedExecutor | None, node: Node | None,
                undo: Callable[[], None] | None) -> None:
     """Close the wiring (the stop goes out), then the executor, the node and the context; never raises."""
     if wiring is not None:
