@@ -35,7 +35,8 @@ def config_file(name: str) -> Path | None:
 
 
 def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[str, Any]:
-    """The parameters a ROS params file gives ``node_name`` (``/**`` and the node's own section)."""
+    """The parameters a ROS params file gives ``node_name`` in any namespace (``/**``, ``/**/node_name``
+    and the node's own section)."""
     import yaml
 
     try:
@@ -44,7 +45,7 @@ def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[s
     except (OSError, yaml.YAMLError):
         return {}
     merged: dict[str, Any] = {}
-    for key in ("/**", "**", node_name, f"/{node_name}"):
+    for key in ("/**", "**", node_name, f"/{node_name}", f"/**/{node_name}"):
         section = data.get(key) if isinstance(data, dict) else None
         if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
             merged.update(section["ros__parameters"])

@@ -177,10 +177,6 @@ def nodes(
     if seed is not None:
         exe_params["random_seed"] = int(seed)
     exe_params.update(executive or {})
-    if namespace is not None:
-        # rcl matches a params file's ``bt_nav_executive:`` section against the fully qualified node name,
-        # so inside a namespace the file would silently not apply: its values are passed explicitly too.
-        exe_params = {**{k: v for f in files for k, v in file_parameters(f).items()}, **exe_params}
     activate, evaluate = (HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE) if namespace is None else \
         (HOMEWORK_ACTIVATE.lstrip("/"), HOMEWORK_EVALUATE.lstrip("/"))
     if homework:

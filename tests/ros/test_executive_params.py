@@ -14,7 +14,7 @@ import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import DescribeParameters, ListParameters
 from rclpy.parameter import Parameter
-from ros_harness import ExecutiveProcess, Harness
+from ros_harness import REPO, STARTUP_TIMEOUT, ExecutiveProcess, Harness, wait_until
 
 from bt_nav.mission import params as P
 
@@ -100,3 +100,18 @@ def test_atomic_change_is_judged_as_a_whole(h: Harness) -> None:
     (back,) = h.set_parameters(Parameter("close_distance", value=0.3), Parameter("far_distance", value=0.7),
                                atomically=True)
     assert back.successful, back.reason
+
+
+@pytest.mark.parametrize(("profile", "says"), [("homework.yaml", r"maneuver C Smart Pivot"),
+                                               ("turtlebot3.yaml", r"cmd_vel /robot1/cmd_vel as TwistStamped")])
+def test_the_params_files_apply_inside_a_namespace(ros_context: Any, profile: str, says: str) -> None:
+    """The config files key their section ``/**/bt_nav_executive``: a plain ``bt_nav_executive:`` would
+    not match the node under ``/robot1`` and the executive would run on the defaults (maneuver none)."""
+    config = REPO / "config" / profile
+    process = ExecutiveProcess(["--ros-args", "-r", "__ns:=/robot1", "--params-file", str(config)])
+    try:
+        wait_until(lambda: process.has_line(r"bt_nav_executive up:"), STARTUP_TIMEOUT, "the executive to start",
+                   details=process.tail)
+        assert process.has_line(r"\[robot1\.bt_nav_executive\]: bt_nav_executive up: .*" + says), process.tail()
+    finally:
+        process.stop()
