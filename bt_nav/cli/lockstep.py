@@ -397,18 +397,9 @@ def _film(bag_dir: str, out: str, fps: float) -> None:
 
 def _main_multi(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     """``bt-nav lockstep --robots N``: N robots in one world (:mod:`bt_nav.cli.lockstep_multi`)."""
-    from bt_nav.cli.lockstep_multi import print_multi, run_multi_mission
+    from bt_nav.cli.lockstep_multi import main_multi
 
-    if args.bag or args.video or args.trace:
-        parser.error("--bag, --video and --trace record one robot: not with --robots > 1")
-    try:
-        result = run_multi_mission(args.world, args.maneuver, args.seed, args.robots,
-                                   parse_assignments(args.overrides), args.profile,
-                                   jitter=None if args.no_jitter else DEFAULT_JITTER, kinematics=args.kinematics,
-                                   noise=not args.no_noise, duration=args.duration)
-    except (ValueError, FileNotFoundError) as exc:
-        parser.error(str(exc))
-    return print_multi(result, args.plot, args.json)
+    return main_multi(parser, args)
 
 
 def main(argv: list[str] | None = None) -> int:

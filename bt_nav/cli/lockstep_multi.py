@@ -12,24 +12,33 @@ tree gets a blackboard of its own (:class:`Boards`), switched in before anything
 Each robot has its own referee (its own arming, 50 s, evaluation call and verdict); the run ends when every
 referee has reported. Robot ``i`` > 0 gets maneuver A's random seed ``seed + i * ROBOT_SEED_STRIDE`` so two robots do
 not make the same random choices.
+
+With ``bag`` (``bt-nav lockstep --robots N --bag DIR [--video FILE.mp4]``) the run is one rosbag2 bag: each
+robot writes through its own :meth:`bt_nav.media.bag.MissionBag.robot` sink (its topics under its namespace,
+as the namespaced executives publish them over DDS) and the shared clock is written once per instant.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bt_nav_sim.core import SimConfig
-from bt_nav_sim.multi import ROBOT_SEED_STRIDE, MultiSimCore
+from bt_nav_sim.multi import ROBOT_SEED_STRIDE, MultiSimCore, robot_names
 from bt_nav_sim.plot import plot_robots
 from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, load_world
 
 from bt_nav.cli.lockstep import DEFAULT_JITTER, HARD_STOP, LockstepMission, MissionResult
+
+if TYPE_CHECKING:
+    import argparse
+
+    from bt_nav.media.bag import MissionBag
 
 
 @dataclass
@@ -122,8 +131,12 @@ def run_multi_mission(world: str | World = "stage_4", maneuver: str = "none", se
                       names: tuple[str, ...] = (), starts: tuple[tuple[float, float, float], ...] = (),
                       kinematics: str = "", noise: bool = True,
                       jitter: tuple[float, float] | None = DEFAULT_JITTER,
-                      referee_config: RefereeConfig | None = None, duration: float | None = None) -> MultiResult:
-    """``robots`` homework missions in one world in lock-step; deterministic per arguments."""
+                      referee_config: RefereeConfig | None = None, duration: float | None = None,
+                      bag: MissionBag | None = None) -> MultiResult:
+    """``robots`` homework missions in one world in lock-step; deterministic per arguments.
+
+    ``bag``: write every robot's messages into it, each under its namespace (see the module docstring).
+    """
     started = time.perf_counter()
     world_obj = world if isinstance(world, World) else load_world(world, seed=int(seed))
     jitter_m, jitter_deg = jitter or (0.0, 0.0)
@@ -136,10 +149,11 @@ def run_multi_mission(world: str | World = "stage_4", maneuver: str = "none", se
         for i, core in enumerate(multi.cores):
             boards.add()
             robot_overrides = {"random_seed": (int(seed) + i * ROBOT_SEED_STRIDE) % 2**31, **(overrides or {})}
+            sink = bag.robot(multi.names[i]) if bag is not None else None
             missions.append(LockstepMission(world_obj, maneuver, seed, robot_overrides, profile,
                                             kinematics=kinematics, noise=noise, jitter=jitter,
-                                            referee_config=referee_config, sim=core))
-        _run(multi, missions, boards, duration)
+                                            referee_config=referee_config, sim=core, sink=sink))
+        _run(multi, missions, boards, duration, bag)
         wall = time.perf_counter() - started
         results = []
         for i, mission in enumerate(missions):
@@ -150,8 +164,13 @@ def run_multi_mission(world: str | World = "stage_4", maneuver: str = "none", se
     return MultiResult(multi.names, results, wall)
 
 
-def _run(multi: MultiSimCore, missions: list[LockstepMission], boards: Boards, duration: float | None) -> None:
-    """Step the shared clock until every referee reported (or ``duration``); see the module docstring."""
+def _run(multi: MultiSimCore, missions: list[LockstepMission], boards: Boards, duration: float | None,
+         bag: MissionBag | None = None) -> None:
+    """Step the shared clock until every referee reported (or ``duration``); see the module docstring.
+
+    ``bag`` gets /clock once per instant, after every robot's messages of that instant (as a robot's
+    own sink writes it after its messages when it runs alone).
+    """
     end_ns = round((duration if duration is not None else HARD_STOP) * 1e9)
     tick_ns, referee_ns = missions[0].tick_ns, missions[0].referee_ns
     next_tick = next_referee = 0
@@ -170,6 +189,8 @@ def _run(multi: MultiSimCore, missions: list[LockstepMission], boards: Boards, d
                     mission.referee_step()
                 if tick_due:
                     mission.tick()
+        if bag is not None:
+            bag.clock(multi.t)
         if referee_due and duration is None and all(m.referee.done for m in missions):
             break
         outs = multi.advance([(m.command.linear, m.command.angular) for m in missions])
@@ -195,3 +216,37 @@ def print_multi(result: MultiResult, plot: str | None, json_path: str | None) ->
         path.write_text(json.dumps(result.to_dict(trajectory=True), indent=1))
         print(f"results: {json_path}")
     return 0 if result.passed else 1
+
+
+def main_multi(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``bt-nav lockstep --robots N [--bag DIR] [--video FILE.mp4]``: the run, its bag and its film; exit code.
+
+    As with one robot, ``--video`` without ``--bag`` writes the bag next to the video (``FILE_bag``): the
+    film is always made from a bag, so what it shows is what ``ros2 bag play`` would replay.
+    """
+    from bt_nav.cli.lockstep import _film, parse_assignments
+    from bt_nav.media.bag import BagError, MissionBag
+
+    if args.trace:
+        parser.error("--trace records one robot: not with --robots > 1 (--bag records them all)")
+    bag_dir = args.bag or (str(Path(args.video).with_suffix("")) + "_bag" if args.video else None)
+    kwargs: dict[str, Any] = {"jitter": None if args.no_jitter else DEFAULT_JITTER, "kinematics": args.kinematics,
+                              "noise": not args.no_noise, "duration": args.duration}
+    try:
+        info = {"world": args.world, "maneuver": args.maneuver, "seed": args.seed, "profile": args.profile,
+                "robots": robot_names(args.robots)}
+        bag = MissionBag(bag_dir, mission=info) if bag_dir else None
+        with bag if bag is not None else nullcontext():
+            result = run_multi_mission(args.world, args.maneuver, args.seed, args.robots,
+                                       parse_assignments(args.overrides), args.profile, bag=bag, **kwargs)
+            for name, r in zip(result.names, result.results, strict=True):
+                if bag is not None:
+                    bag.robot(name).event(r.sim_time, f"verdict: {'PASSED' if r.passed else 'FAILED'}")
+    except (ValueError, FileNotFoundError, BagError) as exc:
+        parser.error(str(exc))
+    code = print_multi(result, args.plot, args.json)
+    if bag_dir:
+        print(f"bag: {bag_dir}")
+    if args.video:
+        _film(bag_dir, args.video, args.fps)
+    return code

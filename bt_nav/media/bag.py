@@ -22,10 +22,18 @@ publishes ``~/tree``) and ``event(t, text)`` take sim seconds. ``close()`` write
 a writer killed before that leaves an ``.mcap`` that :func:`bt_nav.media.bagread.read_bag` still reads
 up to the last chunk written (:meth:`MissionBag.flush` closes a chunk early; the bag does so every
 ``flush_every`` sim seconds, and ``bt-nav record`` also every wall second).
+
+Several robots in one bag (``bt-nav lockstep --robots N --bag DIR``): :meth:`MissionBag.robot` gives a sink
+that writes the same messages into the same bag under the robot's namespace (``/robot1/scan``,
+``/robot1/bt_nav_executive/tree``, ``/robot1/bt_nav/events``, ...), as the namespaced executives publish them
+on the DDS graph. /clock and /bt_nav/mission stay at the root, one per bag: a robot's sink does not write
+/clock (the multi-robot runner writes it once per instant on the bag itself). A bag without robot sinks has
+exactly the topics it always had. :func:`split_namespace` undoes the prefix when reading.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import dataclass
@@ -65,6 +73,22 @@ TOPICS: dict[str, TopicSpec] = {
     MISSION: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
     COLLISIONS: TopicSpec("std_msgs/msg/String", depth=50),
 }
+
+
+#: Topics a robot publishes in its namespace (the others, /clock and /bt_nav/mission, exist once per bag).
+ROBOT_TOPICS: tuple[str, ...] = (SCAN, ODOM, TRUTH, CMD, TREE, EVENTS, COLLISIONS)
+
+
+def split_namespace(topic: str) -> tuple[str, str]:
+    """``/robot1/scan`` -> (``/robot1``, ``/scan``); a root or unknown topic -> ("", topic).
+
+    Why by suffix: a robot's topic is one of :data:`ROBOT_TOPICS` behind its namespace, and the
+    namespace may itself have several levels (``/fleet/robot1``).
+    """
+    for base in ROBOT_TOPICS:
+        if topic.endswith(base) and len(topic) > len(base) + 1 and topic.startswith("/"):
+            return topic[:-len(base)], base
+    return "", topic
 
 
 class BagError(RuntimeError):
@@ -124,6 +148,8 @@ class MissionBag:
             raise BagError(f"cannot write bag {self.path}: {exc}") from exc
         self._connections: dict[str, Any] = {}
         self._last_tree: Any = None
+        self.namespace = ""  # "" for the bag itself, "/robot1" for a robot's sink (:meth:`robot`)
+        self._root = self
         self.counts: dict[str, int] = {}
         self.closed = False
         self._flush_ns = to_ns(flush_every)
@@ -139,7 +165,7 @@ class MissionBag:
         """The writer's connection for ``topic`` (created on first use with :data:`TOPICS`' type and QoS)."""
         conn = self._connections.get(topic)
         if conn is None:
-            spec = TOPICS.get(topic)
+            spec = TOPICS.get(topic) or TOPICS.get(split_namespace(topic)[1])
             msgtype = msgtype or (spec.msgtype if spec else None)
             if msgtype is None:
                 raise BagError(f"{self.path}: no message type known for topic {topic}")
@@ -150,14 +176,34 @@ class MissionBag:
 
     def write_raw(self, topic: str, t_ns: int, data: bytes, msgtype: str | None = None, qos: Any = None) -> None:
         """One already serialised (CDR) message, e.g. from an rclpy ``raw=True`` subscription."""
+        if self._root is not self:  # a robot's sink: the bag itself counts and flushes
+            self._root.write_raw(topic, t_ns, data, msgtype, qos)
+            return
         self._writer.write(self.connection(topic, msgtype, qos), int(t_ns), data)
         self.counts[topic] = self.counts.get(topic, 0) + 1
         if self._flush_ns and t_ns - self._flushed_at >= self._flush_ns:
             self._flushed_at = int(t_ns)
             self.flush()
 
+    def robot(self, name: str) -> MissionBag:
+        """A sink for robot ``name`` writing into this bag under ``/name`` (see the module docstring).
+
+        It shares this bag's writer, connections and :attr:`counts`, and has its own tree state (so each
+        robot's tree is written when *its* status changes); closing it does nothing, close the bag.
+        """
+        view = copy.copy(self)
+        view.namespace = "/" + name.strip("/")
+        view._root = self
+        view._last_tree = None
+        return view
+
+    def topic(self, name: str) -> str:
+        """The full name of ``name`` in this sink: the robot's namespace in front of a robot topic."""
+        return self.namespace + name if self.namespace and name in ROBOT_TOPICS else name
+
     def write(self, topic: str, t: float, msg: Any) -> None:
-        """One rosbags message object, serialised to CDR by rosbags."""
+        """One rosbags message object, serialised to CDR by rosbags (``topic`` as :meth:`topic` names it)."""
+        topic = self.topic(topic)
         self.write_raw(topic, to_ns(t), bytes(self.ts.serialize_cdr(msg, msg.__msgtype__)), msg.__msgtype__)
 
     def _header(self, t: float, frame: str) -> Any:
@@ -166,7 +212,9 @@ class MissionBag:
 
     # ------------------------------------------------------------------ the mission's messages
     def clock(self, t: float) -> None:
-        """/clock (rosgraph_msgs/Clock)."""
+        """/clock (rosgraph_msgs/Clock); a robot's sink writes none (one /clock per bag)."""
+        if self.namespace:
+            return
         ns = to_ns(t)
         clock = self.ts.types["rosgraph_msgs/msg/Clock"]
         self.write(CLOCK, t, clock(clock=self._Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)))
@@ -251,8 +299,8 @@ class MissionBag:
         storage.bio.flush()
 
     def close(self) -> None:
-        """Finish the MCAP file and write ``metadata.yaml``; idempotent."""
-        if not self.closed:
+        """Finish the MCAP file and write ``metadata.yaml``; idempotent (a robot's sink: nothing to do)."""
+        if self._root is self and not self.closed:
             self.closed = True
             self._writer.close()
 

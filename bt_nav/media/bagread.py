@@ -10,6 +10,11 @@ Two ways in, both through maintained libraries:
 
 Either way the CDR payloads are decoded by rosbags' typestore. A file that yields nothing raises
 :class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
+
+A bag of several robots (``bt-nav lockstep --robots N --bag``; each robot's topics under its namespace,
+``/robot1/ground_truth_odom``, ...) gives :attr:`MissionRecord.robots`: one record per namespace that has a
+ground truth, in name order. Its top-level fields are the first robot's (plus the shared /clock and
+/bt_nav/mission), so every reader written for one robot (``bt-nav view``, ``bt-nav replay``) shows robot1.
 """
 
 from __future__ import annotations
@@ -22,7 +27,19 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.media.bag import CMD, COLLISIONS, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, BagError, typestore
+from bt_nav.media.bag import (
+    CMD,
+    COLLISIONS,
+    EVENTS,
+    MISSION,
+    ODOM,
+    SCAN,
+    TREE,
+    TRUTH,
+    BagError,
+    split_namespace,
+    typestore,
+)
 from bt_nav.mission.geometry import yaw_from_quaternion
 
 
@@ -81,6 +98,7 @@ class MissionRecord:
     start: float = 0.0
     end: float = 0.0
     truncated: bool = False
+    robots: dict[str, MissionRecord] = field(default_factory=dict)  # name -> its record (several robots only)
 
     @property
     def duration(self) -> float:
@@ -175,11 +193,15 @@ class _Collector:
         self.mission: dict[str, Any] = {}
         self.counts: dict[str, int] = {}
         self.t_min, self.t_max = float("inf"), float("-inf")
+        self.namespaces: dict[str, _Collector] = {}
 
     def add(self, topic: str, t: float, msg: Any) -> None:
         self.counts[topic] = self.counts.get(topic, 0) + 1
         self.t_min, self.t_max = min(self.t_min, t), max(self.t_max, t)
-        if topic == TRUTH:
+        namespace, base = split_namespace(topic)
+        if namespace:  # a robot's topic: sorted into that robot's collector under its plain name
+            self.namespaces.setdefault(namespace, _Collector()).add(base, t, msg)
+        elif topic == TRUTH:
             self.truth.append(_pose_row(t, msg))
         elif topic == ODOM:
             self.odom.append(_pose_row(t, msg))
@@ -207,6 +229,22 @@ class _Collector:
         self.scan_rows.append(ranges)
 
     def record(self, path: Path, truncated: bool) -> MissionRecord:
+        """The record; with robots in namespaces, each robot's too (the first one's data at the top level)."""
+        rec = self._own_record(path, truncated)
+        for namespace in sorted(self.namespaces):
+            sub = self.namespaces[namespace]
+            if sub.truth:
+                robot = sub._own_record(path, truncated)
+                robot.counts = {namespace + topic: n for topic, n in sub.counts.items()}
+                robot.mission, robot.start, robot.end = self.mission, rec.start, rec.end
+                rec.robots[namespace.strip("/")] = robot
+        if rec.robots and not self.truth:
+            first = next(iter(rec.robots.values()))
+            for name in ("truth", "odom", "scans", "cmd", "trees", "events", "collisions"):
+                setattr(rec, name, getattr(first, name))
+        return rec
+
+    def _own_record(self, path: Path, truncated: bool) -> MissionRecord:
         n_beams = self.scan_rows[0].shape[0] if self.scan_rows else 0
         a0, da, rmax = self.scan_meta or (0.0, 0.0, 3.5)
         scans = Scans(np.asarray(self.scan_t), a0 + da * np.arange(n_beams),
