@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.fps <= 0:
         parser.error("--fps must be positive")
     from bt_nav.media.bagread import read_bag
-    from bt_nav.media.video import VideoRenderer, plot_bag, world_of, write_video
+    from bt_nav.media.video import plot_bag, renderer_for, world_of, write_video
 
     try:
         record = read_bag(args.bag)
@@ -41,7 +41,7 @@ def main(argv: list[str] | None = None) -> int:
     world = world_of(record)
     if args.still:
         at = args.at if args.at is not None else record.start + record.duration / 2
-        VideoRenderer(record, world).frame(at).save(args.still)
+        renderer_for(record, world).frame(at).save(args.still)
         print(f"still: {args.still} (t = {at:.2f} s)")
     if args.plot:
         print(f"picture: {plot_bag(record, args.plot, world)}")

@@ -10,6 +10,11 @@ so ~35 ms a frame including the encoder. Frames are drawn with PIL on a pre-rend
 trajectory is drawn incrementally onto a persistent layer, and the tree panel and the console strip
 are re-rendered only when their text changes. The encoder is ``imageio-ffmpeg``'s bundled ffmpeg
 (libx264, no system ffmpeg). Measured numbers are in the README and ``make bench`` (bench/video.py).
+
+A bag of several robots (:attr:`MissionRecord.robots`) is filmed by :class:`MultiVideoRenderer`: every robot,
+its scan, its 1.5 m circle and its path in its own colour (the picture's, :func:`bt_nav_sim.plot.robot_colour`),
+a legend with each robot's name, distance and branch, each robot's running path of the tree and one console
+of everyone's log lines. :func:`renderer_for` picks the renderer, so a one-robot bag is filmed as before.
 """
 
 from __future__ import annotations
@@ -85,10 +90,12 @@ class MapView:
 def _bounds(record: MissionRecord, world: Any) -> tuple[float, float, float, float]:
     if world is not None:
         return tuple(world.bounds)  # type: ignore[return-value]
-    tr = record.truth
-    if len(tr) == 0:
+    poses = [r.truth for r in record.robots.values()] or [record.truth]  # every robot must be in the picture
+    xs = np.concatenate([p.x for p in poses])
+    ys = np.concatenate([p.y for p in poses])
+    if xs.size == 0:
         return (-2.0, -2.0, 2.0, 2.0)
-    return (float(tr.x.min()) - 2, float(tr.y.min()) - 2, float(tr.x.max()) + 2, float(tr.y.max()) + 2)
+    return (float(xs.min()) - 2, float(ys.min()) - 2, float(xs.max()) + 2, float(ys.max()) + 2)
 
 
 def branches(record: MissionRecord) -> tuple[np.ndarray, list[str], list[str]]:
@@ -122,6 +129,7 @@ class VideoRenderer:
         self.distance = truth.distance()
         idx = np.searchsorted(self.tree_t, truth.t, side="right") - 1
         self.sample_branch = [self.tree_branch[i] if i >= 0 else "Stopped" for i in idx]
+        self.events = record.events
         self.event_t = [t for t, _ in record.events]
         self.layer = self._background()
         self._drawn = 1  # trajectory samples already on the layer (segments end at index _drawn)
@@ -142,15 +150,19 @@ class VideoRenderer:
             d.line([(float(px0), float(py)), (float(px1), float(py))], fill=GRID)
         if self.world is not None:
             self._draw_world(d)
-        if len(self.rec.truth):
-            sx, sy = self.rec.truth.x[0], self.rec.truth.y[0]
-            cx, cy = v.px(sx, sy)
-            r = MIN_DISTANCE * v.scale
-            d.ellipse([cx - r, cy - r, cx + r, cy + r], outline=(31, 119, 180), width=2)
-            d.ellipse([cx - 5, cy - 5, cx + 5, cy + 5], fill=(31, 119, 180))
+        self._draw_start(d)
         d.rectangle([MAP_W, 0, WIDTH, MAP_H], fill=PANEL_BG)
         d.line([(MAP_W, 0), (MAP_W, MAP_H)], fill=(180, 180, 190), width=2)
         return img
+
+    def _draw_start(self, d: Any, truth: Any = None, colour: tuple[int, int, int] = (31, 119, 180)) -> None:
+        """The start point and the 1.5 m circle around it (of ``truth``, default the record's)."""
+        truth = self.rec.truth if truth is None else truth
+        if len(truth):
+            cx, cy = self.view.px(truth.x[0], truth.y[0])
+            r = MIN_DISTANCE * self.view.scale
+            d.ellipse([cx - r, cy - r, cx + r, cy + r], outline=colour, width=2)
+            d.ellipse([cx - 5, cy - 5, cx + 5, cy + 5], fill=colour)
 
     def _draw_world(self, d: Any) -> None:
         from bt_nav_sim.world import box_corners
@@ -181,8 +193,9 @@ class VideoRenderer:
             d.line([(float(xs[k]), float(ys[k])), (float(xs[k + 1]), float(ys[k + 1]))], fill=colour, width=3)
         self._drawn = upto
 
-    def _draw_scan(self, d: Any, t: float, x: float, y: float, yaw: float) -> None:
-        scans = self.rec.scans
+    def _draw_scan(self, d: Any, t: float, x: float, y: float, yaw: float, scans: Any = None,
+                   colour: tuple[int, int, int] = (230, 40, 40)) -> None:
+        scans = self.rec.scans if scans is None else scans
         k = int(np.searchsorted(scans.t, t, side="right")) - 1
         if k < 0 or scans.ranges.size == 0:
             return
@@ -191,12 +204,12 @@ class VideoRenderer:
         a = scans.angles[ok] + yaw
         px, py = self.view.px(x + r[ok] * np.cos(a), y + r[ok] * np.sin(a))
         for u, w in zip(px.tolist(), py.tolist(), strict=True):
-            d.rectangle([u - 1.5, w - 1.5, u + 1.5, w + 1.5], fill=(230, 40, 40))
+            d.rectangle([u - 1.5, w - 1.5, u + 1.5, w + 1.5], fill=colour)
 
-    def _draw_robot(self, d: Any, x: float, y: float, yaw: float) -> None:
+    def _draw_robot(self, d: Any, x: float, y: float, yaw: float, fill: tuple[int, int, int] = (40, 40, 40)) -> None:
         px, py = self.view.px(x, y)
         r = ROBOT_RADIUS * self.view.scale
-        d.ellipse([px - r, py - r, px + r, py + r], fill=(40, 40, 40), outline=(255, 255, 255), width=2)
+        d.ellipse([px - r, py - r, px + r, py + r], fill=fill, outline=(255, 255, 255), width=2)
         hx, hy = self.view.px(x + 2.2 * ROBOT_RADIUS * np.cos(yaw), y + 2.2 * ROBOT_RADIUS * np.sin(yaw))
         d.line([(float(px), float(py)), (float(hx), float(hy))], fill=(255, 200, 0), width=3)
 
@@ -250,12 +263,22 @@ class VideoRenderer:
             return self._console_cache[1]
         img = self._Image.new("RGB", (WIDTH, HEIGHT - CONSOLE_Y), CONSOLE_BG)
         d = self._Draw.Draw(img)
-        lines = self.rec.events[:n_events][-9:]
+        lines = self.events[:n_events][-9:]
         for n, (t, text) in enumerate(lines):
             ink = (255, 255, 255) if n == len(lines) - 1 else CONSOLE_INK
             d.text((10, 6 + 17 * n), f"[{t - self.rec.start:7.2f}] {text}"[:160], font=self.mono, fill=ink)
         self._console_cache = (n_events, img)
         return img
+
+
+def renderer_for(record: MissionRecord, world: Any = None) -> VideoRenderer:
+    """The renderer of this bag: :class:`bt_nav.media.video_multi.MultiVideoRenderer` when it holds robots in
+    namespaces (each in its colour), else the one-robot :class:`VideoRenderer` (branch-coloured path)."""
+    if record.robots:
+        from bt_nav.media.video_multi import MultiVideoRenderer
+
+        return MultiVideoRenderer(record, world)
+    return VideoRenderer(record, world)
 
 
 def frame_times(record: MissionRecord, fps: float) -> np.ndarray:
@@ -276,7 +299,7 @@ class VideoStats:
 
 def iter_frames(record: MissionRecord, fps: float, world: Any = None) -> Iterator[Any]:
     """The frames of the video, as PIL images."""
-    renderer = VideoRenderer(record, world)
+    renderer = renderer_for(record, world)
     for t in frame_times(record, fps):
         yield renderer.frame(float(t))
 
@@ -338,9 +361,24 @@ def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
         bounds = _bounds(record, None)
         world = World(name=str(record.mission.get("world", record.path.name)), segments=np.zeros((0, 4)),
                       circles=np.zeros((0, 3)), spawn=(0.0, 0.0, 0.0), bounds=bounds)
+    if record.robots:
+        return _plot_robots_bag(record, out, world)
     dist = record.truth.distance()
     results = {"travelled": float(dist[-1]) if dist.size else 0.0, "collisions": len(record.collisions),
                "collision_events": [c for c in record.collisions if "x" in c and "y" in c]}
     if "passed" in record.mission:
         results["passed"] = bool(record.mission["passed"])
     return plot_run(world, trajectory(record), results, out, title=f"{world.name} (bag {record.path.name})")
+
+
+def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path:
+    """The several-robot picture (:func:`bt_nav_sim.plot.plot_robots`) of a bag: one path per robot."""
+    from bt_nav_sim.plot import plot_robots
+
+    runs = []
+    for name, rec in record.robots.items():
+        dist = rec.truth.distance()
+        passed = any(text == "verdict: PASSED" for _, text in rec.events)
+        runs.append((name, trajectory(rec), {"travelled": float(dist[-1]) if dist.size else 0.0, "passed": passed,
+                                             "collisions": len(rec.collisions)}))
+    return plot_robots(world, runs, out, title=f"{world.name} (bag {record.path.name})")
