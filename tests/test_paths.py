@@ -10,7 +10,7 @@ from bt_nav_sim import LDS01, RayCaster, world_from_dict
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bt_nav.mission.paths import HEADINGS, free_paths
+from bt_nav.mission.paths import HEADINGS, free_paths, neighbour_min
 from bt_nav.mission.scan import Scan
 
 HALF = 0.2
@@ -96,3 +96,12 @@ def test_steer_is_none_when_no_heading_is_clear() -> None:
     paths = free_paths(scan_of(box), HALF, horizon=1.5)
     assert paths.steer(1.2) is None
     assert paths.side_room(1) > paths.side_room(-1)  # what the leaves fall back on: the side with more room
+
+
+@settings(max_examples=300, deadline=None)
+@given(values=st.lists(st.floats(0.0, 3.0), min_size=1, max_size=40), edge=st.integers(0, 4))
+def test_neighbour_min_is_the_edge_padded_window_minimum(values: list[float], edge: int) -> None:
+    """The shifted-slice minimum equals the plain definition (pad with the end values, window minimum)."""
+    v = np.asarray(values)
+    window = np.lib.stride_tricks.sliding_window_view(np.pad(v, edge, mode="edge"), 2 * edge + 1).min(axis=1)
+    assert np.array_equal(neighbour_min(v, edge), window)

@@ -31,6 +31,16 @@ TURN_COST = 0.25
 EDGE_HEADINGS = 1
 
 
+def neighbour_min(values: np.ndarray, edge: int) -> np.ndarray:
+    """The least of each value and its ``edge`` neighbours on either side; the array's own ends are not
+    obstacles (a window running off an end sees only what is inside)."""
+    out = values.copy()
+    for k in range(1, min(edge, len(values) - 1) + 1):
+        np.minimum(out[k:], values[:-k], out=out[k:])
+        np.minimum(out[:-k], values[k:], out=out[:-k])
+    return out
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class FreePaths:
     """Free travel (m) along each of ``headings`` (rad), capped at the horizon it was computed with."""
@@ -58,8 +68,7 @@ class FreePaths:
         to left / right turns (straight ahead included). None when no heading is clear for ``need``.
         """
         h = self.headings
-        padded = np.pad(self.free, edge, mode="edge")  # the grid's own ends are not obstacles
-        safe = np.lib.stride_tricks.sliding_window_view(padded, 2 * edge + 1).min(axis=1)
+        safe = neighbour_min(self.free, edge)
         usable = safe >= need
         if side:
             usable &= side * h >= 0.0
