@@ -128,6 +128,23 @@ def param_arg(name: str, value: Any) -> str:
 
 
 # ---------------------------------------------------------------------------------------------- the table
+def _sim_spec(world: str | None, homework: bool, seed: int | None, rtf: float | None, stamped: bool | None,
+              with_referee: bool, sim: dict[str, Any] | None) -> NodeSpec:
+    """The simulator node of :func:`nodes` (its arguments as there; ``stamped`` as the executive's)."""
+    sim_params: dict[str, Any] = {"world": world or "stage_4", "profile": "homework" if homework else "lab"}
+    if seed is not None:
+        sim_params["seed"] = int(seed)
+    if rtf is not None:
+        sim_params["real_time_factor"] = float(rtf)
+    if stamped is not None:
+        sim_params["cmd_vel_stamped"] = bool(stamped)
+    if with_referee:
+        # Until the referee follows the simulation (its t0), nothing is judged: no need to race.
+        sim_params["solo_rtf"] = SOLO_RTF
+    sim_params.update(sim or {})
+    return NodeSpec("sim", SIM_NAME, sim_params)
+
+
 def nodes(
     profile: str,
     *,
@@ -189,18 +206,7 @@ def nodes(
     if stamped is None and cfg is not None:
         stamped = file_parameters(cfg).get("cmd_vel_stamped")
     if include_sim:
-        sim_params: dict[str, Any] = {"world": world or "stage_4", "profile": "homework" if homework else "lab"}
-        if seed is not None:
-            sim_params["seed"] = int(seed)
-        if rtf is not None:
-            sim_params["real_time_factor"] = float(rtf)
-        if stamped is not None:
-            sim_params["cmd_vel_stamped"] = bool(stamped)
-        if with_referee:
-            # Until the referee follows the simulation (its t0), nothing is judged: no need to race.
-            sim_params["solo_rtf"] = SOLO_RTF
-        sim_params.update(sim or {})
-        specs.insert(0, NodeSpec("sim", SIM_NAME, sim_params))
+        specs.insert(0, _sim_spec(world, homework, seed, rtf, stamped, with_referee, sim))
 
     if with_referee:
         # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many

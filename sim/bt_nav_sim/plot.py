@@ -30,6 +30,17 @@ BRANCH_COLOURS = {
 MANEUVER_TIPS = frozenset({"Randomizer", "Retreat", "SmartPivot"})
 
 
+def frame_axes(ax: Any, world: World) -> None:
+    """The world's bounds at equal scale, a light grid and metre labels (every picture of a world)."""
+    xmin, ymin, xmax, ymax = world.bounds
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect("equal")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
 def branch_of_tip(tip: str) -> str:
     """The branch label of a tree tip name (what the executive's trace and ``~/tree`` show).
 
@@ -157,13 +168,7 @@ def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: 
             handles.append(Line2D([], [], marker="X", ls="", color="red", mec="black", label="collision"))
         ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
 
-        xmin, ymin, xmax, ymax = world.bounds
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-        ax.set_aspect("equal")
-        ax.grid(True, lw=0.3, alpha=0.5)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        frame_axes(ax, world)
         verdict = "PASSED" if results.get("passed") else "FAILED"
         numbers = []
         if "travelled" in results:
@@ -229,13 +234,7 @@ def plot_robots(world: World, runs: list[tuple[str, Trajectory | Mapping[str, An
         handles += [Line2D([], [], marker="o", ls="", color="black", label="start"),
                     Line2D([], [], marker="s", ls="", color="black", label="end")]
         ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
-        xmin, ymin, xmax, ymax = world.bounds
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-        ax.set_aspect("equal")
-        ax.grid(True, lw=0.3, alpha=0.5)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        frame_axes(ax, world)
         ax.set_title("\n".join(lines), fontsize=10)
         out = Path(path)
         out.parent.mkdir(parents=True, exist_ok=True)
