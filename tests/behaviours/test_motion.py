@@ -162,3 +162,19 @@ def test_a_remembered_side_gives_way_to_a_much_smaller_turn() -> None:
     assert left is not None and (right is None or abs(left) + SWITCH_MARGIN < abs(right))
     tick(leaf)
     assert command(board).angular > 0.0
+
+
+def test_a_rotation_resumed_after_a_blip_of_driving_goes_on_the_same_way() -> None:
+    """A post grazing the path's edge flips the path ahead between clear and close; a rotation in place
+    that resumes within SIDE_MEMORY of the last one keeps its side outright (weighing the sides afresh
+    turned it back and forth by ten degrees, for seconds)."""
+    board = scene((-20.0, 0.2))  # clear at +60 deg, nothing clear within 90 deg on the right
+    clock = FakeClock(1.0)
+    leaf = make(RotateInPlace, "RotateInPlace", clock=clock)
+    board.set(turn_side=TurnSide(-1.0, clock(), in_place=True))  # a rotation to the right, just now
+    tick(leaf)
+    assert command(board).angular < 0.0
+    leaf.stop(Status.INVALID)
+    board.set(turn_side=TurnSide(-1.0, clock(), in_place=False))  # steering right: weighed, and switched
+    tick(leaf)
+    assert command(board).angular > 0.0

@@ -87,6 +87,7 @@ class TurnSide:
 
     side: float = 0.0
     stamp: float = -math.inf
+    in_place: bool = False  # written by a rotation in place (not by steering)
 
 
 #: Written by both avoiding leaves and read back by both (an output port: py_trees refuses a port that is
@@ -106,11 +107,14 @@ SWITCH_MARGIN = math.radians(30.0)
 
 
 def remembered_side(leaf: Leaf, paths: FreePaths, need: float) -> float:
-    """The side an avoiding leaf starts with: the recent one of the other leaf unless the other side needs
-    ``SWITCH_MARGIN`` less turning to a heading clear for ``need``; else :func:`initial_side`."""
+    """The side an avoiding leaf starts with: the recent one unless the other side needs ``SWITCH_MARGIN``
+    less turning to a heading clear for ``need`` (a rotation in place resuming another one keeps it
+    outright); with no recent one, :func:`initial_side`."""
     memory = py_trees.blackboard.Blackboard.storage.get(leaf._get_blackboard_key("turn_side"), TurnSide())
     if not memory.side or leaf.clock() - memory.stamp > SIDE_MEMORY:
         return initial_side(paths, need)
+    if memory.in_place and isinstance(leaf, RotateInPlace):
+        return memory.side  # a rotation resumed after a blip of driving goes on the same way
     return keep_or_switch(paths, need, memory.side)
 
 
@@ -182,7 +186,7 @@ class RotateInPlace(Leaf):
 
     def update(self) -> Status:
         """Rotate, RUNNING."""
-        self._set_output("turn_side", TurnSide(self.direction, self.clock()))
+        self._set_output("turn_side", TurnSide(self.direction, self.clock(), in_place=True))
         self.command(0.0, self.direction * self.get_input("angular_speed"))
         self.feedback_message = f"rotating {'left' if self.direction > 0 else 'right'}"
         return Status.RUNNING
