@@ -41,6 +41,14 @@ def frame_axes(ax: Any, world: World) -> None:
     ax.set_ylabel("y [m]")
 
 
+def save_figure(fig: Any, path: str | Path) -> Path:
+    """Write ``fig`` to ``path`` (format from the suffix), creating the folder; the path written."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, bbox_inches="tight")
+    return out
+
+
 def branch_of_tip(tip: str) -> str:
     """The branch label of a tree tip name (what the executive's trace and ``~/tree`` show).
 
@@ -185,12 +193,9 @@ def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: 
         if failed:
             lines.append("failed: " + ", ".join(failed))
         ax.set_title("\n".join(lines), fontsize=10, color="#006400" if verdict == "PASSED" else "#b00000")
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, bbox_inches="tight")
+        return save_figure(fig, path)
     finally:
         plt.close(fig)
-    return out
 
 
 #: One colour per robot of a multi-robot picture (and video), in robot order; reused cyclically.
@@ -236,12 +241,9 @@ def plot_robots(world: World, runs: list[tuple[str, Trajectory | Mapping[str, An
         ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
         frame_axes(ax, world)
         ax.set_title("\n".join(lines), fontsize=10)
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, bbox_inches="tight")
+        return save_figure(fig, path)
     finally:
         plt.close(fig)
-    return out
 
 
 __all__ = ["BRANCHES", "BRANCH_COLOURS", "ROBOT_COLOURS", "Trajectory", "branch_of_tip", "plot_robots", "plot_run",

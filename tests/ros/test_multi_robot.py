@@ -23,6 +23,7 @@ import pytest
 from simtools import Proc, wait_until
 
 from bt_nav.ros.bringup import robot_nodes
+from bt_nav.ros.rosutil import ThreadedNode
 
 ROBOTS = ["robot1", "robot2"]
 SCALE = 0.2
@@ -33,17 +34,18 @@ OBSERVERS = {"/multi_probe"}
 
 
 class Probe:
-    """Records every robot's cmd_vel (with the sim time it arrived at) and ground truth."""
+    """Records every robot's cmd_vel (with the sim time it arrived at) and ground truth.
 
-    def __init__(self, context: Any) -> None:
-        import rclpy
+    A :class:`~bt_nav.ros.rosutil.ThreadedNode` named ``multi_probe`` (one of :data:`OBSERVERS`)."""
+
+    def __init__(self) -> None:
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
 
-        self.node = rclpy.create_node("multi_probe", context=context)
+        self.spinner = ThreadedNode("multi_probe")
+        self.node = self.spinner.node
         self.lock = threading.Lock()
         self.now = 0.0
         self.cmds: dict[str, list[tuple[float, float, float]]] = {r: [] for r in ROBOTS}
@@ -57,15 +59,7 @@ class Probe:
             self.node.create_subscription(
                 Odometry, f"/{robot}/ground_truth_odom",
                 lambda m, r=robot: self._add(self.truth[r], m.pose.pose.position.x, m.pose.pose.position.y), reliable)
-        self.executor = SingleThreadedExecutor(context=context)
-        self.executor.add_node(self.node)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        self._thread.start()
-
-    def _spin(self) -> None:
-        while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.02)
+        self.spinner.start()
 
     def _on_clock(self, msg: Any) -> None:
         with self.lock:
@@ -81,10 +75,7 @@ class Probe:
             return bool(self.cmds[robot]) and self.cmds[robot][-1][1:] != (0.0, 0.0)
 
     def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2.0)
-        self.executor.remove_node(self.node)
-        self.node.destroy_node()
+        self.spinner.close()
 
 
 def _start(spec: Any) -> Proc:
@@ -93,13 +84,13 @@ def _start(spec: Any) -> Proc:
 
 
 @pytest.fixture
-def world(ros_context: Any, tmp_path: Path) -> Iterator[dict[str, Any]]:
+def world(tmp_path: Path) -> Iterator[dict[str, Any]]:
     """Simulator and both executives running, both referees built but not started; the probe."""
     results = {r: str(tmp_path / f"{r}.json") for r in ROBOTS}
     referee = {"time_scale": SCALE, "min_travelled": 1.0, "min_distance_from_start": 0.3, "timeout": 120.0}
     specs = robot_nodes("eval", ROBOTS, seed=0, rtf=0.0, results_json=results, referee=referee,
                         executive={"mission_duration": MISSION, "maneuver": "C"}, sim={"afap_max_rtf": 4.0})
-    probe = Probe(ros_context)
+    probe = Probe()
     procs: list[Proc] = []
     try:
         for spec in specs:

@@ -83,6 +83,12 @@ class Leaf(BehaviourWithPorts):
             return self.get_input(port_name)  # resolves and remembers the key
         return _STORAGE.get(key)
 
+    def last_output(self, port_name: str, default: Any = None) -> Any:
+        """What an output port's key holds now (``default`` when nothing): a value written on an earlier
+        tick, by this leaf or another writer of the same key (py_trees has no port both in and out)."""
+        value = _STORAGE.get(self._get_blackboard_key(port_name))
+        return default if value is None else value
+
     def _set_output(self, port_name: str, value: Any) -> None:
         """Write an output port: a direct blackboard store once the port has been written through py_trees.
 

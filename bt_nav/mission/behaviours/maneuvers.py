@@ -166,8 +166,7 @@ class RetreatManeuver(RotationManeuver):
 
     def choose_rotation(self, sectors: Sectors) -> float:
         """Half a turn."""
-        last = py_trees.blackboard.Blackboard.storage.get(self._get_blackboard_key("cmd_vel"))
-        turning = getattr(last, "angular", 0.0)
+        turning = getattr(self.last_output("cmd_vel"), "angular", 0.0)
         side = math.copysign(1.0, turning) if abs(turning) >= self.TURNING else clearer_side(sectors)
         return side * math.pi
 

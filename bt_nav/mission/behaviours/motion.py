@@ -110,7 +110,7 @@ def remembered_side(leaf: Leaf, paths: FreePaths, need: float) -> float:
     """The side an avoiding leaf starts with: the recent one unless the other side needs ``SWITCH_MARGIN``
     less turning to a heading clear for ``need`` (a rotation in place resuming another one keeps it
     outright); with no recent one, :func:`initial_side`."""
-    memory = py_trees.blackboard.Blackboard.storage.get(leaf._get_blackboard_key("turn_side"), TurnSide())
+    memory: TurnSide = leaf.last_output("turn_side", TurnSide())
     if not memory.side or leaf.clock() - memory.stamp > SIDE_MEMORY:
         return initial_side(paths, need)
     if memory.in_place and isinstance(leaf, RotateInPlace):
