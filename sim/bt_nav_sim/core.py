@@ -13,6 +13,7 @@ Time is kept in integer nanoseconds so that 100 Hz steps land exactly on the 10 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -43,6 +44,8 @@ PROFILES: dict[str, SimProfile] = {
 # Light wheel-odometry error (relative, per step) when noise is on: odometry drifts a little, the way
 # wheel slip makes it drift on the real base, while ground truth stays exact.
 ODOM_SLIP_SIGMA = 0.01
+#: Largest accepted actuation latency (s): beyond it a run is a broken link, not a slow base.
+MAX_LATENCY = 2.0
 
 
 def profile(name: str) -> SimProfile:
@@ -76,6 +79,9 @@ class SimConfig:
     kinematics: str = ""  # ideal | burger; empty: the profile's
     max_wheel_speed: float = RobotParams.max_wheel_speed  # m/s, burger kinematics
     wheel_separation: float = RobotParams.wheel_separation  # m
+    # Sim s between a command and the wheels (a real base's serial link and motor controller; 0.1-0.15 s
+    # on real TurtleBot3s): a command given at t drives the physics from t + latency on (see SimCore.move).
+    actuation_latency: float = 0.0
 
     def lidar(self) -> LidarModel:
         """The profile's LiDAR with this run's noise and dropout settings."""
@@ -97,6 +103,8 @@ class SimConfig:
             raise ValueError(f"dropout_prob must be in [0, 1], got {self.dropout_prob}")
         if self.cmd_vel_timeout < 0 or not math.isfinite(self.cmd_vel_timeout):
             raise ValueError(f"cmd_vel_timeout must be >= 0, got {self.cmd_vel_timeout}")
+        if not (math.isfinite(self.actuation_latency) and 0.0 <= self.actuation_latency <= MAX_LATENCY):
+            raise ValueError(f"actuation_latency must be in [0, {MAX_LATENCY}] s, got {self.actuation_latency}")
         if self.kinematics and self.kinematics not in KINEMATICS:
             raise ValueError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
         self.lidar()
@@ -176,6 +184,12 @@ class SimCore:
         self.collisions = 0
         self.steps = 0
         self.scans = 0
+        # Actuation latency: commands given but not yet at the wheels as (effective t_ns, v, w), oldest
+        # first; the command the wheels follow now; the last command given (only a change is queued).
+        self.latency_ns = round(config.actuation_latency * 1e9)
+        self._pending: deque[tuple[int, float, float]] = deque()
+        self.in_force: tuple[float, float] = (0.0, 0.0)
+        self._given: tuple[float, float] = (0.0, 0.0)
         self._was_colliding = self.world.clearance(self.spawn[0], self.spawn[1]) <= config.radius
 
     @property
@@ -219,7 +233,36 @@ class SimCore:
         """The physics half of :meth:`advance` (no time, no outputs); returns whether the robot collided.
 
         Among other robots (``crowd`` set) a robot at rest is stepped too: another robot may touch it.
+
+        With ``actuation_latency`` L > 0 the command is *given* now (sim time t) and drives the wheels from
+        the first physics step starting at or after t + L; until then the command in force (the one given
+        before) does. Only a change of command is queued, so a caller that repeats the same command every
+        step (the ROS node) and one that gives it once for merged steps (lock-step) queue the same thing.
+        The steps are split at every queued command's effective time, so a merged call never integrates
+        across one. With L = 0 this is exactly the old path (no queue at all).
         """
+        if not self.latency_ns:
+            self.in_force = (cmd_v, cmd_w)
+            return self._move_under(cmd_v, cmd_w, steps)
+        cmd = (cmd_v, cmd_w)
+        if cmd != self._given:
+            self._given = cmd
+            self._pending.append((self.t_ns + self.latency_ns, cmd_v, cmd_w))
+        t_ns, collided = self.t_ns, False
+        while steps > 0:
+            while self._pending and self._pending[0][0] <= t_ns:
+                _, v, w = self._pending.popleft()
+                self.in_force = (v, w)
+            n = steps
+            if self._pending:
+                n = min(n, max(1, -(-(self._pending[0][0] - t_ns) // self.step_ns)))
+            collided = self._move_under(*self.in_force, n) or collided
+            steps -= n
+            t_ns += n * self.step_ns
+        return collided
+
+    def _move_under(self, cmd_v: float, cmd_w: float, steps: int) -> bool:
+        """``steps`` physics steps with (cmd_v, cmd_w) at the wheels (skipped at rest when alone)."""
         before = self.state
         resting = before.v == 0.0 and before.w == 0.0 and cmd_v == 0.0 and cmd_w == 0.0
         if resting and self.crowd is None:
@@ -257,8 +300,13 @@ class SimCore:
 
     def steps_until(self, t_ns: int) -> int:
         """Physics steps from now until ``t_ns`` or until the next scan or odometry sample, whichever is
-        first (at least one): what a caller may merge into one :meth:`advance`."""
+        first (at least one): what a caller may merge into one :meth:`advance`. A queued command's
+        effective time (actuation latency) ends a merge too, so merged steps never straddle one."""
         due = min(t_ns, self._next_scan_ns, self._next_odom_ns)
+        for effective, _, _ in self._pending:
+            if effective > self.t_ns:
+                due = min(due, effective)
+                break
         return max(1, -(-(due - self.t_ns) // self.step_ns))
 
     def _integrate_odom(self, before: RobotState, after: RobotState) -> None:

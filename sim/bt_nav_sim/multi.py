@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -93,7 +94,10 @@ class MultiSimCore:
     :class:`SimCore` (same calls, bit-identical results)."""
 
     def __init__(self, config: SimConfig, count: int = 1, names: Sequence[str] = (),
-                 starts: Sequence[tuple[float, float, float]] = (), world: World | None = None) -> None:
+                 starts: Sequence[tuple[float, float, float]] = (), world: World | None = None,
+                 latencies: Sequence[float] = ()) -> None:
+        """``latencies``: each robot's ``actuation_latency`` (s) when they differ (one per robot); empty:
+        every robot has ``config``'s. Each robot queues its own commands (:meth:`SimCore.move`)."""
         self.names = robot_names(count, names)
         seed = None if config.seed < 0 else int(config.seed)
         self.world = world if world is not None else load_world(config.world, seed=seed)
@@ -101,7 +105,10 @@ class MultiSimCore:
         if starts and len(starts) != n:
             raise ValueError(f"{len(starts)} start poses for {n} robots")
         poses = list(starts) or auto_starts(self.world, spawn_pose(self.world, config), n, config.radius)
-        self.cores = [SimCore(config, self.world, index=i, spawn=None if i == 0 and not starts else poses[i])
+        if latencies and len(latencies) != n:
+            raise ValueError(f"{len(latencies)} actuation latencies for {n} robots")
+        configs = [replace(config, actuation_latency=float(lat)) for lat in latencies] or [config] * n
+        self.cores = [SimCore(configs[i], self.world, index=i, spawn=None if i == 0 and not starts else poses[i])
                       for i in range(n)]
         self._check_apart()
 

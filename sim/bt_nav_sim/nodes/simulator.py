@@ -110,6 +110,7 @@ def _sim_config(p: dict[str, Any]) -> SimConfig:
         cmd_vel_timeout=float(p["cmd_vel_timeout"]), kinematics=str(p["kinematics"]),
         max_wheel_speed=float(p["max_wheel_speed"]), wheel_separation=float(p["wheel_separation"]),
         spawn_jitter_m=float(p["spawn_jitter_m"]), spawn_jitter_deg=float(p["spawn_jitter_deg"]),
+        actuation_latency=float(p["actuation_latency"]),
     )
 
 
@@ -137,6 +138,8 @@ class SimulatorNode(Node):
         "spawn_yaw": (math.nan, "spawn heading, rad (NaN: the world's spawn)"),
         "cmd_vel_stamped": (False, "subscribe geometry_msgs/TwistStamped instead of Twist"),
         "cmd_vel_timeout": (0.0, "sim s after which the last command expires (0: it persists)"),
+        "actuation_latency": (0.0, "sim s between a command (as _live holds it, after cmd_vel_timeout) and the "
+                                   "wheels, like a real base's serial and motor-controller delay (0.1-0.15 s)"),
         "follow": (True, "wait for the followers (cmd_vel publishers, sim_sync senders) to keep up"),
         "max_lag": (0.05, "sim s that sim time may lead an active follower (at least; see Followers)"),
         "follower_timeout": (1.0, "wall s of silence after which a follower is no longer waited for"),
