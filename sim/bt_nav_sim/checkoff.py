@@ -1,0 +1,468 @@
+"""The lab's check-off judge as a pure, clock-driven state machine (no rclpy), beside the homework's
+:class:`bt_nav_sim.referee_core.Referee` and driven the same way.
+
+The lab is checked off by watching the robot: after ``toggle_navigation`` (std_srvs/SetBool) true it
+creeps ahead, and when its maneuver's trigger holds it rotates in place (A Randomizer: front <
+safety_distance, 90-180 deg either side; B Retreat: left AND right < safety_distance, 180 deg; C Smart
+Pivot: front < pivot_distance, 90 deg towards the side with more room) without driving forward and without
+hitting anything, then moves on. This judge automates that look from ground truth and from the commands
+the robot's node publishes, so any node can be judged, not only bt_nav.
+
+Driver protocol (the referee's, so one driver runs either): :meth:`CheckoffJudge.start` once the
+``toggle_navigation`` service exists; :meth:`CheckoffJudge.step` at ``rate_hz``, performing the returned
+:class:`Activate` actions as ``toggle_navigation`` calls and reporting each answer with
+:meth:`CheckoffJudge.on_activate_result`; every ground-truth pose to :meth:`CheckoffJudge.observe`, every
+collision event to :meth:`CheckoffJudge.on_collision`, every ``cmd_vel`` to
+:meth:`CheckoffJudge.on_command`. The lab has no evaluation service: :meth:`CheckoffJudge.on_evaluate`
+answers (False, ...) so a driver that serves one anyway gets a clear refusal.
+
+Schedule (seconds from ``t0``): static until ``activate_at``; ``toggle_navigation(true)`` on every step
+until an answer says success; at ``activate_at + armed_for`` ``toggle_navigation(false)`` until success;
+``grace`` to brake; static for ``static_after``; then the report.
+
+Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate`` and
+|v| <= ``turn_max_linear``. Trigger readings (front, left and right sector minima and the distance to the
+first obstacle in the robot's swept path) are cast noise-free from the true pose at every ground-truth
+sample while armed, so they reflect the world as it was at that moment (objects that appear later do not
+count). See :meth:`CheckoffJudge._judge_episode` for the rules.
+
+Appearing objects (``appear_within`` in a world file): the judge's ray caster sees an object once it has
+appeared. ``update_world=True`` (default) reveals them from the poses the judge observes; that is what a
+judge with a world of its own needs (over DDS), and it is harmless on a world the simulator shares
+(appearance is a monotone function of the robot's positions, and every observed pose is one the simulator
+has already checked). ``update_world=False`` leaves the world to the simulator that shares it.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from bt_nav_sim.lidar import LDS01, RayCaster
+from bt_nav_sim.referee_core import Activate, static_check
+from bt_nav_sim.world import World
+
+#: The lab's maneuvers (what ``CheckoffConfig.maneuver`` may be).
+MANEUVERS = ("A", "B", "C")
+
+
+@dataclass(frozen=True)
+class CheckoffConfig:
+    """Schedule and rules of the lab's check-off (seconds are relative to t0, distances in metres)."""
+
+    maneuver: str = "A"
+    activate_at: float = 5.0  # static before; then toggle_navigation(true) until success
+    armed_for: float = 60.0  # toggle_navigation(false) at activate_at + armed_for
+    grace: float = 1.0  # braking time after the disarm request
+    static_after: float = 3.0  # must be static this long after the grace; then the report
+    rate_hz: float = 2.0  # how often the driver calls step()
+    moving_linear: float = 0.01  # m/s, as the homework referee
+    moving_angular: float = 0.01  # rad/s
+    safety_distance: float = 0.5  # A and B trigger
+    pivot_distance: float = 0.3  # C trigger
+    trigger_margin: float = 0.05  # the trigger reading may exceed its threshold by this much (sensor noise)
+    front_half_angle_deg: float = 30.0  # front sector: 0 deg +- this
+    side_half_angle_deg: float = 30.0  # left sector: 90 deg +- this; right: -90 deg +- this
+    rotation_min_rate: float = 0.1  # rad/s: a command turning at least this fast ...
+    turn_max_linear: float = 0.03  # m/s: ... and driving at most this fast is part of a rotation episode
+    forward_epsilon: float = 1e-3  # m/s: "zero forward command"
+    angle_tolerance_deg: float = 10.0
+    settle_rate: float = 0.05  # rad/s: the rotation has settled once the true yaw rate stays below this ...
+    settle_hold: float = 0.2  # ... for this long
+    settle_timeout: float = 2.0  # ... or this long after the episode's last command
+    brake_allowance: float = 0.3  # s after an episode's start in which the robot may still roll
+    forward_motion_max: float = 0.01  # m of true displacement allowed after the brake allowance
+    move_on_within: float = 10.0  # s after settling in which the robot must move on ...
+    move_on_distance: float = 0.02  # ... by this much (or start another episode)
+    side_tie: float = 0.15  # C: left and right closer than this count as a tie (either side passes)
+    open_space: float = 3.0  # C: both sides beyond this count as a tie too
+    aeb_distance: float = 0.35  # an obstacle this close in the swept path makes a turn an AEB recovery
+    half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
+    min_maneuvers: int = 1
+
+    def __post_init__(self) -> None:
+        if self.maneuver not in MANEUVERS:
+            raise ValueError(f"maneuver must be one of {', '.join(MANEUVERS)}, got {self.maneuver!r}")
+        if not (self.armed_for > 0 and self.rate_hz > 0 and self.grace >= 0 and self.static_after > 0):
+            raise ValueError("need armed_for > 0, rate_hz > 0, grace >= 0 and static_after > 0")
+
+
+#: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
+CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers performed", "maneuver",
+          "recovery turns", "no collision", "static after deactivation")
+
+
+@dataclass
+class _Reading:
+    """Noise-free trigger readings at one ground-truth sample (m; inf: nothing there)."""
+
+    front: float
+    left: float
+    right: float
+    ahead: float  # distance to the first obstacle in the swept path (robot's width + margin)
+
+
+class CheckoffJudge:
+    """The lab's check-off: schedule, ground truth and commands, the maneuver episodes, the verdict."""
+
+    def __init__(self, config: CheckoffConfig, world: World, *, update_world: bool = True) -> None:
+        self.config = config
+        self.world = world
+        self.update_world = update_world
+        self.caster = RayCaster(world, LDS01)
+        angles = np.remainder(LDS01.angle_min + LDS01.angle_increment * np.arange(LDS01.num_beams) + math.pi,
+                              2 * math.pi) - math.pi
+        front, side = math.radians(config.front_half_angle_deg), math.radians(config.side_half_angle_deg)
+        self._front = np.abs(angles) <= front + 1e-9
+        self._left = np.abs(angles - math.pi / 2) <= side + 1e-9
+        self._right = np.abs(angles + math.pi / 2) <= side + 1e-9
+        self._cos, self._sin = np.cos(angles), np.sin(angles)
+        self.t0: float | None = None
+        self._t: list[float] = []
+        self._x: list[float] = []
+        self._y: list[float] = []
+        self._yaw: list[float] = []
+        self._uyaw: list[float] = []  # unwrapped yaw
+        self._readings: list[_Reading | None] = []
+        self.commands: list[tuple[float, float, float]] = []
+        self.collisions: list[tuple[float, float, float]] = []
+        self.travelled = 0.0
+        self.max_distance = 0.0
+        self.activation_requested: float | None = None
+        self.activated: float | None = None
+        self.deactivation_requested: float | None = None
+        self.deactivated: float | None = None
+        self.evaluation_calls = 0
+        self.report_time: float | None = None
+        self._results: dict[str, Any] | None = None
+
+    # ------------------------------------------------------------------ driver inputs
+    def start(self, t0: float) -> None:
+        """The robot's ``toggle_navigation`` service exists: the schedule starts at ``t0``."""
+        if self.t0 is None:
+            self.t0 = float(t0)
+
+    def step(self, t: float) -> list[Activate]:
+        """Advance the schedule to ``t``; returns the ``toggle_navigation`` calls to make now."""
+        if self.t0 is None or self.done:
+            return []
+        cfg = self.config
+        rel = t - self.t0
+        if rel >= cfg.activate_at + cfg.armed_for:
+            if self.deactivation_requested is None:
+                self.deactivation_requested = float(t)
+            if t >= self.deactivation_requested + cfg.grace + cfg.static_after:
+                self._finish(t)
+                return []
+            return [] if self.deactivated is not None else [Activate(False)]
+        if rel >= cfg.activate_at:
+            if self.activation_requested is None:
+                self.activation_requested = float(t)
+            return [] if self.activated is not None else [Activate(True)]
+        return []
+
+    def on_activate_result(self, t: float, data: bool, success: bool) -> None:
+        """The answer to an :class:`Activate` action (``success`` False also for a failed call)."""
+        if not success:
+            return  # step() asks again
+        if data and self.activated is None and self.deactivation_requested is None:
+            self.activated = float(t)
+        elif not data and self.deactivation_requested is not None and self.deactivated is None:
+            self.deactivated = float(t)
+
+    def on_command(self, t: float, v: float, w: float) -> None:
+        """A ``cmd_vel`` the robot's node published (non-finite values read as 0, as the base does)."""
+        if self.done:
+            return
+        v, w = float(v), float(w)
+        self.commands.append((float(t), v if math.isfinite(v) else 0.0, w if math.isfinite(w) else 0.0))
+
+    def observe(self, t: float, x: float, y: float, yaw: float) -> None:
+        """One ground-truth pose; out-of-order or post-report samples are ignored. While armed the
+        trigger readings are cast here, against the world as it is now."""
+        if self.done or (self._t and t <= self._t[-1]):
+            return
+        if self.update_world and getattr(self.world, "appearing", ()):
+            self.world.update([(x, y)])
+        if self._t:
+            if self._armed_at(t):
+                self.travelled += math.hypot(x - self._x[-1], y - self._y[-1])
+            self.max_distance = max(self.max_distance, math.hypot(x - self._x[0], y - self._y[0]))
+            uyaw = self._uyaw[-1] + math.remainder(yaw - self._yaw[-1], 2 * math.pi)
+        else:
+            uyaw = float(yaw)
+        self._t.append(float(t))
+        self._x.append(float(x))
+        self._y.append(float(y))
+        self._yaw.append(float(yaw))
+        self._uyaw.append(uyaw)
+        self._readings.append(self._read(x, y, yaw) if self._armed_at(t) else None)
+
+    def on_collision(self, t: float, x: float, y: float) -> None:
+        """A collision event (the start of one contact)."""
+        if not self.done:
+            self.collisions.append((float(t), float(x), float(y)))
+
+    def on_evaluate(self, t: float) -> tuple[bool, str]:
+        """The lab has no evaluation service: every call is refused (and counted)."""
+        del t
+        self.evaluation_calls += 1
+        return False, "the lab has no evaluation service"
+
+    # ------------------------------------------------------------------ ground truth helpers
+    def _armed_at(self, t: float) -> bool:
+        """From the first activation request until the disarm request plus the grace."""
+        if self.activation_requested is None or t <= self.activation_requested:
+            return False
+        return self.deactivation_requested is None or t <= self.deactivation_requested + self.config.grace
+
+    def _read(self, x: float, y: float, yaw: float) -> _Reading:
+        """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range)."""
+        r = self.caster.true_ranges(float(x), float(y), float(yaw))
+        along, across = r * self._cos, np.abs(r * self._sin)
+        in_path = (along > 0.0) & (across <= self.config.half_width)
+        return _Reading(front=float(r[self._front].min()), left=float(r[self._left].min()),
+                        right=float(r[self._right].min()),
+                        ahead=float(along[in_path].min()) if in_path.any() else math.inf)
+
+    def _index_at(self, t: float) -> int:
+        """The last sample at or before ``t`` (the first one if none is)."""
+        return max(0, bisect.bisect_right(self._t, t + 1e-9) - 1)
+
+    def _interp(self, series: list[float], t: float) -> float:
+        """``series`` linearly interpolated at ``t`` (held at the ends)."""
+        ts = self._t
+        i = bisect.bisect_right(ts, t)
+        if i == 0:
+            return series[0]
+        if i >= len(ts):
+            return series[-1]
+        a = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
+        return series[i - 1] + a * (series[i] - series[i - 1])
+
+    def _settled_at(self, last: float, limit: float) -> float:
+        """The first moment after ``last`` from which the true yaw rate stays below ``settle_rate`` for
+        ``settle_hold`` (judged on sample pairs), capped at ``limit``."""
+        cfg = self.config
+        ts, uy = self._t, self._uyaw
+        calm_since: float | None = None
+        for i in range(max(1, bisect.bisect_right(ts, last)), len(ts)):
+            if ts[i - 1] >= limit:
+                break
+            rate = abs(uy[i] - uy[i - 1]) / max(ts[i] - ts[i - 1], 1e-9)
+            if rate >= cfg.settle_rate:
+                calm_since = None
+                continue
+            calm_since = max(ts[i - 1], last) if calm_since is None else calm_since
+            if ts[i] - calm_since >= cfg.settle_hold - 1e-9:
+                return min(calm_since, limit)
+        return limit
+
+    def _path_length(self, start: float, end: float) -> float:
+        """True path length over the samples in [start, end]."""
+        i, j = bisect.bisect_left(self._t, start), bisect.bisect_right(self._t, end)
+        return sum(math.hypot(self._x[k] - self._x[k - 1], self._y[k] - self._y[k - 1]) for k in range(i + 1, j))
+
+    def _max_displacement(self, start: float, end: float) -> float:
+        """Largest true distance from the pose at ``start`` over the samples in [start, end]."""
+        x0, y0 = self._interp(self._x, start), self._interp(self._y, start)
+        i, j = bisect.bisect_left(self._t, start), bisect.bisect_right(self._t, end)
+        return max((math.hypot(self._x[k] - x0, self._y[k] - y0) for k in range(i, j)), default=0.0)
+
+    # ------------------------------------------------------------------ episodes
+    def episodes(self) -> list[tuple[int, int]]:
+        """Rotation episodes as (first, last) command indices: maximal runs of turning-in-place commands
+        given while armed."""
+        cfg = self.config
+        runs: list[tuple[int, int]] = []
+        first: int | None = None
+        for i, (t, v, w) in enumerate(self.commands):
+            turning = abs(w) >= cfg.rotation_min_rate and abs(v) <= cfg.turn_max_linear and self._armed_at(t)
+            if turning and first is None:
+                first = i
+            elif not turning and first is not None:
+                runs.append((first, i - 1))
+                first = None
+        if first is not None:
+            runs.append((first, len(self.commands) - 1))
+        return runs
+
+    def _judge_all(self, now: float) -> list[dict[str, Any]]:
+        """Every episode judged (see :meth:`_judge_episode`), with its settling time."""
+        runs = self.episodes()
+        starts = [self.commands[a][0] for a, _ in runs]
+        out = []
+        for k, (a, b) in enumerate(runs):
+            last = self.commands[b][0]
+            nxt = starts[k + 1] if k + 1 < len(runs) else math.inf
+            limit = min(nxt, last + self.config.settle_timeout, now)
+            settle = min(nxt, self._settled_at(last, limit))
+            out.append(self._judge_episode(a, b, settle, nxt, now))
+        return out
+
+    def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float) -> dict[str, Any]:
+        """One episode: trigger at its start, angle and side, no forward command or motion, moved on.
+
+        A turn whose trigger did not hold but whose swept path was blocked within ``aeb_distance`` is an
+        emergency-stop recovery turn (the executive braked and turns away): only the forward rules apply.
+        """
+        cfg = self.config
+        start = self.commands[a][0]
+        reading = self._readings[self._index_at(start)] if self._t else None
+        trigger, trigger_text = self._trigger(reading)
+        recovery = not trigger and reading is not None and reading.ahead < cfg.aeb_distance
+        angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, start)) if self._t else 0.0
+        cmd_forward = max(abs(v) for _, v, _ in self.commands[a:b + 1])
+        motion = self._max_displacement(start + cfg.brake_allowance, settle) if self._t else 0.0
+        forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
+        angle_ok, rule = self._angle_rule(angle, reading)
+        moved_on, moved_text = self._moved_on(settle, next_start, now)
+        passed = forward_ok if recovery else trigger and angle_ok and forward_ok and moved_on
+        return {"t": start - (self.t0 or 0.0), "settled": settle - (self.t0 or 0.0), "kind":
+                "recovery" if recovery else "maneuver", "passed": passed, "trigger": trigger,
+                "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
+                "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule,
+                "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
+                "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
+                "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
+                                                          for k, v in vars(reading).items()}}
+
+    def _trigger(self, r: _Reading | None) -> tuple[bool, str]:
+        """Whether the configured maneuver's trigger held for reading ``r``, and how it read."""
+        cfg = self.config
+        if r is None:
+            return False, "no ground truth at the start"
+        if cfg.maneuver == "B":
+            limit = cfg.safety_distance + cfg.trigger_margin
+            return (r.left < limit and r.right < limit,
+                    f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")
+        limit = (cfg.safety_distance if cfg.maneuver == "A" else cfg.pivot_distance) + cfg.trigger_margin
+        return r.front < limit, f"front {r.front:.2f} m < {limit:.2f} m"
+
+    def _angle_rule(self, angle: float, r: _Reading | None) -> tuple[bool, str]:
+        """Whether ``angle`` (deg, + = left) obeys the maneuver's rule; the rule in words."""
+        cfg = self.config
+        tol, size = cfg.angle_tolerance_deg, abs(angle)
+        if cfg.maneuver == "A":
+            return 90 - tol <= size <= 180 + tol, f"{90 - tol:.0f}-{180 + tol:.0f} deg either side"
+        if cfg.maneuver == "B":
+            return abs(size - 180) <= tol, f"180 +- {tol:.0f} deg either side"
+        side = "either side"
+        if r is not None and abs(r.left - r.right) >= cfg.side_tie and \
+                not (r.left > cfg.open_space and r.right > cfg.open_space):
+            side = "left" if r.left > r.right else "right"
+        side_ok = side == "either side" or (side == "left") == (angle > 0)
+        return abs(size - 90) <= tol and side_ok, f"90 +- {tol:.0f} deg {side}"
+
+    def _moved_on(self, settle: float, next_start: float, now: float) -> tuple[bool, str]:
+        """Within ``move_on_within`` of settling: travelled ``move_on_distance`` or another episode began
+        (a disarm that comes first excuses it)."""
+        cfg = self.config
+        horizon = settle + cfg.move_on_within
+        disarm = self.deactivation_requested if self.deactivation_requested is not None else math.inf
+        if next_start <= horizon and next_start <= disarm:
+            return True, "another maneuver began"
+        end = min(horizon, disarm, now)
+        travelled = self._path_length(settle, end)
+        if travelled >= cfg.move_on_distance:
+            return True, f"travelled {travelled:.2f} m"
+        if disarm <= horizon:
+            return True, "disarmed first"
+        if now < horizon:
+            return True, "run still going"
+        return False, f"travelled {travelled:.3f} m in {cfg.move_on_within:.0f} s"
+
+    # ------------------------------------------------------------------ verdict
+    @property
+    def done(self) -> bool:
+        """The report is made."""
+        return self.report_time is not None
+
+    @property
+    def passed(self) -> bool:
+        """Every check passed (False until the report is made)."""
+        return self.done and bool(self.results()["passed"])
+
+    def _finish(self, t: float) -> None:
+        self.report_time = float(t)
+        self._results = self._evaluate(t)
+
+    def _evaluate(self, now: float) -> dict[str, Any]:
+        cfg = self.config
+        t0 = self.t0 or 0.0
+        samples = (self._t, self._x, self._y, self._yaw)
+        limits = (cfg.moving_linear, cfg.moving_angular)
+        checks = [static_check("static before activation", samples, t0, self.activation_requested
+                               if self.activation_requested is not None else now, "never activated", limits, t0)]
+        checks.append(self._answered_check())
+        episodes = self._judge_all(now)
+        maneuvers = [e for e in episodes if e["kind"] == "maneuver"]
+        recoveries = [e for e in episodes if e["kind"] == "recovery"]
+        checks.append({"name": "maneuvers performed", "passed": len(maneuvers) >= cfg.min_maneuvers,
+                       "value": len(maneuvers), "required": cfg.min_maneuvers,
+                       "detail": f"{len(maneuvers)} performed, required >= {cfg.min_maneuvers}"})
+        checks += [_maneuver_check(i + 1, cfg.maneuver, e) for i, e in enumerate(maneuvers)]
+        if recoveries:
+            bad = [e for e in recoveries if not e["passed"]]
+            checks.append({"name": "recovery turns", "passed": not bad, "value": len(recoveries), "required":
+                           "no forward command or motion", "detail": f"{len(recoveries)} emergency-stop recovery "
+                           f"turn{'s' if len(recoveries) != 1 else ''}, {len(bad)} with forward motion"})
+        n = len(self.collisions)
+        checks.append({"name": "no collision", "passed": n == 0, "value": n, "required": 0,
+                       "detail": f"{n} collision{'s' if n != 1 else ''}"
+                       + "".join(f", t={c[0] - t0:.1f} s ({c[1]:.2f}, {c[2]:.2f})" for c in self.collisions[:5])})
+        after = None if self.deactivation_requested is None else self.deactivation_requested + cfg.grace
+        checks.append(static_check("static after deactivation", samples, after,
+                                   None if after is None else min(now, after + cfg.static_after),
+                                   "the run ended before the deactivation", limits, t0))
+        return {"passed": all(c["passed"] for c in checks), "checks": checks, "maneuver": cfg.maneuver,
+                "maneuvers": maneuvers, "recovery_turns": recoveries, "travelled": round(self.travelled, 4),
+                "max_distance_from_start": round(self.max_distance, 4), "collisions": n,
+                "collision_events": [{"t": c[0] - t0, "x": c[1], "y": c[2]} for c in self.collisions],
+                "times": {k: None if v is None else v - t0 for k, v in (
+                    ("t0", self.t0), ("activation_requested", self.activation_requested),
+                    ("activated", self.activated), ("deactivation_requested", self.deactivation_requested),
+                    ("deactivated", self.deactivated), ("report", now))},
+                "evaluation_calls": self.evaluation_calls, "commands": len(self.commands),
+                "samples": len(self._t), "done": self.done}
+
+    def _answered_check(self) -> dict[str, Any]:
+        """Both toggle_navigation calls (true, then false) were answered with success."""
+        t0 = self.t0 or 0.0
+        parts = [f"true at t={self.activated - t0:.2f} s" if self.activated is not None else "true never answered"]
+        if self.deactivation_requested is not None:
+            parts.append(f"false at t={self.deactivated - t0:.2f} s" if self.deactivated is not None
+                         else "false never answered")
+        ok = self.activated is not None and self.deactivated is not None
+        return {"name": "toggle_navigation answered", "passed": ok, "value": ok, "required": "true, then false",
+                "detail": ", ".join(parts)}
+
+    def results(self) -> dict[str, Any]:
+        """The verdict as a JSON-able dict (provisional, judged at the last sample, before :attr:`done`)."""
+        if self._results is not None:
+            return self._results
+        now = self._t[-1] if self._t else (self.t0 or 0.0)
+        return self._evaluate(now)
+
+    def report_lines(self) -> list[str]:
+        """One line per check (``name (detail): PASSED|FAILED``), then the overall verdict."""
+        res = self.results()
+        lines = [f"{c['name']} ({c['detail']}): {'PASSED' if c['passed'] else 'FAILED'}" for c in res["checks"]]
+        lines.append(f"overall: {'PASSED' if res['passed'] and self.done else 'FAILED'}")
+        return lines
+
+
+def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:
+    """The report line of one maneuver episode: every rule it was held to, what failed first."""
+    failed = [name for name, ok in (("trigger", e["trigger"]), ("angle", e["angle_ok"]),
+                                    ("forward", e["forward_ok"]), ("moved on", e["moved_on"])) if not ok]
+    detail = (f"{maneuver} at t={e['t']:.2f} s: {e['trigger_detail']}"
+              f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
+              f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
+              f"moved on: {e['moved_on_detail']}" + (f"; failed: {', '.join(failed)}" if failed else ""))
+    return {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
+            "detail": detail}

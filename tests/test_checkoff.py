@@ -1,0 +1,210 @@
+"""The lab's check-off judge on synthetic runs: a tiny kinematic driver plays a command script in a small
+world, feeding the judge commands (20 Hz), ground truth (~33 Hz) and the schedule's service calls."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.world import world_from_dict
+
+DT = 0.01  # physics step of the synthetic driver
+ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
+
+
+def _world(*segments: list[float]):
+    return world_from_dict({"name": "test", "segments": ROOM + list(segments)})
+
+
+def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, start=(0.0, 0.0, 0.0),
+         collide_at: float | None = None, end: float = 40.0) -> CheckoffJudge:
+    """Play ``script`` ((seconds, v, w), each started at once; the robot follows its command instantly)
+    from t = 0 until the judge reports. Commands are published every 0.05 s from t = 0."""
+    x, y, yaw = start
+    judge.start(0.0)
+    timeline, t_at = [], 0.0
+    for seconds, v, w in script:
+        timeline.append((t_at, v, w))
+        t_at += seconds
+    cmd = (0.0, 0.0)
+    for k in range(round(end / DT) + 1):
+        t = k * DT
+        if k % 50 == 0:  # 2 Hz
+            for action in judge.step(t):
+                judge.on_activate_result(t, action.data, True)
+        if judge.done:
+            break
+        if k % 5 == 0:  # 20 Hz commands
+            cmd = next(((v, w) for t0, v, w in reversed(timeline) if t0 <= t + 1e-9), (0.0, 0.0))
+            judge.on_command(t, *cmd)
+        if k % 3 == 0:
+            judge.observe(t, x, y, yaw)
+        if collide_at is not None and abs(t - collide_at) < DT / 2:
+            judge.on_collision(t, x, y)
+        v, w = cmd
+        x += v * DT * math.cos(yaw)
+        y += v * DT * math.sin(yaw)
+        yaw = math.remainder(yaw + w * DT, 2 * math.pi)
+    assert judge.done
+    return judge
+
+
+def _cfg(maneuver: str, **kw) -> CheckoffConfig:
+    return CheckoffConfig(**{"maneuver": maneuver, "armed_for": 20.0, **kw})  # disarm at 25 s, report at 29 s
+
+
+def _line(judge: CheckoffJudge, prefix: str) -> str:
+    return next(line for line in judge.report_lines() if line.startswith(prefix))
+
+
+WALL_AHEAD = [1.0, -2.0, 1.0, 2.0]  # a wall across the room 1 m ahead of the spawn
+# creep 10.2 s at 0.05 m/s from t = 5: x = 0.51, front 0.49 m < 0.5 m
+A_SCRIPT = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (2.0, 0.0, 1.0), (7.8, 0.05, 0.0), (10.0, 0.0, 0.0)]
+
+
+def test_a_correct_randomizer_passes() -> None:
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), A_SCRIPT)
+    assert judge.passed, judge.report_lines()
+    res = judge.results()
+    (m,) = res["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(math.degrees(2.0), abs=1.0) and m["side"] == "left"
+    assert m["readings"]["front"] == pytest.approx(0.49, abs=0.01)
+    assert res["travelled"] == pytest.approx(0.05 * 18.0, abs=0.02)
+    assert res["collisions"] == 0 and res["done"]
+    names = [c["name"] for c in res["checks"]]
+    assert names == ["static before activation", "toggle_navigation answered", "maneuvers performed",
+                     "maneuver 1", "no collision", "static after deactivation"]
+    assert judge.report_lines()[-1] == "overall: PASSED"
+    assert _line(judge, "maneuver 1").endswith(": PASSED") and "front 0.49 m < 0.55 m" in _line(judge, "maneuver 1")
+
+
+def test_a_correct_retreat_passes() -> None:
+    """B in a dead-end passage 0.7 m wide: squeezed from the start, a 180 deg spin, out again."""
+    world = _world([-1.5, 0.35, 1.5, 0.35], [-1.5, -0.35, 1.5, -0.35], [1.5, -0.35, 1.5, 0.35])
+    script = [(5.0, 0.0, 0.0), (3.0, 0.05, 0.0), (math.pi / 1.2 + 0.01, 0.0, -1.2), (5.0, 0.05, 0.0),
+              (20.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("B"), world), script)
+    assert judge.passed, judge.report_lines()
+    (m,) = judge.results()["maneuvers"]
+    assert abs(m["angle_deg"]) == pytest.approx(180.0, abs=3.0) and m["side"] == "right"
+    assert "left 0.35 m and right 0.35 m < 0.55 m" in _line(judge, "maneuver 1")
+
+
+C_WORLD = _world(WALL_AHEAD, [0.0, -0.3, 1.0, -0.3])  # a wall on the right: the left has more room
+
+
+def _c_script(w: float) -> list[tuple[float, float, float]]:
+    # creep to x = 0.72 (front 0.28 m < 0.3 m), a 90 deg turn in 1.6 s, creep on
+    return [(5.0, 0.0, 0.0), (14.4, 0.05, 0.0), (1.6, 0.0, w), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+
+
+def test_a_correct_smart_pivot_passes() -> None:
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), _c_script(math.pi / 2 / 1.6))
+    assert judge.passed, judge.report_lines()
+    (m,) = judge.results()["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(90.0, abs=2.0) and m["rule"] == "90 +- 10 deg left"
+
+
+def test_a_smart_pivot_to_the_wrong_side_fails() -> None:
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), _c_script(-math.pi / 2 / 1.6))
+    line = _line(judge, "maneuver 1")
+    assert line.endswith("FAILED") and "turned 90 deg right, rule 90 +- 10 deg left" in line
+    assert "failed: angle" in line and not judge.passed
+
+
+def test_a_wrong_angle_fails() -> None:
+    script = list(A_SCRIPT)
+    script[2] = (1.0, 0.0, 1.0)  # 57 deg
+    script[3] = (8.8, 0.05, 0.0)
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    line = _line(judge, "maneuver 1")
+    assert "turned 57 deg left, rule 80-190 deg either side" in line and "failed: angle" in line
+    assert judge.report_lines()[-1] == "overall: FAILED"
+
+
+def test_forward_creep_during_a_turn_fails() -> None:
+    script = list(A_SCRIPT)
+    script[2] = (2.0, 0.02, 1.0)  # still a rotation episode (|v| <= 0.03), but it drives
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    line = _line(judge, "maneuver 1")
+    assert "forward command 0.020 m/s" in line and "failed: forward" in line and line.endswith("FAILED")
+    assert judge.results()["maneuvers"][0]["forward_motion"] > 0.01
+
+
+def test_a_turn_without_its_trigger_fails() -> None:
+    script = [(5.0, 0.0, 0.0), (2.0, 0.05, 0.0), (2.0, 0.0, 1.0), (16.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    line = _line(judge, "maneuver 1")
+    assert "front 0.90 m < 0.55 m did not hold" in line and "failed: trigger" in line
+    assert judge.results()["maneuvers"][0]["kind"] == "maneuver"
+
+
+def test_a_collision_fails() -> None:
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), A_SCRIPT, collide_at=16.0)
+    assert _line(judge, "no collision").startswith("no collision (1 collision, t=16.0 s")
+    assert _line(judge, "no collision").endswith("FAILED") and judge.results()["collisions"] == 1
+    assert not judge.passed
+
+
+def test_motion_before_arming_and_after_disarm_fail() -> None:
+    early = [(2.0, 0.0, 0.0)] + A_SCRIPT
+    early[1] = (3.0, 0.05, 0.0)  # creeps from t = 2 s
+    early[2] = (7.2, 0.05, 0.0)
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), early)
+    assert _line(judge, "static before activation").endswith("FAILED")
+    assert _line(judge, "static after deactivation").endswith("PASSED")
+    late = A_SCRIPT[:3] + [(20.0, 0.05, 0.0)]  # never stops
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), late)
+    assert _line(judge, "static before activation").endswith("PASSED")
+    assert _line(judge, "static after deactivation").startswith("static after deactivation (peak 0.050 m/s")
+    assert _line(judge, "static after deactivation").endswith("FAILED")
+
+
+def test_no_maneuver_and_no_move_on_fail() -> None:
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0)])
+    assert _line(judge, "maneuvers performed (0 performed, required >= 1)").endswith("FAILED")
+    stuck = A_SCRIPT[:3] + [(30.0, 0.0, 0.0)]  # turns, then stands still though armed for 8 more s
+    judge = _run(CheckoffJudge(_cfg("A", armed_for=30.0), _world(WALL_AHEAD)), stuck, end=45.0)
+    line = _line(judge, "maneuver 1")
+    assert "moved on: travelled 0.000 m in 10 s" in line and "failed: moved on" in line
+
+
+def test_an_emergency_stop_turn_is_a_recovery_not_a_maneuver() -> None:
+    """B in an open room: the robot braked 0.3 m before the wall (B's trigger cannot hold) and turns
+    away: listed as a recovery turn, checked only for forward motion."""
+    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD)), script)
+    res = judge.results()
+    assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
+    rec = res["recovery_turns"][0]
+    assert rec["kind"] == "recovery" and rec["passed"] and rec["readings"]["ahead"] == pytest.approx(0.3, abs=0.01)
+    assert _line(judge, "recovery turns (1 emergency-stop recovery turn, 0 with forward motion)").endswith("PASSED")
+    assert _line(judge, "maneuvers performed").endswith("FAILED")
+
+
+def test_no_evaluation_service_and_the_schedule() -> None:
+    judge = CheckoffJudge(_cfg("A"), _world(WALL_AHEAD))
+    assert judge.on_evaluate(1.0) == (False, "the lab has no evaluation service")
+    judge.start(10.0)
+    assert judge.step(14.9) == []
+    assert [a.data for a in judge.step(15.0)] == [True]
+    judge.on_activate_result(15.0, True, False)  # failed: asked again
+    assert [a.data for a in judge.step(15.5)] == [True]
+    judge.on_activate_result(15.5, True, True)
+    assert judge.step(16.0) == [] and judge.activated == 15.5
+    assert [a.data for a in judge.step(35.0)] == [False]
+    assert [a.data for a in judge.step(35.5)] == [False]  # until answered
+    judge.on_activate_result(35.5, False, True)
+    assert judge.step(36.0) == [] and not judge.done
+    judge.step(39.0)
+    assert judge.done and judge.results()["evaluation_calls"] == 1
+    with pytest.raises(ValueError, match="maneuver"):
+        CheckoffConfig(maneuver="D")
+
+
+def test_a_smart_pivot_with_as_much_room_on_both_sides_may_turn_either_way() -> None:
+    """Left 0.56 m and right 0.56 m (the wall ahead seen at +-60 deg): a tie, so a right turn passes."""
+    judge = _run(CheckoffJudge(_cfg("C"), _world(WALL_AHEAD)), _c_script(-math.pi / 2 / 1.6))
+    assert judge.passed, judge.report_lines()
+    assert judge.results()["maneuvers"][0]["rule"] == "90 +- 10 deg either side"
