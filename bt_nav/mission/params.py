@@ -109,8 +109,12 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("maneuver", "none", "Evasive rotation maneuver: none, A (Randomizer), B (Retreat), "
               "C (Smart Pivot); the names are accepted too.", live=False,
               choices=("none", "A", "B", "C")),
+    ParamSpec("mode", "homework", "What the robot does when armed and no maneuver runs: homework (reactive "
+              "close / far / none driving at speed) or lab (creep straight ahead at creep_speed, brake before "
+              "contact; the lab's maneuvers do the avoiding).", choices=("homework", "lab")),
     ParamSpec("mission_duration", 50.0, "Time from the first arming until the robot must have stopped "
-              "and asked for evaluation.", "s", 1.0, 3600.0),
+              "and asked for evaluation; 0: no deadline and no evaluation call (the lab runs until disarmed).",
+              "s", 0.0, 3600.0),
     ParamSpec("stop_margin", 0.5, "The stop and the evaluation call happen this long before "
               "mission_duration runs out, so the referee sees them inside the limit.", "s", 0.0, 10.0),
     ParamSpec("evaluation_timeout", 2.0, "How long one evaluation call may take before it is abandoned.",
@@ -129,6 +133,9 @@ PARAMS: tuple[ParamSpec, ...] = (
               "is armed (or armed again) fires at once. false (default): the trigger waits until it has seen "
               "its condition clear, so a robot armed in a corridor does not spin on the spot (measured: "
               "corridor B passes 0/4 with true, 3/4 with false)."),
+    ParamSpec("trigger_repeat", False, "true: a front trigger (A, C) whose condition still holds when its "
+              "maneuver ends fires again, so the robot turns until its front is clear (the lab). B never "
+              "repeats: a spin in a corridor leaves the robot as squeezed as before."),
     ParamSpec("trigger_clear_away", 1.5, "A clearing re-arms a maneuver's trigger only this far (straight "
               "line, odometry) from where it last fired: spinning on the spot or shuttling around one spot is "
               "no new situation.", "m", 0.0, 100.0),
@@ -156,7 +163,20 @@ PARAMS: tuple[ParamSpec, ...] = (
               0.05, 10.0),
     ParamSpec("odom_timeout", 0.5, "Odometry older than this: maneuvers integrate the commanded rate "
               "instead (open loop).", "s", 0.05, 10.0),
+    ParamSpec("pivot_side_reading", "free_path", "How maneuver C reads the clearer side: free_path (how far "
+              "the robot's width could drive after the quarter turn, along +-90 deg) or side_sectors (the nearest "
+              "return in the left and right sectors, the lab's literal rule).", choices=("free_path", "side_sectors")),
     # --- motion ------------------------------------------------------------------------------------
+    ParamSpec("creep_speed", 0.05, "Lab mode: the slow forward speed while no maneuver runs (the lab's template "
+              "drives at 0.05 m/s).", "m/s", 0.0, 0.5),
+    ParamSpec("aeb_distance", 0.10, "Lab mode, automatic emergency braking: the robot's swept path (its width, "
+              "path_half_width) blocked within this much travel stops the creep; the robot then waits aeb_hold "
+              "and turns in place towards the side with more room until the path is clear again.", "m", 0.0, 2.0),
+    ParamSpec("aeb_hold", 1.0, "Lab mode: how long the robot stands after an emergency stop before it turns "
+              "away (a person walking past has moved on by then).", "s", 0.0, 60.0),
+    ParamSpec("actuation_latency", 0.0, "Expected time between a command and the wheels (0.1-0.15 s on a real "
+              "TurtleBot3): maneuvers predict the turn already commanded but not yet done, so they stop on their "
+              "angle, and hold still this long after it before they end.", "s", 0.0, 1.0),
     ParamSpec("max_linear_speed", 0.22, "Forward speed with nothing ahead (TurtleBot3 Burger: 0.22).",
               "m/s", 0.0, 2.0),
     ParamSpec("slow_linear_speed", 0.2, "Forward speed while steering away with the path blocked at "
@@ -211,6 +231,9 @@ def cross_check(values: Mapping[str, Value]) -> str | None:
     if values["close_distance"] >= values["far_distance"]:
         return (f"close_distance ({values['close_distance']}) must be smaller than far_distance "
                 f"({values['far_distance']})")
+    if 0.0 < values["mission_duration"] <= values["stop_margin"]:
+        return (f"mission_duration ({values['mission_duration']}) must exceed stop_margin "
+                f"({values['stop_margin']}), or be 0 for no deadline")
     if values["slow_linear_speed"] > values["max_linear_speed"]:
         return (f"slow_linear_speed ({values['slow_linear_speed']}) must not exceed max_linear_speed "
                 f"({values['max_linear_speed']})")

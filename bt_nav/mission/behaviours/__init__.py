@@ -7,6 +7,7 @@
 | ``perception`` | ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar |
 | ``triggers`` | FrontTrigger, SqueezeTrigger (the maneuvers' conditions, on their rising edge) |
 | ``motion`` | Stop, DriveForward, TurnAway, RotateInPlace |
+| ``lab`` | InMode, Creep, PathBlocked, EmergencyStop (lab mode: the creep and its emergency braking) |
 | ``maneuvers`` | ManeuverActive, RandomizerManeuver (A), RetreatManeuver (B), SmartPivotManeuver (C), AlwaysFailure |
 
 To add a leaf: subclass :class:`~bt_nav.mission.behaviours.base.Leaf` (or ``Condition``), declare
@@ -19,6 +20,7 @@ from __future__ import annotations
 from py_trees.ports import PortsMixin
 
 from bt_nav.mission.behaviours.control import ForceSuccess, ReactiveFallback, ReactiveSequence
+from bt_nav.mission.behaviours.lab import Creep, EmergencyStop, InMode, PathBlocked
 from bt_nav.mission.behaviours.maneuvers import (
     AlwaysFailure,
     ManeuverActive,
@@ -37,6 +39,7 @@ _CLASSES: tuple[type[PortsMixin], ...] = (
     ArmService, IsArmed, MissionDeadline, EvaluateMission,
     ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontTrigger, SqueezeTrigger,
     Stop, DriveForward, TurnAway, RotateInPlace,
+    InMode, Creep, PathBlocked, EmergencyStop,
     ManeuverActive, RandomizerManeuver, RetreatManeuver, SmartPivotManeuver, AlwaysFailure,
 )
 

@@ -17,9 +17,9 @@ import py_trees
 
 from bt_nav.mission.behaviours.base import CMD_PORT, Condition, Leaf, port
 from bt_nav.mission.behaviours.perception import PATHS_PORT, SECTORS_PORT
-from bt_nav.mission.datatypes import NO_ODOM, OdomSample
+from bt_nav.mission.datatypes import NO_ODOM, Command, OdomSample
 from bt_nav.mission.paths import FreePaths
-from bt_nav.mission.scan import Sectors, clearer_side
+from bt_nav.mission.scan import SectorReading, Sectors, clearer_side
 from bt_nav.mission.turning import TurnMeter, approach_rate
 
 Status = py_trees.common.Status
@@ -45,6 +45,12 @@ class RotationManeuver(Leaf, register=False):
     nominal time plus ``time_margin`` has passed. ``active`` is True from start to end, so the branch
     is not abandoned when the trigger clears mid-turn; a preemption (disarm, deadline) ends it through
     ``terminate`` with a zero twist.
+
+    With an actuation ``latency`` (a real base) the turn is measured and stopped on what the wheels will
+    have done (:meth:`TurnMeter.pending`), and the maneuver is framed by two stills of ``latency`` +
+    :data:`SETTLE` seconds: before the turn when the robot was moving (so the rotation starts from rest:
+    no forward motion left in it) and after it (so the angle is read once the robot has stopped, and the
+    next command finds it still). Without latency both are skipped (the homework's tuning).
     """
 
     INPUT_PORTS = {
@@ -54,6 +60,7 @@ class RotationManeuver(Leaf, register=False):
         "tolerance_deg": port(float, default=3.0),
         "time_margin": port(float, default=2.0),
         "odom_timeout": port(float, default=0.5),
+        "latency": port(float, "expected time between a command and the wheels", default=0.0),
     }
     OUTPUT_PORTS = {**CMD_PORT, **ACTIVE_PORT}
 
@@ -62,7 +69,13 @@ class RotationManeuver(Leaf, register=False):
     # leaves room for the 20 Hz tick and the odometry lag. (A proportional approach, 6/s, took ~0.3 s
     # longer per maneuver.)
     DECEL = 6.0
+    #: rad/s^2 with an actuation latency: the turn ends at the rate sqrt(2 DECEL tolerance), and what the
+    #: latency is misjudged by, times that rate, is the error left in the angle; braking more gently ends
+    #: slower (0.45 rad/s instead of 0.8 at a 3 deg tolerance), so a 0.05 s misjudgement costs 1.3 deg.
+    DECEL_LAGGED = 2.0
     MIN_RATE = 0.3  # rad/s: below this a real base stalls; also bounds the approach time
+    #: s beyond the latency that the robot is given to come to rest (the base's own deceleration).
+    SETTLE = 0.1
 
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name=name, **kwargs)
@@ -70,6 +83,8 @@ class RotationManeuver(Leaf, register=False):
         self.meter = TurnMeter()
         self._allowance = 0.0
         self._open_loop_logged = False
+        self._phase = "turn"  # "still" (before), "turn", "settle" (after)
+        self._phase_end = 0.0
 
     @property
     def turned(self) -> float:
@@ -85,32 +100,70 @@ class RotationManeuver(Leaf, register=False):
         """Signed angle to turn (rad, + is CCW / left), decided when the maneuver starts."""
         raise NotImplementedError
 
+    def reading(self, sectors: Sectors) -> str:
+        """The trigger's reading that started the maneuver, for the log line (e.g. ``front 0.47 m``)."""
+        return _range_text("front", sectors.front)
+
     def initialise(self) -> None:
-        """Decide the rotation and start the clock."""
-        self.rotation = self.choose_rotation(self.get_input("sectors"))
-        self.meter.start(self.clock(), self.get_input("odom"), self.get_input("odom_timeout"))
+        """Decide the rotation; start turning now, or after a still when the robot moves and lags."""
+        sectors = self.get_input("sectors")
+        self.rotation = self.choose_rotation(sectors)
         self._open_loop_logged = False
+        self._set_output("active", True)
+        side = "left" if self.rotation > 0 else "right"
+        self.events.info(f"{self.label}: {self.reading(sectors)}: turning {side} "
+                         f"{abs(math.degrees(self.rotation)):.0f} deg")
+        latency = float(self.get_input("latency"))
+        moving = not self.last_output("cmd_vel", Command()).is_zero
+        if latency > 0.0 and moving:
+            self._phase, self._phase_end = "still", self.clock() + latency + self.SETTLE
+        else:
+            self._start_turn()
+
+    def _start_turn(self) -> None:
+        self._phase = "turn"
+        self.meter.start(self.clock(), self.get_input("odom"), self.get_input("odom_timeout"),
+                         float(self.get_input("latency")))
         rate = self.get_input("angular_speed")
         self._allowance = abs(self.rotation) / rate + 1.0 + self.get_input("time_margin")
-        self._set_output("active", True)
-        self.events.info(f"{self.label}: starting a {math.degrees(self.rotation):+.0f} deg rotation")
 
     def update(self) -> Status:
-        """Advance the turn; RUNNING until within tolerance or out of time."""
-        self.meter.measure(self.clock(), self.get_input("odom"), self.get_input("odom_timeout"))
+        """Advance the turn; RUNNING until within tolerance (and still) or out of time."""
+        if self._phase == "still":
+            if self.clock() < self._phase_end:
+                return self._hold("coming to rest before the turn")
+            self._start_turn()
+        now = self.clock()
+        self.meter.measure(now, self.get_input("odom"), self.get_input("odom_timeout"))
+        if self._phase == "settle":
+            if now < self._phase_end:
+                return self._hold(f"settling: turned {math.degrees(self.turned):+.0f} deg")
+            return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
         if self.meter.open_loop and not self._open_loop_logged:
             self._open_loop_logged = True
             self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
                                 "(integrating the commanded turn rate)")
-        remaining = self.rotation - self.turned
+        remaining = self.rotation - self.turned - self.meter.pending(now)
         if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
-            return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
+            latency = float(self.get_input("latency"))
+            if latency <= 0.0:
+                return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
+            self._phase, self._phase_end = "settle", now + latency + self.SETTLE
+            self.meter.command(now, 0.0)
+            return self._hold(f"settling: turned {math.degrees(self.turned):+.0f} deg")
         if self.meter.elapsed > self._allowance:
             return self._finish(Status.FAILURE, f"out of time after {self.meter.elapsed:.1f} s, "
                                 f"{math.degrees(remaining):+.0f} deg short")
-        self.meter.rate = approach_rate(remaining, self.get_input("angular_speed"), self.DECEL, self.MIN_RATE)
+        decel = self.DECEL_LAGGED if self.meter.latency > 0.0 else self.DECEL
+        self.meter.command(now, approach_rate(remaining, self.get_input("angular_speed"), decel, self.MIN_RATE))
         self.command(0.0, self.meter.rate)
         self.feedback_message = f"{math.degrees(remaining):+.0f} deg to go"
+        return Status.RUNNING
+
+    def _hold(self, message: str) -> Status:
+        """A still tick inside the maneuver (before or after the turn)."""
+        self.command(0.0, 0.0)
+        self.feedback_message = message
         return Status.RUNNING
 
     def _finish(self, status: Status, message: str) -> Status:
@@ -130,6 +183,11 @@ class RotationManeuver(Leaf, register=False):
             self.command(0.0, 0.0)
             self._set_output("active", False)
             self.events.info(f"{self.label}: preempted, stopped")
+
+
+def _range_text(name: str, reading: SectorReading) -> str:
+    """``front 0.47 m`` (``front unknown`` when the sector has too few valid beams)."""
+    return f"{name} {reading.min_range:.2f} m" if reading.known else f"{name} unknown"
 
 
 class RandomizerManeuver(RotationManeuver):
@@ -164,6 +222,10 @@ class RetreatManeuver(RotationManeuver):
     #: rad/s: a last command turning slower than this does not choose the way round.
     TURNING = 0.1
 
+    def reading(self, sectors: Sectors) -> str:
+        """Both sides' nearest returns."""
+        return f"{_range_text('left', sectors.left)}, {_range_text('right', sectors.right)}"
+
     def choose_rotation(self, sectors: Sectors) -> float:
         """Half a turn."""
         turning = getattr(self.last_output("cmd_vel"), "angular", 0.0)
@@ -178,12 +240,23 @@ class SmartPivotManeuver(RotationManeuver):
     the free path of the robot's width along +-90 deg. Comparing the side cones beside the front instead
     turned a robot in a corner towards the near wall, and the rotation in place that followed undid the
     pivot and more. Equal readings (both clear to the horizon, or no paths yet) fall back to the cones.
+    With ``side_reading`` ``side_sectors`` (the lab) the side cones decide outright: the lab's literal
+    rule, "whichever side has the higher distance reading", which the lab's check-off judges.
     """
 
-    INPUT_PORTS = {**RotationManeuver.INPUT_PORTS, **PATHS_PORT}
+    INPUT_PORTS = {**RotationManeuver.INPUT_PORTS, **PATHS_PORT,
+                   "side_reading": port(str, "free_path or side_sectors (see the class docstring)",
+                                        default="free_path")}
+
+    def reading(self, sectors: Sectors) -> str:
+        """The front and both sides."""
+        return (f"{_range_text('front', sectors.front)} ({_range_text('left', sectors.left)}, "
+                f"{_range_text('right', sectors.right)})")
 
     def choose_rotation(self, sectors: Sectors) -> float:
         """A quarter turn to the clearer side."""
+        if self.get_input("side_reading") == "side_sectors":
+            return clearer_side(sectors) * math.pi / 2
         paths: FreePaths = self.get_input("paths")
         left, right = paths.along(math.pi / 2), paths.along(-math.pi / 2)
         side = clearer_side(sectors) if math.isclose(left, right, abs_tol=1e-3) else (1 if left > right else -1)

@@ -33,6 +33,8 @@ class ArmService(Leaf):
         "mission_over": port(bool, "the deadline has passed", default=False),
         "scan_ok": port(bool, "the newest scan is fresh and usable (ProcessScan, last tick)", default=False),
         "scan_status": port(str, "why the scan is (not) usable", default="no scan yet"),
+        "mission_duration": port(float, "0: no deadline (the reply says so instead of a mission timer)",
+                                 default=50.0),
     }
     OUTPUT_PORTS = {
         "armed": port(bool, "the robot may move", default=False),
@@ -83,7 +85,9 @@ class ArmService(Leaf):
         self._set_output("arm_count", int(self.blackboard_client.get("arm_count") or 0) + 1)
         if math.isnan(first):
             self._set_output("first_armed_at", float(now))
-            message = f"armed: mission timer started at {clock_text(now)} (mission t=0.00 s)"
+            message = (f"armed: mission timer started at {clock_text(now)} (mission t=0.00 s)"
+                       if self.get_input("mission_duration") > 0.0 else
+                       f"armed at {clock_text(now)}: navigating until disarmed (no deadline)")
         else:
             message = f"armed again at mission t={now - first:.2f} s"
         if not self.get_input("scan_ok"):
@@ -124,6 +128,8 @@ class IsArmed(Condition):
 class MissionDeadline(Condition):
     """One-shot latch: SUCCESS from ``mission_duration - stop_margin`` after the first arming, forever.
 
+    ``mission_duration`` 0 means no deadline (the lab runs until it is disarmed): never SUCCESS.
+
     The margin makes the stop and the evaluation call land inside the limit even with a tick of
     delay and the service round trip. Once latched it never unlatches, not even if the clock jumps
     back (a simulator reset): the mission's evaluation must not be asked for twice.
@@ -140,11 +146,15 @@ class MissionDeadline(Condition):
         """Has the deadline passed (latched)?"""
         if self.blackboard_client.get("mission_over"):
             return True
+        duration = self.get_input("mission_duration")
+        if duration <= 0.0:
+            self.feedback_message = "no deadline"
+            return False
         first = self.get_input("first_armed_at")
         if math.isnan(first):
             self.feedback_message = "not armed yet"
             return False
-        limit = first + self.get_input("mission_duration") - self.get_input("stop_margin")
+        limit = first + duration - self.get_input("stop_margin")
         now = self.clock()
         if now < limit:
             self.feedback_message = f"{limit - now:.1f} s left"

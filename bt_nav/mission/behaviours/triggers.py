@@ -19,6 +19,9 @@ A new arming (``arm_count`` changes) is a fresh start: the trigger is armed, so 
 holds then fires at once (a robot armed beside a wall meets a new situation). A trigger that has never
 been ticked is armed too. An unknown reading counts as "near" (never drive into what cannot be seen) and
 never as "cleared". The latch is :class:`EdgeLatch`, pure state with no py_trees in it.
+
+With ``repeat`` (the lab's front triggers) the trigger is level-triggered instead: it is only ticked when
+no maneuver runs, so a front still blocked after a turn fires the next turn, until the front is clear.
 """
 
 from __future__ import annotations
@@ -140,6 +143,8 @@ class _EdgeTrigger(Condition, register=False):
         "arm_count": port(int, "a new arming re-arms the trigger", default=0),
         "fire_at_arming": port(bool, "a condition already holding at an arming fires (else: wait for a clear)",
                                default=True),
+        "repeat": port(bool, "a condition still holding after the maneuver fires again (level, not edge)",
+                       default=False),
     }
     OUTPUT_PORTS = {}
 
@@ -169,6 +174,8 @@ class _EdgeTrigger(Condition, register=False):
         self.latch.position = self.odometer.position
         sectors, distance = self.get_input("sectors"), float(self.get_input("distance"))
         rearm = Rearm(float(self.get_input("clear_away")), float(self.get_input("rearm_distance")))
+        if self.get_input("repeat"):
+            self.latch.armed = True  # level-triggered: the maneuver is over when this leaf is ticked again
         fired = self.latch.step(self.holds(sectors, distance),
                                 self.cleared(sectors, distance + float(self.get_input("hysteresis"))), rearm)
         if fired:
