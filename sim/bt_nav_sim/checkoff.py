@@ -186,7 +186,7 @@ class CheckoffJudge:
         trigger readings are cast here, against the world as it is now."""
         if self.done or (self._t and t <= self._t[-1]):
             return
-        if self.update_world and getattr(self.world, "appearing", ()):
+        if self.update_world and self.world.appearing:
             self.world.update([(x, y)])
         if self._t:
             if self._armed_at(t):

@@ -190,6 +190,10 @@ class SimCore:
         self._pending: deque[tuple[int, float, float]] = deque()
         self.in_force: tuple[float, float] = (0.0, 0.0)
         self._given: tuple[float, float] = (0.0, 0.0)
+        # Appearing objects (world.update) are checked after every move; a world without any skips that.
+        self._appearing = bool(self.world.appearing)
+        if self._appearing:
+            self.world.update([self.spawn[:2]])
         self._was_colliding = self.world.clearance(self.spawn[0], self.spawn[1]) <= config.radius
 
     @property
@@ -241,6 +245,15 @@ class SimCore:
         The steps are split at every queued command's effective time, so a merged call never integrates
         across one. With L = 0 this is exactly the old path (no queue at all).
         """
+        if self._appearing:
+            before = self.state
+            collided = self._move_latent(cmd_v, cmd_w, steps)
+            self.world.update(((before.x, before.y), (self.state.x, self.state.y)))
+            return collided
+        return self._move_latent(cmd_v, cmd_w, steps)
+
+    def _move_latent(self, cmd_v: float, cmd_w: float, steps: int) -> bool:
+        """:meth:`move` without the appearing objects' update: the latency queue, then the physics."""
         if not self.latency_ns:
             self.in_force = (cmd_v, cmd_w)
             return self._move_under(cmd_v, cmd_w, steps)

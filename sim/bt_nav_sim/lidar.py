@@ -72,6 +72,13 @@ class RayCaster:
         # Beam directions in the robot frame; the scan rotates them by yaw (cheaper than nb trig calls).
         self._cos = np.cos(ang)
         self._sin = np.sin(ang)
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """Obstacle columns and work buffers of the world as it is now (again after an object appeared:
+        ``World.version`` changed; a world without appearing objects is prepared once)."""
+        world, nb = self.world, self.model.num_beams
+        self._version = world.version
         # Obstacle data as (K, 1) columns: work arrays are (obstacles, beams) so the per-beam minimum is a
         # reduction over rows of contiguous memory (several times faster than reducing short rows).
         segs = world.segments
@@ -107,6 +114,8 @@ class RayCaster:
         the result is exactly the single-robot one. Returns an internal buffer that the next call
         overwrites; copy it to keep it.
         """
+        if self.world.version != self._version:
+            self._prepare()
         cy, sy = math.cos(yaw), math.sin(yaw)
         ux, uy = self._ux, self._uy
         # World-frame beam directions: rotate the robot-frame ones by yaw.
