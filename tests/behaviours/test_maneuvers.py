@@ -98,3 +98,89 @@ def test_the_approach_brakes_as_late_as_it_can() -> None:
     assert approach_rate(1e-4, peak, decel, floor) == floor
     braking = peak ** 2 / (2 * decel)
     assert approach_rate(braking * 0.99, peak, decel, floor) < peak <= approach_rate(braking * 1.01, peak, decel, floor)
+
+
+# ----------------------------------------------------------------------------------- a lagging base
+class LaggedBase:
+    """A base whose wheels follow each turn-rate command ``latency`` s after it is given, ramping at
+    ``accel`` rad/s^2, stepped in 5 ms; odometry (yaw) at 30 Hz."""
+
+    def __init__(self, latency: float, accel: float = 10.0) -> None:
+        self.latency, self.accel = latency, accel
+        self.given: list[tuple[float, float]] = [(-math.inf, 0.0)]  # (time given, rate)
+        self.yaw = self.rate = 0.0
+        self.next_odom = 1.0
+
+    def run(self, clock: FakeClock, seconds: float, board: Board | None = None) -> None:
+        step = 0.005
+        for _ in range(round(seconds / step)):
+            clock.now += step
+            target = [w for t, w in self.given if t <= clock.now - self.latency][-1]
+            self.rate += max(-self.accel * step, min(self.accel * step, target - self.rate))
+            self.yaw += self.rate * step
+            if board is not None and clock.now >= self.next_odom:
+                board.set(odom=OdomSample(self.yaw, clock.now, 0.0, 0.0))
+                self.next_odom += 1 / 30
+
+
+def lagged_turn(cls: type, s: Sectors, *, true_latency: float, planned: float,
+                moving: bool = False) -> tuple[float, float, list[Command]]:
+    """Tick a maneuver at 20 Hz against a :class:`LaggedBase`; returns (rotation chosen, angle turned once
+    the base is at rest, the commands)."""
+    board = maneuver_board(s)
+    board.set(angular_speed=1.5, latency=planned, cmd_vel=Command(0.05 if moving else 0.0, 0.0, "Creep"))
+    clock = FakeClock(1.0)
+    leaf = make(cls, clock=clock)
+    base = LaggedBase(true_latency)
+    commands: list[Command] = []
+    for _ in range(400):
+        status = tick(leaf)
+        commands.append(board.get("cmd_vel"))
+        base.given.append((clock.now, commands[-1].angular))
+        if status != Status.RUNNING:
+            break
+        base.run(clock, 0.05, board)
+    base.run(clock, 0.5)  # the base comes to rest on the last (zero) command
+    assert leaf.status == Status.SUCCESS
+    return leaf.rotation, base.yaw, commands
+
+
+@pytest.mark.parametrize("true_latency", [0.0, 0.1, 0.15])
+@pytest.mark.parametrize(("cls", "s"), [
+    (RandomizerManeuver, sectors(front=0.4)),
+    (RetreatManeuver, sectors(left=0.4, right=0.45)),
+    (SmartPivotManeuver, sectors(front=0.25, left=1.0, right=0.5)),
+])
+def test_maneuvers_land_on_their_angle_on_a_lagging_base(cls: type, s: Sectors, true_latency: float) -> None:
+    """Planned for 0.1 s, the turn ends within 6 deg of its angle whether the wheels lag 0, 0.1 or 0.15 s
+    (the lab's limit is 10 deg); planned for none, a 0.15 s lag overshoots by rate x lag."""
+    rotation, turned, commands = lagged_turn(cls, s, true_latency=true_latency, planned=0.1)
+    assert abs(math.degrees(turned - rotation)) < 6.0, (math.degrees(rotation), math.degrees(turned))
+    assert all(c.linear == 0.0 for c in commands)
+    if true_latency == 0.15:
+        blind_rotation, blind, _ = lagged_turn(cls, s, true_latency=0.15, planned=0.0)
+        assert abs(math.degrees(blind - blind_rotation)) > abs(math.degrees(turned - rotation)) + 3.0
+
+
+def test_a_lagging_maneuver_starts_from_rest_and_ends_at_rest() -> None:
+    """Moving when it fires (the creep), the maneuver holds still for latency + SETTLE before it turns,
+    and holds still as long after the turn before it ends: its rotation has no forward motion in it."""
+    _, _, commands = lagged_turn(SmartPivotManeuver, sectors(front=0.25, left=1.0, right=0.5),
+                                 true_latency=0.1, planned=0.1, moving=True)
+    still = round((0.1 + SmartPivotManeuver.SETTLE) / 0.05)  # ticks; one more where the clock lands short
+    first_turn = next(i for i, c in enumerate(commands) if not c.is_zero)
+    last_turn = max(i for i, c in enumerate(commands) if not c.is_zero)
+    assert still <= first_turn <= still + 1
+    assert still + 1 <= len(commands) - 1 - last_turn <= still + 2  # the tick it stops, the still, the end
+    _, _, unlagged = lagged_turn(SmartPivotManeuver, sectors(front=0.25, left=1.0, right=0.5),
+                                 true_latency=0.0, planned=0.0, moving=True)
+    assert unlagged[0].angular != 0.0  # the homework tuning: no still
+
+
+def test_smart_pivot_reads_the_side_sectors_when_told() -> None:
+    """The lab's literal rule: the side whose sector reads farther, whatever the free paths say."""
+    board = maneuver_board(sectors(front=0.25, left=0.6, right=1.2))
+    board.set(paths=FreePaths(HEADINGS, np.where(HEADINGS > 0, 1.05, 0.3)), side_reading="side_sectors")
+    leaf = make(SmartPivotManeuver, clock=FakeClock(1.0))
+    tick(leaf)
+    assert leaf.rotation == pytest.approx(-math.pi / 2)

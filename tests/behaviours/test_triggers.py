@@ -219,3 +219,16 @@ def test_trigger_integrates_the_command_when_odometry_has_no_position() -> None:
     assert fired_after == pytest.approx(10.0, abs=0.11)
 
 
+
+
+def test_a_repeating_front_trigger_fires_whenever_it_is_ticked_while_its_condition_holds() -> None:
+    """The lab's front triggers (trigger_repeat): the tree ticks them only when no maneuver runs, so a
+    front still blocked after a turn fires the next turn; a clear front does not fire."""
+    board = Board()
+    board.set(sectors=sectors(front=0.4), distance=0.5, repeat=True)
+    trigger = make(FrontTrigger, clock=FakeClock(1.0))
+    assert [tick(trigger) for _ in range(3)] == [Status.SUCCESS] * 3
+    board.set(sectors=sectors(front=0.7))
+    assert tick(trigger) == Status.FAILURE
+    board.set(sectors=sectors(front=0.4), repeat=False)
+    assert tick(trigger) == Status.SUCCESS and tick(trigger) == Status.FAILURE  # the edge rule again

@@ -32,7 +32,7 @@ def odometry_faults(h: Harness, run: Run, faults: FaultCases) -> None:
     """The odometry cases of :func:`test_sensor_stream_faults` (one executive, maneuver C, armed)."""
     with faults.case("odometry stops mid-maneuver", "timing",
                      "maneuver C starts on live odometry, odometry stops after 3 ticks: the turn finishes open loop "
-                     "(dead reckoning) within its allowance, linear exactly 0 throughout; one 'starting' and one "
+                     "(dead reckoning) within its allowance, linear exactly 0 throughout; one 'turning' and one "
                      "'done' line; then drives on") as case:
         mark = run.mark()
         first = run.tick(CLOSE)
@@ -45,7 +45,7 @@ def odometry_faults(h: Harness, run: Run, faults: FaultCases) -> None:
             turning.append(sample)
         assert all(s.linear == 0.0 and s.angular != 0.0 for s in turning[:-1]), turning
         run.assert_full_speed(sample)
-        run.expect_one(r"SmartPivot: starting a [+-]90 deg rotation", mark)
+        run.expect_one(r"SmartPivot: front .*: turning (left|right) 90 deg", mark)
         run.expect_one(r"SmartPivot: done: turned [+-]\d", mark)
         assert h.sim_time - started < ALLOWANCE_C, "finished by the allowance, not by dead reckoning"
         run.gap_line(r"SmartPivot: .*open loop", mark, case.note,
