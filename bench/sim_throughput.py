@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 from bt_nav_sim import HOMEWORK_LIDAR, RayCaster, load_world
 
-from bt_nav.cli.demo import effective_maneuver
 from bt_nav.mission import params as P
 from bt_nav.run.lockstep import run_mission
+from bt_nav.run.settings import profile_maneuver
 
 from .common import (
     Target,
@@ -121,7 +121,7 @@ def lidar(scans: int = 3000, seed: int = 0) -> dict[str, Any]:
 
 def lockstep(seeds: int = 10, world: str = "stage_4", profile: bool = True) -> dict[str, Any]:
     """Wall time of whole lock-step missions (serial, this process), and a profile of one of them."""
-    maneuver = effective_maneuver(None)
+    maneuver = profile_maneuver("homework")
     tick_hz = float(P.SPECS["tick_rate_hz"].default)
     overrides = homework_overrides()
     run_mission(world, maneuver, 0, overrides)  # warm-up: imports, caches, the tree file

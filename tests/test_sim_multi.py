@@ -96,7 +96,7 @@ def test_names_starts_and_placement() -> None:
 
 def test_lockstep_robots_have_their_own_trees_and_referees() -> None:
     """With the second robot parked out of the way, the first drives exactly its single-robot mission:
-    the trees do not share a blackboard (they did, through py_trees' process-wide one, before each MissionCore owned its blackboard)."""
+    the trees do not share a blackboard (each MissionCore owns one; py_trees' storage is process-wide)."""
     single = run_mission("stage_4", "C", 0, jitter=None)
     multi = run_robots("stage_4", "C", 0, robots=2, starts=((-0.7, 0.0, 0.0), (2.0, -1.5, 0.0)), jitter=None)
     first, second = multi.results

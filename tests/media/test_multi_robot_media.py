@@ -16,8 +16,7 @@ from rosbags.rosbag2 import Reader
 from bt_nav.cli.lockstep import main
 from bt_nav.media.bag import ROBOT_TOPICS, TOPICS, split_namespace
 from bt_nav.media.bagread import MissionRecord, read_bag
-from bt_nav.media.video import MAP_H, MAP_W, VideoRenderer, renderer_for, world_of
-from bt_nav.media.video_multi import MultiVideoRenderer
+from bt_nav.media.video import MAP_H, MAP_W, TracksRenderer, VideoRenderer, renderer_for, world_of
 
 DURATION, FPS = 12.0, 5.0  # past the first arming at 5 s, so every robot topic has messages
 ROBOTS = ("robot1", "robot2")
@@ -75,7 +74,7 @@ def _pixels(img: Any, rgb: tuple[int, int, int]) -> int:
 def test_each_robot_is_drawn_in_its_own_colour(run: dict[str, Any]) -> None:
     record: MissionRecord = run["record"]
     renderer = renderer_for(record, world_of(record))
-    assert isinstance(renderer, MultiVideoRenderer)
+    assert isinstance(renderer, TracksRenderer)
     expected = {name: tuple(int(robot_colour(i)[k:k + 2], 16) for k in (1, 3, 5)) for i, name in enumerate(ROBOTS)}
     assert renderer.colours == expected and len(set(expected.values())) == 2
     img = None
