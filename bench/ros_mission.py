@@ -3,7 +3,8 @@
 The ``eval`` graph of :func:`bt_nav.ros.bringup.nodes` (simulator with ``real_time_factor`` 0, the
 executive with ``config/homework.yaml``, the referee) runs as subprocesses in a domain of its own;
 it runs through :class:`~bt_nav.run.rosmission.RosMission` (as ``bt-nav demo`` does), whose recorder
-node in this process records ground truth with its wall arrival time, which gives the real-time factor over exactly the referee's mission (from its t0 to
+node in this process records ground truth with its wall arrival time, which gives the real-time factor
+over exactly the referee's mission (from its t0 to
 its report): simulated seconds / wall seconds. Start-up (Python imports, DDS discovery) is reported
 apart, because it is a fixed cost, not a speed.
 

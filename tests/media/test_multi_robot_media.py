@@ -99,7 +99,13 @@ def test_split_namespace() -> None:
         assert split_namespace(root) == ("", root)
 
 
-def test_trace_still_records_one_robot(tmp_path: Path) -> None:
-    with pytest.raises(SystemExit) as exc:
-        main(["--robots", "2", "--duration", "1", "--trace", str(tmp_path / "t.jsonl")])
-    assert exc.value.code == 2
+def test_trace_records_every_robot(tmp_path: Path) -> None:
+    """--trace with several robots writes one trace per robot (t_robot1.jsonl, t_robot2.jsonl), each its
+    own tree's ticks (the robots start apart, so their poses differ)."""
+    import json
+
+    main(["--robots", "2", "--duration", "1", "--trace", str(tmp_path / "t.jsonl")])
+    traces = [[json.loads(line) for line in (tmp_path / f"t_{name}.jsonl").read_text().splitlines()]
+              for name in ("robot1", "robot2")]
+    assert all(len(t) >= 9 for t in traces)
+    assert traces[0][-1]["pose"] != traces[1][-1]["pose"]
