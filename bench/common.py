@@ -88,7 +88,7 @@ def homework_overrides() -> dict[str, Any]:
     The lock-step benchmarks run what ``bt-nav demo`` runs (the executive with that file), not the
     bare defaults, so their missions and the ROS-path ones are the same missions.
     """
-    from bt_nav.cli.lockstep import profile_parameters
+    from bt_nav.run.settings import profile_parameters
 
     return profile_parameters("homework")
 

@@ -2,8 +2,9 @@
 
 The ``eval`` graph of :func:`bt_nav.ros.bringup.nodes` (simulator with ``real_time_factor`` 0, the
 executive with ``config/homework.yaml``, the referee) runs as subprocesses in a domain of its own;
-the demo's :class:`~bt_nav.cli.demo.Recorder` node in this process records ground truth with its wall
-arrival time, which gives the real-time factor over exactly the referee's mission (from its t0 to
+it runs through :class:`~bt_nav.run.rosmission.RosMission` (as ``bt-nav demo`` does), whose recorder
+node in this process records ground truth with its wall arrival time, which gives the real-time factor
+over exactly the referee's mission (from its t0 to
 its report): simulated seconds / wall seconds. Start-up (Python imports, DDS discovery) is reported
 apart, because it is a fixed cost, not a speed.
 
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.ros.bringup import Launcher, NodeSpec, child_env, nodes
+from bt_nav.ros.bringup import Launcher, NodeSpec, child_env
 from bt_nav.ros.rosutil import dds_env
 
 #: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
@@ -160,7 +161,8 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     The DDS environment of this process is set to ``domain`` (the recorder node lives here).
     """
-    from bt_nav.cli.demo import Recorder, effective_maneuver, rec_ready
+    from bt_nav.run.rosmission import RosMission, mission_graph
+    from bt_nav.run.settings import profile_maneuver
 
     os.environ.update(dds_env(domain))
     env = child_env(domain)
@@ -171,26 +173,23 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     with tempfile.TemporaryDirectory(prefix="bt_nav_bench_") as tmp:
         results_path = Path(tmp) / "results.json"
-        specs = nodes("eval", world=world, seed=seed, rtf=0.0, results_json=str(results_path),
-                      referee={"timeout": REFEREE_TIMEOUT})
+        specs = mission_graph(["robot1"], {"robot1": str(results_path)}, world=world, seed=seed, rtf=0.0,
+                              referee={"timeout": REFEREE_TIMEOUT})
         if profile_to is not None:
             specs = [ProfiledSpec(**vars(s), profile_out=str(profile_to)) if s.executable == "executive" else s
                      for s in specs]
-        out: dict[str, Any] = {"world": world, "maneuver": effective_maneuver(None), "seed": seed, "domain": domain}
+        out: dict[str, Any] = {"world": world, "maneuver": profile_maneuver("homework"), "seed": seed,
+                               "domain": domain}
         wall0 = time.monotonic()
-        recorder = Recorder()
-        launcher = Launcher(env, sink=sink)
+        mission = RosMission(specs, ["robot1"], env, sink=sink)
+        launcher = mission.launcher
         referee_code: int | None = None
         memory: dict[str, dict[str, int]] = {}
         try:
-            for spec in specs[:-1]:
-                launcher.start(spec)
-            deadline = time.monotonic() + STARTUP
-            while not (rec_ready(recorder) or time.monotonic() > deadline
-                       or any(c.poll() is not None for c in launcher.children)):
-                time.sleep(0.02)
+            mission.start_graph()
+            mission.wait_ready(STARTUP)
             out["startup_wall_s"] = round(time.monotonic() - wall0, 3)
-            referee = launcher.start(specs[-1])
+            (referee,) = mission.start_referees()
             ended, memory = _measure_verdict(launcher, referee, out)
             if ended is referee:
                 referee_code = referee.poll()
@@ -199,8 +198,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
             else:
                 out["error"] = "no verdict in time"
         finally:
-            launcher.shutdown()
-            rec = recorder.close()
+            rec = mission.close()["robot1"]
         out["total_wall_s"] = round(time.monotonic() - wall0, 3)
         results = json.loads(results_path.read_text(encoding="utf-8")) if results_path.is_file() else {}
 

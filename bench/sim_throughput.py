@@ -3,7 +3,7 @@
 - LiDAR: :meth:`sim.lidar.RayCaster.cast` in stage_4 with the homework LiDAR (360 beams, seeded
   noise, as the simulator and the lock-step runner call it), from random poses; per-call timings,
   scans/s = 1 / p50. The noise-free geometry (``true_ranges``) is timed in the same loop.
-- Lock-step: :func:`bt_nav.cli.lockstep.run_mission` on stage_4 with ``config/homework.yaml``'s
+- Lock-step: :func:`bt_nav.run.lockstep.run_mission` on stage_4 with ``config/homework.yaml``'s
   parameters over several seeds, serially in this process; wall seconds per mission (median) and
   what one mission's time is spent on (cProfile: inclusive time of the tree tick, the ray casting,
   the physics, the referee).
@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 from bt_nav_sim import HOMEWORK_LIDAR, RayCaster, load_world
 
-from bt_nav.cli.demo import effective_maneuver
-from bt_nav.cli.lockstep import run_mission
 from bt_nav.mission import params as P
+from bt_nav.run.lockstep import run_mission
+from bt_nav.run.settings import profile_maneuver
 
 from .common import (
     Target,
@@ -121,7 +121,7 @@ def lidar(scans: int = 3000, seed: int = 0) -> dict[str, Any]:
 
 def lockstep(seeds: int = 10, world: str = "stage_4", profile: bool = True) -> dict[str, Any]:
     """Wall time of whole lock-step missions (serial, this process), and a profile of one of them."""
-    maneuver = effective_maneuver(None)
+    maneuver = profile_maneuver("homework")
     tick_hz = float(P.SPECS["tick_rate_hz"].default)
     overrides = homework_overrides()
     run_mission(world, maneuver, 0, overrides)  # warm-up: imports, caches, the tree file

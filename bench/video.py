@@ -20,10 +20,10 @@ FPS = 10.0
 
 def run(quick: bool = False) -> dict[str, Any]:
     """Measure; ``quick`` films a 20 s slice instead of the whole mission."""
-    from bt_nav.cli.lockstep import run_mission
     from bt_nav.media.bag import MissionBag
     from bt_nav.media.bagread import read_bag
     from bt_nav.media.video import world_of, write_video
+    from bt_nav.run.lockstep import run_mission
 
     duration = 20.0 if quick else None
     t0 = time.perf_counter()

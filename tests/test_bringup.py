@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from bt_nav.cli.demo import tip_from_snapshot
+from bt_nav.media.treetext import tip_name as tip_from_snapshot
 from bt_nav.ros import bringup, supervise
 from bt_nav.ros.bringup import NodeSpec, choose_domain_id, nodes, param_arg, parse_assignments
 

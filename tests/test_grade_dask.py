@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from bt_nav.cli.grade import make_jobs, run_grid
+from bt_nav.run.grid import make_jobs, run_grid
 
 REPO = Path(__file__).resolve().parents[1]
 DASK = Path(sys.executable).with_name("dask")

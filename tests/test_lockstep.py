@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from bt_nav_sim.plot import BRANCHES, Trajectory, plot_run
 
-from bt_nav.cli.lockstep import main, run_mission
+from bt_nav.cli.lockstep import main
 from bt_nav.mission.trace import read_trace
+from bt_nav.run.lockstep import run_mission
 
 
 def test_same_seed_same_run() -> None:

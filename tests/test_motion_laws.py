@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 
-from bt_nav.cli.lockstep import profile_parameters
 from bt_nav.mission import params as P
 from bt_nav.mission.behaviours.motion import STEER_GAIN, TurnAway
 from bt_nav.mission.behaviours.perception import ProcessScan
 from bt_nav.mission.paths import free_paths
+from bt_nav.run.settings import profile_parameters
 from bt_nav.testing import TickHarness, synthetic_scan
 
 HOMEWORK = profile_parameters("homework")

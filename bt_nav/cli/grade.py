@@ -1,7 +1,7 @@
 """Batch grading: lock-step missions over worlds x maneuvers x seeds, in local processes or on a Dask cluster.
 
 Every mission is deterministic per (world, maneuver, seed, profile, kinematics), so a grade is
-reproducible, two grades can be compared run by run, and where a mission ran (:mod:`bt_nav.cli.gridrun`)
+reproducible, two grades can be compared run by run, and where a mission ran (:mod:`bt_nav.run.grid`)
 does not change its result. ``--json`` is rewritten as missions finish, so ``--resume`` can continue an
 interrupted grid from it without running any mission twice.
 """
@@ -10,108 +10,20 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import sys
 import time
-from collections import Counter
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from bt_nav_sim.physics import KINEMATICS
 from bt_nav_sim.world import list_worlds
-from tqdm import tqdm
 
-from bt_nav.cli.gridrun import Job, run_dask, run_local
-from bt_nav.cli.lockstep import DEFAULT_JITTER
+from bt_nav.cli.options import add_mission_options
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
-from bt_nav.mission.profiles import PROFILE_FILES
-
-
-def seed_list(seeds: int | Iterable[int]) -> list[int]:
-    """``20`` means seeds 0..19; an iterable is taken as is."""
-    return list(range(seeds)) if isinstance(seeds, int) else [int(s) for s in seeds]
-
-
-def make_jobs(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iterable[int],
-              overrides: dict[str, Any] | None = None, profile: str = "homework",
-              jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "") -> list[Job]:
-    """The grid in its canonical order: worlds, then maneuvers, then seeds."""
-    return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides)
-            for w in worlds for m in maneuvers for s in seed_list(seeds)]
-
-
-def run_grid(jobs: Sequence[Job], processes: int = 2, scheduler: str | None = None,
-             done: dict[str, dict[str, Any]] | None = None, progress: bool = False,
-             on_result: Callable[[dict[str, dict[str, Any]]], None] | None = None) -> list[dict[str, Any]]:
-    """Run the jobs not in ``done`` (job key -> summary); returns every summary in grid order.
-
-    ``on_result`` sees the growing ``done`` after each mission (``bt-nav grade`` saves it).
-    """
-    results = dict(done or {})
-    todo = [job for job in jobs if job.key not in results]
-    stream = run_dask(todo, scheduler) if scheduler else run_local(todo, processes)
-    with tqdm(total=len(jobs), initial=len(jobs) - len(todo), disable=not progress, unit="mission",
-              dynamic_ncols=True, file=sys.stderr) as bar:
-        for job, summary in stream:
-            results[job.key] = summary
-            bar.update(1)
-            if on_result is not None:
-                on_result(results)
-    return [results[job.key] for job in jobs]
-
-
-def grade(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iterable[int], jobs: int = 2,
-          overrides: dict[str, Any] | None = None, profile: str = "homework",
-          jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "",
-          scheduler: str | None = None) -> list[dict[str, Any]]:
-    """Run every (world, maneuver, seed); returns one summary dict per mission, in grid order."""
-    grid = make_jobs(worlds, maneuvers, seeds, overrides, profile, jitter, kinematics)
-    return run_grid(grid, jobs, scheduler)
-
-
-def _median(values: list[float]) -> float:
-    return statistics.median(values) if values else float("nan")
-
-
-def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One line per (world, maneuver): pass rate, collisions, distances, efficiency, failures, time."""
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for row in rows:
-        groups.setdefault((row["world"], row["maneuver"]), []).append(row)
-    out = []
-    for (world, maneuver), runs in groups.items():
-        travelled = [r["travelled"] for r in runs]
-        efficiency = [r["efficiency"] for r in runs]
-        failures = Counter(name for r in runs for name in r.get("failed_checks", ()))
-        out.append({
-            "world": world, "maneuver": maneuver, "runs": len(runs),
-            "passed": sum(1 for r in runs if r["passed"]),
-            "pass_rate": sum(1 for r in runs if r["passed"]) / len(runs),
-            "collisions": sum(r["collisions"] for r in runs),
-            "runs_with_collisions": sum(1 for r in runs if r["collisions"]),
-            "travelled_median": _median(travelled), "travelled_min": min(travelled),
-            "efficiency_median": _median(efficiency), "efficiency_worst": min(efficiency),
-            "failed_checks": dict(failures.most_common()),
-            "failed_seeds": [r["seed"] for r in runs if not r["passed"]],
-            "wall_time_mean": statistics.fmean(r.get("wall_time", 0.0) for r in runs),
-        })
-    return out
-
-
-def overall(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -> dict[str, Any]:
-    """The grid's headline figures: what the homework targets are stated in."""
-    efficiency = [r["efficiency"] for r in rows]
-    worst_cell = min(summary, key=lambda s: s["pass_rate"], default=None)
-    return {
-        "runs": len(rows), "passed": sum(1 for r in rows if r["passed"]),
-        "pass_rate": sum(1 for r in rows if r["passed"]) / len(rows) if rows else float("nan"),
-        "collisions": sum(r["collisions"] for r in rows),
-        "runs_with_collisions": sum(1 for r in rows if r["collisions"]),
-        "efficiency_median": _median(efficiency), "efficiency_worst": min(efficiency, default=float("nan")),
-        "worst_cell": (f"{worst_cell['world']} {worst_cell['maneuver']} {worst_cell['passed']}/{worst_cell['runs']}"
-                       if worst_cell else ""),
-    }
+from bt_nav.run.grid import Job, make_jobs, run_grid, summarize
+from bt_nav.run.grid import overall as overall
+from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, tree_settings
 
 
 def format_overall(total: dict[str, Any]) -> str:
@@ -144,12 +56,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
-    parser.add_argument("--profile", default="homework", choices=sorted(PROFILE_FILES),
-                        help="params files and simulated robot (homework, lab, turtlebot3)")
+    add_mission_options(parser, grid=True)
     parser.add_argument("--kinematics", default="", choices=("", *KINEMATICS),
                         help="ideal or burger (per-wheel limits); default: the profile's")
-    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
-                        help="parameter override for every mission (repeatable)")
     parser.add_argument("--no-jitter", action="store_true", help="start exactly at each world's spawn")
     parser.add_argument("--json", default=None, help="write every run and the summary here (updated as runs finish)")
     parser.add_argument("--resume", action="store_true", help="keep the finished runs of --json's file, run the rest")
@@ -199,7 +108,10 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     settings = {"profile": args.profile, "kinematics": args.kinematics, "seeds": seeds, "worlds": worlds,
-                "maneuvers": maneuvers, "overrides": overrides or {}, "jitter": not args.no_jitter}
+                "maneuvers": maneuvers, "overrides": overrides or {}, "jitter": not args.no_jitter,
+                "parameters": effective_parameters(tree_settings(args.profile, "none", seeds[0] if seeds else 0,
+                                                                 overrides)),
+                "parameters_note": "every mission's; maneuver and random_seed vary per run (maneuver, seed)"}
     by_key = {job.key: job for job in jobs}
 
     def save_partial(results: dict[str, dict[str, Any]]) -> None:

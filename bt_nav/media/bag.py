@@ -10,7 +10,7 @@ bag's receive time, and each header stamp where the type has one), so a lock-ste
 the same mission look alike.
 
 How lock-step uses it (``bt-nav lockstep --bag DIR``): :class:`MissionBag` satisfies
-:class:`bt_nav.cli.lockstep.MissionSink`, so pass it as ``sink``::
+:class:`bt_nav.run.sinks.MissionSink`, so pass it as ``sink``::
 
     with MissionBag(path, mission={"world": ..., "maneuver": ..., "seed": ..., "profile": ...}) as bag:
         result = run_mission(..., sink=bag)

@@ -4,11 +4,12 @@ Both drivers of the tree use this class, so they cannot drift apart:
 - the ROS executive (:mod:`bt_nav.ros.executive`) feeds it scans and odometry from subscriptions,
   passes its node to ``setup`` (the arm server and evaluation client are created there) and
   publishes the command each tick returns;
-- the lock-step runner (:mod:`bt_nav.cli.lockstep`) feeds it the simulator's scans and applies the
+- the lock-step engine (:mod:`bt_nav.run.lockstep`) feeds it the simulator's scans and applies the
   command to the same physics, without DDS.
 
-py_trees' blackboard is process-global, so one process holds one MissionCore at a time (creating a
-new one clears the blackboard).
+py_trees' blackboard is process-global; each MissionCore owns a blackboard of its own
+(:class:`bt_nav.mission.boards.OwnBoard`) and switches it in at every entry point, so several cores can
+live in one process (one per robot) and nothing outside swaps the blackboard.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from bt_nav.mission import params as P
 from bt_nav.mission.behaviours import ArmService, EvaluateMission
 from bt_nav.mission.behaviours.base import EventLogger
 from bt_nav.mission.behaviours.control import compile_tick
+from bt_nav.mission.boards import OwnBoard
 from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample, keep_wheels_within
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.tree import load_tree
@@ -85,6 +87,8 @@ class MissionCore:
         self.params: dict[str, P.Value] = P.resolve(overrides)
         self.clock = clock
         self.events: EventLogger = events or logging.getLogger("bt_nav")
+        self.own_board = OwnBoard()  # this tree's blackboard, entered by every method that touches it
+        self.own_board.enter()
         py_trees.blackboard.Blackboard.clear()
         self.root = load_tree(str(self.params["maneuver"]), tree_path)
         self.tree = py_trees.trees.BehaviourTree(self.root)
@@ -120,15 +124,18 @@ class MissionCore:
 
     def feed_scan(self, scan: Scan, stamp: float | None = None) -> None:
         """The newest scan and when it arrived (default: now on the mission clock)."""
+        self.own_board.enter()
         self._put("/scan", scan)
         self._put("/scan_stamp", float(self.clock() if stamp is None else stamp))
 
     def feed_odom(self, yaw: float, stamp: float | None = None, x: float = math.nan, y: float = math.nan) -> None:
         """The newest odometry pose (yaw in rad; x, y in m, NaN when the source has none) and when it arrived."""
+        self.own_board.enter()
         self._put("/odom", OdomSample(float(yaw), float(self.clock() if stamp is None else stamp), float(x), float(y)))
 
     def request_arm(self, data: bool) -> tuple[bool, str]:
         """Same as a call of the ``arm`` service: (success, message)."""
+        self.own_board.enter()
         return self.arm_leaf.handle(bool(data))
 
     def set_param(self, name: str, value: Any) -> str | None:
@@ -148,6 +155,7 @@ class MissionCore:
         candidate, reason = P.check_changes(self.params, values)
         if reason:
             return reason
+        self.own_board.enter()
         for name, value in candidate.items():
             if value != self.params[name]:
                 self.params[name] = value
@@ -163,6 +171,7 @@ class MissionCore:
         is a stop; the next tick starts afresh. The caller never sees the exception.
         """
         self.ticks += 1
+        self.own_board.enter()
         try:
             self._tick_tree()
             command = self.value("cmd_vel", STOP)
@@ -207,6 +216,7 @@ class MissionCore:
 
     def shutdown(self) -> Command:
         """Stop every running leaf (a pending evaluation request is dropped) and return a stop."""
+        self.own_board.enter()
         try:
             self.tree.interrupt()
             if self.evaluate_leaf is not None:
@@ -220,6 +230,7 @@ class MissionCore:
     def value(self, key: str, default: Any = None) -> Any:
         """A blackboard value the core reads (see OUTPUT_KEYS) or writes (a plain lookup: the core's
         client has every such key registered and no remapping, so py_trees' checks add nothing)."""
+        self.own_board.enter()
         if _BLACKBOARD.activity_stream is not None:
             return self.board.get(f"/{key}") if self.board.exists(f"/{key}") else default
         return _STORAGE.get(f"/{key}", default)

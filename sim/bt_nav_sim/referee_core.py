@@ -6,7 +6,7 @@ implementation serve two drivers that must not disagree:
 
 - the ROS referee node (:mod:`bt_nav_sim.nodes.referee`) drives it with sim time, real service calls and
   ground-truth odometry;
-- the lock-step runner (:mod:`bt_nav.cli.lockstep`) drives it in-process with the simulator's state.
+- the lock-step runner (:mod:`bt_nav.run.lockstep`) drives it in-process with the simulator's state.
 
 The driver calls :meth:`Referee.step` at ``rate_hz`` and performs the :class:`Activate` actions it
 returns, reporting each answer with :meth:`Referee.on_activate_result`; it forwards every ground-truth

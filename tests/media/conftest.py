@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.cli.lockstep import run_mission
 from bt_nav.media.bag import MissionBag
+from bt_nav.run.lockstep import run_mission
 
 MISSION = {"world": "stage_4", "maneuver": "C", "seed": 1, "profile": "homework"}
 DURATION = 12.0  # sim s: past the first arming at 5 s, so every topic has messages

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from simtools import Proc
 
-from bt_nav.cli.lockstep import run_mission
+from bt_nav.run.lockstep import run_mission
 
 #: Largest ground-truth position gap allowed between the two runs while armed (m): 50 ms of command
 #: latency at 0.22 m/s is 1.1 cm per command change, and headings that differ by that much drift apart

@@ -21,7 +21,7 @@ import yaml
 from bt_nav_sim import World, list_worlds, load_world
 from bt_nav_sim.world import WORLDS_DIR, world_from_dict
 
-from bt_nav.cli.lockstep import DEFAULT_JITTER
+from bt_nav.run.settings import DEFAULT_JITTER
 
 ROBOT_RADIUS = 0.12  # TurtleBot3 Burger collision disk
 RES = 0.04  # grid resolution, m

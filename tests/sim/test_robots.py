@@ -1,4 +1,4 @@
-"""Several robots in one world (bt_nav_sim.multi, bt_nav.cli.lockstep_multi): one robot is the single-robot
+"""Several robots in one world (bt_nav_sim.multi, bt_nav.run.lockstep): one robot is the single-robot
 core bit for bit, robots see each other in their LiDAR, a robot-robot contact is a collision for both,
 and each robot's tree and referee are its own."""
 
@@ -13,8 +13,7 @@ from bt_nav_sim.lidar import RayCaster
 from bt_nav_sim.multi import MultiSimCore, auto_starts, parse_starts, robot_names
 from bt_nav_sim.world import load_world
 
-from bt_nav.cli.lockstep import run_mission
-from bt_nav.cli.lockstep_multi import run_multi_mission
+from bt_nav.run.lockstep import run_mission, run_robots
 
 QUIET = SimConfig(world="empty_room", noise=False)
 
@@ -97,9 +96,9 @@ def test_names_starts_and_placement() -> None:
 
 def test_lockstep_robots_have_their_own_trees_and_referees() -> None:
     """With the second robot parked out of the way, the first drives exactly its single-robot mission:
-    the trees do not share a blackboard (they did, through py_trees' process-wide one, before Boards)."""
+    the trees do not share a blackboard (each MissionCore owns one; py_trees' storage is process-wide)."""
     single = run_mission("stage_4", "C", 0, jitter=None)
-    multi = run_multi_mission("stage_4", "C", 0, 2, starts=((-0.7, 0.0, 0.0), (2.0, -1.5, 0.0)), jitter=None)
+    multi = run_robots("stage_4", "C", 0, robots=2, starts=((-0.7, 0.0, 0.0), (2.0, -1.5, 0.0)), jitter=None)
     first, second = multi.results
     assert first.travelled == pytest.approx(single.travelled, abs=0.05)
     assert first.passed and second.collisions == 0

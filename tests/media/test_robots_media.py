@@ -16,8 +16,7 @@ from rosbags.rosbag2 import Reader
 from bt_nav.cli.lockstep import main
 from bt_nav.media.bag import ROBOT_TOPICS, TOPICS, split_namespace
 from bt_nav.media.bagread import MissionRecord, read_bag
-from bt_nav.media.video import MAP_H, MAP_W, VideoRenderer, renderer_for, world_of
-from bt_nav.media.video_multi import MultiVideoRenderer
+from bt_nav.media.video import MAP_H, MAP_W, TracksRenderer, VideoRenderer, renderer_for, world_of
 
 DURATION, FPS = 12.0, 5.0  # past the first arming at 5 s, so every robot topic has messages
 ROBOTS = ("robot1", "robot2")
@@ -75,7 +74,7 @@ def _pixels(img: Any, rgb: tuple[int, int, int]) -> int:
 def test_each_robot_is_drawn_in_its_own_colour(run: dict[str, Any]) -> None:
     record: MissionRecord = run["record"]
     renderer = renderer_for(record, world_of(record))
-    assert isinstance(renderer, MultiVideoRenderer)
+    assert isinstance(renderer, TracksRenderer)
     expected = {name: tuple(int(robot_colour(i)[k:k + 2], 16) for k in (1, 3, 5)) for i, name in enumerate(ROBOTS)}
     assert renderer.colours == expected and len(set(expected.values())) == 2
     img = None
@@ -100,7 +99,13 @@ def test_split_namespace() -> None:
         assert split_namespace(root) == ("", root)
 
 
-def test_trace_still_records_one_robot(tmp_path: Path) -> None:
-    with pytest.raises(SystemExit) as exc:
-        main(["--robots", "2", "--duration", "1", "--trace", str(tmp_path / "t.jsonl")])
-    assert exc.value.code == 2
+def test_trace_records_every_robot(tmp_path: Path) -> None:
+    """--trace with several robots writes one trace per robot (t_robot1.jsonl, t_robot2.jsonl), each its
+    own tree's ticks (the robots start apart, so their poses differ)."""
+    import json
+
+    main(["--robots", "2", "--duration", "1", "--trace", str(tmp_path / "t.jsonl")])
+    traces = [[json.loads(line) for line in (tmp_path / f"t_{name}.jsonl").read_text().splitlines()]
+              for name in ("robot1", "robot2")]
+    assert all(len(t) >= 9 for t in traces)
+    assert traces[0][-1]["pose"] != traces[1][-1]["pose"]

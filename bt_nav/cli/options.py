@@ -1,0 +1,43 @@
+"""The options every command that runs a mission shares (demo, lockstep, grade): one spelling, one default.
+
+Why: ``bt-nav lockstep --profile homework`` and ``bt-nav demo`` with the same profile must run the same
+mission; the maneuver defaults to the profile's (:func:`bt_nav.run.settings.profile_maneuver`), ``--set``
+overrides any parameter, and the seed is 0 unless given.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from bt_nav.mission.profiles import PROFILE_FILES
+
+
+def add_mission_options(parser: argparse.ArgumentParser, *, grid: bool = False) -> None:
+    """``--profile``, ``--set NAME=VALUE`` (repeatable) and, unless ``grid`` (which takes lists),
+    ``--world``, ``--maneuver``, ``--seed``."""
+    if not grid:
+        parser.add_argument("--world", default="stage_4", help="bundled world name or YAML path (default stage_4)")
+        parser.add_argument("--maneuver", default=None,
+                            help="none, A, B, C or a name (default: the profile's, config/homework.yaml says C)")
+        parser.add_argument("--seed", type=int, default=0, help="seed of noise, worlds and maneuver A (default 0)")
+    parser.add_argument("--profile", default="homework", choices=sorted(PROFILE_FILES),
+                        help="params files and simulated robot (homework, lab, turtlebot3; default homework)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
+                        help="parameter override (repeatable), over the profile's params files")
+
+
+def bag_for(bag: str | None, video: str | None) -> str | None:
+    """The bag directory of a run: ``--bag``, else next to ``--video`` (``FILE_bag``: a film is always made
+    from a bag, so what it shows is what ``ros2 bag play`` would replay), else none."""
+    return bag or (str(Path(video).with_suffix("")) + "_bag" if video else None)
+
+
+def film(bag_dir: str, out: str, fps: float) -> None:
+    """Render the bag ``bag_dir`` to the MP4 ``out`` and say so."""
+    from bt_nav.media.bagread import read_bag
+    from bt_nav.media.video import world_of, write_video
+
+    record = read_bag(bag_dir)
+    stats = write_video(record, out, fps, world_of(record))
+    print(f"video: {out} ({stats.frames} frames at {fps:g} fps, rendered in {stats.seconds:.1f} s)")

@@ -1,0 +1,123 @@
+"""A mission over real DDS, for one robot or several: start the graph, a recorder per robot, the referees
+once every robot is seen, wait for every verdict, collect.
+
+``bt-nav demo`` and the ROS benchmark (:mod:`bench.ros_mission`) both run a mission through
+:class:`RosMission`, so "start the graph, wait for the recorder, start the referee, wait for the verdict"
+is written once. One robot is the graph of :func:`bt_nav.ros.bringup.nodes` (the homework's root topics);
+several are :func:`bt_nav.ros.bringup.robot_nodes` (one simulator, per robot an executive and a referee
+in the robot's namespace). The referees start last, once every recorder sees its robot's ground truth and
+commands, so each recording covers the whole schedule.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+from bt_nav.ros.bringup import NodeSpec, nodes, robot_nodes
+from bt_nav.ros.supervise import Child, Launcher, LineSink, StopRequest
+from bt_nav.run.recorder import Recorder, Recording, rec_ready
+
+#: Extra wall time allowed beyond the referees' own timeout before the run gives up itself.
+GRACE = 15.0
+#: Wall time to wait for the recorders to see ground truth and commands before starting the referees anyway.
+STARTUP = 30.0
+
+
+def mission_graph(names: list[str], results: dict[str, str], **options: Any) -> list[NodeSpec]:
+    """The ``eval`` graph for ``names`` (one robot: root topics, its referee's verdict to ``results[name]``;
+    several: namespaced), with :func:`bt_nav.ros.bringup.nodes`' ``options``."""
+    if len(names) == 1:
+        return nodes("eval", results_json=results[names[0]], **options)
+    return robot_nodes("eval", names, results_json=results, **options)
+
+
+class RosMission:
+    """The processes and recorders of one mission over DDS (see the module docstring).
+
+    Args:
+        specs: the graph (:func:`mission_graph`); its referees are the nodes whose executable is ``referee``.
+        names: the robots' names; with one robot its recorder listens at the root topics.
+        env: the children's environment (their ROS domain). ``sink``: where node output lines go (a node
+            in a robot's namespace is named ``<robot>_<node>``, its report lines prefixed ``<robot>: ``).
+        stop, last_word: as :class:`bt_nav.ros.supervise.Launcher`'s.
+    """
+
+    def __init__(self, specs: list[NodeSpec], names: list[str], env: dict[str, str], *,
+                 sink: LineSink | None = None, stop: StopRequest | None = None,
+                 last_word: Callable[[], Any] | None = None) -> None:
+        self.specs = specs
+        self.names = names
+        self.recorders = {name: Recorder(name if len(names) > 1 else "") for name in names}
+        self.launcher = Launcher(env, sink=sink, stop=stop, last_word=last_word)
+        self.stop = stop
+        self.referees: list[Child] = []
+
+    def _start(self, spec: NodeSpec) -> Child:
+        """Start one node; in a robot's namespace its log name and report lines carry the robot's name."""
+        robot, parent = spec.namespace, self.launcher.sink
+
+        def sink(name: str, line: str) -> None:
+            if not robot:
+                parent(name, line)
+            else:
+                parent(f"{robot}_{name}", line if line.startswith("[") else f"{robot}: {line}")
+
+        return self.launcher.start(spec, sink=sink)
+
+    def _stopped(self) -> bool:
+        return self.stop is not None and self.stop.requested
+
+    def start_graph(self) -> None:
+        """Every node but the referees."""
+        for spec in self.specs:
+            if spec.executable != "referee":
+                self._start(spec)
+
+    def wait_ready(self, timeout: float = STARTUP) -> bool:
+        """Wait until every recorder sees its robot (False: timed out, a node exited, or a stop request)."""
+        deadline = time.monotonic() + timeout
+        while not all(rec_ready(r) for r in self.recorders.values()):
+            if time.monotonic() > deadline or self._stopped() or self.exited() is not None:
+                return False
+            time.sleep(0.02)
+        return True
+
+    def start_referees(self) -> list[Child]:
+        """The referees (their clocks start once they see their robot)."""
+        self.referees = [self._start(spec) for spec in self.specs if spec.executable == "referee"]
+        return self.referees
+
+    def exited(self) -> Child | None:
+        """A node other than a referee that has exited (None: all running)."""
+        return next((c for c in self.launcher.children if c not in self.referees and c.poll() is not None), None)
+
+    def wait_verdicts(self, timeout: float, poll: Callable[[], None] | None = None) -> tuple[str, Child | None]:
+        """Wait until every referee has exited: ``("verdict", None)``; or ``("exited", child)`` when another
+        node exited first, ``("timeout", None)``, ``("stopped", None)``. ``poll`` runs every 50 ms."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if self._stopped():
+                return "stopped", None
+            if all(r.poll() is not None for r in self.referees):
+                return "verdict", None
+            other = self.exited()
+            if other is not None:
+                return "exited", other
+            if poll is not None:
+                poll()
+            time.sleep(0.05)
+        return "timeout", None
+
+    def referee_code(self) -> int:
+        """0 when every referee passed its robot, else the worst exit code (1 FAILED, 2 no verdict)."""
+        return max((int(r.poll() or 0) for r in self.referees), default=2)
+
+    def close(self) -> dict[str, Recording]:
+        """Stop every node, then the recorders; each robot's recording."""
+        try:
+            self.launcher.shutdown()
+        finally:
+            recordings = {name: rec.close() for name, rec in self.recorders.items()}
+        return recordings

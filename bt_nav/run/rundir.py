@@ -1,0 +1,77 @@
+"""Where a mission over DDS writes: its run directory and one log file per node, with one time base.
+
+Log lines carry ``sim <t> s [wall <t> s]``: the newest ground truth the recorder saw (sim time, the
+executive's and the simulator's clock) and wall seconds since the run started. The referee's report lines
+are its own: their times are seconds from the referee's t0 (its results say so under ``time_base``).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+from typing import IO, Any
+
+#: rcutils' line format for the nodes: no epoch stamp (the run prefixes sim and wall time itself).
+LOG_FORMAT = "[{severity}] [{name}]: {message}"
+
+
+def make_run_dir(out: Path, name: str) -> Path:
+    """A new directory ``out/name`` (``-2``, ``-3`` ... appended while taken): a run never overwrites
+    another's files, however many run at once (``mkdir`` is atomic)."""
+    out.mkdir(parents=True, exist_ok=True)
+    for n in range(1, 1000):
+        path = out / (name if n == 1 else f"{name}-{n}")
+        try:
+            path.mkdir()
+        except FileExistsError:
+            continue
+        return path
+    raise FileExistsError(f"{out / name}: 999 runs of that name already")
+
+
+class Logs:
+    """Per-node log files; the referee's report lines (anything not an rcutils log line) go to stdout.
+
+    Every log line is prefixed with one time base: ``sim 37.65 s [wall 3.2 s]`` (the newest ground
+    truth the recorder saw, and wall seconds since the demo started); report lines stay as the
+    referee prints them. After the verdict nothing is echoed any more: the shutdown's own lines go
+    to the files only, so the verdict is the last thing the user reads.
+    """
+
+    def __init__(self, directory: Path, echo_logs: bool, sim_time: Any = None) -> None:
+        self.directory = directory
+        self.echo_logs = echo_logs
+        self.sim_time = sim_time or (lambda: None)
+        self.wall0 = time.monotonic()
+        self.files: dict[str, IO[str]] = {}
+        self.verdict: list[str] = []
+        self.quiet_from_now = False
+        self._lock = threading.Lock()
+
+    def stamp(self) -> str:
+        """``sim 37.65 s [wall 3.2 s]`` (sim ``-`` before the first ground truth)."""
+        t = self.sim_time()
+        sim = f"{t:7.2f} s" if t is not None else "      - s"
+        return f"sim {sim} [wall {time.monotonic() - self.wall0:5.1f} s]"
+
+    def sink(self, name: str, line: str) -> None:
+        """Launcher sink: log file always; stdout for report lines (and warnings, unless quiet)."""
+        with self._lock:
+            stream = self.files.get(name)
+            if stream is None:
+                stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
+            is_log = line.startswith("[")
+            stream.write((f"{self.stamp()} {line}" if is_log else line) + "\n")
+            if (name == "referee" or name.endswith("_referee")) and not is_log:
+                self.verdict.append(line)
+                print(line, flush=True)
+            elif self.echo_logs and not self.quiet_from_now and (
+                    name == "referee" or any(lvl in line for lvl in ("[WARN]", "[ERROR]", "[FATAL]"))):
+                print(f"  {self.stamp()} [{name}] {line}", flush=True)
+
+    def close(self) -> None:
+        """Close every log file."""
+        with self._lock:
+            for stream in self.files.values():
+                stream.close()

@@ -1,0 +1,140 @@
+"""The project's layers hold: no import cycle among its modules, and no module imports a layer above its own.
+
+Every ``import``/``from ... import`` in every module counts, at module level or inside a function (a lazy
+import is still a dependency, and a lazy import back is still a cycle). The layers, bottom to top, are the
+ones ``docs/architecture.md`` draws; a module may import its own layer's package and any layer below.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+#: (layer, module prefixes), bottom first. A module belongs to the first layer with the longest matching prefix.
+LAYERS: list[tuple[str, tuple[str, ...]]] = [
+    ("mission", ("bt_nav.mission",)),
+    ("simulator", ("bt_nav_sim",)),
+    ("media", ("bt_nav.media",)),
+    ("ros", ("bt_nav.ros",)),
+    ("simulator nodes", ("bt_nav_sim.nodes",)),
+    ("testing", ("bt_nav.testing",)),
+    ("run", ("bt_nav.run",)),
+    ("commands", ("bt_nav.cli",)),
+    ("bench", ("bench",)),
+]
+#: Package roots scanned (directory, package name).
+SOURCES = ((ROOT / "bt_nav", "bt_nav"), (ROOT / "sim" / "bt_nav_sim", "bt_nav_sim"), (ROOT / "bench", "bench"))
+
+
+def module_name(path: Path, base: Path, package: str) -> str:
+    """``bt_nav/run/lockstep.py`` -> ``bt_nav.run.lockstep`` (a package's ``__init__`` is the package)."""
+    parts = [package, *path.relative_to(base).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def project_modules() -> dict[str, Path]:
+    """Every module of the project, by dotted name."""
+    return {module_name(p, base, pkg): p for base, pkg in SOURCES for p in sorted(base.rglob("*.py"))}
+
+
+def resolve(target: str, modules: dict[str, Path]) -> str | None:
+    """The project module an import names (``a.b.c`` where only ``a.b`` is a module: ``a.b``), or None."""
+    while target:
+        if target in modules:
+            return target
+        target = target.rpartition(".")[0]
+    return None
+
+
+def imports_of(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The project modules ``name`` imports anywhere in its source."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")
+                anchor = anchor[: len(anchor) - (node.level - 1)]
+                base = ".".join([*anchor, base] if base else anchor)
+            targets = [f"{base}.{alias.name}" for alias in node.names] + [base]
+        for target in targets:
+            hit = resolve(target, modules)
+            if hit is not None and hit != name:
+                found.add(hit)
+    return found
+
+
+def layer_of(name: str) -> int:
+    """Index of the module's layer in :data:`LAYERS` (the longest matching prefix wins)."""
+    best, best_len = -1, -1
+    for index, (_, prefixes) in enumerate(LAYERS):
+        for prefix in prefixes:
+            if (name == prefix or name.startswith(prefix + ".")) and len(prefix) > best_len:
+                best, best_len = index, len(prefix)
+    return best
+
+
+def graph() -> dict[str, set[str]]:
+    """Module -> the project modules it imports."""
+    modules = project_modules()
+    return {name: imports_of(name, path, modules) for name, path in modules.items()}
+
+
+def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle (as a path that ends where it starts), or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(edges.get(node, ())):
+            if state.get(nxt) == 1:
+                return [*stack[stack.index(nxt):], nxt]
+            if nxt not in state and (cycle := visit(nxt)) is not None:
+                return cycle
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(edges):
+        if node not in state and (cycle := visit(node)) is not None:
+            return cycle
+    return None
+
+
+def test_every_module_has_a_layer() -> None:
+    unplaced = [name for name in graph() if layer_of(name) < 0 and name not in ("bt_nav",)]
+    assert not unplaced, f"modules in no layer (add them to LAYERS and docs/architecture.md): {unplaced}"
+
+
+def test_no_import_cycle() -> None:
+    cycle = find_cycle(graph())
+    assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
+
+
+def test_no_upward_import() -> None:
+    upward = [f"{name} ({LAYERS[layer_of(name)][0]}) imports {dep} ({LAYERS[layer_of(dep)][0]})"
+              for name, deps in sorted(graph().items()) for dep in sorted(deps)
+              if name != "bt_nav" and layer_of(dep) > layer_of(name)]
+    assert not upward, "imports against the layers:\n" + "\n".join(upward)
+
+
+def test_nothing_outside_the_commands_imports_them() -> None:
+    commands = layer_of("bt_nav.cli")
+    users = [f"{name} imports {dep}" for name, deps in sorted(graph().items()) for dep in sorted(deps)
+             if layer_of(dep) == commands and layer_of(name) != commands]
+    assert not users, "\n".join(users)
+
+
+def test_the_checker_sees_a_cycle_and_an_upward_import() -> None:
+    """The checks can fail: a made-up cycle is found, and a made-up upward import is."""
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert layer_of("bt_nav.cli.demo") > layer_of("bt_nav.run.lockstep") > layer_of("bt_nav.mission.core")
+    assert layer_of("bt_nav_sim.nodes.simulator") > layer_of("bt_nav.ros.runner") > layer_of("bt_nav_sim.core")
