@@ -208,3 +208,27 @@ def test_a_smart_pivot_with_as_much_room_on_both_sides_may_turn_either_way() -> 
     judge = _run(CheckoffJudge(_cfg("C"), _world(WALL_AHEAD)), _c_script(-math.pi / 2 / 1.6))
     assert judge.passed, judge.report_lines()
     assert judge.results()["maneuvers"][0]["rule"] == "90 +- 10 deg either side"
+
+
+def test_a_brake_turn_where_the_trigger_holds_only_within_the_margin_is_a_recovery() -> None:
+    """B beside walls 0.52 m away (the margin's 0.55 m says squeezed, the lab's 0.5 m does not), braked
+    0.3 m before a wall: the executive's way out, judged as a recovery, not as a 180 deg Retreat."""
+    world = _world(WALL_AHEAD, [-1.5, 0.52, 1.5, 0.52], [-1.5, -0.52, 1.5, -0.52])
+    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    res = _run(CheckoffJudge(_cfg("B"), world), script).results()
+    assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
+    strict = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD, [-1.5, 0.45, 1.5, 0.45],
+                                                  [-1.5, -0.45, 1.5, -0.45])), script).results()
+    assert len(strict["maneuvers"]) == 1 and not strict["maneuvers"][0]["angle_ok"]  # squeezed: B's rule applies
+
+
+def test_a_maneuver_cut_short_by_the_disarm_is_not_judged_on_its_angle() -> None:
+    """The disarm must stop a turn; the angle reached by then is no failure (its trigger still is judged)."""
+    # creep to front 0.49 m at 15.2 s, turn left at 0.5 rad/s until the disarm at 25 s (9.8 s, many turns)
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (9.8, 0.0, 0.5), (10.0, 0.0, 0.0)]  # 280 deg by then
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["interrupted"] and m["passed"] and "interrupted by the disarm" in _line(judge, "maneuver 1")
+    early = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (0.5, 0.0, 0.25), (19.3, 0.0, 0.0)]
+    (m,) = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), early).results()["maneuvers"]
+    assert not m["interrupted"] and not m["angle_ok"]  # stopped on its own, 7 deg: judged, failed

@@ -125,3 +125,19 @@ def test_disarming_in_lab_mode_stops_and_arming_again_creeps() -> None:
     assert h.tick().command.is_zero
     assert h.arm(True)[0]
     assert h.tick().tip == "Creep"
+
+
+def test_squeezed_and_braking_the_retreat_applies_not_the_brakes_way_out() -> None:
+    """B fired on the way into a passage (its edge trigger then waits for a clearing); at the passage's
+    closed end the brake holds while the robot is still squeezed: the Retreat fires again, no AEB turn."""
+    h, events = lab("B")
+    h.see((90.0, 0.4), (-90.0, 0.4))
+    assert h.tick().tip == "Retreat"
+    h.run_until(lambda r: r.tip == "Creep", 400)
+    h.see((90.0, 0.4), (-90.0, 0.4), (0.0, 0.2))  # the closed end, 0.2 m ahead
+    r = h.tick()
+    assert r.tip == "Retreat" and r.command.is_zero
+    assert "emergency stop" not in events.text()
+    h2, events2 = lab("B")
+    h2.see((0.0, 0.2))  # braking but not squeezed: the brake's way out
+    assert h2.tick().tip == "AEB" and "emergency stop" in events2.text()

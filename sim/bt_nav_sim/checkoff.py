@@ -46,6 +46,10 @@ from bt_nav_sim.lidar import LDS01, RayCaster
 from bt_nav_sim.referee_core import Activate, static_check
 from bt_nav_sim.world import World
 
+#: s: an episode whose last turning command came this close to the disarm request (or after it) was
+#: stopped by the disarm, as it must be: its angle is not judged.
+INTERRUPT_SLACK = 0.15
+
 #: The lab's maneuvers (what ``CheckoffConfig.maneuver`` may be).
 MANEUVERS = ("A", "B", "C")
 
@@ -314,16 +318,25 @@ class CheckoffJudge:
         start = self.commands[a][0]
         reading = self._readings[self._index_at(start)] if self._t else None
         trigger, trigger_text = self._trigger(reading)
-        recovery = not trigger and reading is not None and reading.ahead < cfg.aeb_distance
+        # A recovery: the path was blocked and the trigger did not hold even without the margin (the margin
+        # is the robot's benefit of the doubt for its own maneuvers, not a reason to judge its brake's way out
+        # by the maneuver's rule).
+        recovery = (reading is not None and reading.ahead < cfg.aeb_distance
+                    and not self._trigger(reading, margin=0.0)[0])
+        disarm = self.deactivation_requested
+        interrupted = disarm is not None and self.commands[b][0] >= disarm - INTERRUPT_SLACK
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, start)) if self._t else 0.0
         cmd_forward = max(abs(v) for _, v, _ in self.commands[a:b + 1])
         motion = self._max_displacement(start + cfg.brake_allowance, settle) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
         angle_ok, rule = self._angle_rule(angle, reading)
         moved_on, moved_text = self._moved_on(settle, next_start, now)
+        if interrupted:  # the disarm stopped it: its angle is whatever it had reached
+            angle_ok, rule = True, "interrupted by the disarm (angle not judged)"
         passed = forward_ok if recovery else trigger and angle_ok and forward_ok and moved_on
         return {"t": start - (self.t0 or 0.0), "settled": settle - (self.t0 or 0.0), "kind":
                 "recovery" if recovery else "maneuver", "passed": passed, "trigger": trigger,
+                "interrupted": interrupted,
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
                 "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule,
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
@@ -331,16 +344,18 @@ class CheckoffJudge:
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items()}}
 
-    def _trigger(self, r: _Reading | None) -> tuple[bool, str]:
-        """Whether the configured maneuver's trigger held for reading ``r``, and how it read."""
+    def _trigger(self, r: _Reading | None, margin: float | None = None) -> tuple[bool, str]:
+        """Whether the configured maneuver's trigger held for reading ``r`` (within ``margin``, the config's
+        ``trigger_margin`` by default), and how it read."""
         cfg = self.config
+        margin = cfg.trigger_margin if margin is None else margin
         if r is None:
             return False, "no ground truth at the start"
         if cfg.maneuver == "B":
-            limit = cfg.safety_distance + cfg.trigger_margin
+            limit = cfg.safety_distance + margin
             return (r.left < limit and r.right < limit,
                     f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")
-        limit = (cfg.safety_distance if cfg.maneuver == "A" else cfg.pivot_distance) + cfg.trigger_margin
+        limit = (cfg.safety_distance if cfg.maneuver == "A" else cfg.pivot_distance) + margin
         return r.front < limit, f"front {r.front:.2f} m < {limit:.2f} m"
 
     def _angle_rule(self, angle: float, r: _Reading | None) -> tuple[bool, str]:

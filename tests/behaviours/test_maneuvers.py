@@ -109,7 +109,7 @@ class LaggedBase:
         self.latency, self.accel = latency, accel
         self.given: list[tuple[float, float]] = [(-math.inf, 0.0)]  # (time given, rate)
         self.yaw = self.rate = 0.0
-        self.next_odom = 1.0
+        self.next_odom = self.next_scan = 1.0
 
     def run(self, clock: FakeClock, seconds: float, board: Board | None = None) -> None:
         step = 0.005
@@ -121,6 +121,9 @@ class LaggedBase:
             if board is not None and clock.now >= self.next_odom:
                 board.set(odom=OdomSample(self.yaw, clock.now, 0.0, 0.0))
                 self.next_odom += 1 / 30
+            if board is not None and clock.now >= self.next_scan:  # an LDS-01 at 5 Hz
+                board.set(scan_stamp=clock.now)
+                self.next_scan += 0.2
 
 
 def lagged_turn(cls: type, s: Sectors, *, true_latency: float, planned: float,
@@ -171,7 +174,8 @@ def test_a_lagging_maneuver_starts_from_rest_and_ends_at_rest() -> None:
     first_turn = next(i for i, c in enumerate(commands) if not c.is_zero)
     last_turn = max(i for i, c in enumerate(commands) if not c.is_zero)
     assert still <= first_turn <= still + 1
-    assert still + 1 <= len(commands) - 1 - last_turn <= still + 2  # the tick it stops, the still, the end
+    # the tick it stops, the still, the wait for a scan taken at rest (one LDS-01 period at most), the end
+    assert still + 1 <= len(commands) - 1 - last_turn <= still + 2 + round(0.2 / 0.05)
     _, _, unlagged = lagged_turn(SmartPivotManeuver, sectors(front=0.25, left=1.0, right=0.5),
                                  true_latency=0.0, planned=0.0, moving=True)
     assert unlagged[0].angular != 0.0  # the homework tuning: no still

@@ -50,7 +50,8 @@ class RotationManeuver(Leaf, register=False):
     have done (:meth:`TurnMeter.pending`), and the maneuver is framed by two stills of ``latency`` +
     :data:`SETTLE` seconds: before the turn when the robot was moving (so the rotation starts from rest:
     no forward motion left in it) and after it (so the angle is read once the robot has stopped, and the
-    next command finds it still). Without latency both are skipped (the homework's tuning).
+    next command finds it still; it ends once a scan taken after that has arrived, so the triggers do not
+    judge the front by a scan from mid-turn). Without latency both are skipped (the homework's tuning).
     """
 
     INPUT_PORTS = {
@@ -61,6 +62,9 @@ class RotationManeuver(Leaf, register=False):
         "time_margin": port(float, default=2.0),
         "odom_timeout": port(float, default=0.5),
         "latency": port(float, "expected time between a command and the wheels", default=0.0),
+        "scan_stamp": port(float, "when the newest scan arrived (a lagging turn ends on a scan taken at rest)",
+                           default=-math.inf),
+        "scan_timeout": port(float, "longest wait for that scan", default=0.5),
     }
     OUTPUT_PORTS = {**CMD_PORT, **ACTIVE_PORT}
 
@@ -136,7 +140,8 @@ class RotationManeuver(Leaf, register=False):
         now = self.clock()
         self.meter.measure(now, self.get_input("odom"), self.get_input("odom_timeout"))
         if self._phase == "settle":
-            if now < self._phase_end:
+            if now < self._phase_end or (self.get_input("scan_stamp") < self._phase_end
+                                         and now < self._phase_end + self.get_input("scan_timeout")):
                 return self._hold(f"settling: turned {math.degrees(self.turned):+.0f} deg")
             return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
         if self.meter.open_loop and not self._open_loop_logged:
