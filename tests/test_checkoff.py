@@ -171,9 +171,14 @@ def test_no_maneuver_and_no_move_on_fail() -> None:
 
 
 def test_an_emergency_stop_turn_is_a_recovery_not_a_maneuver() -> None:
-    """B in an open room: the robot braked 0.3 m before the wall (B's trigger cannot hold) and turns
-    away: listed as a recovery turn, checked only for forward motion."""
-    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    """B in an open room: the robot braked 0.3 m before the wall (B's trigger cannot hold), stood 1 s and
+    turns away: listed as a recovery turn, checked only for forward motion. Without the standstill the
+    same turn is judged as a maneuver (whose trigger did not hold)."""
+    unbraked = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    res = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD)), unbraked).results()
+    assert len(res["maneuvers"]) == 1 and not res["maneuvers"][0]["trigger"]
+    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.0, 0.0, 0.0), (1.6, 0.0, 1.0), (3.0, 0.05, 0.0),
+              (10.0, 0.0, 0.0)]
     judge = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD)), script)
     res = judge.results()
     assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
@@ -214,7 +219,8 @@ def test_a_brake_turn_where_the_trigger_holds_only_within_the_margin_is_a_recove
     """B beside walls 0.52 m away (the margin's 0.55 m says squeezed, the lab's 0.5 m does not), braked
     0.3 m before a wall: the executive's way out, judged as a recovery, not as a 180 deg Retreat."""
     world = _world(WALL_AHEAD, [-1.5, 0.52, 1.5, 0.52], [-1.5, -0.52, 1.5, -0.52])
-    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.0, 0.0, 0.0), (1.6, 0.0, 1.0), (3.0, 0.05, 0.0),
+              (10.0, 0.0, 0.0)]
     res = _run(CheckoffJudge(_cfg("B"), world), script).results()
     assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
     strict = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD, [-1.5, 0.45, 1.5, 0.45],

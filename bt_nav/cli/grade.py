@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav_sim.physics import KINEMATICS
-from bt_nav_sim.world import list_worlds
+from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.cli.options import add_mission_options
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
@@ -27,30 +27,47 @@ from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, tree_setti
 
 
 def format_overall(total: dict[str, Any]) -> str:
-    """One line with the headline figures."""
-    return (f"{total['passed']}/{total['runs']} passed ({100 * total['pass_rate']:.1f} %), "
-            f"{total['collisions']} collisions in {total['runs_with_collisions']} runs, efficiency median "
-            f"{total['efficiency_median']:.3f} worst {total['efficiency_worst']:.3f}; worst cell {total['worst_cell']}")
+    """One line with the headline figures (the lab's: maneuvers in their rule and the largest angle miss)."""
+    head = (f"{total['passed']}/{total['runs']} passed ({100 * total['pass_rate']:.1f} %), "
+            f"{total['collisions']} collisions in {total['runs_with_collisions']} runs")
+    if "turns" in total:
+        return (f"{head}, {total['turns_ok']}/{total['turns']} maneuvers within their rule, largest miss of an "
+                f"announced angle {total['angle_error_max']:.1f} deg, {total['recoveries']} brake recoveries; "
+                f"worst cell {total['worst_cell']}")
+    return (f"{head}, efficiency median {total['efficiency_median']:.3f} worst {total['efficiency_worst']:.3f}; "
+            f"worst cell {total['worst_cell']}")
+
+
+def _failed(s: dict[str, Any]) -> str:
+    return ", ".join(f"{name} x{n}" for name, n in s["failed_checks"].items()) or "-"
 
 
 def format_table(summary: Sequence[dict[str, Any]]) -> str:
-    """The summary as a fixed-width text table."""
-    head = (f"{'world':<11} {'man':<4} {'pass':>7} {'coll':>5} {'trav med':>8} {'trav min':>8} "
-            f"{'eff med':>7} {'eff min':>7} {'wall/run':>8}  failed checks")
-    lines = [head, "-" * len(head)]
-    for s in summary:
-        failed = ", ".join(f"{name} x{n}" for name, n in s["failed_checks"].items()) or "-"
-        lines.append(
-            f"{s['world']:<11} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['collisions']:>5} "
-            f"{s['travelled_median']:>8.2f} {s['travelled_min']:>8.2f} {s['efficiency_median']:>7.3f} "
-            f"{s['efficiency_worst']:>7.3f} {s['wall_time_mean']:>7.3f}s  {failed}")
-    return "\n".join(lines)
+    """The summary as a fixed-width text table (the lab's check-off columns for a lab grid)."""
+    if summary and "turns" in summary[0]:
+        head = (f"{'world':<15} {'man':<4} {'pass':>7} {'coll':>5} {'turns':>6} {'in rule':>7} {'miss max':>8} "
+                f"{'brakes':>6} {'wall/run':>8}  failed checks")
+        rows = [f"{s['world']:<15} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['collisions']:>5} "
+                f"{s['turns']:>6} {s['turns_ok']:>7} {s['angle_error_max']:>7.1f}° {s['recoveries']:>6} "
+                f"{s['wall_time_mean']:>7.3f}s  {_failed(s)}" for s in summary]
+    else:
+        head = (f"{'world':<11} {'man':<4} {'pass':>7} {'coll':>5} {'trav med':>8} {'trav min':>8} "
+                f"{'eff med':>7} {'eff min':>7} {'wall/run':>8}  failed checks")
+        rows = [f"{s['world']:<11} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['collisions']:>5} "
+                f"{s['travelled_median']:>8.2f} {s['travelled_min']:>8.2f} {s['efficiency_median']:>7.3f} "
+                f"{s['efficiency_worst']:>7.3f} {s['wall_time_mean']:>7.3f}s  {_failed(s)}" for s in summary]
+    return "\n".join([head, "-" * len(head), *rows])
 
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="bt-nav grade", description=__doc__.splitlines()[0])
-    parser.add_argument("--worlds", default="stage_4", help="comma-separated world names, or 'all' (bundled)")
-    parser.add_argument("--maneuvers", default="none,A,B,C", help="comma-separated: none, A, B, C")
+    parser.add_argument("--worlds", default=None, help="comma-separated world names, or 'all' (the bundled "
+                        "worlds of the profile: the homework's, or with --profile lab the lab's check-off arenas); "
+                        "default stage_4, or all for lab")
+    parser.add_argument("--maneuvers", default=None, help="comma-separated: none, A, B, C (default none,A,B,C; "
+                        "lab: A,B,C, each in the arenas that can check it off)")
+    parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
+                        help="simulator setting for every mission (repeatable), e.g. actuation_latency=0.15")
     parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")
@@ -88,19 +105,37 @@ def _save(path: Path, settings: dict[str, Any], rows: Sequence[dict[str, Any]], 
     tmp.replace(path)
 
 
+def checkoff_jobs(jobs: Sequence[Job]) -> list[Job]:
+    """The jobs whose arena can check their maneuver off (its ``checkoff_maneuvers``: a lone object in the
+    open cannot squeeze a robot for B); says on stderr which pairs it leaves out."""
+    can = {world: load_world(world).checkoff_maneuvers for world in {job.world for job in jobs}}
+    kept = [job for job in jobs if not can[job.world] or job.maneuver in can[job.world]]
+    skipped = sorted({(job.world, job.maneuver) for job in jobs} - {(job.world, job.maneuver) for job in kept})
+    if skipped:
+        print("not checked off there: " + ", ".join(f"{w} {m}" for w, m in skipped), file=sys.stderr)
+    if not kept:
+        raise ValueError("no arena among the worlds can check these maneuvers off")
+    return kept
+
+
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav grade``: prints the table; exit 0 only if every mission passed."""
     parser = _parser()
     args = parser.parse_args(argv)
-    worlds = [w.strip() for w in args.worlds.split(",") if w.strip()]
+    lab = args.profile == "lab"
+    worlds = [w.strip() for w in (args.worlds or ("all" if lab else "stage_4")).split(",") if w.strip()]
     if worlds == ["all"]:
-        worlds = list_worlds()
+        worlds = list_worlds("lab" if lab else "homework")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     try:
-        maneuvers = [normalise_maneuver(m.strip()) for m in args.maneuvers.split(",") if m.strip()]
+        maneuvers = [normalise_maneuver(m.strip()) for m in (args.maneuvers or ("A,B,C" if lab else "none,A,B,C"))
+                     .split(",") if m.strip()]
         overrides = parse_assignments(args.overrides) or None
+        sim_params = parse_assignments(args.sim_param) or None
         jobs = make_jobs(worlds, maneuvers, seeds, overrides, args.profile,
-                         None if args.no_jitter else DEFAULT_JITTER, args.kinematics)
+                         None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params)
+        if lab:
+            jobs = checkoff_jobs(jobs)
         if args.resume and not args.json:
             raise ValueError("--resume needs --json FILE (the file to continue)")
         path = Path(args.json) if args.json else None
@@ -108,6 +143,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     settings = {"profile": args.profile, "kinematics": args.kinematics, "seeds": seeds, "worlds": worlds,
+                "sim_params": sim_params or {},
                 "maneuvers": maneuvers, "overrides": overrides or {}, "jitter": not args.no_jitter,
                 "parameters": effective_parameters(tree_settings(args.profile, "none", seeds[0] if seeds else 0,
                                                                  overrides)),

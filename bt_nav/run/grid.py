@@ -44,12 +44,14 @@ class Job:
     kinematics: str = ""
     jitter: tuple[float, float] | None = None
     overrides: dict[str, Any] | None = field(default=None, hash=False, compare=False)
+    sim_params: tuple[tuple[str, Any], ...] = ()  # simulator settings (--sim-param), e.g. actuation_latency
 
     @property
     def key(self) -> str:
         """A stable name of the job (results files and Dask keys use it)."""
         jitter = "exact" if not self.jitter else f"{self.jitter[0]:g}m{self.jitter[1]:g}deg"
-        return f"{self.world}|{self.maneuver}|{self.seed}|{self.profile}|{self.kinematics or '-'}|{jitter}"
+        sim = "".join(f"|{name}={value}" for name, value in self.sim_params)
+        return f"{self.world}|{self.maneuver}|{self.seed}|{self.profile}|{self.kinematics or '-'}|{jitter}{sim}"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
@@ -63,7 +65,7 @@ def run_job(job: Job) -> dict[str, Any]:
     with _MISSION_LOCK:
         try:
             summary = run_mission(job.world, job.maneuver, job.seed, job.overrides, job.profile, jitter=job.jitter,
-                                  kinematics=job.kinematics).summary()
+                                  kinematics=job.kinematics, sim_params=dict(job.sim_params)).summary()
         except Exception as exc:  # one broken mission must not sink the whole grade
             summary = {"world": job.world, "maneuver": job.maneuver, "seed": job.seed, "profile": job.profile,
                        "kinematics": job.kinematics, "passed": False, "error": repr(exc), "travelled": 0.0,
@@ -107,9 +109,11 @@ def seed_list(seeds: int | Iterable[int]) -> list[int]:
 
 def make_jobs(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iterable[int],
               overrides: dict[str, Any] | None = None, profile: str = "homework",
-              jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "") -> list[Job]:
+              jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "",
+              sim_params: dict[str, Any] | None = None) -> list[Job]:
     """The grid in its canonical order: worlds, then maneuvers, then seeds."""
-    return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides)
+    sim = tuple(sorted((sim_params or {}).items()))
+    return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides, sim)
             for w in worlds for m in maneuvers for s in seed_list(seeds)]
 
 
@@ -167,8 +171,21 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "failed_checks": dict(failures.most_common()),
             "failed_seeds": [r["seed"] for r in runs if not r["passed"]],
             "wall_time_mean": statistics.fmean(r.get("wall_time", 0.0) for r in runs),
+            **_checkoff_cell(runs),
         })
     return out
+
+
+def _checkoff_cell(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The lab check-off's figures of a cell (nothing for homework runs): maneuvers judged, how many obeyed
+    their rule, recovery turns, and the largest miss of an announced angle (degrees)."""
+    cells = [r["checkoff"] for r in runs if "checkoff" in r]
+    if not cells:
+        return {}
+    errors = [abs(e) for c in cells for e in c["angle_errors"]]
+    return {"turns": sum(c["maneuvers"] for c in cells), "turns_ok": sum(c["angles_ok"] for c in cells),
+            "recoveries": sum(c["recoveries"] for c in cells), "angle_error_max": max(errors, default=0.0),
+            "runs_without_maneuver": sum(1 for c in cells if c["maneuvers"] == 0)}
 
 
 def overall(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -> dict[str, Any]:
@@ -183,4 +200,5 @@ def overall(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -
         "efficiency_median": _median(efficiency), "efficiency_worst": min(efficiency, default=float("nan")),
         "worst_cell": (f"{worst_cell['world']} {worst_cell['maneuver']} {worst_cell['passed']}/{worst_cell['runs']}"
                        if worst_cell else ""),
+        **_checkoff_cell(rows),
     }

@@ -32,7 +32,7 @@ from __future__ import annotations
 import time
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -46,14 +46,17 @@ from bt_nav_sim.world import World, load_world
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.local_services import LocalTriggerClient, TriggerRequest, TriggerResponse
+from bt_nav.mission.params import coerce
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.trace import TraceRecorder
+from bt_nav.run.checkoff import lab_judge
 from bt_nav.run.result import MissionResult, RunResult
 from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, profile_maneuver, tree_settings
 from bt_nav.run.sinks import EventLog, MissionSink, RunSink
 
 REFEREE_HZ = 2.0
-HARD_STOP = 60.0  # s after t0: the run ends even if the referees have not reported
+HARD_STOP = 60.0  # s after t0: the run ends even if the referees have not reported (a referee may say
+#                   when it will have reported: its ``hard_stop``, the lab's check-off runs longer)
 
 
 class RefereeLike(Protocol):
@@ -237,20 +240,22 @@ class Lockstep:
                  kinematics: str = "", noise: bool = True,
                  jitter: tuple[float, float] | None = DEFAULT_JITTER, referee: RefereeFactory | None = None,
                  referee_config: RefereeConfig | None = None, sink: RunSink | MissionSink | None = None,
-                 merge_steps: bool = True) -> None:
+                 merge_steps: bool = True, sim_params: dict[str, Any] | None = None) -> None:
         profile(profile_name)  # ValueError for an unknown profile, before any work
         self.profile = profile_name
         self.maneuver = profile_maneuver(profile_name, maneuver)
         self.seed = int(seed)
         world_obj = world if isinstance(world, World) else load_world(world, seed=self.seed)
         jitter_m, jitter_deg = jitter or (0.0, 0.0)
-        config = SimConfig(world=world_obj.name, profile=profile_name, seed=self.seed, noise=noise,
-                           kinematics=kinematics, spawn_jitter_m=jitter_m, spawn_jitter_deg=jitter_deg)
+        config = sim_config(SimConfig(world=world_obj.name, profile=profile_name, seed=self.seed, noise=noise,
+                                      kinematics=kinematics, spawn_jitter_m=jitter_m,
+                                      spawn_jitter_deg=jitter_deg), sim_params)
         self.sim = MultiSimCore(config, robots, names, starts, world=world_obj)
         self.clock = SimClock()
         self.sink = sink
         self.merge_steps = merge_steps
-        make_referee = referee or homework_referee(referee_config)
+        make_referee = referee or (lab_judge(self.maneuver, lambda: self.sim.world) if profile_name == "lab"
+                                   else homework_referee(referee_config))
         self.robots: list[Robot] = []
         for i, (name, body) in enumerate(zip(self.sim.names, self.sim.cores, strict=True)):
             robot_sink = sink if sink is None or len(self.sim.names) == 1 else sink.robot(name)  # type: ignore[union-attr]
@@ -280,12 +285,13 @@ class Lockstep:
 
     def _loop(self, duration: float | None) -> None:
         """The one loop (see the module docstring for the order within an instant)."""
-        end_ns = round((duration if duration is not None else HARD_STOP) * 1e9)
         sim, robots, sink = self.sim, self.robots, self.sink
         next_tick = next_referee = 0
         outs = sim.outputs()
         for robot in robots:
             robot.referee.start(0.0)
+        hard_stop = max(getattr(robot.referee, "hard_stop", HARD_STOP) for robot in robots)
+        end_ns = round((duration if duration is not None else hard_stop) * 1e9)
         while sim.t_ns <= end_ns:
             self.clock.now = sim.t
             for robot, out in zip(robots, outs, strict=True):
@@ -308,6 +314,21 @@ class Lockstep:
     def result(self, wall_time: float) -> RunResult:
         """Every robot's verdict and measurements."""
         return RunResult(self.names, [robot.result(self, wall_time) for robot in self.robots], wall_time)
+
+
+def sim_config(config: SimConfig, sim_params: dict[str, Any] | None) -> SimConfig:
+    """``config`` with the simulator settings ``sim_params`` (``--sim-param NAME=VALUE``: the simulator node's
+    parameter names, e.g. ``actuation_latency``, ``odom_rate_hz``); ValueError names an unknown one."""
+    if not sim_params:
+        return config
+    known = {f.name for f in fields(SimConfig)}
+    unknown = sorted(set(sim_params) - known)
+    if unknown:
+        raise ValueError(f"unknown simulator parameter {unknown[0]!r}; known: {', '.join(sorted(known))}")
+    values = {name: coerce(getattr(config, name), value) for name, value in sim_params.items()}
+    updated = replace(config, **values)
+    updated.check()
+    return updated
 
 
 def run_robots(world: str | World = "stage_4", maneuver: str | None = None, seed: int = 0,

@@ -13,6 +13,8 @@ from typing import Any
 from bt_nav_sim.plot import Trajectory, plot_robots, plot_run
 from bt_nav_sim.world import World
 
+from bt_nav.run.checkoff import checkoff_summary
+
 
 @dataclass
 class MissionResult:
@@ -57,6 +59,7 @@ class MissionResult:
             "failed_checks": self.failed_checks, "wall_time": round(self.wall_time, 4),
             "sim_time": round(self.sim_time, 4), "branch_ticks": dict(self.branch_ticks),
             "maneuvers": self.maneuvers, "faults": self.faults,
+            **({"checkoff": checkoff_summary(self.results, self.events)} if "recovery_turns" in self.results else {}),
         }
 
     def to_dict(self, trajectory: bool = False) -> dict[str, Any]:

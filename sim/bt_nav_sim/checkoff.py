@@ -85,6 +85,7 @@ class CheckoffConfig:
     side_tie: float = 0.15  # C: left and right closer than this count as a tie (either side passes)
     open_space: float = 3.0  # C: both sides beyond this count as a tie too
     aeb_distance: float = 0.35  # an obstacle this close in the swept path makes a turn an AEB recovery
+    aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned)
     half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
     min_maneuvers: int = 1
 
@@ -311,18 +312,20 @@ class CheckoffJudge:
     def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float) -> dict[str, Any]:
         """One episode: trigger at its start, angle and side, no forward command or motion, moved on.
 
-        A turn whose trigger did not hold but whose swept path was blocked within ``aeb_distance`` is an
-        emergency-stop recovery turn (the executive braked and turns away): only the forward rules apply.
+        A turn after a standstill of ``aeb_stop`` whose trigger did not hold but whose swept path was blocked
+        within ``aeb_distance`` is an emergency-stop recovery turn (the executive braked, stood and turns
+        away): only the forward rules apply.
         """
         cfg = self.config
         start = self.commands[a][0]
         reading = self._readings[self._index_at(start)] if self._t else None
         trigger, trigger_text = self._trigger(reading)
-        # A recovery: the path was blocked and the trigger did not hold even without the margin (the margin
-        # is the robot's benefit of the doubt for its own maneuvers, not a reason to judge its brake's way out
-        # by the maneuver's rule).
+        # A recovery: the robot stood (it braked), its path was blocked, and the trigger did not hold even
+        # without the margin (the margin is the robot's benefit of the doubt for its own maneuvers, not a
+        # reason to judge its brake's way out by the maneuver's rule; and a maneuver that fires with no
+        # standstill before it, C's at 0.3 m with a 0.35 m brake zone, is judged as one).
         recovery = (reading is not None and reading.ahead < cfg.aeb_distance
-                    and not self._trigger(reading, margin=0.0)[0])
+                    and self._stood_before(a) >= cfg.aeb_stop and not self._trigger(reading, margin=0.0)[0])
         disarm = self.deactivation_requested
         interrupted = disarm is not None and self.commands[b][0] >= disarm - INTERRUPT_SLACK
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, start)) if self._t else 0.0
@@ -343,6 +346,14 @@ class CheckoffJudge:
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items()}}
+
+    def _stood_before(self, a: int) -> float:
+        """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""
+        start = self.commands[a][0]
+        for t, v, w in reversed(self.commands[:a]):
+            if v != 0.0 or w != 0.0:
+                return start - t
+        return start - self.commands[0][0] if self.commands else 0.0
 
     def _trigger(self, r: _Reading | None, margin: float | None = None) -> tuple[bool, str]:
         """Whether the configured maneuver's trigger held for reading ``r`` (within ``margin``, the config's
@@ -392,6 +403,13 @@ class CheckoffJudge:
         return False, f"travelled {travelled:.3f} m in {cfg.move_on_within:.0f} s"
 
     # ------------------------------------------------------------------ verdict
+    @property
+    def hard_stop(self) -> float:
+        """Absolute time by which the report is made on schedule (a driver may stop a run that goes on longer):
+        the disarm, the grace, the static window and a second of slack after t0."""
+        cfg = self.config
+        return (self.t0 or 0.0) + cfg.activate_at + cfg.armed_for + cfg.grace + cfg.static_after + 1.0
+
     @property
     def done(self) -> bool:
         """The report is made."""
