@@ -1,0 +1,55 @@
+"""The lab's check-off in lock-step: the real tree in lab mode, the simulator, the check-off judge.
+
+The lab runs on a real TurtleBot3, so the grid here runs with what makes a real base hard: the Burger's
+per-wheel limits, 0.15 s between a command and the wheels (the upper end measured on real robots) and
+odometry at the robot's 20 Hz. Every maneuver must still land within 10 deg of the angle it announced.
+"""
+
+from __future__ import annotations
+
+import pytest
+from bt_nav_sim.world import list_worlds, load_world
+
+from bt_nav.run.checkoff import angle_errors, announced_turns
+from bt_nav.run.grid import Job, run_job
+from bt_nav.run.lockstep import run_mission
+from bt_nav.run.settings import DEFAULT_JITTER
+
+REAL_BASE = {"actuation_latency": 0.15, "odom_rate_hz": 20.0}
+CELLS = [(world, maneuver) for world in list_worlds("lab") for maneuver in load_world(world).checkoff_maneuvers]
+
+
+def test_every_lab_arena_is_in_the_grid() -> None:
+    assert {w for w, _ in CELLS} == set(list_worlds("lab")) and len(list_worlds("lab")) >= 5
+    assert {m for _, m in CELLS} == {"A", "B", "C"}
+
+
+@pytest.mark.parametrize(("world", "maneuver"), CELLS)
+def test_on_a_lagging_burger_every_maneuver_lands_within_10_deg_of_its_angle(world: str, maneuver: str) -> None:
+    for seed in (0, 1):
+        job = Job(world, maneuver, seed, "lab", "burger", DEFAULT_JITTER, None, tuple(sorted(REAL_BASE.items())))
+        summary = run_job(job)
+        assert "error" not in summary, summary
+        checkoff = summary["checkoff"]
+        assert checkoff["maneuvers"] >= 1 and summary["collisions"] == 0, summary
+        assert checkoff["angles_ok"] == checkoff["maneuvers"], summary["failed_checks"]
+        assert checkoff["angle_errors"], "every judged maneuver is matched to its announcement"
+        assert max(abs(e) for e in checkoff["angle_errors"]) <= 10.0, checkoff["angle_errors"]
+
+
+def test_a_check_off_passes_and_its_report_reads_like_the_homeworks() -> None:
+    result = run_mission("lab_object", "C", 0, profile="lab")
+    assert result.passed, result.report_lines
+    lines = result.report_lines
+    assert lines[0].startswith("static before activation") and lines[-1] == "overall: PASSED"
+    assert any(line.startswith("maneuver 1 (C at t=") and line.endswith(": PASSED") for line in lines)
+    assert lines[-2].startswith("static after deactivation")
+    assert result.sim_time > 60.0  # the lab runs 60 s armed, beyond the homework's hard stop
+    turns = announced_turns(result.events)
+    assert turns and all(abs(abs(deg) - 90.0) < 1e-9 for _, deg in turns)
+    assert len(angle_errors(result.events, result.results["maneuvers"])) == len(result.results["maneuvers"])
+
+
+def test_the_lab_profile_needs_a_lab_maneuver() -> None:
+    with pytest.raises(ValueError, match="A, B or C"):
+        run_mission("lab_object", "none", 0, profile="lab")
