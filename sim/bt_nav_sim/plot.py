@@ -18,11 +18,13 @@ import numpy as np
 from bt_nav_sim.world import World, box_corners
 
 #: Branch labels, in legend order.
-BRANCHES = ("FullSpeed", "TurnAway", "RotateInPlace", "Maneuver", "Stopped")
+BRANCHES = ("FullSpeed", "TurnAway", "RotateInPlace", "Creep", "AEB", "Maneuver", "Stopped")
 BRANCH_COLOURS = {
     "FullSpeed": "#2ca02c",
     "TurnAway": "#ff7f0e",
     "RotateInPlace": "#d62728",
+    "Creep": "#1f77b4",  # lab mode: the slow straight creep
+    "AEB": "#e377c2",  # lab mode: the emergency stop and its way out
     "Maneuver": "#9467bd",
     "Stopped": "#7f7f7f",
 }
@@ -55,7 +57,7 @@ def branch_of_tip(tip: str) -> str:
     Anything that is not a driving leaf (Stop*, EvaluateMission, an empty tip) counts as stopped.
     """
     name = tip.rsplit(".", 1)[-1]
-    if name in ("FullSpeed", "TurnAway", "RotateInPlace"):
+    if name in ("FullSpeed", "TurnAway", "RotateInPlace", "Creep", "AEB"):
         return name
     if name in MANEUVER_TIPS or name.startswith("Maneuver"):
         return "Maneuver"
