@@ -31,6 +31,28 @@ def test_homework_profile() -> None:
     assert (sim.parameters["seed"], sim.parameters["real_time_factor"]) == (7, 0.0)
 
 
+@pytest.mark.parametrize(("maneuver", "world"), [("A", "lab_object"), ("randomizer", "lab_object"),
+                                                  ("B", "lab_dead_end"), ("C", "lab_object")])
+def test_checkoff_profile_judges_the_executives_maneuver_in_the_simulators_world(maneuver: str, world: str) -> None:
+    specs = nodes("checkoff", maneuver=maneuver, seed=3, results_json="/tmp/c.json")
+    assert [s.executable for s in specs] == ["sim", "executive", "checkoff"]  # the judge last: started last
+    sim, exe, judge = (s.parameters for s in specs)
+    assert exe["maneuver"] == judge["maneuver"] == {"randomizer": "A"}.get(maneuver, maneuver)
+    assert sim["world"] == judge["world"] == world and sim["seed"] == judge["seed"] == 3
+    assert sim["profile"] == "lab" and sim["solo_rtf"] == bringup.SOLO_RTF
+    assert specs[1].remappings == [("arm", "toggle_navigation")] and judge["activate_service"] == "toggle_navigation"
+    assert (judge["json"], judge["wait_for_cmd_vel"], judge["use_sim_time"]) == ("/tmp/c.json", True, True)
+    assert specs[2].name == "bt_nav_checkoff"
+    assert bringup.arm_hint(specs, 100) is None  # the judge arms the robot
+    assert _by_name(nodes("checkoff", maneuver="A", world="lab_cluttered"))["checkoff"].parameters["world"] == \
+        "lab_cluttered"
+
+
+def test_checkoff_refuses_no_maneuver() -> None:
+    with pytest.raises(ValueError, match="A, B or C"):
+        nodes("checkoff", maneuver="none")
+
+
 def test_eval_adds_the_referee_and_lab_remaps_arm() -> None:
     specs = _by_name(nodes("eval", results_json="/tmp/r.json"))
     assert list(specs) == ["sim", "executive", "referee"]  # the referee last: the demo starts it last

@@ -54,8 +54,9 @@ def run_launch_file(path: Path, monkeypatch: pytest.MonkeyPatch):
     return module, module.generate_launch_description()
 
 
-def test_there_are_the_three_launch_files() -> None:
-    assert {f.name for f in FILES} == {"turtlebot_bringup.launch.py", "sim.launch.py", "eval.launch.py"}
+def test_there_are_the_four_launch_files() -> None:
+    assert {f.name for f in FILES} == {"turtlebot_bringup.launch.py", "sim.launch.py", "eval.launch.py",
+                                       "lab_checkoff.launch.py"}
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)
@@ -82,9 +83,12 @@ def test_every_argument_is_declared_used_and_typed(path: Path, monkeypatch: pyte
         if type(node.kwargs.get("namespace")).__name__ == "LaunchConfiguration":
             used.add(node.kwargs["namespace"].args[0])
     assert used == set(declared), "every declared argument reaches a node, and only declared ones"
+    own_defaults = getattr(module, "DEFAULTS", {})  # a launch file's own defaults (the lab check-off's arena)
     for name, kwargs in declared.items():
         assert kwargs["description"], f"{name} has no description"
-        if name in SPECS:
+        if name in own_defaults:
+            assert kwargs["default_value"] == own_defaults[name]
+        elif name in SPECS:
             expected = SPECS[name].default
             assert kwargs["default_value"] == (str(expected).lower() if isinstance(expected, bool) else str(expected))
 
@@ -100,6 +104,44 @@ def test_lab_bringup_is_the_labs_interface(monkeypatch: pytest.MonkeyPatch) -> N
     assert ("arm", "toggle_navigation") in node.kwargs["remappings"]
     value = node.kwargs["parameters"][-1]["safety_distance"]
     assert value.kwargs["value_type"] is float
+    _assert_lab_mode(node)
+
+
+def _assert_lab_mode(node) -> None:
+    """The executive loads config/lab.yaml first (lab mode: creep, AEB, no deadline), explicit values after."""
+    from bt_nav.mission.profiles import file_parameters
+
+    files, explicit = node.kwargs["parameters"][:-1], node.kwargs["parameters"][-1]
+    assert [Path(f).name for f in files] == ["lab.yaml"]
+    lab = file_parameters(files[0])
+    assert (lab["mode"], lab["mission_duration"]) == ("lab", 0.0)
+    assert "mode" not in explicit and "mission_duration" not in explicit  # nothing overrides lab mode
+
+
+def test_lab_checkoff_launch_has_sim_executive_and_judge(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Simulator, the executive in lab mode on toggle_navigation, and the judge calling that service in the
+    simulator's world (the same launch arguments reach both), with the executive's maneuver and distance."""
+    module, description = run_launch_file(LAUNCH / "lab_checkoff.launch.py", monkeypatch)
+    entities = description.args[0]
+    declared = {e.args[0]: e.kwargs for e in entities if type(e).__name__ == "DeclareLaunchArgument"}
+    assert (declared["maneuver"]["default_value"], declared["world"]["default_value"]) == ("C", "lab_object")
+    nodes = {e.kwargs["executable"]: e for e in entities if type(e).__name__ == "Node"}
+    assert list(nodes) == ["sim", "executive", "checkoff"]
+    assert nodes["checkoff"].kwargs["name"] == "bt_nav_checkoff"
+    assert dict(nodes["executive"].kwargs["remappings"]) == {"arm": "toggle_navigation"}
+    _assert_lab_mode(nodes["executive"])
+    judge, sim, exe = (nodes[n].kwargs["parameters"][-1] for n in ("checkoff", "sim", "executive"))
+    assert judge["activate_service"] == "toggle_navigation" and judge["use_sim_time"] is True
+    assert exe["use_sim_time"] is True and sim["profile"] == "lab"
+
+    def argument(params: dict, name: str) -> str:
+        return params[name].args[0].args[0]
+
+    assert argument(judge, "world") == argument(sim, "world") == "world"
+    assert argument(judge, "seed") == argument(sim, "seed") == "seed"
+    assert argument(judge, "maneuver") == argument(exe, "maneuver") == "maneuver"
+    assert argument(judge, "safety_distance") == argument(exe, "safety_distance") == "safety_distance"
+    assert argument(judge, "json") == "results_json"
 
 
 def test_eval_launch_has_sim_executive_and_referee(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -6,7 +6,6 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.nodes.simulator import split_ros_args
 from bt_nav_sim.pacing import Followers
 
 MS = 1_000_000
@@ -107,10 +106,3 @@ def test_holds_block_until_released_or_too_long() -> None:
     f.report("referee", 0, True, wall=5.0)
     assert f.blocking(10 * MS, wall=10.1) == (None, ["referee"])
     assert f.leave("referee") and not f.leave("referee")
-
-
-def test_split_ros_args() -> None:
-    ours, ros = split_ros_args(["--world", "x", "--ros-args", "-p", "a:=1", "--", "--rtf", "2", "--ros-args", "-r",
-                                "b:=c"])
-    assert ours == ["--world", "x", "--rtf", "2"]
-    assert ros == ["--ros-args", "-p", "a:=1", "--", "--ros-args", "-r", "b:=c", "--"]

@@ -15,8 +15,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "executive": ("bt_nav.ros.executive", "run the mission executive node (ros2 run bt_nav executive)"),
     "sim": ("bt_nav_sim.nodes.simulator", "run the 2D TurtleBot3 simulator node"),
     "referee": ("bt_nav_sim.nodes.referee", "run the homework referee node"),
+    "checkoff": ("bt_nav_sim.nodes.checkoff", "run the lab's check-off judge node (calls toggle_navigation)"),
     "sim-run": ("bt_nav.ros.bringup", "simulator + executive (+ referee) in one go, without ros2 launch"),
-    "demo": ("bt_nav.cli.demo", "the whole homework mission over DDS in sim time, with verdict and picture"),
+    "demo": ("bt_nav.cli.demo", "the homework mission (or --profile lab: the lab's check-off) over DDS in sim time"),
     "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),
     "grade": ("bt_nav.cli.grade", "grade worlds x maneuvers x seeds in lock-step, in parallel"),
     "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
@@ -105,6 +106,11 @@ def sim_main() -> int:
 def referee_main() -> int:
     """``ros2 run bt_nav referee``."""
     return _entry("referee")
+
+
+def checkoff_main() -> int:
+    """``ros2 run bt_nav checkoff``."""
+    return _entry("checkoff")
 
 
 def dump_tree_main() -> int:

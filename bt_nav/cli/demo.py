@@ -1,5 +1,7 @@
 """``bt-nav demo`` (``make demo``): the whole homework mission over real DDS in sim time, judged and drawn.
 
+With ``--profile lab`` it is the lab's check-off instead: :mod:`bt_nav.cli.labdemo`.
+
 It starts the ``eval`` graph of :mod:`bt_nav.ros.bringup` — simulator (stage_4, homework LiDAR),
 executive (``config/homework.yaml`` and any ``--set``) and referee; with ``--robots N`` one simulator
 hosting robot1 ... robotN and per robot an executive and a referee in its namespace — as subprocesses on
@@ -30,7 +32,7 @@ from bt_nav.cli import plain
 from bt_nav.cli.options import add_mission_options
 from bt_nav.mission.params import parse_assignments
 from bt_nav.run.recorder import Recording, speed_line
-from bt_nav.run.rosmission import GRACE, STARTUP, RosMission, mission_graph
+from bt_nav.run.rosmission import GRACE, RosMission, mission_graph
 from bt_nav.run.rundir import LOG_FORMAT, Logs, make_run_dir
 from bt_nav.run.settings import effective_parameters, profile_maneuver, tree_settings
 
@@ -52,8 +54,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
     parser.add_argument("--quiet", action="store_true", help="print only the verdict lines")
     parser.add_argument("--bag", metavar="DIR", help="also record the run as a rosbag2 (MCAP) bag (bt-nav record)")
+    parser.add_argument("--video", metavar="MP4", help="also film the run (from its bag: --bag, else <MP4>_bag)")
     parser.add_argument("--robots", type=int, default=1, help="robots in the world (default 1); > 1: robot1, "
                         "robot2, ... each with its executive and referee in its namespace, a verdict each")
+    parser.set_defaults(world=None)  # the lab's default arena depends on the maneuver; the homework's is stage_4
     return parser
 
 
@@ -80,8 +84,9 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     from bt_nav.ros.supervise import choose_domain_id
 
     if opts.profile != "homework":
-        raise ValueError(f"--profile {opts.profile}: the demo's graph runs the homework profile only "
-                         "(lockstep and grade run every profile)")
+        raise ValueError(f"--profile {opts.profile}: the demo runs the homework (its referee) or the lab (its "
+                         "check-off judge), not this profile (lockstep and grade run every profile)")
+    opts.world = opts.world or "stage_4"
     names = robot_names(opts.robots)
     maneuver = effective_maneuver(opts.maneuver)
     overrides = parse_assignments(opts.overrides)
@@ -105,11 +110,16 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav demo``; returns 0 (every robot PASSED), 1 (one FAILED) or 2 (no verdict)."""
+    from bt_nav.cli.options import bag_for, film
     from bt_nav.cli.record import start_process, stop_process
     from bt_nav.ros.bringup import cmd_vel_stamped
     from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    if opts.profile == "lab":
+        from bt_nav.cli.labdemo import run_lab
+
+        return run_lab(opts)
     try:
         run = _prepare(opts)
     except ValueError as exc:
@@ -130,46 +140,22 @@ def main(argv: list[str] | None = None) -> int:
     mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, last_word=lambda: [
         publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
     logs.sim_time = mission.recorders[names[0]].sim_time
-    bag = start_process(opts.bag, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if opts.bag \
+    bag_dir = bag_for(opts.bag, opts.video)
+    bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if bag_dir \
         else None
     try:
-        code = _supervise(mission, opts, run_dir)
+        code = mission.supervise(opts.timeout + GRACE, run_dir)
     finally:
         logs.quiet_from_now = True  # the shutdown's lines go to the log files only
         stop.closing = True
         recs = mission.close()
         if bag is not None:
-            print(f"bt-nav demo: bag {opts.bag}: {stop_process(bag)}", flush=True)
+            print(f"bt-nav demo: bag {bag_dir}: {stop_process(bag)}", flush=True)
         logs.close()
         stop.restore()
+    if opts.video and bag_dir:
+        film(bag_dir, opts.video, 10.0)
     return _report(run, opts, recs, code, time.monotonic() - wall0)
-
-
-def _supervise(mission: RosMission, opts: argparse.Namespace, run_dir: Path) -> int:
-    """Start the nodes, the referees once every robot is seen, wait for every verdict; the exit code."""
-    mission.start_graph()
-    mission.wait_ready(STARTUP)
-    if mission.stop is not None and mission.stop.requested:
-        return _stopped(mission)
-    mission.start_referees()
-    outcome, child = mission.wait_verdicts(opts.timeout + GRACE)
-    if outcome == "verdict":
-        return mission.referee_code()
-    if outcome == "stopped":
-        return _stopped(mission)
-    if outcome == "exited" and child is not None:
-        where = f"{child.spec.namespace}_{child.name}" if child.spec.namespace else child.name
-        print(f"bt-nav demo: {where} exited with {child.poll()} before the verdict; see "
-              f"{run_dir / (where + '.log')}", file=sys.stderr)
-    else:
-        print(f"bt-nav demo: no verdict within {opts.timeout + GRACE:g} s wall; stopping", file=sys.stderr)
-    return 2
-
-
-def _stopped(mission: RosMission) -> int:
-    stop = mission.stop
-    print(f"bt-nav demo: {(stop.name if stop else '') or 'SIGINT'}: stopping every node", file=sys.stderr)
-    return 128 + int((stop.signum if stop else 2) or 2)
 
 
 def _robot_files(run: dict[str, Any], name: str, rec: Recording) -> tuple[dict[str, Any], Any, list[Path]]:

@@ -16,7 +16,10 @@ Profiles:
               ``evaluate_mission`` -> ``/reactive_control/evaluate_mission``) with
               ``config/homework.yaml`` when present, in sim time, plus the simulator in stage_4 with
               the homework LiDAR;
-``eval``      ``homework`` plus the referee.
+``eval``      ``homework`` plus the referee;
+``checkoff``  ``lab`` plus the lab's check-off judge (``bt_nav_checkoff``), in sim time; its world is by
+              default the lab arena for the maneuver (:data:`CHECKOFF_WORLDS`) and the judge gets the
+              simulator's world and seed and the executive's maneuver.
 
 Namespaces (``namespace=``, one robot of several): every node of the profile goes into it and the service
 names become relative (``reactive_control/activate`` is ``/robot1/reactive_control/activate`` there); without
@@ -51,7 +54,13 @@ from bt_nav.ros.supervise import (  # noqa: F401
     publish_zero_twist,
 )
 
-PROFILES = ("lab", "homework", "eval")
+PROFILES = ("lab", "homework", "eval", "checkoff")
+
+#: The lab arena a check-off runs in by default, per maneuver (each lists the maneuver in its
+#: ``checkoff_maneuvers``): an object in the path for A and C, a dead-end passage for B.
+CHECKOFF_WORLDS = {"A": "lab_object", "B": "lab_dead_end", "C": "lab_object"}
+#: The executables that judge a run (print a verdict, then exit): the homework's referee, the lab's judge.
+JUDGES = ("referee", "checkoff")
 
 #: The homework's service names (what the course's evaluator calls and serves).
 HOMEWORK_ACTIVATE = "/reactive_control/activate"
@@ -62,9 +71,10 @@ LAB_ARM = "toggle_navigation"
 #: Simulator speed cap (as-fast-as-possible mode) before the referee joins, in the profiles with a referee.
 SOLO_RTF = 5.0
 
-#: Node names (the console scripts are ``executive``, ``sim`` and ``referee``).
+#: Node names (the console scripts are ``executive``, ``sim``, ``referee`` and ``checkoff``).
 SIM_NAME = "bt_nav_sim"
 REFEREE_NAME = "bt_nav_referee"
+CHECKOFF_NAME = "bt_nav_checkoff"
 
 
 @dataclass
@@ -168,21 +178,24 @@ def nodes(
         maneuver: the executive's evasive maneuver (none, A, B, C or a name).
         seed: one seed for everything random: sensor noise, generated worlds, maneuver A's choices.
         rtf: simulator real-time factor (0 = as fast as the executive keeps up).
-        with_referee: add the referee (default: only in ``eval``).
+        with_referee: add the judge (default: only in ``eval``, the referee, and ``checkoff``, the lab's judge).
         include_sim: add the simulator; without it (a real robot) the executive uses wall time.
-        results_json: where the referee writes its verdict.
+        results_json: where the referee (or the lab's judge) writes its verdict.
         executive: further executive parameters (override the params file and the profile's values).
         sim: further simulator parameters.
-        referee: further referee parameters.
+        referee: further parameters of the judge (the referee, or the lab's judge).
         namespace: put every node in this namespace, with relative service names ("" for a namespace
             chosen later, e.g. by a launch argument); None: no namespace, the homework's absolute names.
     """
     if profile not in PROFILES:
         raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
     homework = profile in ("homework", "eval")
-    with_referee = (profile == "eval") if with_referee is None else with_referee
-    if with_referee and not homework:
-        raise ValueError("the referee judges the homework interface: use profile homework or eval")
+    with_referee = (profile in ("eval", "checkoff")) if with_referee is None else with_referee
+    if with_referee and profile == "lab":
+        raise ValueError("the referee judges the homework interface: use profile homework or eval "
+                         "(or checkoff: the lab's judge)")
+    if profile == "checkoff":
+        maneuver, world = _checkoff_choices(maneuver, world)
 
     exe_params: dict[str, Any] = {"use_sim_time": include_sim}
     files: list[str] = []
@@ -212,17 +225,33 @@ def nodes(
         # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many
         # times real time, a process still starting up would otherwise lose seconds of the schedule.
         ref_params: dict[str, Any] = {"use_sim_time": include_sim, "wait_for_cmd_vel": True}
-        if namespace is not None:
+        if homework and namespace is not None:
             ref_params.update({"activate_service": activate, "evaluate_service": evaluate})
+        if not homework:  # the lab's judge: the simulator's world and seed, the executive's maneuver
+            ref_params.update({"activate_service": LAB_ARM, "world": world, "maneuver": maneuver,
+                               **({"seed": int(seed)} if seed is not None else {})})
         if stamped:
             ref_params["cmd_vel_stamped"] = True
         if results_json:
             ref_params["json"] = str(results_json)
         ref_params.update(referee or {})
-        specs.append(NodeSpec("referee", REFEREE_NAME, ref_params))
+        specs.append(NodeSpec("referee", REFEREE_NAME, ref_params) if homework else
+                     NodeSpec("checkoff", CHECKOFF_NAME, ref_params))
     for spec in specs:
         spec.namespace = (namespace or "").strip("/")
     return specs
+
+
+def _checkoff_choices(maneuver: str | None, world: str | None) -> tuple[str, str]:
+    """The check-off's maneuver (given, else ``config/lab.yaml``'s) and world (given, else the maneuver's arena)."""
+    from bt_nav.mission.params import normalise_maneuver
+
+    cfg = config_file("lab.yaml")
+    chosen = normalise_maneuver(str(maneuver if maneuver is not None else
+                                    (file_parameters(cfg).get("maneuver", "none") if cfg is not None else "none")))
+    if chosen not in CHECKOFF_WORLDS:
+        raise ValueError(f"a check-off judges maneuver A, B or C, not {chosen!r}")
+    return chosen, world or CHECKOFF_WORLDS[chosen]
 
 
 def robot_nodes(profile: str, names: list[str], *, seed: int | None = None,
@@ -260,7 +289,8 @@ def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
     parser.add_argument("--maneuver", help="evasive maneuver: none, A, B, C (or randomizer, retreat, smart_pivot)")
     parser.add_argument("--seed", type=int, help="one seed for sensor noise, generated worlds and maneuver A")
     parser.add_argument("--rtf", type=float, help="simulator real-time factor (default 1; 0 = as fast as possible)")
-    parser.add_argument("--with-referee", action="store_true", help="add the referee (implied by --profile eval)")
+    parser.add_argument("--with-referee", action="store_true", help="add the referee (implied by --profile eval; "
+                        "--profile checkoff adds the lab's judge)")
     parser.add_argument("--json", help="referee results file")
     parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
                         help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
@@ -292,8 +322,8 @@ def bt_nav_command() -> str:
 
 
 def arm_hint(specs: list[NodeSpec], domain: int) -> str | None:
-    """The exact command that arms the executive of ``specs`` (None when the referee does the arming)."""
-    if any(spec.executable == "referee" for spec in specs):
+    """The exact command that arms the executive of ``specs`` (None when a judge does the arming)."""
+    if any(spec.executable in JUDGES for spec in specs):
         return None
     executive = next((spec for spec in specs if spec.executable == "executive"), None)
     if executive is None:
@@ -354,7 +384,7 @@ def _run(specs: list[NodeSpec], domain: int, profile: str) -> int:
     try:
         for spec in specs:
             launcher.start(spec)
-        referee = next((c for c in launcher.children if c.spec.executable == "referee"), None)
+        referee = next((c for c in launcher.children if c.spec.executable in JUDGES), None)
         while not stop.requested:
             ended = launcher.wait_any(timeout=0.5)
             if ended is None:

@@ -47,11 +47,13 @@ def argument_description(name: str) -> str:
     return EXTRA_ARGUMENTS[name][1]
 
 
-def declare(names: list[str]) -> list[Any]:
-    """``DeclareLaunchArgument`` for each name, defaults and descriptions from the tables."""
+def declare(names: list[str], defaults: dict[str, str] | None = None) -> list[Any]:
+    """``DeclareLaunchArgument`` for each name, defaults and descriptions from the tables; ``defaults``
+    overrides a default where a launch file needs its own (the lab check-off's maneuver and arena)."""
     from launch.actions import DeclareLaunchArgument
 
-    return [DeclareLaunchArgument(n, default_value=argument_default(n), description=argument_description(n))
+    own = defaults or {}
+    return [DeclareLaunchArgument(n, default_value=own.get(n, argument_default(n)), description=argument_description(n))
             for n in names]
 
 

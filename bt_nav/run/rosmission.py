@@ -1,5 +1,6 @@
 """A mission over real DDS, for one robot or several: start the graph, a recorder per robot, the referees
-once every robot is seen, wait for every verdict, collect.
+(or the lab's check-off judge: every judge of :data:`bt_nav.ros.bringup.JUDGES`) once every robot is seen,
+wait for every verdict, collect.
 
 ``bt-nav demo`` and the ROS benchmark (:mod:`bench.ros_mission`) both run a mission through
 :class:`RosMission`, so "start the graph, wait for the recorder, start the referee, wait for the verdict"
@@ -11,11 +12,13 @@ commands, so each recording covers the whole schedule.
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-from bt_nav.ros.bringup import NodeSpec, nodes, robot_nodes
+from bt_nav.ros.bringup import JUDGES, NodeSpec, nodes, robot_nodes
 from bt_nav.ros.supervise import Child, Launcher, LineSink, StopRequest
 from bt_nav.run.recorder import Recorder, Recording, rec_ready
 
@@ -25,19 +28,21 @@ GRACE = 15.0
 STARTUP = 30.0
 
 
-def mission_graph(names: list[str], results: dict[str, str], **options: Any) -> list[NodeSpec]:
-    """The ``eval`` graph for ``names`` (one robot: root topics, its referee's verdict to ``results[name]``;
-    several: namespaced), with :func:`bt_nav.ros.bringup.nodes`' ``options``."""
+def mission_graph(names: list[str], results: dict[str, str], profile: str = "eval", **options: Any) -> list[NodeSpec]:
+    """The judged graph of ``profile`` (``eval``: the homework and its referee; ``checkoff``: the lab and its
+    judge) for ``names`` (one robot: root topics, its judge's verdict to ``results[name]``; several:
+    namespaced), with :func:`bt_nav.ros.bringup.nodes`' ``options``."""
     if len(names) == 1:
-        return nodes("eval", results_json=results[names[0]], **options)
-    return robot_nodes("eval", names, results_json=results, **options)
+        return nodes(profile, results_json=results[names[0]], **options)
+    return robot_nodes(profile, names, results_json=results, **options)
 
 
 class RosMission:
     """The processes and recorders of one mission over DDS (see the module docstring).
 
     Args:
-        specs: the graph (:func:`mission_graph`); its referees are the nodes whose executable is ``referee``.
+        specs: the graph (:func:`mission_graph`); its referees are the nodes whose executable is a judge
+            (``referee`` or ``checkoff``).
         names: the robots' names; with one robot its recorder listens at the root topics.
         env: the children's environment (their ROS domain). ``sink``: where node output lines go (a node
             in a robot's namespace is named ``<robot>_<node>``, its report lines prefixed ``<robot>: ``).
@@ -72,7 +77,7 @@ class RosMission:
     def start_graph(self) -> None:
         """Every node but the referees."""
         for spec in self.specs:
-            if spec.executable != "referee":
+            if spec.executable not in JUDGES:
                 self._start(spec)
 
     def wait_ready(self, timeout: float = STARTUP) -> bool:
@@ -86,7 +91,7 @@ class RosMission:
 
     def start_referees(self) -> list[Child]:
         """The referees (their clocks start once they see their robot)."""
-        self.referees = [self._start(spec) for spec in self.specs if spec.executable == "referee"]
+        self.referees = [self._start(spec) for spec in self.specs if spec.executable in JUDGES]
         return self.referees
 
     def exited(self) -> Child | None:
@@ -109,6 +114,33 @@ class RosMission:
                 poll()
             time.sleep(0.05)
         return "timeout", None
+
+    def supervise(self, timeout: float, run_dir: Path) -> int:
+        """Start the nodes, the referees once every robot is seen, wait for every verdict (``timeout`` wall s);
+        the exit code: the referees' (:meth:`referee_code`), 2 without a verdict, 128 + signal when stopped.
+        Why a node ended the run early goes to stderr, naming its log in ``run_dir``."""
+        self.start_graph()
+        self.wait_ready(STARTUP)
+        if self._stopped():
+            return self._stop_code()
+        self.start_referees()
+        outcome, child = self.wait_verdicts(timeout)
+        if outcome == "verdict":
+            return self.referee_code()
+        if outcome == "stopped":
+            return self._stop_code()
+        if outcome == "exited" and child is not None:
+            where = f"{child.spec.namespace}_{child.name}" if child.spec.namespace else child.name
+            print(f"bt-nav demo: {where} exited with {child.poll()} before the verdict; see "
+                  f"{run_dir / (where + '.log')}", file=sys.stderr)
+        else:
+            print(f"bt-nav demo: no verdict within {timeout:g} s wall; stopping", file=sys.stderr)
+        return 2
+
+    def _stop_code(self) -> int:
+        stop = self.stop
+        print(f"bt-nav demo: {(stop.name if stop else '') or 'SIGINT'}: stopping every node", file=sys.stderr)
+        return 128 + int((stop.signum if stop else 2) or 2)
 
     def referee_code(self) -> int:
         """0 when every referee passed its robot, else the worst exit code (1 FAILED, 2 no verdict)."""

@@ -12,6 +12,8 @@ import time
 from pathlib import Path
 from typing import IO, Any
 
+from bt_nav.ros.bringup import JUDGES
+
 #: rcutils' line format for the nodes: no epoch stamp (the run prefixes sim and wall time itself).
 LOG_FORMAT = "[{severity}] [{name}]: {message}"
 
@@ -31,7 +33,7 @@ def make_run_dir(out: Path, name: str) -> Path:
 
 
 class Logs:
-    """Per-node log files; the referee's report lines (anything not an rcutils log line) go to stdout.
+    """Per-node log files; a judge's report lines (anything not an rcutils log line) go to stdout.
 
     Every log line is prefixed with one time base: ``sim 37.65 s [wall 3.2 s]`` (the newest ground
     truth the recorder saw, and wall seconds since the demo started); report lines stay as the
@@ -63,7 +65,7 @@ class Logs:
                 stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
             is_log = line.startswith("[")
             stream.write((f"{self.stamp()} {line}" if is_log else line) + "\n")
-            if (name == "referee" or name.endswith("_referee")) and not is_log:
+            if name.rsplit("_", 1)[-1] in JUDGES and not is_log:
                 self.verdict.append(line)
                 print(line, flush=True)
             elif self.echo_logs and not self.quiet_from_now and (

@@ -196,3 +196,39 @@ class Probe:
         self._thread.join(timeout=2.0)
         self.executor.remove_node(self.node)
         self.node.destroy_node()
+
+
+class StubRobot:
+    """Serves an activate service (always succeeds) and never moves; can call evaluate_mission (the referee's
+    tests) or serve the lab's toggle_navigation (the check-off judge's)."""
+
+    def __init__(self, context: Any, activate: str, evaluate: str = "/reactive_control/evaluate_mission") -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from std_srvs.srv import SetBool, Trigger
+
+        self.node = rclpy.create_node("stub_robot", context=context)
+        self.requests: list[bool] = []
+        self.node.create_service(SetBool, activate, self._on_activate)
+        self.evaluate = self.node.create_client(Trigger, evaluate)
+        self._trigger = Trigger.Request
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set():
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def _on_activate(self, request: Any, response: Any) -> Any:
+        self.requests.append(bool(request.data))
+        response.success, response.message = True, f"stub: data={request.data}"
+        return response
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self.executor.remove_node(self.node)
+        self.node.destroy_node()

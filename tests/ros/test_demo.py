@@ -95,3 +95,37 @@ def test_a_second_simulator_in_the_domain_means_no_verdict() -> None:
     assert RefereeNode._own_truth(referee, {"publication_sequence_number": 1}) is False  # the other run's first
     assert "more than one simulator (/bt_nav_sim, /bt_nav_sim)" in referee.foreign
     assert RefereeNode._own_truth(referee, {"publication_sequence_number": 4}) is False  # and stays refused
+
+
+@pytest.mark.slow
+def test_lab_demo_checks_off_maneuver_c_and_bags_the_terminal(tmp_path: Path) -> None:
+    """``bt-nav demo --profile lab --maneuver C --bag``: the lab's terminal (launch, the toggle_navigation call
+    and reply as ``ros2 service call`` prints them, the maneuver lines, the verdict, "maneuvers fired"), exit 0,
+    and the bag's events are exactly the terminal's lines."""
+    from bt_nav.media.bagread import read_bag
+
+    bag = tmp_path / "bag"
+    demo = Proc("demo", "--profile", "lab", "--maneuver", "C", "--out", str(tmp_path), "--name", "run",
+                "--timeout", "100", "--bag", str(bag))
+    code = demo.wait(180.0)
+    assert code == 0, demo.output() + "\n".join(
+        f"--- {p.name}\n{p.read_text()}" for p in sorted((tmp_path / "run").glob("*.log")))
+    out = "\n".join(demo.stdout)
+    assert "$ ros2 launch bt_nav lab_checkoff.launch.py maneuver:=C world:=lab_object" in out
+    assert re.search(r"\[sim +[\d.]+ s\] \[INFO\] \[bt_nav_executive\]: up: params file \S*lab\.yaml, maneuver C "
+                     r"Smart Pivot, safety_distance 0\.5 m", out), out
+    assert '$ ros2 service call /toggle_navigation std_srvs/srv/SetBool "{data: true}"' in out
+    assert "std_srvs.srv.SetBool_Response(success=True, message='armed at" in out
+    assert '"{data: false}"' in out and "message='disarmed: robot stopped'" in out
+    assert re.search(r"\[sim +[\d.]+ s\] \[INFO\] \[bt_nav_executive\]: SmartPivot: front 0\.\d+ m", out), out
+    assert "overall: PASSED" in demo.stdout and "stats:" not in out and "ProcessScan" not in out
+    fired = re.search(r"maneuvers fired: (\d+) \(maneuver C", out)
+    assert fired and int(fired[1]) >= 1, out
+    results = json.loads((tmp_path / "run" / "results.json").read_text())
+    assert results["passed"] and len(results["maneuvers"]) == int(fired[1])
+    assert (tmp_path / "run" / "trajectory.png").is_file()
+    events = [text for _, text in read_bag(bag).events]
+    shown = [line.split("] ", 1)[1] for line in demo.stdout if line.startswith("[sim ")]
+    assert events[:len(shown)] == shown, (events, shown)
+    assert events[len(shown):] == [line for line in demo.stdout if not line.startswith(("[sim ", "bt-nav demo:", "$"))
+                                   ] + [f"maneuvers fired: {out.split('maneuvers fired: ', 1)[1].splitlines()[0]}"]

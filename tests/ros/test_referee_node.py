@@ -3,60 +3,24 @@
 from __future__ import annotations
 
 import json
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 from bt_nav_sim.referee_core import RefereeConfig, scaled
-from simtools import Proc, wait_until
+from simtools import Proc, StubRobot, wait_until
 
 ACTIVATE = "/reactive_control/activate"
 EVALUATE = "/reactive_control/evaluate_mission"
 SCALE = 0.1  # the whole schedule in ~6 s of sim time
 
 
-class StubRobot:
-    """Serves the activate service (always succeeds) and never moves; can call evaluate_mission."""
-
-    def __init__(self, context: Any) -> None:
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-        from std_srvs.srv import SetBool, Trigger
-
-        self.node = rclpy.create_node("stub_robot", context=context)
-        self.requests: list[bool] = []
-        self.node.create_service(SetBool, ACTIVATE, self._on_activate)
-        self.evaluate = self.node.create_client(Trigger, EVALUATE)
-        self._trigger = Trigger.Request
-        self.executor = SingleThreadedExecutor(context=context)
-        self.executor.add_node(self.node)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        self._thread.start()
-
-    def _spin(self) -> None:
-        while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.02)
-
-    def _on_activate(self, request: Any, response: Any) -> Any:
-        self.requests.append(bool(request.data))
-        response.success, response.message = True, f"stub: data={request.data}"
-        return response
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(timeout=2.0)
-        self.executor.remove_node(self.node)
-        self.node.destroy_node()
-
-
 @pytest.fixture
 def world(ros_context: Any) -> Iterator[tuple[Proc, StubRobot]]:
     """A simulator (as fast as its followers allow) and the stub robot."""
     sim = Proc("sim")
-    robot = StubRobot(ros_context)
+    robot = StubRobot(ros_context, ACTIVATE, EVALUATE)
     yield sim, robot
     sim.stop()
     robot.close()

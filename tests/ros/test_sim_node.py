@@ -145,5 +145,5 @@ def test_sim_time_waits_for_a_holding_follower(sim: Callable[..., tuple[Proc, Pr
 
 def test_refuses_an_unknown_profile() -> None:
     proc = Proc("sim", "--ros-args", "-p", "profile:=gazebo")
-    assert proc.wait(20.0) == 1
+    assert proc.wait(20.0) == 2  # a refused configuration (bt_nav.ros.runner), as the executive's
     assert "unknown profile 'gazebo'" in proc.output()

@@ -67,17 +67,14 @@ import numpy as np
 import rclpy
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
-from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-from rclpy.signals import SignalHandlerOptions
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from bt_nav.ros.rosutil import coerce_int_overrides
-from bt_nav.ros.supervise import StopRequest
+from bt_nav.ros.rosutil import declare_node_parameters
+from bt_nav.ros.runner import param_args, run_node
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.multi import MultiSimCore, parse_starts
 from bt_nav_sim.pacing import Followers
@@ -156,7 +153,7 @@ class SimulatorNode(Node):
 
     def __init__(self, parameter_overrides: list | None = None) -> None:
         super().__init__(NODE_NAME, parameter_overrides=parameter_overrides or [])
-        p = self._declare_parameters()
+        p = declare_node_parameters(self, self.PARAMETERS)
         names = [n for n in str(p["robot_names"]).split(",") if n.strip()]
         count = int(p["robots"])
         self.sim = MultiSimCore(_sim_config(p), count, names, parse_starts(str(p["starts"])))
@@ -172,12 +169,6 @@ class SimulatorNode(Node):
         self.get_logger().info(self._describe())
 
     # -------------------------------------------------------------- set-up
-    def _declare_parameters(self) -> dict[str, Any]:
-        """Declare every parameter of :attr:`PARAMETERS`; returns their values by name."""
-        coerce_int_overrides(self, {name: default for name, (default, _) in self.PARAMETERS.items()})
-        return {name: self.declare_parameter(name, default, ParameterDescriptor(description=text)).value
-                for name, (default, text) in self.PARAMETERS.items()}
-
     def _read_pacing(self, p: dict[str, Any]) -> None:
         """Pacing and following parameters (negative values mean 0)."""
         self.rtf = max(0.0, float(p["real_time_factor"]))
@@ -233,6 +224,23 @@ class SimulatorNode(Node):
             self._cond.notify_all()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
+
+    # the runner's Finishing protocol (bt_nav.ros.runner): the process ends after ``duration`` or a loop failure
+    def poll(self) -> bool:
+        """The loop ended by itself (``duration`` reached, or it failed)."""
+        return self.finished.is_set()
+
+    def close(self) -> None:
+        """Stop the loop and log how much sim time ran (idempotent; the runner calls it on every way out)."""
+        if self._stop.is_set() and not self._thread.is_alive():
+            return
+        self.stop()
+        self.get_logger().info(self.stats())
+
+    @property
+    def exit_code(self) -> int:
+        """1 when the loop died, else 0."""
+        return 1 if self.failed is not None else 0
 
     def stats(self) -> str:
         """One line: how much sim time ran in how much wall time."""
@@ -492,81 +500,41 @@ def make_node(parameter_overrides: list | None = None) -> SimulatorNode:
 
 
 # ---------------------------------------------------------------------------------------------- command line
-def split_ros_args(argv: list[str]) -> tuple[list[str], list[str]]:
-    """(our own options, the ``--ros-args ... [--]`` parts) of a command line, order kept in each."""
-    ours: list[str] = []
-    ros: list[str] = []
-    inside = False
-    for arg in argv:
-        if arg == "--ros-args":
-            inside = True
-            ros.append(arg)
-        elif inside and arg == "--":
-            inside = False
-            ros.append(arg)
-        elif inside:
-            ros.append(arg)
-        else:
-            ours.append(arg)
-    if inside:
-        ros.append("--")
-    return ours, ros
-
-
-def param_args(values: dict[str, Any]) -> list[str]:
-    """``--ros-args -p name:=value ...`` for the options given on our own command line (None: skipped)."""
-    from bt_nav.ros.bringup import param_arg
-
-    items = [a for name, value in values.items() if value is not None for a in ("-p", param_arg(name, value))]
-    return ["--ros-args", *items, "--"] if items else []
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``bt-nav sim [--world W] [--profile P] [--seed N] [--rtf X] [--duration S] [--ros-args ...]``.
-
-    The options are shorthands for the parameters of the same meaning; ``--ros-args -p`` works for all.
-    Returns 0 after a clean shutdown (Ctrl-C or ``duration``), 1 if the loop or the set-up failed.
-    """
-    argv = list(sys.argv[1:] if argv is None else argv)
-    ours, ros = split_ros_args(argv)
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Our own options (ROS arguments removed first): shorthands for the parameters of the same meaning."""
     parser = argparse.ArgumentParser(prog="bt-nav sim", description=__doc__.split("\n\n")[0])
     parser.add_argument("--world", help="world name or YAML path (parameter world)")
     parser.add_argument("--profile", choices=sorted(PROFILES), help="LiDAR profile (parameter profile)")
     parser.add_argument("--seed", type=int, help="noise / world seed (parameter seed)")
     parser.add_argument("--rtf", type=float, help="real-time factor, 0 = as fast as possible")
     parser.add_argument("--duration", type=float, help="stop after this many sim seconds")
-    opts = parser.parse_args(ours)
-    extra = param_args({"world": opts.world, "profile": opts.profile, "seed": opts.seed,
-                        "real_time_factor": opts.rtf, "duration": opts.duration})
+    return parser.parse_args(argv)
 
+
+def _as_parameters(opts: argparse.Namespace) -> list[str]:
+    return param_args({"world": opts.world, "profile": opts.profile, "seed": opts.seed,
+                       "real_time_factor": opts.rtf, "duration": opts.duration})
+
+
+def _started(node: Node, opts: argparse.Namespace) -> SimulatorNode:
+    assert isinstance(node, SimulatorNode)
+    node.start()
+    return node
+
+
+def _make(name: str) -> SimulatorNode:
     sys.setswitchinterval(1e-4)  # see the module docstring: command latency under load
-    rclpy.init(args=[NODE_NAME, *ros, *extra], signal_handler_options=SignalHandlerOptions.NO)
-    stop = StopRequest().install()
-    node = None
-    code = 0
-    try:
-        try:
-            node = make_node()
-        except (ValueError, FileNotFoundError) as exc:
-            print(f"bt-nav sim: {exc}", file=sys.stderr)
-            return 1
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
-        node.start()
-        try:
-            while rclpy.ok() and not node.finished.is_set() and not stop:
-                executor.spin_once(timeout_sec=0.1)
-        except (KeyboardInterrupt, ExternalShutdownException):
-            pass
-        node.stop()
-        if node.failed is not None:
-            code = 1
-        node.get_logger().info(node.stats())
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return code
+    return make_node()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav sim [--world W] [--profile P] [--seed N] [--rtf X] [--duration S] [--ros-args ...]``.
+
+    The options are shorthands for the parameters of the same meaning; ``--ros-args -p`` works for all.
+    Returns 0 after a clean shutdown (Ctrl-C or ``duration``), 1 if the loop failed, 2 for a configuration
+    it refuses (an unknown world or profile; :func:`bt_nav.ros.runner.run_node`).
+    """
+    return run_node(NODE_NAME, argv, parse_args, build=_started, make_node=_make, ros_args_of=_as_parameters)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,145 @@
+"""The lab's terminal: what a student's screen shows during a check-off, picked from the nodes' output.
+
+The lab hands in a video of "the terminal output of starting the launch file and calling the service" and
+of the robot reacting. ``bt-nav demo --profile lab`` runs the check-off over DDS; :class:`LabTerminal` is its
+line sink: every node line still goes to the run's log files (:class:`bt_nav.run.rundir.Logs`, which also
+prints the judge's report lines), and the terminal shows, stamped with sim time,
+
+- the launch: the executive's start-up line, as the lab asks to verify it (node name, params file,
+  maneuver, ``safety_distance``);
+- each ``toggle_navigation`` call the judge makes and its reply, as ``ros2 service call`` prints them;
+- the executive's maneuver and emergency-brake lines (``Randomizer: ...``, ``AEB: ...``) as they happen;
+  not tick statistics, not the scan checker's chatter.
+
+With a bag (``--bag``/``--video``) every shown line and every report line is also published on
+``/bt_nav/events`` (:data:`bt_nav.media.bag.EVENTS`, latched) by :class:`EventPublisher`; ``bt-nav record``
+records that topic instead of turning ``/rosout`` into events, so the bag's events, and the video's console
+strip, are exactly the terminal's lines, stamped with the sim time at which the recorder got them.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from bt_nav_sim.plot import MANEUVER_TIPS
+
+from bt_nav.media.bag import EVENTS
+from bt_nav.ros.bringup import EXECUTIVE_NAME
+from bt_nav.run.rundir import Logs
+
+#: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
+SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
+#: An rcutils line in the run's format (:data:`bt_nav.run.rundir.LOG_FORMAT`).
+LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
+#: The judge's call and reply lines (:class:`bt_nav_sim.nodes.judging.JudgeNode`).
+CALL_LINE = re.compile(r"^sim (?P<t>-?[\d.]+) s(?: \(t0 \+ [-\d.]+ s\))?: (?P<call>\w+)\((?P<data>true|false)\) "
+                       r"(?:sent|-> (?P<ok>success|failure): (?P<message>.*))$")
+
+
+def service_call_lines(service: str, data: bool) -> list[str]:
+    """What ``ros2 service call`` prints when it sends a SetBool request."""
+    word = "true" if data else "false"
+    return [f'$ ros2 service call {service} std_srvs/srv/SetBool "{{data: {word}}}"',
+            f"requester: making request: std_srvs.srv.SetBool_Request(data={data})"]
+
+
+def service_reply_lines(success: bool, message: str) -> list[str]:
+    """What ``ros2 service call`` prints for a SetBool response."""
+    return ["response:", f"std_srvs.srv.SetBool_Response(success={success}, message={message!r})"]
+
+
+class EventPublisher:
+    """``/bt_nav/events`` (std_msgs/String, reliable, transient local: a recorder that subscribes late still
+    gets the launch lines) from a node of this process's own."""
+
+    def __init__(self) -> None:
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from std_msgs.msg import String
+
+        from bt_nav.ros.rosutil import ThreadedNode
+
+        self.ros = ThreadedNode("bt_nav_demo_terminal")
+        qos = QoSProfile(depth=500, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.publisher = self.ros.node.create_publisher(String, EVENTS, qos)
+        self._string = String
+        self.ros.start()
+
+    def publish(self, text: str) -> None:
+        """One event line."""
+        self.publisher.publish(self._string(data=text))
+
+    def close(self, wait: float = 1.0) -> None:
+        """Wait (``wait`` wall s at most) until the recorder has every line, then go."""
+        from rclpy.duration import Duration
+
+        try:
+            self.publisher.wait_for_all_acked(Duration(nanoseconds=int(wait * 1e9)))
+        finally:
+            self.ros.close()
+
+
+class LabTerminal:
+    """The line sink of a lab check-off over DDS (see the module docstring).
+
+    Args:
+        logs: the run's log files (and the judge's report lines on stdout).
+        launch_line: the executive's start-up line as the terminal shows it (made by the command).
+        events: where shown lines also go (None: no bag).
+        out: prints one terminal line (default ``print``).
+    """
+
+    def __init__(self, logs: Logs, launch_line: str, events: EventPublisher | None = None,
+                 out: Callable[[str], Any] | None = None) -> None:
+        self.logs = logs
+        self.launch_line = launch_line
+        self.events = events
+        self.out = out or (lambda text: print(text, flush=True))
+        self.lines: list[tuple[float | None, str]] = []  # everything shown, with its sim time
+        self._lock = threading.Lock()
+
+    def show(self, text: str, t: float | None = None) -> None:
+        """One terminal line at sim time ``t`` (default: the newest ground truth), published as an event."""
+        t = self.logs.sim_time() if t is None else t
+        with self._lock:
+            self.lines.append((t, text))
+            self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
+            if self.events is not None:
+                self.events.publish(text)
+
+    def event(self, text: str) -> None:
+        """A line that is printed elsewhere (the report) but belongs in the bag's events."""
+        if self.events is not None:
+            with self._lock:
+                self.events.publish(text)
+
+    def sink(self, name: str, line: str) -> None:
+        """Launcher sink: the log files, then what the lab's terminal shows of ``line``."""
+        self.logs.sink(name, line)
+        match = LOG_LINE.match(line)
+        if name.endswith("checkoff"):
+            if match is None:
+                self.event(line)  # a report line (Logs printed it)
+            else:
+                self._judge_line(match["msg"])
+        elif name.endswith("executive") and match is not None:
+            message = match["msg"]
+            if message.startswith(f"{EXECUTIVE_NAME} up:"):
+                self.show(self.launch_line)
+            elif message.split(":", 1)[0] in SHOWN_LABELS:
+                self.show(f"[{match['level']}] [{match['node']}]: {message}")
+
+    def _judge_line(self, message: str) -> None:
+        """The judge's toggle_navigation calls and replies, as ``ros2 service call`` shows them."""
+        call = CALL_LINE.match(message)
+        if call is None:
+            return
+        t = float(call["t"])
+        if call["ok"] is None:
+            for text in service_call_lines(f"/{call['call']}", call["data"] == "true"):
+                self.show(text, t)
+        else:
+            for text in service_reply_lines(call["ok"] == "success", call["message"]):
+                self.show(text, t)

@@ -1,0 +1,109 @@
+"""``bt_nav_checkoff``: the lab's check-off judge (:mod:`bt_nav_sim.checkoff`) over real DDS, in sim time.
+
+Run: ``bt-nav checkoff --maneuver C --world lab_object [--json PATH] [--timeout S] [--ros-args ...]`` or
+``ros2 run bt_nav checkoff``; ``bt-nav demo --profile lab`` and ``launch/lab_checkoff.launch.py`` start it
+beside the simulator and the executive.
+
+It judges any robot node with the lab's interface, not only bt_nav's: it calls its ``toggle_navigation``
+(std_srvs/SetBool; parameter ``activate_service``, relative so a namespace or a remap moves it) as the
+judge's schedule says (static 5 s, true, 60 s armed, false, 1 s grace, 3 s static, report); it reads
+ground truth (``ground_truth_odom``), the simulator's ``collisions`` and every ``cmd_vel`` the robot
+publishes (Twist or TwistStamped, found on the graph; ``cmd_vel_type`` forces one); and it casts its
+noise-free trigger readings in its own copy of the simulator's world (parameters ``world`` and ``seed``, as
+given to the simulator; objects that appear are revealed from the poses it observes). It prints the
+judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), writes the verdict JSON
+(``json``) and exits 0 when the check-off passed, 1 when it failed, 2 without a verdict.
+
+The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
+7.30 s)``) is :class:`bt_nav_sim.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
+Every :class:`bt_nav_sim.checkoff.CheckoffConfig` field is a parameter of the same name (``armed_for``,
+``safety_distance``, ``pivot_distance``, ...): the trigger distances must be the robot's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import fields
+from typing import Any
+
+from bt_nav.mission.params import normalise_maneuver
+from bt_nav.ros.runner import param_args, run_node
+from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.nodes.judging import DRIVER_PARAMETERS, JudgeNode
+from bt_nav_sim.world import load_world
+
+NODE_NAME = "bt_nav_checkoff"
+
+_DEFAULTS = CheckoffConfig()
+
+
+def _config_parameters() -> dict[str, tuple[Any, str]]:
+    """Every CheckoffConfig field as a parameter (its type kept: maneuver a string, min_maneuvers an int)."""
+    return {f.name: (getattr(_DEFAULTS, f.name), f"CheckoffConfig.{f.name}") for f in fields(_DEFAULTS)}
+
+
+class CheckoffNode(JudgeNode):
+    """The check-off judge node (see the module docstring); rclpy must be initialised."""
+
+    PARAMETERS: dict[str, tuple[Any, str]] = {
+        **DRIVER_PARAMETERS,
+        "activate_service": ("toggle_navigation", "the robot's SetBool service that starts (true) and stops it"),
+        "world": ("lab_object", "the simulator's world (name or YAML path), for the judge's own ray casts"),
+        "seed": (0, "the simulator's seed (generated worlds); -1: random, refused for a generated world"),
+        **_config_parameters(),
+    }
+    wants_commands = True
+
+    def __init__(self, wall_start: float | None = None) -> None:
+        super().__init__(NODE_NAME, wall_start)
+
+    def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
+        """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""
+        values = {f.name: type(getattr(_DEFAULTS, f.name))(p[f.name]) for f in fields(_DEFAULTS)}
+        values["maneuver"] = normalise_maneuver(str(values["maneuver"]))  # randomizer, a, ... are A
+        config = CheckoffConfig(**values)
+        seed = int(p["seed"])
+        world = load_world(str(p["world"]), seed=None if seed < 0 else seed)
+        if world.checkoff_maneuvers and config.maneuver not in world.checkoff_maneuvers:
+            self.get_logger().warning(f"world {world.name} lists check-offs of {', '.join(world.checkoff_maneuvers)}, "
+                                      f"not {config.maneuver}: its trigger may never hold here")
+        self.world_name = world.name
+        return CheckoffJudge(config, world, update_world=True), config
+
+    def schedule_text(self) -> str:
+        """The lab's schedule, sim seconds from t0."""
+        c = self.config
+        off = c.activate_at + c.armed_for
+        call = self.call_name
+        return (f"check-off of maneuver {c.maneuver} in {self.world_name}: {call}(true) at {c.activate_at:g} s, "
+                f"{call}(false) at {off:g} s, report at {off + c.grace + c.static_after:g} s (sim time from t0)")
+
+
+def make_node(wall_start: float | None = None) -> CheckoffNode:
+    """Create the check-off judge node (rclpy must be initialised)."""
+    return CheckoffNode(wall_start)
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Our own options (ROS arguments removed first): shorthands for parameters."""
+    parser = argparse.ArgumentParser(prog="bt-nav checkoff", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--maneuver", help="the maneuver to check off: A, B or C (parameter maneuver)")
+    parser.add_argument("--world", help="the simulator's world (parameter world)")
+    parser.add_argument("--seed", type=int, help="the simulator's seed (parameter seed)")
+    parser.add_argument("--json", help="results file (parameter json)")
+    parser.add_argument("--timeout", type=float, help="wall-clock limit, s (parameter timeout)")
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav checkoff``: exit 0 when the check-off passed, 1 when it failed, 2 on timeout or bad set-up."""
+    wall_start = time.monotonic()
+    return run_node(NODE_NAME, argv, parse_args, build=lambda node, opts: node,
+                    make_node=lambda name: make_node(wall_start), ros_defaults=["-p", "use_sim_time:=true"],
+                    ros_args_of=lambda o: param_args({"maneuver": o.maneuver, "world": o.world, "seed": o.seed,
+                                                      "json": o.json, "timeout": o.timeout}))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

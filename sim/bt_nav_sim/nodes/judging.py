@@ -1,0 +1,426 @@
+"""What every judge node shares: the referee's driver protocol over real DDS, in sim time.
+
+The homework's referee (:mod:`bt_nav_sim.nodes.referee`) and the lab's check-off judge
+(:mod:`bt_nav_sim.nodes.checkoff`) drive pure judges with one protocol (``start``, ``step`` -> activate
+calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``report_lines``, ``done``,
+``passed``). Everything between that protocol and the wire lives here, once:
+
+1. t0: wait until the robot's SetBool service (parameter ``activate_service``) exists, ``/clock`` runs and
+   ground truth arrives (and the simulator listens on ``sim_sync``, for at most ``sync_wait`` wall
+   seconds); with ``wait_for_cmd_vel`` also until the robot's first ``cmd_vel`` (its executive ticks on sim
+   time, not merely starts up);
+2. a timer on the node clock (sim time) calls ``step`` at the judge's ``rate_hz``; each activate action
+   becomes an asynchronous SetBool call, answered through ``on_activate_result`` (a request unanswered for
+   ``call_timeout`` wall seconds is sent again, ``call_retries`` times, then counts as failed and the
+   schedule retries on a later step; the same request is never out twice at once);
+3. ``ground_truth_odom`` feeds ``observe`` (message stamps, from t0 on) and ``collisions`` (the simulator's
+   JSON events) ``on_collision``; a judge that wants the commands (``on_command``) gets every ``cmd_vel``;
+   its type is Twist or TwistStamped as the robot publishes it on the graph (``cmd_vel_type`` auto), or
+   as ``cmd_vel_type``/``cmd_vel_stamped`` say;
+4. when the judge is done: the report lines are printed on stdout exactly as the judge makes them, the
+   results (with the run's facts) go to ``json`` and the process exits 0 when every check passed, 1 when
+   one failed, 2 on timeout or when stopped first.
+
+Sim-time faithfulness (``sync``): the node tells the simulator where its clock is on ``sim_sync`` and holds
+sim time while a call is in flight (see :mod:`bt_nav_sim.nodes.simulator`), so a busy CPU never makes the
+judge late. A wall-clock ``timeout`` bounds the whole run (``TIMEOUT`` line, provisional report, exit 2).
+
+Time base: every log line says the node clock's sim time and the schedule's time since t0, ``sim 58.50 s
+(t0 + 54.50 s)``: the executive logs sim time too, so the two read side by side. The report lines count
+from t0, as the judges make them; the JSON says so (``time_base``) and gives t0's sim time (``t0_sim``).
+
+Another run in the same ROS domain (a second simulator publishing ground truth) ends the run without a
+verdict: a judgement over two robots' poses would report distances nobody drove.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from geometry_msgs.msg import Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+from std_srvs.srv import SetBool
+
+from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.ros.rosutil import declare_node_parameters
+
+EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
+#: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
+FINAL_CALL_WAIT = 1.0
+#: ``cmd_vel_type`` values: the message class of each (auto: whatever the robot publishes).
+CMD_TYPES = {"Twist": Twist, "TwistStamped": TwistStamped}
+
+#: The driver's own parameters, shared by every judge node (name -> (default, description)).
+DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
+    "json": ("", "write the results here (JSON); empty: do not write"),
+    "timeout": (300.0, "wall-clock seconds after which the run is abandoned (exit 2)"),
+    "call_timeout": (1.0, "wall s after which an unanswered activate request is sent again"),
+    "call_retries": (3, "resends of an unanswered activate request before it counts as failed"),
+    "sync": (True, "send heartbeats and holds on sim_sync so the simulator never outruns the judge"),
+    "sync_rate_hz": (20.0, "heartbeat rate on sim_sync, Hz of sim time"),
+    "sync_wait": (5.0, "wall s to wait for the simulator to listen on sim_sync before starting anyway"),
+    "service_wait": (0.0, "sim s to wait for the activate service before starting anyway (0: wait)"),
+    "wait_for_cmd_vel": (False, "also wait for the robot's first cmd_vel before t0 (its executive ticks)"),
+    "cmd_vel_type": ("auto", "cmd_vel message type: auto (as the robot publishes it), Twist or TwistStamped"),
+    "cmd_vel_stamped": (False, "cmd_vel is geometry_msgs/TwistStamped (same as cmd_vel_type TwistStamped)"),
+}
+
+
+class JudgeNode(Node):
+    """A judge over DDS (see the module docstring); subclasses make the judge and add their interfaces.
+
+    Subclass duties: ``PARAMETERS`` (``DRIVER_PARAMETERS`` plus their own), :meth:`make_judge` (returns the
+    judge and its config dataclass) and :meth:`schedule_text`; ``wants_commands`` True to get every
+    ``cmd_vel`` through the judge's ``on_command``.
+
+    Args:
+        name: the node name. ``wall_start``: monotonic wall time the ``timeout`` counts from (default: now).
+    """
+
+    PARAMETERS: dict[str, tuple[Any, str]] = DRIVER_PARAMETERS
+    wants_commands = False
+
+    def __init__(self, name: str, wall_start: float | None = None) -> None:
+        super().__init__(name)
+        p = declare_node_parameters(self, self.PARAMETERS)
+        self.judge, self.config = self.make_judge(p)
+        self.json_path = str(p["json"])
+        self.timeout = float(p["timeout"])
+        self.call_timeout = float(p["call_timeout"])
+        self.call_retries = int(p["call_retries"])
+        self.service_wait = float(p["service_wait"])
+        self.sync_wait = float(p["sync_wait"])
+        self.activate_name = str(p["activate_service"])
+        self.call_name = self.activate_name.rstrip("/").rsplit("/", 1)[-1]  # activate, toggle_navigation
+        self.wall_start = time.monotonic() if wall_start is None else wall_start
+        self._init_state()
+        self._create_interfaces(p)
+        self.get_logger().info(f"waiting for {self.activate_name} and /clock; {self.schedule_text()}")
+
+    # -------------------------------------------------------------- subclass hooks
+    def make_judge(self, p: dict[str, Any]) -> tuple[Any, Any]:
+        """(the judge, its config dataclass) from the declared parameter values ``p``."""
+        raise NotImplementedError
+
+    def schedule_text(self) -> str:
+        """The start-up log line's account of the schedule."""
+        raise NotImplementedError
+
+    # -------------------------------------------------------------- set-up
+    def _init_state(self) -> None:
+        """Progress of the run: start, pending calls, verdict."""
+        self._truth_seen = False
+        self.started = False
+        self._first_clock: float | None = None
+        self._step_timer: Any = None
+        self._pending: dict[bool, tuple[Any, float, int]] = {}  # data -> (future, sent at: wall s, attempt)
+        self._finish_by: float | None = None  # wall deadline for the final call, once done
+        self.finished = False
+        self.exit_code = EXIT_TIMEOUT  # until a verdict: stopped or timed out
+        self.timed_out = False
+        self.calls = 0
+        self._truth_seq: int | None = None  # publication sequence number of the last ground truth
+        self.foreign: str | None = None  # why the judged messages cannot all be this run's
+        self._cmd_sub: Any = None
+
+    def _create_interfaces(self, p: dict[str, Any]) -> None:
+        """The activate client, the inputs, and the sim_sync heartbeat if ``sync``."""
+        self.activate_client = self.create_client(SetBool, self.activate_name)
+        self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,  # (msg, info): see _own_truth
+                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.create_subscription(String, "collisions", self._on_collision, QoSProfile(depth=50))
+        self._cmd_vel_seen = not bool(p["wait_for_cmd_vel"])
+        self._cmd_type = "TwistStamped" if bool(p["cmd_vel_stamped"]) else str(p["cmd_vel_type"])
+        if self._cmd_type not in (*CMD_TYPES, "auto"):
+            raise ValueError(f"cmd_vel_type must be auto, Twist or TwistStamped, got {self._cmd_type!r}")
+        self._subscribe_cmd_vel()
+        # Its name on sim_sync: several robots' judges (one per namespace) must not be one follower.
+        self.who = self.get_name() if self.get_namespace() == "/" else self.get_fully_qualified_name()
+        self.sync_pub = self.create_publisher(String, "sim_sync", QoSProfile(depth=50)) if bool(p["sync"]) else None
+        if self.sync_pub is not None:
+            self.create_timer(1.0 / max(1e-3, float(p["sync_rate_hz"])), self._heartbeat)
+
+    def _subscribe_cmd_vel(self) -> None:
+        """Subscribe ``cmd_vel`` once its type is known (auto: from the robot's publisher on the graph)."""
+        if self._cmd_sub is not None or (self._cmd_vel_seen and not self.wants_commands):
+            return
+        kind = self._cmd_type
+        if kind == "auto":
+            types = {i.topic_type.rsplit("/", 1)[-1]
+                     for i in self.get_publishers_info_by_topic(self.resolve_topic_name("cmd_vel"))}
+            kind = next((k for k in CMD_TYPES if k in types), "")
+            if not kind:
+                return  # no publisher yet: asked again at the next poll
+        stamped = kind == "TwistStamped"
+        self._cmd_sub = self.create_subscription(CMD_TYPES[kind], "cmd_vel",
+                                                 lambda m: self._on_cmd(m.twist if stamped else m), 10)
+
+    def _on_cmd(self, twist: Any) -> None:
+        self._cmd_vel_seen = True
+        if self.wants_commands and self.started:
+            self.judge.on_command(self.now(), twist.linear.x, twist.angular.z)
+
+    # -------------------------------------------------------------- time
+    def now(self) -> float:
+        """Node clock seconds (sim time with use_sim_time)."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def stamp(self, now: float | None = None) -> str:
+        """``sim 58.50 s (t0 + 54.50 s)``: both time bases of a log line (sim clock, schedule)."""
+        now = self.now() if now is None else now
+        t0 = self.judge.t0
+        return f"sim {now:.2f} s" + (f" (t0 + {now - t0:.2f} s)" if t0 is not None else "")
+
+    # -------------------------------------------------------------- main-loop duties (runner: Finishing)
+    def poll(self) -> bool:
+        """Called between executor spins: start, wall timeout, finishing; True once finished."""
+        if self.finished:
+            return True
+        if time.monotonic() - self.wall_start > self.timeout or self.foreign is not None:
+            self._give_up()
+            return True
+        self._subscribe_cmd_vel()
+        self._expire_calls()
+        if not self.started:
+            self._try_start()
+        elif self._finish_by is not None and (not self._pending or time.monotonic() > self._finish_by):
+            self._conclude()
+        return self.finished
+
+    def close(self) -> None:
+        """Stopped before the verdict (a signal, a shutdown): say so and let the simulator go on."""
+        if self.finished:
+            return
+        self.finished = True
+        self.leave()
+        print(f"{self.get_name()} stopped before its verdict", file=sys.stderr)
+
+    def _missing(self, now: float) -> list[str]:
+        """What t0 still waits for (empty: start now)."""
+        missing = []
+        if now <= 0.0:
+            missing.append("/clock")
+        if not self.activate_client.service_is_ready():
+            missing.append(self.activate_name)
+        if not self._cmd_vel_seen:
+            missing.append("the first cmd_vel")
+        if not self._truth_seen:
+            missing.append("ground_truth_odom")
+        if self.sync_pub is not None and self.sync_pub.get_subscription_count() == 0 \
+                and time.monotonic() - self.wall_start < self.sync_wait:
+            missing.append("a simulator listening on sim_sync")
+        return missing
+
+    def _try_start(self) -> None:
+        now = self.now()
+        if now > 0.0 and self._first_clock is None:
+            self._first_clock = now
+        missing = self._missing(now)
+        robot = {self.activate_name, "the first cmd_vel"}
+        waited = now - self._first_clock if self._first_clock is not None else 0.0
+        if missing and self.service_wait > 0.0 and waited >= self.service_wait and set(missing) <= robot:
+            self.get_logger().warning(f"{' and '.join(missing)} did not appear within {self.service_wait:g} s: "
+                                      "starting anyway")
+            missing = []
+        if missing:
+            # Judging needs the ground truth from the start and a simulator that waits for this node;
+            # discovery between processes can take seconds on a loaded machine.
+            self.get_logger().info(f"waiting for {', '.join(missing)}", throttle_duration_sec=2.0)
+            return
+        self.started = True
+        self.judge.start(now)
+        if self._cmd_sub is not None and not self.wants_commands:
+            self.destroy_subscription(self._cmd_sub)
+            self._cmd_sub = None
+        self.get_logger().info(f"t0 = sim {now:.2f} s: {self.activate_name} is available")
+        self._step_timer = self.create_timer(1.0 / self.config.rate_hz, self._on_step)
+
+    def _on_step(self) -> None:
+        if self.finished or self._finish_by is not None:
+            return
+        now = self.now()
+        for action in self.judge.step(now):
+            self._call(bool(action.data), now)
+        if self.judge.done:
+            self._finish_by = time.monotonic() + FINAL_CALL_WAIT
+            if self._step_timer is not None:
+                self._step_timer.cancel()
+
+    # -------------------------------------------------------------- activate calls
+    def _call(self, data: bool, now: float) -> None:
+        if data in self._pending:
+            return  # the previous request with the same data is still out
+        if not self.activate_client.service_is_ready():
+            self.get_logger().warning(f"{self.activate_name} unavailable: {self.call_name}({data}) failed",
+                                      throttle_duration_sec=5.0)
+            self.judge.on_activate_result(now, data, False)
+            return
+        self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) sent")
+        self._send(data, attempt=1)
+
+    def _send(self, data: bool, attempt: int) -> None:
+        """One request; sim time is held (heartbeat) before it leaves, so its latency costs no sim time."""
+        self.calls += 1
+        self._pending[data] = (None, time.monotonic(), attempt)
+        self._heartbeat()
+        future = self.activate_client.call_async(SetBool.Request(data=data))
+        self._pending[data] = (future, time.monotonic(), attempt)
+        future.add_done_callback(lambda f, d=data: self._on_activate_done(f, d))
+
+    def _on_activate_done(self, future: Any, data: bool) -> None:
+        entry = self._pending.get(data)
+        if entry is None or entry[0] is not future:
+            return  # expired earlier
+        del self._pending[data]
+        self._heartbeat()
+        now = self.now()
+        try:
+            response = future.result()
+        except Exception as exc:
+            self.get_logger().warning(f"{self.call_name}({data}) raised {exc!r}")
+            response = None
+        success = bool(response is not None and response.success)
+        message = "" if response is None else str(response.message)
+        self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) -> "
+                               f"{'success' if success else 'failure'}: {message}")
+        self.judge.on_activate_result(now, data, success)
+
+    def _expire_calls(self) -> None:
+        """Resend a request unanswered for ``call_timeout`` wall seconds (sim time stays held), up to
+        ``call_retries`` times; then report the failure (the schedule retries on a later step).
+
+        A lost request is real on DDS: ``service_is_ready`` only says the client sees the server, not
+        that the server already sees the client, so the very first request can vanish.
+        """
+        for data, (future, sent, attempt) in list(self._pending.items()):
+            if time.monotonic() - sent <= self.call_timeout:
+                continue
+            del self._pending[data]
+            if future is not None:
+                self.activate_client.remove_pending_request(future)
+            if attempt <= self.call_retries:
+                self.get_logger().warning(f"{self.call_name}({data}) unanswered for {self.call_timeout:g} s wall: "
+                                          f"sending it again (attempt {attempt + 1})")
+                self._send(data, attempt + 1)
+                continue
+            self._heartbeat()
+            self.get_logger().warning(f"{self.call_name}({data}) unanswered after {attempt} attempts")
+            self.judge.on_activate_result(self.now(), data, False)
+
+    def _heartbeat(self) -> None:
+        """Tell the simulator where this node's clock is and whether a call is in flight."""
+        if self.sync_pub is None or self.finished:
+            return
+        payload = {"who": self.who, "t": round(self.now(), 9), "hold": bool(self._pending)}
+        self.sync_pub.publish(String(data=json.dumps(payload)))
+
+    def leave(self) -> None:
+        """Tell the simulator to stop waiting for this node (after the verdict, or when stopping)."""
+        if self.sync_pub is None:
+            return
+        self.sync_pub.publish(String(data=json.dumps({"who": self.who, "leave": True})))
+        try:  # the process exits right after this: make sure the simulator got it
+            self.sync_pub.wait_for_all_acked(Duration(nanoseconds=300_000_000))
+        except Exception as exc:  # informational only: the simulator times the follower out anyway
+            self.get_logger().debug(f"sim_sync goodbye not acknowledged: {exc!r}")
+
+    # -------------------------------------------------------------- inputs
+    def _own_truth(self, info: Any) -> bool:
+        """Ground truth must come from one simulator: a second publisher in this ROS domain (another
+        run sharing ROS_DOMAIN_ID) interleaves its robot's poses, and summing two robots' poses reports
+        distances nobody drove. One publisher's sequence numbers only grow; a step back is someone else."""
+        seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+        if seq is None or self.foreign is not None:
+            return self.foreign is None
+        if self._truth_seq is not None and seq <= self._truth_seq:
+            names = sorted(f"{i.node_namespace.rstrip('/')}/{i.node_name}"
+                           for i in self.get_publishers_info_by_topic("ground_truth_odom"))
+            self.foreign = (f"ground_truth_odom comes from more than one simulator ({', '.join(names) or 'unknown'}):"
+                            " another run shares this ROS_DOMAIN_ID")
+            return False
+        self._truth_seq = seq
+        return True
+
+    def _on_truth(self, msg: Any, info: Any = None) -> None:
+        if not self._own_truth(info):
+            return
+        if not self.started:
+            self._truth_seen = True
+            return
+        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        if self.judge.t0 is not None and t < self.judge.t0:
+            return
+        pose = msg.pose.pose
+        q = pose.orientation
+        self.judge.observe(t, pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w))
+
+    def _on_collision(self, msg: Any) -> None:
+        if not self.started:
+            return
+        try:
+            event = json.loads(msg.data)
+            t, x, y = float(event["t"]), float(event["x"]), float(event["y"])
+        except (ValueError, KeyError, TypeError) as exc:
+            self.get_logger().warning(f"unreadable collision event {msg.data!r}: {exc}")
+            return
+        self.judge.on_collision(t, x, y)
+
+    # -------------------------------------------------------------- the end
+    def _conclude(self) -> None:
+        self.leave()
+        self.finished = True
+        self.exit_code = EXIT_PASSED if self.judge.passed else EXIT_FAILED
+        lines = self.judge.report_lines()
+        for line in lines:
+            print(line)
+        sys.stdout.flush()
+        self._write_json(lines)
+
+    def _give_up(self) -> None:
+        self.leave()
+        self.finished = True
+        self.timed_out = self.foreign is None
+        self.exit_code = EXIT_TIMEOUT
+        state = "before t0 (the activate service or /clock never came)" if not self.started else \
+            f"at {self.stamp()} of the schedule"
+        if self.foreign is not None:  # nothing measured can be trusted: no figures at all
+            print(f"NO VERDICT: {self.foreign}; set a ROS_DOMAIN_ID of its own for each run")
+            lines = []
+        else:
+            print(f"TIMEOUT: no verdict after {self.timeout:g} s wall, {state}; provisional report:")
+            lines = self.judge.report_lines()
+        for line in lines:
+            print(line)
+        sys.stdout.flush()
+        self._write_json(lines)
+
+    def _write_json(self, lines: list[str]) -> None:
+        if not self.json_path:
+            return
+        results = dict(self.judge.results())
+        results.update({
+            "report_lines": lines,
+            "timed_out": self.timed_out,
+            "foreign": self.foreign,
+            "config": asdict(self.config),
+            "wall_time_s": round(time.monotonic() - self.wall_start, 3),
+            "activate_calls": self.calls,
+            "t0_sim": self.judge.t0,
+            "time_base": "times and report lines: seconds from t0 (t0_sim: t0 on the sim clock); "
+                         "log lines: sim clock and t0 + seconds",
+        })
+        path = Path(self.json_path)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+        except OSError as exc:
+            self.get_logger().error(f"could not write {path}: {exc}")
