@@ -1,8 +1,12 @@
-"""The lock-step runner: the real tree and the simulator stepped together, judged by the referee."""
+"""The lock-step runner: the real tree and the simulator stepped together, judged by the referee.
+
+What must hold for any number of robots runs for one and for two (``robots``): the one loop drives a
+list of robots, one robot is a list of one. Two robots run shorter where the check allows it."""
 
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -10,22 +14,38 @@ from bt_nav_sim.plot import BRANCHES, Trajectory, plot_run
 
 from bt_nav.cli.lockstep import main
 from bt_nav.mission.trace import read_trace
-from bt_nav.run.lockstep import run_mission
+from bt_nav.run.lockstep import run_mission, run_robots
+from bt_nav.run.result import MissionResult
+
+ROBOTS = [pytest.param(1, id="1robot"), pytest.param(2, id="2robots")]
 
 
-def test_same_seed_same_run() -> None:
-    a = run_mission("stage_4", "A", seed=3)
-    b = run_mission("stage_4", "A", seed=3)
-    assert a.results == b.results
-    assert a.branch_ticks == b.branch_ticks
-    np.testing.assert_array_equal(a.trajectory.x, b.trajectory.x)
-    np.testing.assert_array_equal(a.trajectory.yaw, b.trajectory.yaw)
-    c = run_mission("stage_4", "A", seed=4)
-    assert not np.array_equal(a.trajectory.x, c.trajectory.x), "the seed matters"
+def each_robot(robots: int, *args: Any, **kwargs: Any) -> list[MissionResult]:
+    """Every robot's result of one lock-step run of ``robots`` robots (:func:`run_robots`'s arguments)."""
+    results = run_robots(*args, robots=robots, **kwargs).results
+    assert len(results) == robots
+    return results
 
 
-def test_stage_4_mission_passes() -> None:
-    result = run_mission("stage_4", "none", seed=0)
+@pytest.mark.parametrize(("robots", "duration"), [pytest.param(1, None, id="1robot"),
+                                                  pytest.param(2, 20.0, id="2robots")])
+def test_same_seed_same_run(robots: int, duration: float | None) -> None:
+    runs = [each_robot(robots, "stage_4", "A", seed, duration=duration) for seed in (3, 3, 4)]
+    for a, b, c in zip(*runs, strict=True):
+        assert a.results == b.results
+        assert a.branch_ticks == b.branch_ticks
+        np.testing.assert_array_equal(a.trajectory.x, b.trajectory.x)
+        np.testing.assert_array_equal(a.trajectory.yaw, b.trajectory.yaw)
+        assert not np.array_equal(a.trajectory.x, c.trajectory.x), "the seed matters"
+
+
+@pytest.mark.parametrize("robots", ROBOTS)
+def test_stage_4_mission_passes(robots: int) -> None:
+    for result in each_robot(robots, "stage_4", "none", seed=0):
+        _passes_stage_4(result)
+
+
+def _passes_stage_4(result: MissionResult) -> None:
     assert result.passed, result.report_lines
     assert result.collisions == 0
     assert result.report_lines[-1] == "overall: PASSED"
@@ -39,61 +59,76 @@ def test_stage_4_mission_passes() -> None:
     assert result.sim_time == pytest.approx(57.5)
 
 
-def test_driving_into_a_wall_is_caught_by_the_referee() -> None:
+@pytest.mark.parametrize("robots", ROBOTS)
+def test_driving_into_a_wall_is_caught_by_the_referee(robots: int) -> None:
     """Thresholds so small the robot never reacts: it hits the wall, and the referee must fail it."""
     # a path narrower than the robot (radius 0.12 m) and tiny thresholds: it only sees what is dead ahead
-    result = run_mission("stage_4", "none", seed=0, overrides={"close_distance": 0.05, "far_distance": 0.06,
-                                                                  "path_half_width": 0.05},
-                         jitter=None)
-    assert result.collisions >= 1
-    assert not result.passed
-    assert "no collision" in result.failed_checks
-    assert result.report_lines[-1] == "overall: FAILED"
-    event = result.results["collision_events"][0]
-    assert 5.0 < event["t"] < 20.0
+    for result in each_robot(robots, "stage_4", "none", seed=0, overrides={"close_distance": 0.05,
+                                                                           "far_distance": 0.06,
+                                                                           "path_half_width": 0.05}, jitter=None):
+        assert result.collisions >= 1
+        assert not result.passed
+        assert "no collision" in result.failed_checks
+        assert result.report_lines[-1] == "overall: FAILED"
+        event = result.results["collision_events"][0]
+        assert 5.0 < event["t"] < 20.0
 
 
-def test_kinematics_and_profiles_reach_the_simulator() -> None:
-    ideal = run_mission("stage_4", "none", seed=1, duration=20.0)
-    burger = run_mission("stage_4", "none", seed=1, duration=20.0, kinematics="burger")
-    real = run_mission("stage_4", "none", seed=1, duration=20.0, profile="turtlebot3")
-    assert (ideal.kinematics, burger.kinematics, real.kinematics) == ("ideal", "burger", "burger")
-    assert ideal.summary()["kinematics"] == "ideal"
-    # the homework tuning turns at 2.5 rad/s while driving: wheel limits cost it distance
-    assert burger.travelled < ideal.travelled - 0.1
-    assert real.profile == "turtlebot3"
+@pytest.mark.parametrize("robots", ROBOTS)
+def test_kinematics_and_profiles_reach_the_simulator(robots: int) -> None:
+    runs = [each_robot(robots, "stage_4", "none", seed=1, duration=20.0, **options)
+            for options in ({}, {"kinematics": "burger"}, {"profile": "turtlebot3"})]
+    for ideal, burger, real in zip(*runs, strict=True):
+        assert (ideal.kinematics, burger.kinematics, real.kinematics) == ("ideal", "burger", "burger")
+        assert ideal.summary()["kinematics"] == "ideal"
+        # the homework tuning turns at 2.5 rad/s while driving: wheel limits cost it distance
+        assert burger.travelled < ideal.travelled - 0.1
+        assert real.profile == "turtlebot3"
 
 
-def test_noise_off_is_deterministic_without_a_seed_effect_on_the_sensors() -> None:
-    a = run_mission("empty_room", "none", seed=1, duration=12.0, jitter=None, noise=False)
-    b = run_mission("empty_room", "none", seed=2, duration=12.0, jitter=None, noise=False)
-    np.testing.assert_allclose(a.trajectory.x, b.trajectory.x)  # nothing random is left
-    c = run_mission("empty_room", "none", seed=2, duration=12.0, jitter=None)
-    assert not np.array_equal(a.trajectory.x, c.trajectory.x)  # noise on: the seed matters
+@pytest.mark.parametrize("robots", ROBOTS)
+def test_noise_off_is_deterministic_without_a_seed_effect_on_the_sensors(robots: int) -> None:
+    a = each_robot(robots, "empty_room", "none", seed=1, duration=12.0, jitter=None, noise=False)
+    b = each_robot(robots, "empty_room", "none", seed=2, duration=12.0, jitter=None, noise=False)
+    c = each_robot(robots, "empty_room", "none", seed=2, duration=12.0, jitter=None)
+    for ra, rb, rc in zip(a, b, c, strict=True):
+        np.testing.assert_allclose(ra.trajectory.x, rb.trajectory.x)  # nothing random is left
+        assert not np.array_equal(ra.trajectory.x, rc.trajectory.x)  # noise on: the seed matters
 
 
-def test_lab_profile_and_bad_arguments() -> None:
-    result = run_mission("empty_room", "none", seed=0, profile="lab", duration=12.0)
-    assert 0.25 < result.travelled < 0.36  # lab mode: armed at 5 s, it creeps at 0.05 m/s
+@pytest.mark.parametrize("robots", ROBOTS)
+def test_lab_profile_and_bad_arguments(robots: int) -> None:
+    for result in each_robot(robots, "empty_room", "none", seed=0, profile="lab", duration=12.0):
+        assert 0.25 < result.travelled < 0.36  # lab mode: armed at 5 s, it creeps at 0.05 m/s
     with pytest.raises(ValueError, match="profile"):
         run_mission(profile="gazebo")
     with pytest.raises(ValueError, match="unknown parameter"):
         run_mission(overrides={"no_such_parameter": 1})
 
 
-def test_cli_writes_trace_plot_and_json(tmp_path, capsys) -> None:
+@pytest.mark.parametrize(("robots", "duration", "at_least"), [pytest.param(1, None, 1000, id="1robot"),
+                                                             pytest.param(2, 20.0, 350, id="2robots")])
+def test_cli_writes_trace_plot_and_json(robots: int, duration: float | None, at_least: int, tmp_path,
+                                        capsys) -> None:
+    """One robot: the trace and the results as they are; several: a trace per robot, results per robot.
+    ``at_least``: trace lines and trajectory samples (20 Hz ticks, 30 Hz odometry) the run must give."""
     trace, picture, results = tmp_path / "trace.jsonl", tmp_path / "run.png", tmp_path / "results.json"
     code = main(["--world", "stage_4", "--maneuver", "B", "--seed", "2", "--trace", str(trace),
-                 "--plot", str(picture), "--json", str(results)])
+                 "--plot", str(picture), "--json", str(results), "--robots", str(robots),
+                 *(["--duration", str(duration)] if duration else [])])
     out = capsys.readouterr().out
     data = json.loads(results.read_text())
     assert code == (0 if data["passed"] else 1)
     assert "overall:" in out and "maneuver B, seed 2" in out
     assert picture.stat().st_size > 10_000
-    header, ticks = read_trace(trace)
-    assert header["maneuver"] == "B" and len(ticks) > 1000
-    assert "pose" in ticks[0]
-    assert len(data["trajectory"]["x"]) == len(data["trajectory"]["branch"]) > 1000
+    names = ["robot1", "robot2"][:robots]
+    traces = [trace] if robots == 1 else [tmp_path / f"trace_{name}.jsonl" for name in names]
+    each = [data] if robots == 1 else [data["robots"][name] for name in names]
+    for path, robot in zip(traces, each, strict=True):
+        header, ticks = read_trace(path)
+        assert header["maneuver"] == "B" and len(ticks) > at_least
+        assert "pose" in ticks[0]
+        assert len(robot["trajectory"]["x"]) == len(robot["trajectory"]["branch"]) > at_least
 
 
 def test_plot_accepts_a_plain_dict_trajectory(tmp_path) -> None:
