@@ -3,7 +3,8 @@
 The frame shows the world, robot, scan, trajectory, the 1.5 m circle, the active branch, sim time and
 distance, the tree coloured by status and the mission's log lines (:mod:`bt_nav.media.video`). The
 encoder is imageio-ffmpeg's bundled ffmpeg: no system ffmpeg needed. ``--still`` writes one frame as
-PNG and ``--plot`` the trajectory picture (:func:`bt_nav_sim.plot.plot_run`) from the same bag.
+PNG and ``--plot`` the trajectory picture (:func:`bt_nav_sim.plot.plot_run`) from the same bag. Every time
+shown, and ``--at``, counts sim seconds since the bag's first /clock (:data:`bt_nav.media.video.TIME_BASE`).
 """
 
 from __future__ import annotations
@@ -21,14 +22,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-o", "--output", default="mission.mp4", help="the MP4 to write (default mission.mp4)")
     parser.add_argument("--fps", type=float, default=10.0, help="frames per second of sim time (default 10)")
     parser.add_argument("--still", metavar="PNG", help="also write one frame as PNG (at --at)")
-    parser.add_argument("--at", type=float, default=None, help="sim time of the still (default: mid-mission)")
+    parser.add_argument("--at", type=float, default=None, help="time of the still, s since the bag's first /clock "
+                        "(the time every frame shows; default: mid-bag)")
     parser.add_argument("--plot", metavar="PNG", help="also write the trajectory picture")
     parser.add_argument("--no-video", action="store_true", help="only --still / --plot")
     args = parser.parse_args(argv)
     if args.fps <= 0:
         parser.error("--fps must be positive")
     from bt_nav.media.bagread import read_bag
-    from bt_nav.media.video import plot_bag, renderer_for, world_of, write_video
+    from bt_nav.media.video import TIME_BASE, plot_bag, renderer_for, world_of, write_video
 
     try:
         record = read_bag(args.bag)
@@ -40,9 +42,9 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
     world = world_of(record)
     if args.still:
-        at = args.at if args.at is not None else record.start + record.duration / 2
-        renderer_for(record, world).frame(at).save(args.still)
-        print(f"still: {args.still} (t = {at:.2f} s)")
+        at = args.at if args.at is not None else max(0.0, record.end - record.origin) / 2
+        renderer_for(record, world).frame(record.origin + at).save(args.still)
+        print(f"still: {args.still} (t = {at:.2f} s {TIME_BASE})")
     if args.plot:
         print(f"picture: {plot_bag(record, args.plot, world)}")
     if not args.no_video:

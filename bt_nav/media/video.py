@@ -5,6 +5,14 @@ around the start, the latest LiDAR scan, the robot's footprint and heading, a ca
 distance travelled and the active branch (tip and its feedback), a side panel with the tree coloured by
 status (running path highlighted) and a console strip with the mission's log lines as they happened.
 
+What a frame says is computed apart from the drawing (:class:`FrameText`, :meth:`Track.text`) and is that
+frame's own: one time base, sim seconds since the bag's first /clock (:data:`TIME_BASE`, written in the
+caption; ``bt-nav video --still --at T`` is the frame whose clock reads T); feedback only of nodes ticked in
+the snapshot at that instant, countdowns counted down to the frame (:func:`live_feedback`), a maneuver's turn
+so far from ground truth; the scan placed from the pose at the scan's own stamp
+(:meth:`~bt_nav.media.bagread.MissionRecord.scan_at`); the console filtered by one rule
+(:data:`HIDDEN_PREFIXES`).
+
 Why PIL and not matplotlib: a 55 s mission at 10 fps is 550 frames and the budget is 20 s on two cores,
 so ~35 ms a frame including the encoder. Frames are drawn with PIL on a pre-rendered background; the
 trajectory is drawn incrementally onto a persistent layer, and the tree panel and the console strip
@@ -19,7 +27,7 @@ of everyone's log lines. :func:`renderer_for` picks the renderer, so a one-robot
 
 from __future__ import annotations
 
-import bisect
+import re
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -29,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from bt_nav.media.bagread import MissionRecord
-from bt_nav.media.treetext import active_path, parse_snapshot
+from bt_nav.media.treetext import TreeRow, active_path, parse_snapshot
 
 WIDTH, HEIGHT = 1280, 720
 MAP_W, MAP_H = 720, 560  # map panel (top left); the tree panel fills the rest of the top
@@ -98,19 +106,211 @@ def _bounds(record: MissionRecord, world: Any) -> tuple[float, float, float, flo
     return (float(xs.min()) - 2, float(ys.min()) - 2, float(xs.max()) + 2, float(ys.max()) + 2)
 
 
-def branches(record: MissionRecord) -> tuple[np.ndarray, list[str], list[str]]:
-    """Per tree snapshot: times, branch labels and tip descriptions ("TurnAway: steering +10 deg")."""
+# ---------------------------------------------------------------------- what a frame says
+# Why a section of its own: every text of a frame (caption, tree panel, legend, console) must be that frame's
+# own, on one time base, and a test compares it with the bag. The drawing code only draws these strings.
+
+TIME_BASE = "since the bag's first /clock"  # the origin of every time a picture shows (MissionRecord.origin)
+
+#: The console strip shows the mission's story as the lab's terminal does: launch and start-up lines, service
+#: calls and their replies (arm / toggle_navigation, the referee's activate), maneuver announcements and
+#: results, the emergency brake (AEB), deadline, evaluation and verdict lines. It hides diagnostics: DEBUG lines
+#: and the lines whose message (after the ``[LEVEL]`` tag and a ``[node]:`` tag, as ``ros2 launch`` prints them)
+#: begins with one of these prefixes: tick statistics and the scan pipeline's health chatter.
+HIDDEN_PREFIXES = ("stats:", "final stats:", "ProcessScan:")
+_TAGS = re.compile(r"^(?:\[(?P<level>[A-Z]+)\]\s*)?(?:\[[^\]\s]+\]:\s*)?")
+
+
+def console_shows(line: str) -> bool:
+    """Whether the console strip shows this log line (the rule: :data:`HIDDEN_PREFIXES`)."""
+    match = _TAGS.match(line)
+    if match["level"] == "DEBUG":
+        return False
+    return not line[match.end():].startswith(HIDDEN_PREFIXES)
+
+
+#: s: a tip's feedback older than this is shown with its time (snapshots come only when a status changes).
+STALE_AFTER = 0.5
+_COUNTDOWN = re.compile(r"^(?P<n>[+-]?\d+(?:\.\d+)?) (?P<unit>s left|deg to go)$")
+
+
+def live_feedback(feedback: str, elapsed: float, turned: float) -> str:
+    """A snapshot's feedback as of the frame: ``elapsed`` s and ``turned`` deg after the snapshot.
+
+    Why: the executive publishes its tree only when a status changes, so a snapshot's countdowns ("16.2 s
+    left", "+158 deg to go") are as old as the snapshot. They are counted down by the sim time and by the
+    ground-truth heading change since; any other feedback is shown as the snapshot says it.
+    """
+    match = _COUNTDOWN.match(feedback)
+    if match is None:
+        return feedback
+    n = float(match["n"])
+    if match["unit"] == "s left":
+        return f"{max(0.0, n - elapsed):.1f} s left"
+    return f"{n - turned:+.0f} deg to go"
+
+
+def shown_feedback(row: TreeRow) -> str:
+    """A row's feedback if that node was ticked in the snapshot's tick (RUNNING, SUCCESS or FAILURE), else "".
+
+    Why: py_trees keeps a node's last feedback after it stops being ticked ("+158 deg to go" of a finished
+    turn, "creeping" of a branch no longer chosen); only the nodes of that tick speak for that moment.
+    """
+    return row.feedback if row.status != "INVALID" else ""
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """One tree snapshot of the bag, parsed once: its rows, the running path, the branch and the tip."""
+
+    t: float  # sim time of the snapshot (absolute, as in the bag)
+    rows: list[TreeRow]
+    path: list[int]
+    branch: str  # the tree's branch: the child of the first selector on the running path ("Lab", "Disarmed")
+    label: str  # the trajectory's colour label (:func:`bt_nav_sim.plot.branch_of_tip`)
+    running_since: float  # since when the tip has been running without a break (``t`` when it is not running)
+
+    @property
+    def tip(self) -> TreeRow | None:
+        """The last node of the running path (None for a foreign text)."""
+        return self.rows[self.path[-1]] if self.path else None
+
+
+def snapshots(record: MissionRecord) -> list[Snapshot]:
+    """The bag's tree snapshots, parsed (see :class:`Snapshot`)."""
     from bt_nav_sim.plot import branch_of_tip
 
-    times, labels, tips = [], [], []
+    out: list[Snapshot] = []
     for t, text in record.trees:
         rows = parse_snapshot(text)
         path = active_path(rows)
         tip = rows[path[-1]] if path else None
-        times.append(t)
-        labels.append(branch_of_tip(tip.name) if tip else "Stopped")
-        tips.append(f"{tip.name}: {tip.feedback}" if tip and tip.feedback else (tip.name if tip else ""))
-    return np.asarray(times, dtype=np.float64), labels, tips
+        chosen = next((path[n + 1] for n, i in enumerate(path[:-1]) if rows[i].marker == "[o]"), None)
+        branch = rows[chosen].name if chosen is not None else (tip.name if tip else "")
+        since = t
+        if tip is not None and tip.status == "RUNNING" and out:
+            last = out[-1].tip
+            if last is not None and last.name == tip.name and last.status == "RUNNING":
+                since = out[-1].running_since
+        out.append(Snapshot(t, rows, path, branch, branch_of_tip(tip.name) if tip else "Stopped", since))
+    return out
+
+
+def branches(record: MissionRecord) -> tuple[np.ndarray, list[str], list[str]]:
+    """Per tree snapshot: times, trajectory labels and tips as the snapshot says them ("TurnAway: steering
+    +10 deg"; the feedback only when the tip was ticked)."""
+    snaps = snapshots(record)
+    tips = []
+    for snap in snaps:
+        tip = snap.tip
+        feedback = shown_feedback(tip) if tip else ""
+        tips.append(f"{tip.name}: {feedback}" if feedback else (tip.name if tip else ""))
+    return np.asarray([s.t for s in snaps], dtype=np.float64), [s.label for s in snaps], tips
+
+
+@dataclass(frozen=True)
+class FrameText:
+    """Everything a frame says about one robot at one instant (the caption draws :meth:`lines`)."""
+
+    clock: float  # s since :attr:`MissionRecord.origin` (:data:`TIME_BASE`)
+    travelled: float  # m, ground truth
+    branch: str  # the tree's branch at that instant ("Stopped" before the first snapshot)
+    tip: str
+    feedback: str  # the tip's feedback, live (:func:`live_feedback`), "" when the tip was not ticked
+    deadline: str  # "no deadline", "12.3 s left", "deadline reached", "" (no such node in the tree)
+    turned: float | None  # deg turned since the running maneuver began (ground truth); None when none runs
+    snapshot: float | None  # the snapshot's time, s since the origin (None before the first)
+
+    def lines(self) -> tuple[str, str]:
+        """The caption's two lines: time (and its base), distance and deadline; then branch, tip, the turn so far
+        and the feedback (last: a stale feedback's "as of" may be cut at the frame's edge, the turn may not)."""
+        head = f"t = {self.clock:.2f} s {TIME_BASE}    travelled {self.travelled:.2f} m"
+        if self.deadline:
+            head += f"    {self.deadline}"
+        if not self.tip or self.tip == self.branch:
+            detail = self.branch
+        else:  # "ManeuverC_SmartPivot > SmartPivot" says the name twice: the tip alone says it
+            detail = self.tip if self.branch.endswith(self.tip) else f"{self.branch} > {self.tip}"
+        if self.turned is not None:
+            detail += f" [turned {self.turned:+.0f} deg]"
+        if self.feedback:
+            detail += f": {self.feedback}"
+            stale = self.snapshot is not None and self.clock - self.snapshot > STALE_AFTER
+            if stale and not _COUNTDOWN.match(self.feedback):  # a countdown is live; other text says its age
+                detail += f" (as of {self.snapshot:.2f} s)"
+        return head, detail
+
+
+def _deadline(snap: Snapshot, elapsed: float, turned: float) -> str:
+    """The deadline as that snapshot's ticked nodes say it, counted down to the frame ("" when none says)."""
+    for row in snap.rows:
+        feedback = live_feedback(shown_feedback(row), elapsed, turned)
+        if feedback == "no deadline" or feedback == "deadline reached" or feedback.endswith(" s left"):
+            return feedback
+    return ""
+
+
+@dataclass
+class Track:
+    """One robot of the film: its name, record and colour, its parsed snapshots, and how much of its path is on
+    the layer. Both renderers ask a track what its robot says and where its scan lies at an instant."""
+
+    name: str
+    rec: MissionRecord
+    colour: tuple[int, int, int]
+    drawn: int = 1  # trajectory samples already on the layer (segments end at index ``drawn``)
+    distance: np.ndarray = field(init=False)
+    snaps: list[Snapshot] = field(init=False)
+    snap_t: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.distance = self.rec.truth.distance()
+        self.snaps = snapshots(self.rec)
+        self.snap_t = np.asarray([s.t for s in self.snaps], dtype=np.float64)
+
+    def index(self, t: float) -> int:
+        """The last ground-truth sample at or before ``t`` (-1: none yet)."""
+        return int(np.searchsorted(self.rec.truth.t, t, side="right")) - 1
+
+    def snapshot(self, t: float) -> int:
+        """The last tree snapshot at or before ``t`` (-1: none yet)."""
+        return int(np.searchsorted(self.snap_t, t, side="right")) - 1
+
+    def sample_labels(self) -> list[str]:
+        """The branch label of each ground-truth sample (what drove it), for the path's colours."""
+        idx = np.searchsorted(self.snap_t, self.rec.truth.t, side="right") - 1
+        return [self.snaps[i].label if i >= 0 else "Stopped" for i in idx]
+
+    def text(self, t: float, origin: float) -> FrameText:
+        """What the frame at sim time ``t`` says about this robot (times counted from ``origin``)."""
+        i, k = self.index(t), self.snapshot(t)
+        travelled = float(self.distance[i]) if i >= 0 else 0.0
+        if k < 0:
+            return FrameText(t - origin, travelled, "Stopped", "", "", "", None, None)
+        snap, truth = self.snaps[k], self.rec.truth
+        elapsed, since_snap = t - snap.t, truth.turned(snap.t, t)
+        tip = snap.tip
+        feedback = live_feedback(shown_feedback(tip), elapsed, since_snap) if tip else ""
+        turning = tip is not None and tip.status == "RUNNING" and snap.label == "Maneuver"
+        turned = truth.turned(snap.running_since, t) if turning else None
+        return FrameText(t - origin, travelled, snap.branch, tip.name if tip else "", feedback,
+                         _deadline(snap, elapsed, since_snap), turned, snap.t - origin)
+
+    def panel_rows(self, t: float) -> list[tuple[TreeRow, str, bool]]:
+        """The tree at ``t``: each row with the feedback the frame shows and whether it is on the running path."""
+        k = self.snapshot(t)
+        if k < 0:
+            return []
+        snap = self.snaps[k]
+        elapsed, turned = t - snap.t, self.rec.truth.turned(snap.t, t)
+        on_path = set(snap.path)
+        return [(row, live_feedback(shown_feedback(row), elapsed, turned), n in on_path)
+                for n, row in enumerate(snap.rows)]
+
+
+def console_lines(events: list[tuple[float, str]], prefix: str = "") -> list[tuple[float, str]]:
+    """The log lines the console strip shows (:func:`console_shows`), each behind ``prefix``."""
+    return [(t, prefix + text) for t, text in events if console_shows(text)]
 
 
 class VideoRenderer:
@@ -124,16 +324,16 @@ class VideoRenderer:
         self.world = world
         self.view = MapView.fit(_bounds(record, world))
         self.font, self.mono = _fonts()
-        self.tree_t, self.tree_branch, self.tree_tip = branches(record)
-        truth = record.truth
-        self.distance = truth.distance()
-        idx = np.searchsorted(self.tree_t, truth.t, side="right") - 1
-        self.sample_branch = [self.tree_branch[i] if i >= 0 else "Stopped" for i in idx]
-        self.events = record.events
-        self.event_t = [t for t, _ in record.events]
+        self.origin = record.origin  # every time a frame shows counts from here (TIME_BASE)
+        if not hasattr(self, "tracks"):  # one robot: one track, its path coloured by branch
+            self.tracks = [Track("", record, (40, 40, 40))]
+        self.track = self.tracks[0]
+        self.sample_branch = self.track.sample_labels()
+        self.events = console_lines(record.events)
+        self.event_t = [t for t, _ in self.events]
         self.layer = self._background()
-        self._drawn = 1  # trajectory samples already on the layer (segments end at index _drawn)
-        self._tree_cache: tuple[int, Any] = (-2, None)
+        self._tree_cache: tuple[Any, Any] = (None, None)
+        self._panel_base: tuple[int | None, Any] = (None, None)
         self._console_cache: tuple[int, Any] = (-1, None)
 
     # ------------------------------------------------------------------ static parts
@@ -184,25 +384,23 @@ class VideoRenderer:
         """Draw trajectory segments up to sample ``upto`` onto the persistent layer."""
         from bt_nav_sim.plot import BRANCH_COLOURS
 
-        if upto <= self._drawn:
+        drawn = self.track.drawn
+        if upto <= drawn:
             return
         tr, d = self.rec.truth, self._Draw.Draw(self.layer)
-        xs, ys = self.view.px(tr.x[self._drawn - 1:upto], tr.y[self._drawn - 1:upto])
+        xs, ys = self.view.px(tr.x[drawn - 1:upto], tr.y[drawn - 1:upto])
         for k in range(len(xs) - 1):
-            colour = _hex(BRANCH_COLOURS.get(self.sample_branch[self._drawn + k], "#000000"))
+            colour = _hex(BRANCH_COLOURS.get(self.sample_branch[drawn + k], "#000000"))
             d.line([(float(xs[k]), float(ys[k])), (float(xs[k + 1]), float(ys[k + 1]))], fill=colour, width=3)
-        self._drawn = upto
+        self.track.drawn = upto
 
-    def _draw_scan(self, d: Any, t: float, x: float, y: float, yaw: float, scans: Any = None,
+    def _draw_scan(self, d: Any, t: float, rec: MissionRecord | None = None,
                    colour: tuple[int, int, int] = (230, 40, 40)) -> None:
-        scans = self.rec.scans if scans is None else scans
-        k = int(np.searchsorted(scans.t, t, side="right")) - 1
-        if k < 0 or scans.ranges.size == 0:
+        """The latest scan at ``t`` of ``rec`` (default the record's), placed from the pose at its own stamp."""
+        scan = (self.rec if rec is None else rec).scan_at(t)
+        if scan is None:
             return
-        r = scans.ranges[k]
-        ok = np.isfinite(r) & (r < scans.range_max)
-        a = scans.angles[ok] + yaw
-        px, py = self.view.px(x + r[ok] * np.cos(a), y + r[ok] * np.sin(a))
+        px, py = self.view.px(scan[1], scan[2])
         for u, w in zip(px.tolist(), py.tolist(), strict=True):
             d.rectangle([u - 1.5, w - 1.5, u + 1.5, w + 1.5], fill=colour)
 
@@ -213,52 +411,83 @@ class VideoRenderer:
         hx, hy = self.view.px(x + 2.2 * ROBOT_RADIUS * np.cos(yaw), y + 2.2 * ROBOT_RADIUS * np.sin(yaw))
         d.line([(float(px), float(py)), (float(hx), float(hy))], fill=(255, 200, 0), width=3)
 
+    def text(self, t: float) -> FrameText:
+        """What the frame at sim time ``t`` says (its caption is :meth:`FrameText.lines`, drawn as is)."""
+        return self.track.text(t, self.origin)
+
     def frame(self, t: float) -> Any:
         """The frame at sim time ``t`` (a PIL RGB image of WIDTH x HEIGHT)."""
         tr = self.rec.truth
-        i = int(np.searchsorted(tr.t, t, side="right")) - 1
+        i = self.track.index(t)
         self._extend_trail(i + 1)
         img = self.layer.copy()
         d = self._Draw.Draw(img)
-        k = int(np.searchsorted(self.tree_t, t, side="right")) - 1
-        if i >= 0:
-            self._draw_scan(d, t, tr.x[i], tr.y[i], tr.yaw[i])
-            self._draw_robot(d, tr.x[i], tr.y[i], tr.yaw[i])
-        branch = self.tree_branch[k] if k >= 0 else "Stopped"
-        tip = self.tree_tip[k] if k >= 0 else ""
-        travelled = self.distance[i] if i >= 0 else 0.0
+        pose = tr.at(t)
+        if pose is not None:
+            self._draw_scan(d, t)
+            self._draw_robot(d, *pose)
+        head, detail = self.text(t).lines()
         d.rectangle([0, 0, MAP_W, 46], fill=(255, 255, 255))
-        d.text((10, 4), f"t = {t - self.rec.start:6.2f} s    travelled {travelled:5.2f} m    {branch}",
-               font=self.font, fill=INK)
-        d.text((10, 25), tip[:90], font=self.mono, fill=(70, 70, 90))
-        img.paste(self._tree_panel(k), (MAP_W + 2, 0))
-        img.paste(self._console(bisect.bisect_right(self.event_t, t)), (0, CONSOLE_Y))
+        d.text((10, 4), head, font=self.font, fill=INK)
+        d.text((10, 25), detail[:90], font=self.mono, fill=(70, 70, 90))
+        img.paste(self._tree_panel(t), (MAP_W + 2, 0))
+        img.paste(self._console(int(np.searchsorted(self.event_t, t, side="right"))), (0, CONSOLE_Y))
         return img
 
-    def _tree_panel(self, k: int) -> Any:
-        """The tree of snapshot ``k`` coloured by status (cached while the snapshot is the same)."""
-        if self._tree_cache[0] == k:
+    def _tree_panel(self, t: float) -> Any:
+        """The tree at ``t`` coloured by status, feedback as :meth:`Track.panel_rows` gives it.
+
+        Why two levels of cache: the snapshot's panel is drawn once; only rows whose feedback is live (a
+        countdown, :func:`live_feedback`) are redrawn on a copy, and only when their text changed.
+        """
+        k = self.track.snapshot(t)
+        rows = self.track.panel_rows(t)
+        live = tuple((n, feedback) for n, (row, feedback, _) in enumerate(rows) if feedback != shown_feedback(row))
+        if self._tree_cache[0] == (k, live):
             return self._tree_cache[1]
+        if self._panel_base[0] != k:
+            self._panel_base = (k, self._draw_panel(k, rows))
+        img = self._panel_base[1]
+        if live:
+            img = img.copy()
+            d = self._Draw.Draw(img)
+            step = self._panel_step(len(rows))
+            for n, feedback in live:
+                row, _, on_path = rows[n]
+                y = 28 + n * step
+                d.rectangle([2, y, WIDTH - MAP_W - 6, y + step - 2], fill=(255, 243, 190) if on_path else PANEL_BG)
+                self._panel_row(d, y, row, feedback)
+        self._tree_cache = ((k, live), img)
+        return img
+
+    @staticmethod
+    def _panel_step(n_rows: int) -> int:
+        return min(15, (MAP_H - 30) // max(n_rows, 1))
+
+    def _draw_panel(self, k: int, rows: list[tuple[TreeRow, str, bool]]) -> Any:
+        """The panel of snapshot ``k``: title with the snapshot's time, highlights of the running path, rows."""
         img = self._Image.new("RGB", (WIDTH - MAP_W - 2, MAP_H), PANEL_BG)
         d = self._Draw.Draw(img)
-        d.text((8, 6), "behaviour tree", font=self.font, fill=INK)
-        rows = parse_snapshot(self.rec.trees[k][1]) if k >= 0 else []
-        on_path = set(active_path(rows))
-        step = min(15, (MAP_H - 30) // max(len(rows), 1))
-        for n, row in enumerate(rows):
-            y = 28 + n * step
-            colour = STATUS_COLOURS[row.status]
-            if n in on_path:
-                d.rectangle([2, y - 1, WIDTH - MAP_W - 6, y + step - 2], fill=(255, 243, 190))
-            x = 8 + 14 * row.depth
-            d.rectangle([x, y + 3, x + 7, y + 10], fill=colour)
-            label = row.name + (f" - {row.feedback}" if row.feedback else "")
-            d.text((x + 12, y), label[:70 - 2 * row.depth], font=self.mono, fill=colour)
-        self._tree_cache = (k, img)
+        title = f"behaviour tree (t = {self.track.snaps[k].t - self.origin:.2f} s)" if k >= 0 else "behaviour tree"
+        d.text((8, 6), title, font=self.font, fill=INK)
+        step = self._panel_step(len(rows))
+        for n, (_, _, on_path) in enumerate(rows):  # highlights first: none may cover the text of the row above
+            if on_path:
+                d.rectangle([2, 28 + n * step - 1, WIDTH - MAP_W - 6, 28 + (n + 1) * step - 2], fill=(255, 243, 190))
+        for n, (row, _, _) in enumerate(rows):
+            self._panel_row(d, 28 + n * step, row, shown_feedback(row))
         return img
 
+    def _panel_row(self, d: Any, y: int, row: TreeRow, feedback: str) -> None:
+        colour = STATUS_COLOURS[row.status]
+        x = 8 + 14 * row.depth
+        d.rectangle([x, y + 3, x + 7, y + 10], fill=colour)
+        label = row.name + (f" - {feedback}" if feedback else "")
+        d.text((x + 12, y), label[:70 - 2 * row.depth], font=self.mono, fill=colour)
+
     def _console(self, n_events: int) -> Any:
-        """The console strip with the first ``n_events`` log lines, newest at the bottom (cached)."""
+        """The console strip with the first ``n_events`` shown log lines (:func:`console_lines`), newest at the
+        bottom, each stamped on the frame's time base (cached)."""
         if self._console_cache[0] == n_events:
             return self._console_cache[1]
         img = self._Image.new("RGB", (WIDTH, HEIGHT - CONSOLE_Y), CONSOLE_BG)
@@ -266,7 +495,7 @@ class VideoRenderer:
         lines = self.events[:n_events][-9:]
         for n, (t, text) in enumerate(lines):
             ink = (255, 255, 255) if n == len(lines) - 1 else CONSOLE_INK
-            d.text((10, 6 + 17 * n), f"[{t - self.rec.start:7.2f}] {text}"[:160], font=self.mono, fill=ink)
+            d.text((10, 6 + 17 * n), f"[{t - self.origin:7.2f}] {text}"[:160], font=self.mono, fill=ink)
         self._console_cache = (n_events, img)
         return img
 
@@ -280,9 +509,10 @@ def renderer_for(record: MissionRecord, world: Any = None) -> VideoRenderer:
 
 
 def frame_times(record: MissionRecord, fps: float) -> np.ndarray:
-    """Sim times of the frames: round(duration x fps) frames (at least one), from the bag's start."""
-    n = max(1, round(record.duration * fps))
-    return record.start + np.arange(n) / fps
+    """Sim times of the frames: one every 1/fps s from the bag's origin (:attr:`MissionRecord.origin`, the time
+    zero the frames show) to its end, at least one."""
+    n = max(1, round(max(0.0, record.end - record.origin) * fps))
+    return record.origin + np.arange(n) / fps
 
 
 @dataclass
@@ -343,10 +573,8 @@ def trajectory(record: MissionRecord) -> Any:
     from bt_nav_sim.plot import Trajectory
 
     tr = record.truth
-    tree_t, labels, _ = branches(record)
-    idx = np.searchsorted(tree_t, tr.t, side="right") - 1
-    return Trajectory(tr.t, tr.x, tr.y, tr.yaw, np.array([labels[i] if i >= 0 else "Stopped" for i in idx],
-                                                         dtype=object))
+    labels = Track("", record, (0, 0, 0)).sample_labels()
+    return Trajectory(tr.t, tr.x, tr.y, tr.yaw, np.array(labels, dtype=object))
 
 
 def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
@@ -389,30 +617,6 @@ def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path
 # (each robot's name in its colour with its distance and active branch), the side panel shows each robot's
 # running path of its tree, and the console interleaves every robot's log lines, prefixed with its name.
 
-@dataclass
-class Track:
-    """One robot of the film: its name, record and colour, and how much of its path is on the layer."""
-
-    name: str
-    rec: MissionRecord
-    colour: tuple[int, int, int]
-    drawn: int = 1  # trajectory samples already on the layer (segments end at index ``drawn``)
-    distance: np.ndarray = field(init=False)
-    tree: tuple[np.ndarray, list[str], list[str]] = field(init=False)
-
-    def __post_init__(self) -> None:
-        self.distance = self.rec.truth.distance()
-        self.tree = branches(self.rec)
-
-    def index(self, t: float) -> int:
-        """The last ground-truth sample at or before ``t`` (-1: none yet)."""
-        return int(np.searchsorted(self.rec.truth.t, t, side="right")) - 1
-
-    def snapshot(self, t: float) -> int:
-        """The last tree snapshot at or before ``t`` (-1: none yet)."""
-        return int(np.searchsorted(self.tree[0], t, side="right")) - 1
-
-
 def robot_colours(record: MissionRecord) -> dict[str, tuple[int, int, int]]:
     """Robot name -> RGB, the picture's palette in the bag's robot order (one home: bt_nav_sim.plot)."""
     from bt_nav_sim.plot import robot_colour
@@ -427,11 +631,11 @@ class TracksRenderer(VideoRenderer):
         self.tracks = [Track(name, rec, colour) for (name, rec), colour in
                        zip(record.robots.items(), robot_colours(record).values(), strict=True)]
         super().__init__(record, world)  # draws the background, so the tracks must exist before
-        merged = sorted(((t, f"{tr.name}: {text}") for tr in self.tracks for t, text in tr.rec.events),
+        merged = sorted((line for tr in self.tracks for line in console_lines(tr.rec.events, f"{tr.name}: ")),
                         key=lambda e: e[0])
         self.events = merged
         self.event_t = [t for t, _ in merged]
-        self._paths_cache: tuple[tuple[int, ...], Any] = ((), None)
+        self._paths_cache: tuple[Any, Any] = ((), None)
 
     @property
     def colours(self) -> dict[str, tuple[int, int, int]]:
@@ -455,55 +659,57 @@ class TracksRenderer(VideoRenderer):
 
     def frame(self, t: float) -> Any:
         """The frame at sim time ``t`` (a PIL RGB image of WIDTH x HEIGHT)."""
-        now = [(tr, tr.index(t), tr.snapshot(t)) for tr in self.tracks]
-        for tr, i, _ in now:
-            self._extend_track(tr, i + 1)
+        for tr in self.tracks:
+            self._extend_track(tr, tr.index(t) + 1)
         img = self.layer.copy()
         d = self._Draw.Draw(img)
-        for tr, i, _ in now:
-            if i >= 0:
-                truth = tr.rec.truth
+        for tr in self.tracks:
+            pose = tr.rec.truth.at(t)
+            if pose is not None:
                 scan_ink = tuple(int(c + (255 - c) * 0.45) for c in tr.colour)  # lighter than the path
-                self._draw_scan(d, t, truth.x[i], truth.y[i], truth.yaw[i], tr.rec.scans, scan_ink)
-                self._draw_robot(d, truth.x[i], truth.y[i], truth.yaw[i], fill=tr.colour)
-                px, py = self.view.px(truth.x[i], truth.y[i])
+                self._draw_scan(d, t, tr.rec, scan_ink)
+                self._draw_robot(d, *pose, fill=tr.colour)
+                px, py = self.view.px(pose[0], pose[1])
                 d.text((float(px) + 9, float(py) - 22), tr.name, font=self.mono, fill=tr.colour)
-        self._legend(d, t, now)
-        img.paste(self._paths_panel(tuple(k for _, _, k in now)), (MAP_W + 2, 0))
+        self._legend(d, t)
+        img.paste(self._paths_panel(t), (MAP_W + 2, 0))
         img.paste(self._console(int(np.searchsorted(self.event_t, t, side="right"))), (0, CONSOLE_Y))
         return img
 
-    def _legend(self, d: Any, t: float, now: list[tuple[Track, int, int]]) -> None:
-        """The caption: sim time, then per robot a swatch, its name, distance and branch in its colour."""
+    def _legend(self, d: Any, t: float) -> None:
+        """The caption: the time, then per robot a swatch, its name, distance and branch in its colour (each
+        robot's :meth:`Track.text`, as the one-robot caption)."""
         d.rectangle([0, 0, MAP_W, 46], fill=(255, 255, 255))
-        d.text((10, 4), f"t = {t - self.rec.start:6.2f} s    {len(self.tracks)} robots", font=self.font, fill=INK)
-        width = (MAP_W - 10) // max(len(now), 1)
-        for n, (tr, i, k) in enumerate(now):
+        d.text((10, 4), f"t = {t - self.origin:.2f} s {TIME_BASE}    {len(self.tracks)} robots", font=self.font,
+               fill=INK)
+        width = (MAP_W - 10) // max(len(self.tracks), 1)
+        for n, tr in enumerate(self.tracks):
             x = 10 + n * width
             d.rectangle([x, 29, x + 12, 39], fill=tr.colour)
-            branch = tr.tree[1][k] if k >= 0 else "Stopped"
-            travelled = tr.distance[i] if i >= 0 else 0.0
-            label = f"{tr.name}  {travelled:5.2f} m  {branch}"
+            text = tr.text(t, self.origin)
+            label = f"{tr.name}  {text.travelled:5.2f} m  {text.branch}"
             d.text((x + 17, 26), label[:max(8, (width - 20) // 8)], font=self.mono, fill=tr.colour)
 
-    def _paths_panel(self, ks: tuple[int, ...]) -> Any:
-        """Each robot's running path of its tree (name in its colour, rows coloured by status); cached."""
-        if self._paths_cache[0] == ks and self._paths_cache[1] is not None:
+    def _paths_panel(self, t: float) -> Any:
+        """Each robot's running path of its tree (name in its colour, rows coloured by status, feedback as
+        :meth:`Track.panel_rows` gives it); cached while the rows are the same."""
+        panels = [[(row, feedback) for row, feedback, on_path in tr.panel_rows(t) if on_path] for tr in self.tracks]
+        key = tuple(tuple((row.name, row.status, feedback) for row, feedback in rows) for rows in panels)
+        if self._paths_cache[0] == key and self._paths_cache[1] is not None:
             return self._paths_cache[1]
         img = self._Image.new("RGB", (WIDTH - MAP_W - 2, MAP_H), PANEL_BG)
         d = self._Draw.Draw(img)
         d.text((8, 6), "behaviour trees: running path", font=self.font, fill=INK)
         y = 30
-        for tr, k in zip(self.tracks, ks, strict=True):
+        for tr, rows in zip(self.tracks, panels, strict=True):
             d.text((8, y), tr.name, font=self.font, fill=tr.colour)
             y += 20
-            rows = parse_snapshot(tr.rec.trees[k][1]) if k >= 0 else []
-            for row in (rows[n] for n in active_path(rows)):
+            for row, feedback in rows:
                 x = 8 + 10 * row.depth
                 d.rectangle([x, y + 3, x + 7, y + 10], fill=STATUS_COLOURS[row.status])
-                label = row.name + (f" - {row.feedback}" if row.feedback else "")
+                label = row.name + (f" - {feedback}" if feedback else "")
                 d.text((x + 12, y), label[:66 - row.depth], font=self.mono, fill=STATUS_COLOURS[row.status])
                 y += 15
             y += 10
-        self._paths_cache = (ks, img)
+        self._paths_cache = (key, img)
         return img

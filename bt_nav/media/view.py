@@ -196,9 +196,8 @@ class BagScene(Scene):
         tr = rec.truth
         i = int(np.searchsorted(tr.t, t, side="right")) - 1
         pose = [float(tr.x[i]), float(tr.y[i]), float(tr.yaw[i])] if i >= 0 else None
-        k = int(np.searchsorted(rec.scans.t, t, side="right")) - 1
-        pts = (scan_points(*pose, rec.scans.angles, rec.scans.ranges[k], rec.scans.range_max)
-               if pose and k >= 0 else [])
+        scan = rec.scan_at(t)  # placed from the pose at the scan's own stamp
+        pts = np.round(np.column_stack(scan[1:]), 3).tolist() if scan is not None else []
         step = max(1, (i + 1) // 1500)
         trail = np.round(np.column_stack([tr.x[: i + 1 : step], tr.y[: i + 1 : step]]), 3).tolist() if i >= 0 else []
         j = next((n for n in range(len(rec.trees) - 1, -1, -1) if rec.trees[n][0] <= t), -1)
