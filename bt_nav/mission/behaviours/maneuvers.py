@@ -134,8 +134,9 @@ class RotationManeuver(Leaf, register=False):
     def update(self) -> Status:
         """Advance the turn; RUNNING until within tolerance (and still) or out of time."""
         if self._phase == "still":
-            if self.clock() < self._phase_end:
-                return self._hold("coming to rest before the turn")
+            if self.clock() < self._phase_end:  # says what comes: the only snapshot a video may have of it
+                side = "left" if self.rotation > 0 else "right"
+                return self._hold(f"turning {side} {abs(math.degrees(self.rotation)):.0f} deg, from rest")
             self._start_turn()
         now = self.clock()
         self.meter.measure(now, self.get_input("odom"), self.get_input("odom_timeout"))
