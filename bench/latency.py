@@ -26,15 +26,14 @@ plus transport and tick; the target is one tick period + 3 ms, with no misses.
 from __future__ import annotations
 
 import bisect
-import math
 import os
 import random
 import time
-from collections.abc import Callable
 from typing import Any
 
 from bt_nav.ros.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
 from bt_nav.ros.rosutil import ThreadedNode, dds_env
+from bt_nav.testing import front_scan, laserscan_msg, wait_until
 
 from .common import Target, at_most, percentiles
 from .ros_mission import proc_status
@@ -46,20 +45,6 @@ CLEAR_RANGE, BLOCKED_RANGE = 3.0, 0.2
 PHASE_S = (0.25, 0.35)
 RESEND_S = 0.1
 STARTUP_TIMEOUT = 30.0
-
-
-def _scan_message(front: float, beams: int = 360) -> Any:
-    """A 0..2pi scan: ``front`` within +-30 deg of ahead, 3 m elsewhere."""
-    from sensor_msgs.msg import LaserScan
-
-    msg = LaserScan()
-    msg.header.frame_id = "base_scan"
-    msg.angle_min, msg.angle_increment = 0.0, 2.0 * math.pi / beams
-    msg.angle_max = msg.angle_increment * (beams - 1)
-    msg.range_min, msg.range_max = 0.12, 3.5
-    ahead = [abs(math.degrees(math.remainder(i * msg.angle_increment, 2 * math.pi))) <= 30.0 for i in range(beams)]
-    msg.ranges = [front if a else CLEAR_RANGE for a in ahead]
-    return msg
 
 
 def reflects(kind: str, linear: float, angular: float) -> bool:
@@ -127,17 +112,6 @@ class Probe:
         self.ros.close()
 
 
-def _wait(predicate: Callable[[], bool], timeout: float, what: str, tick: Callable[[], Any] | None = None) -> None:
-    """Poll ``predicate``, calling ``tick`` in between (to keep scans flowing); TimeoutError after ``timeout``."""
-    end = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > end:
-            raise TimeoutError(f"timed out after {timeout:g} s waiting for {what}")
-        if tick is not None:
-            tick()
-        time.sleep(0.02)
-
-
 def analyse(events: list[tuple[int, str]], commands: list[tuple[int, int, int, float, float]],
             end_ns: int) -> dict[str, Any]:
     """Latencies of the switches (see the module docstring); times in ns in, milliseconds out."""
@@ -182,7 +156,7 @@ def analyse(events: list[tuple[int, str]], commands: list[tuple[int, int, int, f
 def run(domain: int, switches: int = 400, seed: int = 1) -> dict[str, Any]:
     """Start the executive, arm it, alternate clear / blocked ``switches`` times; the latencies."""
     rnd = random.Random(seed)
-    clear, blocked = _scan_message(CLEAR_RANGE), _scan_message(BLOCKED_RANGE)
+    clear, blocked = (laserscan_msg(front_scan(front, CLEAR_RANGE)) for front in (CLEAR_RANGE, BLOCKED_RANGE))
     lines: list[str] = []
     spec = NodeSpec("executive", EXECUTIVE_NAME,
                     {"use_sim_time": False, "maneuver": "none", "mission_duration": 3600.0,
@@ -194,9 +168,9 @@ def run(domain: int, switches: int = 400, seed: int = 1) -> dict[str, Any]:
     started = time.monotonic()
     try:
         child = launcher.start(spec)
-        _wait(probe.matched, STARTUP_TIMEOUT, "the executive's endpoints")
-        _wait(lambda: len(probe.commands) > 0, STARTUP_TIMEOUT, "the executive's first command",
-              tick=lambda: probe.publish(clear))
+        wait_until(probe.matched, STARTUP_TIMEOUT, "the executive's endpoints", interval=0.02)
+        wait_until(lambda: len(probe.commands) > 0, STARTUP_TIMEOUT, "the executive's first command",
+                   step=lambda: probe.publish(clear), interval=0.02)
         ok, message = False, ""
         end = time.monotonic() + STARTUP_TIMEOUT
         while not ok and time.monotonic() < end:
@@ -205,8 +179,8 @@ def run(domain: int, switches: int = 400, seed: int = 1) -> dict[str, Any]:
             time.sleep(0.1)
         if not ok:
             raise RuntimeError(f"arming refused: {message}")
-        _wait(lambda: reflects("clear", *probe.commands[-1][3:]), 10.0, "full speed after arming",
-              tick=lambda: probe.publish(clear))
+        wait_until(lambda: reflects("clear", *probe.commands[-1][3:]), 10.0, "full speed after arming",
+                   step=lambda: probe.publish(clear), interval=0.02)
         time.sleep(0.2)
         kind = "clear"
         for _ in range(switches):

@@ -18,7 +18,6 @@ framework, bt_nav's leaves, scan processing, numpy...).
 
 from __future__ import annotations
 
-import array
 import gc
 import math
 import time
@@ -26,7 +25,7 @@ from typing import Any
 
 from bt_nav.mission import params as P
 from bt_nav.mission.scan import Scan
-from bt_nav.testing import Layout, TickHarness, synthetic_scan
+from bt_nav.testing import Layout, TickHarness, laserscan_msg, synthetic_scan
 
 from .baseline import IfElseController
 from .common import Target, at_most, percentiles, profile_call
@@ -70,15 +69,9 @@ def _scans(layout: Layout) -> list[Scan]:
 def _laserscan(scan: Scan) -> Any:
     """The ROS message that carries ``scan`` (None when the message package is not importable)."""
     try:
-        from sensor_msgs.msg import LaserScan
+        return laserscan_msg(scan)
     except ImportError:
         return None
-    msg = LaserScan()
-    msg.angle_min, msg.angle_max = float(scan.angle_min), float(scan.angle_max)
-    msg.angle_increment = float(scan.angle_increment)
-    msg.range_min, msg.range_max = float(scan.range_min), float(scan.range_max)
-    msg.ranges = array.array("f", scan.ranges.astype("float32").tobytes())
-    return msg
 
 
 def _harness(beams: int, maneuver: str) -> TickHarness:

@@ -4,12 +4,18 @@ Used by bt_nav's own tick-by-tick tests and meant for users who add leaves: a fa
 scans for any LiDAR layout, perfect odometry that integrates the commands, a local Trigger client whose
 answers a test scripts (:mod:`bt_nav.mission.local_services`, re-exported here), and a recorder of what
 every tick decided.
+
+Also the one home of what the DDS tests and the benchmarks share: the ``sensor_msgs/LaserScan`` built
+from a :class:`Scan` (:func:`laserscan_msg`; rclpy's message is imported only when called, so this
+module and the core stay ROS-free) and the bounded poll (:func:`wait_until`).
 """
 
 from __future__ import annotations
 
+import array
 import math
-from collections.abc import Callable, Iterable
+import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -68,6 +74,69 @@ def synthetic_scan(obstacles: Iterable[tuple[float, float]] = (), *, layout: Lay
             ranges[hit] = np.fmin(ranges[hit], distance)
     return Scan(layout.angle_min, layout.angle_max, layout.angle_increment, layout.range_min,
                 layout.range_max, ranges)
+
+
+def scan_from_ranges(ranges: Sequence[float], *, angle_min: float = 0.0, angle_increment: float | None = None,
+                     angle_max: float | None = None, range_min: float = 0.12, range_max: float = 3.5) -> Scan:
+    """A scan with exactly these fields, valid or not (defaults: a TurtleBot3 LDS-01, 0..2pi CCW, one beam
+    per range: ``angle_increment`` 2pi / len(ranges), ``angle_max`` the last beam's angle).
+
+    The ranges are kept as float32, the type a LaserScan carries (an ``array('f')`` is taken without a copy).
+    """
+    n = len(ranges)
+    increment = (2.0 * math.pi / max(n, 1)) if angle_increment is None else angle_increment
+    last = float(angle_min + increment * max(n - 1, 0)) if angle_max is None else float(angle_max)
+    return Scan(float(angle_min), last, float(increment), float(range_min), float(range_max),
+                np.asarray(ranges, dtype=np.float32))
+
+
+def front_scan(front: float = 3.0, rest: float = 3.0, *, beams: int = 360,
+               increment: float | None = None) -> Scan:
+    """A TurtleBot3-like scan (0..2pi, CCW): ``front`` within +-30 deg of ahead, ``rest`` elsewhere.
+
+    The cone is computed from ``2pi / beams`` whatever ``increment`` says (an odd increment only changes
+    where the message claims the beams point).
+    """
+    ranges = [front if abs(math.degrees(math.remainder(i * 2.0 * math.pi / beams, 2.0 * math.pi))) <= 30.0
+              else rest for i in range(beams)]
+    return scan_from_ranges(ranges, angle_increment=increment)
+
+
+def laserscan_msg(scan: Scan, *, stamp: tuple[int, int] | None = None, intensities: Sequence[float] = (),
+                  frame_id: str = "base_scan") -> Any:
+    """The ``sensor_msgs/LaserScan`` carrying ``scan`` field for field (``stamp``: sec, nanosec).
+
+    The one place a test or benchmark builds the message; ImportError when rclpy's messages are missing.
+    """
+    from sensor_msgs.msg import LaserScan
+
+    msg = LaserScan()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    msg.angle_min, msg.angle_max = float(scan.angle_min), float(scan.angle_max)
+    msg.angle_increment = float(scan.angle_increment)
+    msg.range_min, msg.range_max = float(scan.range_min), float(scan.range_max)
+    msg.ranges = array.array("f", np.asarray(scan.ranges, dtype=np.float32).tobytes())
+    msg.intensities = array.array("f", intensities)
+    return msg
+
+
+def wait_until(predicate: Callable[[], bool], timeout: float, what: str, details: Callable[[], str] = lambda: "",
+               *, step: Callable[[], Any] | None = None, interval: float = 0.01) -> None:
+    """Poll ``predicate`` until true; AssertionError after ``timeout`` wall seconds naming ``what`` and ``details()``.
+
+    Between polls ``step`` is called (a spin, a resend) and then ``interval`` seconds are slept (0: none,
+    for a step that waits by itself, such as ``spin_once`` with a timeout).
+    """
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout:.1f} s waiting for {what}\n{details()}")
+        if step is not None:
+            step()
+        if interval > 0:
+            time.sleep(interval)
 
 
 class FakeClock:

@@ -10,13 +10,13 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from bt_nav.run.grid import make_jobs, run_grid
+from bt_nav.testing import wait_until
 
 REPO = Path(__file__).resolve().parents[1]
 DASK = Path(sys.executable).with_name("dask")
@@ -51,10 +51,7 @@ class _DaskProcesses:
         self.procs: list[subprocess.Popen[bytes]] = []
         self._start("scheduler", "--scheduler-file", str(self.file), "--host", "127.0.0.1", "--port", "0",
                     "--no-dashboard")
-        deadline = time.monotonic() + 30
-        while not self.file.exists():
-            assert time.monotonic() < deadline, "dask scheduler did not write its file"
-            time.sleep(0.1)
+        wait_until(self.file.exists, 30, "the dask scheduler to write its file", interval=0.1)
         self.workers = [self._start("worker", "--scheduler-file", str(self.file), "--nthreads", "1", "--no-nanny",
                                     "--no-dashboard", "--host", "127.0.0.1") for _ in range(2)]
 
@@ -80,10 +77,12 @@ def test_dask_cli_cluster_survives_a_killed_worker_and_resumes(tmp_path: Path,
                                   "--maneuvers", ",".join(MANEUVERS), "--seeds", "2", "--scheduler", str(cluster.file),
                                   "--json", str(out), "--progress", "off"], cwd=REPO, stdout=subprocess.PIPE,
                                  stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 60
-        while not (out.exists() and json.loads(out.read_text())["runs"]):  # the first mission is in
-            assert time.monotonic() < deadline and grade.poll() is None, "no mission finished"
-            time.sleep(0.05)
+
+        def first_mission_in() -> bool:
+            assert grade.poll() is None, "grade exited before a mission finished"
+            return out.exists() and bool(json.loads(out.read_text())["runs"])
+
+        wait_until(first_mission_in, 60, "a finished mission", interval=0.05)
         os.killpg(cluster.workers[0].pid, signal.SIGKILL)  # mid-grid: its running mission is lost
         stdout, stderr = grade.communicate(timeout=120)
     finally:

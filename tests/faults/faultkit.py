@@ -20,10 +20,12 @@ from typing import Any
 
 import rclpy
 from rclpy.parameter import Parameter
-from ros_harness import PERIOD, V_MAX, Harness, Sample, laser_scan
+from ros_harness import PERIOD, V_MAX, Harness, Sample
 
-FREE = laser_scan()  # nothing within 3 m: full speed
-from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402
+from bt_nav.mission.params import SPECS as _SPECS
+from bt_nav.testing import front_scan, laserscan_msg, scan_from_ranges
+
+FREE = laserscan_msg(front_scan())  # nothing within 3 m: full speed
 
 W_TURN = float(_SPECS["angular_speed"].default)  # rotating in place and the Close branch
 DUE_MARGIN = 0.5  # stop_margin default
@@ -31,25 +33,11 @@ DUE_MARGIN = 0.5  # stop_margin default
 COMPLAINT = r"\[(WARN|ERROR|FATAL)\]"
 
 
-def scan_msg(ranges: Sequence[float], *, angle_min: float = 0.0, angle_increment: float | None = None,
-             angle_max: float | None = None, range_min: float = 0.12, range_max: float = 3.5,
-             stamp: tuple[int, int] | None = None, intensities: Sequence[float] = ()) -> Any:
-    """A LaserScan with exactly these fields (defaults: a TurtleBot3 LDS-01, 0..2pi CCW, one beam per ranges)."""
-    from sensor_msgs.msg import LaserScan
-
-    n = len(ranges)
-    msg = LaserScan()
-    msg.header.frame_id = "base_scan"
-    if stamp is not None:
-        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
-    increment = (2.0 * math.pi / max(n, 1)) if angle_increment is None else angle_increment
-    msg.angle_min = float(angle_min)
-    msg.angle_increment = float(increment)
-    msg.angle_max = float(angle_min + increment * max(n - 1, 0)) if angle_max is None else float(angle_max)
-    msg.range_min, msg.range_max = float(range_min), float(range_max)
-    msg.ranges = ranges if isinstance(ranges, array.array) else array.array("f", ranges)
-    msg.intensities = array.array("f", intensities)
-    return msg
+def scan_msg(ranges: Sequence[float], *, stamp: tuple[int, int] | None = None, intensities: Sequence[float] = (),
+             **fields: float | None) -> Any:
+    """A LaserScan with exactly these fields (defaults: a TurtleBot3 LDS-01, 0..2pi CCW, one beam per ranges;
+    ``fields``: those of :func:`bt_nav.testing.scan_from_ranges`)."""
+    return laserscan_msg(scan_from_ranges(ranges, **fields), stamp=stamp, intensities=intensities)
 
 
 def filled(value: float, beams: int = 360, **kwargs: Any) -> Any:
@@ -348,7 +336,7 @@ def connect(h: Harness, process: Any) -> Harness:
 
     h.connect(process)
     h.first_contact()
-    prime = laser_scan()
+    prime = laserscan_msg(front_scan())
     h.wait(lambda: h.tick(scan=prime).is_zero and process.has_line("scan usable again"),
            "the executive to receive scans", STARTUP_TIMEOUT)
     return h

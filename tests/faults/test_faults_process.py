@@ -23,7 +23,9 @@ from conftest import FaultCases
 from faultinject import FAULT_INJECT_ENV
 from faultkit import FREE, EvaluationServer, Run, connect
 from rclpy.parameter import Parameter
-from ros_harness import PERIOD, ExecutiveProcess, Harness, laser_scan
+from ros_harness import PERIOD, ExecutiveProcess, Harness
+
+from bt_nav.testing import front_scan, laserscan_msg
 
 SIGNALS = [signal.SIGINT, signal.SIGTERM]
 #: The real executive with the test-only fault injection (product code has none).
@@ -48,7 +50,7 @@ def test_signal_mid_maneuver(executive: Callable[..., Harness], signum: signal.S
     h = executive("-p", "maneuver:=A", "-p", "trigger_at_arming:=true", "-p", "random_seed:=7")
     run = Run(h)
     run.arm()
-    turning = run.ticks(3, laser_scan(front=0.4))
+    turning = run.ticks(3, laserscan_msg(front_scan(front=0.4)))
     assert all(s.linear == 0.0 and s.angular != 0.0 for s in turning), turning
     assert shut_down(run, signum) == 0
     assert len(run.since(0, rf"{signum.name} received: stopping the robot and shutting down")) == 1
@@ -111,7 +113,7 @@ def test_exceptions_in_leaves(start_executive: Callable[..., ExecutiveProcess],
     with faults.case("exception in TurnAway in the far band", "process",
                      "the 2nd update raises: one stop, one line; slow turning resumes on the next tick"):
         mark = run.mark()
-        samples = run.ticks(5, laser_scan(front=0.5))
+        samples = run.ticks(5, laserscan_msg(front_scan(front=0.5)))
         assert sum(1 for s in samples if s.is_zero) == 1 and samples[-1].angular != 0.0, samples
         assert all(s.is_zero or (0.0 < s.linear <= 0.22 and s.angular != 0.0) for s in samples), samples
         run.expect_one(exception_line("TurnAway"), mark)
@@ -120,7 +122,7 @@ def test_exceptions_in_leaves(start_executive: Callable[..., ExecutiveProcess],
                      "the 3rd update of a running maneuver raises: one stop, one line, the maneuver is reset "
                      "('preempted, stopped') and starts afresh; linear exactly 0 until it completes; then drives"):
         mark = run.mark()
-        close = laser_scan(front=0.25)
+        close = laserscan_msg(front_scan(front=0.25))
         samples = run.ticks(5, close)
         assert all(s.linear == 0.0 for s in samples), samples
         assert sum(1 for s in samples if s.is_zero) >= 1, samples

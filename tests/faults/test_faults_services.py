@@ -18,8 +18,10 @@ import rclpy
 from conftest import LONG, FaultCases
 from faultkit import FREE, EvaluationServer, Run
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from ros_harness import PERIOD, Harness, laser_scan
+from ros_harness import PERIOD, Harness
 from std_srvs.srv import SetBool
+
+from bt_nav.testing import front_scan, laserscan_msg
 
 SHORT_MISSION = 5.0  # s: mission_duration of these runs (deadline 4.5 s after the first arming)
 
@@ -203,7 +205,7 @@ def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Call
         with faults.case("arm(true) during a maneuver", "services",
                          "maneuver C running: arm(true) answers 'already armed' without a log line; the maneuver "
                          "carries on (linear exactly 0, same turn direction) and completes; then drives"):
-            first = run.tick(laser_scan(front=0.25))
+            first = run.tick(laserscan_msg(front_scan(front=0.25)))
             assert first.linear == 0.0 and first.angular != 0.0, first
             mark = run.mark()
             response = h.arm(True)

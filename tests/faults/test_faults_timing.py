@@ -18,9 +18,11 @@ from conftest import FaultCases
 from faultkit import FREE, EvaluationServer, Run, wait_wall
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
-from ros_harness import PERIOD, Harness, laser_scan
+from ros_harness import PERIOD, Harness
 
-CLOSE = laser_scan(front=0.25)  # nearer than pivot_distance (0.3): maneuver C starts
+from bt_nav.testing import front_scan, laserscan_msg
+
+CLOSE = laserscan_msg(front_scan(front=0.25))  # nearer than pivot_distance (0.3): maneuver C starts
 SCAN_TIMEOUT = 0.5
 from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402
 
@@ -139,7 +141,7 @@ def test_clock_faults(executive: Callable[..., Harness], faults: FaultCases) -> 
         waited = stops[0].wall_time - h.samples[count - 1].wall_time
         assert WATCHDOG - 0.05 <= waited <= WATCHDOG + 1.0, f"the watchdog stopped after {waited:.2f} s"
         run.expect_one(r"clock watchdog: no tick for \d+\.\d s of wall time while moving \(/clock stalled\?\)", mark)
-        run.assert_full_speed(run.tick(laser_scan()))
+        run.assert_full_speed(run.tick(laserscan_msg(front_scan())))
         run.expect_one(r"clock watchdog: ticking again after", mark)
 
     with faults.case("/clock stalls while stopped", "timing",
@@ -176,7 +178,7 @@ def test_clock_faults(executive: Callable[..., Harness], faults: FaultCases) -> 
         stopped = [run.jump_back(5.0), *run.ticks(2)]
         assert all(s.is_zero for s in stopped), stopped
         run.expect_one(r"ProcessScan: scan stamped in the future \(clock jumped back\?\) — stopping", mark)
-        run.assert_full_speed(run.ticks(2, laser_scan())[-1])
+        run.assert_full_speed(run.ticks(2, laserscan_msg(front_scan()))[-1])
         run.expect_one(r"ProcessScan: ok — scan usable again", mark)
         assert not run.since(mark, r"deadline reached|clock watchdog")  # every stop above came from a tick
         run.alive()
@@ -192,7 +194,7 @@ def test_clock_faults(executive: Callable[..., Harness], faults: FaultCases) -> 
         calls = len(run.server.calls)
         mark = run.mark()
         assert run.jump_back(20.0).is_zero
-        assert all(s.is_zero for s in run.ticks(10, laser_scan()))
+        assert all(s.is_zero for s in run.ticks(10, laserscan_msg(front_scan())))
         assert all(s.is_zero for s in run.ticks(5, FREE))
         refused = h.arm(True)
         assert not refused.success and "mission ended" in refused.message, refused.message

@@ -14,9 +14,11 @@ from typing import Any
 import pytest
 import rclpy
 from rclpy.signals import SignalHandlerOptions
-from ros_harness import STARTUP_TIMEOUT, ExecutiveProcess, Harness, laser_scan
+from ros_harness import STARTUP_TIMEOUT, ExecutiveProcess, Harness
 
-PRIME = laser_scan()  # a free scan, sent until the executive says it has one
+from bt_nav.testing import front_scan, laserscan_msg
+
+PRIME = laserscan_msg(front_scan())  # a free scan, sent until the executive says it has one
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

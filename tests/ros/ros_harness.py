@@ -54,25 +54,12 @@ PERIOD = 0.05
 #: exactly on the grid).
 T0 = 1.0 + PERIOD / 2
 from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402 - after the DDS environment is set
+from bt_nav.testing import wait_until  # noqa: E402
 
 # default limits: max_linear_speed, max(angular_speed, maneuver_angular_speed)
 V_MAX = float(_SPECS["max_linear_speed"].default)
 W_MAX = max(float(_SPECS["angular_speed"].default), float(_SPECS["maneuver_angular_speed"].default))
 STARTUP_TIMEOUT = 20.0
-
-
-# ---------------------------------------------------------------------------------------------- waiting
-def wait_until(predicate: Callable[[], bool], timeout: float, what: str, *, step: Callable[[], None] | None = None,
-               details: Callable[[], str] = lambda: "") -> None:
-    """Poll ``predicate`` (calling ``step`` between polls, e.g. a spin) until true or ``timeout`` seconds."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:.1f} s waiting for {what}\n{details()}")
-        if step is not None:
-            step()
-        else:
-            time.sleep(0.01)
 
 
 # ---------------------------------------------------------------------------------------------- the executive
@@ -119,7 +106,8 @@ class ExecutiveProcess:
 
     def wait_exit(self, timeout: float, step: Callable[[], None] | None = None) -> int:
         """Wait (spinning ``step`` meanwhile) for the process to end; its exit status."""
-        wait_until(lambda: not self.alive, timeout, "the executive to exit", step=step, details=self.tail)
+        wait_until(lambda: not self.alive, timeout, "the executive to exit", self.tail, step=step,
+                   interval=0.01 if step is None else 0.0)
         self._reader.join(timeout=2.0)
         return int(self.proc.returncode)
 
@@ -160,24 +148,6 @@ class EvaluationCall:
     sim_time: float
     wall_time: float
     answered_success: bool
-
-
-def laser_scan(front: float = 3.0, rest: float = 3.0, *, beams: int = 360, increment: float | None = None) -> Any:
-    """A TurtleBot3-like scan (0..2pi, CCW): ``front`` within +-30 deg of ahead, ``rest`` elsewhere."""
-    from sensor_msgs.msg import LaserScan
-
-    msg = LaserScan()
-    msg.angle_min = 0.0
-    msg.angle_increment = 2.0 * math.pi / beams if increment is None else increment
-    msg.angle_max = msg.angle_min + msg.angle_increment * (beams - 1)
-    msg.range_min, msg.range_max = 0.12, 3.5
-    ranges = []
-    for i in range(beams):
-        angle = math.degrees(math.remainder(i * 2.0 * math.pi / beams, 2.0 * math.pi))
-        ranges.append(front if abs(angle) <= 30.0 else rest)
-    msg.ranges = ranges
-    msg.header.frame_id = "base_scan"
-    return msg
 
 
 class Harness:
@@ -251,7 +221,7 @@ class Harness:
                 raise AssertionError(f"the executive exited while waiting for {what}\n{self.details()}")
             return False
 
-        wait_until(check, timeout, what, step=self.spin, details=self.details)
+        wait_until(check, timeout, what, self.details, step=self.spin, interval=0.0)
 
     def connect(self, process: ExecutiveProcess, timeout: float = STARTUP_TIMEOUT) -> None:
         """Wait until the executive is up and matched with every endpoint the tests use."""

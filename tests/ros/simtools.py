@@ -14,12 +14,11 @@ import signal
 import subprocess
 import sys
 import threading
-import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from bt_nav.ros.rosutil import dds_env, domain_id_for
+from bt_nav.testing import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -33,16 +32,6 @@ def ensure_local_dds() -> None:
 
 
 ensure_local_dds()
-
-
-def wait_until(predicate: Callable[[], bool], timeout: float, what: str,
-               details: Callable[[], str] = lambda: "") -> None:
-    """Poll ``predicate`` every 10 ms until true; fail after ``timeout`` wall seconds with ``details()``."""
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:.1f} s waiting for {what}\n{details()}")
-        time.sleep(0.01)
 
 
 class Proc:

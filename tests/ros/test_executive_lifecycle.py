@@ -9,7 +9,9 @@ import sys
 from collections.abc import Callable
 
 import pytest
-from ros_harness import REPO, ExecutiveProcess, Harness, laser_scan, wait_until
+from ros_harness import REPO, ExecutiveProcess, Harness
+
+from bt_nav.testing import front_scan, laserscan_msg, wait_until
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
@@ -18,7 +20,7 @@ def test_signal_mid_maneuver_publishes_zero_and_exits_0(executive: Callable[...,
     h = executive("-p", "maneuver:=A", "-p", "trigger_at_arming:=true",
                   "-p", "random_seed:=7", "-p", "safety_distance:=0.5")
     assert h.arm(True).success
-    turning = h.ticks(3, scan=laser_scan(front=0.4))  # within safety_distance: maneuver A rotates
+    turning = h.ticks(3, scan=laserscan_msg(front_scan(front=0.4)))  # within safety_distance: maneuver A rotates
     assert all(s.linear == 0.0 and s.angular != 0.0 for s in turning), turning
     h.wait(lambda: bool(h.trees) and "Randomizer [*]" in h.trees[-1], "the tree showing the maneuver running")
 

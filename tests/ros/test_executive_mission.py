@@ -10,9 +10,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from ros_harness import PERIOD, Harness, laser_scan
+from ros_harness import PERIOD, Harness
 
-FREE = laser_scan()
+from bt_nav.testing import front_scan, laserscan_msg
+
+FREE = laserscan_msg(front_scan())
 DUE = 49.5  # mission_duration - stop_margin
 
 

@@ -10,12 +10,13 @@ import math
 from collections.abc import Callable
 
 import pytest
-from ros_harness import PERIOD, REPO, V_MAX, Harness, laser_scan
+from ros_harness import PERIOD, REPO, V_MAX, Harness
 from std_msgs.msg import String
 
 from bt_nav.ros.rosutil import LATCHED
+from bt_nav.testing import front_scan, laserscan_msg
 
-FREE = laser_scan()  # nothing within 3 m: full speed
+FREE = laserscan_msg(front_scan())  # nothing within 3 m: full speed
 
 
 def test_no_motion_before_arm_then_motion_after(executive: Callable[..., Harness]) -> None:
@@ -79,10 +80,10 @@ def test_malformed_scan_stops_and_the_node_survives(executive: Callable[..., Har
     h = executive()
     h.arm(True)
     assert h.tick(scan=FREE).linear > 0.0
-    bad = laser_scan(increment=0.0)  # angle_increment 0: every beam at one angle
+    bad = laserscan_msg(front_scan(increment=0.0))  # angle_increment 0: every beam at one angle
     assert h.tick(scan=bad).is_zero
     h.wait(lambda: h.process.has_line(r"malformed scan"), "the malformed-scan log line")
-    nan_ranges = laser_scan()
+    nan_ranges = laserscan_msg(front_scan())
     nan_ranges.range_min = math.nan
     assert h.tick(scan=nan_ranges).is_zero
     assert h.tick(scan=FREE).linear > 0.0
@@ -93,9 +94,9 @@ def test_obstacle_ahead_turns_and_odometry_is_accepted(executive: Callable[..., 
     h = executive()
     h.arm(True)
     h.publish_odom(0.3)
-    close = h.tick(scan=laser_scan(front=0.2))  # inside close_distance: rotate in place
+    close = h.tick(scan=laserscan_msg(front_scan(front=0.2)))  # inside close_distance: rotate in place
     assert close.linear == 0.0 and close.angular != 0.0
-    far = h.tick(scan=laser_scan(front=0.5))  # far band: keep going, turn away
+    far = h.tick(scan=laserscan_msg(front_scan(front=0.5)))  # far band: keep going, turn away
     assert 0.0 < far.linear <= V_MAX and far.angular != 0.0
 
 
@@ -119,7 +120,7 @@ def test_tree_topic_follows_the_tip(executive: Callable[..., Harness]) -> None:
     assert "FullSpeed" in h.trees[-1] and "\x1b[" not in h.trees[-1]
     count = len(h.trees)
     h.ticks(3, scan=FREE)  # nothing changes: no new snapshot
-    h.tick(scan=laser_scan(front=0.2))
+    h.tick(scan=laserscan_msg(front_scan(front=0.2)))
     h.wait(lambda: len(h.trees) > count, "a ~/tree message after the tip changed")
     assert len(h.trees) == count + 1 and "RotateInPlace" in h.trees[-1]
 

@@ -14,9 +14,10 @@ import pytest
 from rcl_interfaces.msg import ParameterType
 from rcl_interfaces.srv import DescribeParameters, ListParameters
 from rclpy.parameter import Parameter
-from ros_harness import REPO, STARTUP_TIMEOUT, ExecutiveProcess, Harness, wait_until
+from ros_harness import REPO, STARTUP_TIMEOUT, ExecutiveProcess, Harness
 
 from bt_nav.mission import params as P
+from bt_nav.testing import wait_until
 
 
 @pytest.fixture(scope="module")

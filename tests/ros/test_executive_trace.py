@@ -8,9 +8,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from ros_harness import REPO, Harness, laser_scan
+from ros_harness import REPO, Harness
 
 from bt_nav.mission.trace import read_trace
+from bt_nav.testing import front_scan, laserscan_msg
 
 
 def test_trace_path_writes_a_trace_that_replay_reads(executive: Callable[..., Harness], tmp_path: Path) -> None:
@@ -18,8 +19,8 @@ def test_trace_path_writes_a_trace_that_replay_reads(executive: Callable[..., Ha
     h = executive("-p", f"trace_path:={trace}", "-p", "maneuver:=A", "-p", "trigger_at_arming:=true",
                   "-p", "random_seed:=7")
     assert h.arm(True).success
-    driving = h.ticks(3, scan=laser_scan())
-    turning = h.ticks(3, scan=laser_scan(front=0.4))
+    driving = h.ticks(3, scan=laserscan_msg(front_scan()))
+    turning = h.ticks(3, scan=laserscan_msg(front_scan(front=0.4)))
     assert driving[-1].linear > 0.0 and turning[-1].linear == 0.0 and turning[-1].angular != 0.0
     h.process.proc.send_signal(signal.SIGINT)
     assert h.process.wait_exit(10.0, step=h.spin) == 0

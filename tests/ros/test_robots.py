@@ -20,10 +20,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from simtools import Proc, wait_until
+from simtools import Proc
 
 from bt_nav.ros.bringup import robot_nodes
 from bt_nav.ros.rosutil import ThreadedNode
+from bt_nav.testing import wait_until
 
 ROBOTS = ["robot1", "robot2"]
 SCALE = 0.2

@@ -21,6 +21,7 @@ from pathlib import Path
 import pytest
 
 from bt_nav.ros.supervise import child_env, claim_domain_id
+from bt_nav.testing import wait_until
 
 REPO = Path(__file__).resolve().parents[2]
 DOMAIN = claim_domain_id(140, 159)
@@ -99,14 +100,6 @@ class CmdProbe:
         rclpy.try_shutdown(context=self.context)
 
 
-def wait_for(predicate, timeout: float, what: str, details=lambda: "") -> None:
-    deadline = time.monotonic() + timeout
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:.0f} s waiting for {what}\n{details()}")
-        time.sleep(0.05)
-
-
 def start_sim_run(background: bool) -> tuple[subprocess.Popen, list[str]]:
     """``bt-nav sim-run`` (directly, or as a background job of a non-interactive bash); its output lines."""
     command = [sys.executable, "-m", "bt_nav.cli", "sim-run", "--profile", "homework"]
@@ -128,21 +121,23 @@ def test_launcher_end_leaves_no_child_and_a_stopped_robot(how: str) -> None:
     proc, lines = start_sim_run(background=how.endswith("background"))
     output = lambda: "\n".join(lines)  # noqa: E731
     try:
-        wait_for(lambda: any("scan usable again" in line for line in lines), 60, "the executive's first scan", output)
+        wait_until(lambda: any("scan usable again" in line for line in lines), 60, "the executive's first scan", output,
+                   interval=0.05)
         launcher = int(re.search(r"pid (\d+)", next(line for line in lines if "ROS_DOMAIN_ID=" in line))[1])
         hint = next(line for line in lines if "in another terminal:" in line)
         assert f"ROS_DOMAIN_ID={DOMAIN} " in hint and "arm --service /reactive_control/activate" in hint
         arm = subprocess.run([sys.executable, "-m", "bt_nav.cli", "arm", "--domain-id", str(DOMAIN)], cwd=REPO,
                              env=child_env(DOMAIN), capture_output=True, text=True, timeout=60)
         assert arm.returncode == 0 and "accepted: armed" in arm.stdout, arm.stdout + arm.stderr
-        wait_for(lambda: any(v != 0.0 for v, _ in probe.commands[-5:]), 30, "the robot to drive", output)
+        wait_until(lambda: any(v != 0.0 for v, _ in probe.commands[-5:]), 30, "the robot to drive", output,
+                   interval=0.05)
         children = descendants(launcher)
         assert len(children) >= 2, f"sim and executive below the launcher: {children}"
         signum = {"SIGTERM": signal.SIGTERM, "SIGKILL": signal.SIGKILL}.get(how, signal.SIGINT)
         killed_at = time.monotonic()
         os.kill(launcher, signum)
-        wait_for(lambda: not alive(children), ORPHAN_LIMIT, f"every child gone after {how}",
-                 lambda: f"left: {alive(children)}\n{output()}")
+        wait_until(lambda: not alive(children), ORPHAN_LIMIT, f"every child gone after {how}",
+                   lambda: f"left: {alive(children)}\n{output()}", interval=0.05)
         assert time.monotonic() - killed_at <= ORPHAN_LIMIT
         time.sleep(0.3)  # the last messages in flight
         assert probe.commands and probe.commands[-1] == (0.0, 0.0), probe.commands[-5:]

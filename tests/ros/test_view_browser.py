@@ -15,10 +15,11 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from simtools import REPO, Proc, wait_until
+from simtools import REPO, Proc
 
 from bt_nav.media.bag import COLLISIONS, TOPICS
 from bt_nav.media.bagread import read_bag
+from bt_nav.testing import wait_until
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",

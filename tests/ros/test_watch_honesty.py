@@ -5,7 +5,9 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from simtools import Proc, wait_until
+from simtools import Proc
+
+from bt_nav.testing import wait_until
 
 
 def test_says_so_when_no_executive_publishes() -> None:
