@@ -1,76 +1,88 @@
-"""Mission bags: lock-step writes a real rosbag2 (MCAP) bag that rosbags and mcap both read; bad bags fail clearly."""
+"""Mission bags: lock-step writes a real rosbag2 (MCAP) bag that rosbags and mcap both read; bad bags fail clearly.
+
+What a bag must be for any number of robots is checked on ``robots_bag``: one robot and two."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 import yaml
 
-from bt_nav.media.bag import CLOCK, COLLISIONS, EVENTS, SCAN, TOPICS, TREE, BagError, MissionBag
+from bt_nav.media.bag import CLOCK, COLLISIONS, EVENTS, ROBOT_TOPICS, SCAN, TOPICS, TREE, BagError, MissionBag
 from bt_nav.media.bagread import read_bag
+
+if TYPE_CHECKING:
+    from conftest import RobotsBag  # tests/media/conftest.py
 
 EXPECTED = [topic for topic in TOPICS if topic != COLLISIONS]  # no collision in this mission
 
 
-def test_rosbags_reader_counts_every_topic(mission_bag: Path) -> None:
+def test_rosbags_reader_counts_every_topic(robots_bag: RobotsBag) -> None:
     from rosbags.rosbag2 import Reader
 
-    with Reader(mission_bag) as reader:
+    with Reader(robots_bag.path) as reader:
         counts = {c.topic: c.msgcount for c in reader.connections}
         types = {c.topic: c.msgtype for c in reader.connections}
-    for topic in EXPECTED:
+    expected = [(topic, name) for name in EXPECTED for topic in robots_bag.topics(name)]
+    assert len(expected) == len(EXPECTED) + (robots_bag.robots - 1) * (len(ROBOT_TOPICS) - 1)
+    for topic, name in expected:
         assert counts.get(topic, 0) > 0, topic
-        assert types[topic] == TOPICS[topic].msgtype
+        assert types[topic] == TOPICS[name].msgtype
+    assert set(counts) == {topic for topic, _ in expected}, "a topic where it does not belong"
 
 
-def test_mcap_reader_agrees(mission_bag: Path) -> None:
+def test_mcap_reader_agrees(robots_bag: RobotsBag) -> None:
     from mcap.reader import make_reader
 
-    (file,) = mission_bag.glob("*.mcap")
+    (file,) = robots_bag.path.glob("*.mcap")
     with file.open("rb") as stream:
         summary = make_reader(stream).get_summary()
     counts = {ch.topic: summary.statistics.channel_message_counts[cid] for cid, ch in summary.channels.items()}
-    assert counts == read_bag(mission_bag).counts
+    assert counts == read_bag(robots_bag.path).counts
     schemas = {summary.schemas[ch.schema_id].encoding for ch in summary.channels.values()}
     assert schemas == {"ros2msg"}
 
 
-def test_metadata_has_mcap_storage_and_qos(mission_bag: Path) -> None:
-    meta = yaml.safe_load((mission_bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+def test_metadata_has_mcap_storage_and_qos(robots_bag: RobotsBag) -> None:
+    meta = yaml.safe_load((robots_bag.path / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert meta["storage_identifier"] == "mcap"
     qos = {t["topic_metadata"]["name"]: t["topic_metadata"]["offered_qos_profiles"]
            for t in meta["topics_with_message_count"]}
-    assert "reliability: 2" in str(qos[SCAN]) or "best_effort" in str(qos[SCAN])  # scans are best effort
-    assert qos[TREE]  # every topic carries its offered QoS
+    for scan, tree in zip(robots_bag.topics(SCAN), robots_bag.topics(TREE), strict=True):
+        assert "reliability: 2" in str(qos[scan]) or "best_effort" in str(qos[scan])  # scans are best effort
+        assert qos[tree]  # every topic carries its offered QoS
 
 
-def test_timestamps_are_sim_time(mission_bag: Path) -> None:
-    rec = read_bag(mission_bag)
+def test_timestamps_are_sim_time(robots_bag: RobotsBag) -> None:
+    rec = read_bag(robots_bag.path)
     assert rec.start == pytest.approx(0.0, abs=0.02)
     assert rec.end == pytest.approx(12.0, abs=0.1)
-    assert rec.truth.t[-1] <= rec.end and rec.scans.t.size > 10
-    assert any("armed" in text for _, text in rec.events)
     assert rec.mission["world"] == "stage_4" and not rec.truncated
+    each = [rec] if robots_bag.robots == 1 else [rec.robots[ns.strip("/")] for ns in robots_bag.namespaces]
     from bt_nav.media.treetext import parse_snapshot
 
     def statuses(text: str) -> list:
         return [(r.name, r.status) for r in parse_snapshot(text)]
 
-    assert all(statuses(a[1]) != statuses(b[1]) for a, b in zip(rec.trees, rec.trees[1:], strict=False)), \
-        "tree written when a status changes only"
+    for robot in each:
+        assert robot.truth.t[-1] <= rec.end and robot.scans.t.size > 10
+        assert any("armed" in text for _, text in robot.events)
+        assert all(statuses(a[1]) != statuses(b[1]) for a, b in zip(robot.trees, robot.trees[1:], strict=False)), \
+            "tree written when a status changes only"
 
 
-def test_cut_bag_reads_up_to_the_cut(mission_bag: Path, tmp_path: Path) -> None:
-    (file,) = mission_bag.glob("*.mcap")
+def test_cut_bag_reads_up_to_the_cut(robots_bag: RobotsBag, tmp_path: Path) -> None:
+    (file,) = robots_bag.path.glob("*.mcap")
     data = file.read_bytes()
     cut = tmp_path / "cut"
     cut.mkdir()
     (cut / "cut.mcap").write_bytes(data[: len(data) * 2 // 3])  # no summary, no metadata.yaml
     rec = read_bag(cut)
-    full = read_bag(mission_bag)
+    full = read_bag(robots_bag.path)
     assert rec.truncated
     assert 0 < rec.counts[CLOCK] < full.counts[CLOCK]
     assert 0 < rec.duration < full.duration

@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from bt_nav.cli.replay import main as replay_main
 
+if TYPE_CHECKING:
+    from conftest import RobotsBag  # tests/media/conftest.py
 
-def test_replay_prints_snapshots_commands_and_events(mission_bag: Path, capsys: pytest.CaptureFixture) -> None:
-    assert replay_main([str(mission_bag), "--compact", "--from", "4", "--to", "8"]) == 0
+
+def test_replay_prints_snapshots_commands_and_events(robots_bag: RobotsBag, capsys: pytest.CaptureFixture) -> None:
+    """One robot's bag or several robots' (replay shows the first robot's then)."""
+    assert replay_main([str(robots_bag.path), "--compact", "--from", "4", "--to", "8"]) == 0
     out = capsys.readouterr().out
     lines = [line for line in out.splitlines() if line.startswith("t=")]
     assert lines and all(4.0 <= float(line[2:].split()[0]) <= 8.0 for line in lines)
