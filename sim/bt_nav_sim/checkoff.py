@@ -337,7 +337,7 @@ class CheckoffJudge:
         if interrupted:  # the disarm stopped it: its angle is whatever it had reached
             angle_ok, rule = True, "interrupted by the disarm (angle not judged)"
         passed = forward_ok if recovery else trigger and angle_ok and forward_ok and moved_on
-        return {"t": start - (self.t0 or 0.0), "settled": settle - (self.t0 or 0.0), "kind":
+        return {"t": start - (self.t0 or 0.0), "t0": self.t0 or 0.0, "settled": settle - (self.t0 or 0.0), "kind":
                 "recovery" if recovery else "maneuver", "passed": passed, "trigger": trigger,
                 "interrupted": interrupted,
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
@@ -493,7 +493,8 @@ def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, 
     """The report line of one maneuver episode: every rule it was held to, what failed first."""
     failed = [name for name, ok in (("trigger", e["trigger"]), ("angle", e["angle_ok"]),
                                     ("forward", e["forward_ok"]), ("moved on", e["moved_on"])) if not ok]
-    detail = (f"{maneuver} at t={e['t']:.2f} s: {e['trigger_detail']}"
+    sim = f" (sim {e['t'] + e['t0']:.2f} s)" if e.get("t0") else ""  # the terminal's and the video's clock
+    detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
               f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
               f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
               f"moved on: {e['moved_on_detail']}" + (f"; failed: {', '.join(failed)}" if failed else ""))
