@@ -121,6 +121,7 @@ def main(argv: list[str] | None = None) -> int:
 
         return run_lab(opts)
     try:
+        bag_dir = bag_for(opts.bag, opts.video)
         run = _prepare(opts)
     except ValueError as exc:
         print(f"bt-nav demo: {exc}", file=sys.stderr)
@@ -140,7 +141,6 @@ def main(argv: list[str] | None = None) -> int:
     mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, last_word=lambda: [
         publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
     logs.sim_time = mission.recorders[names[0]].sim_time
-    bag_dir = bag_for(opts.bag, opts.video)
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if bag_dir \
         else None
     try:

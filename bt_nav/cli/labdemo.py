@@ -83,6 +83,7 @@ def run_lab(opts: argparse.Namespace) -> int:
     from bt_nav.run.rundir import LOG_FORMAT, Logs
 
     try:
+        bag_dir = bag_for(opts.bag, opts.video)
         run = _prepare(opts)
     except (ValueError, FileNotFoundError) as exc:
         print(f"bt-nav demo: {exc}", file=sys.stderr)
@@ -98,7 +99,6 @@ def run_lab(opts: argparse.Namespace) -> int:
     env = {**child_env(domain), "RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}
     stop = StopRequest().install()
     logs = Logs(run_dir, echo_logs=False)
-    bag_dir = bag_for(opts.bag, opts.video)
     events = EventPublisher() if bag_dir else None
     terminal = LabTerminal(logs, launch_line(run), events)
     stamped = cmd_vel_stamped(run["specs"])

@@ -91,8 +91,8 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = _parser()
     args = parser.parse_args(argv)
-    args.bag = bag_for(args.bag, args.video)
     try:
+        args.bag = bag_for(args.bag, args.video)
         result, traces = _run(args)
     except (ValueError, FileNotFoundError, BagError) as exc:
         parser.error(str(exc))

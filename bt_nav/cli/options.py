@@ -29,8 +29,17 @@ def add_mission_options(parser: argparse.ArgumentParser, *, grid: bool = False) 
 
 def bag_for(bag: str | None, video: str | None) -> str | None:
     """The bag directory of a run: ``--bag``, else next to ``--video`` (``FILE_bag``: a film is always made
-    from a bag, so what it shows is what ``ros2 bag play`` would replay), else none."""
-    return bag or (str(Path(video).with_suffix("")) + "_bag" if video else None)
+    from a bag, so what it shows is what ``ros2 bag play`` would replay), else none.
+
+    Raises:
+        ValueError: when that directory exists already: a bag is never overwritten, and a film made from an
+            earlier run's bag would show that run, so the run is refused before it starts.
+    """
+    path = bag or (str(Path(video).with_suffix("")) + "_bag" if video else None)
+    if path is not None and Path(path).exists():
+        raise ValueError(f"bag {path} exists already (bags are never overwritten): remove it or choose another "
+                         f"{'--bag' if bag else '--video name'}")
+    return path
 
 
 def film(bag_dir: str, out: str, fps: float) -> None:
