@@ -47,10 +47,13 @@ def test_a_robot_that_never_moves_fails(ros_context: Any, tmp_path: Path) -> Non
         assert judge.wait(90.0) == 1, judge.output() + sim.output()
         assert "maneuvers performed (0 performed, required >= 1): FAILED" in judge.stdout, judge.output()
         assert judge.stdout[-1] == "overall: FAILED"
-        assert "static before activation" in judge.stdout[0] and judge.stdout[0].endswith(": PASSED")
+        assert any(line.startswith("static before activation") and line.endswith(": PASSED")
+                   for line in judge.stdout), judge.output()
         assert any(line.startswith("static after deactivation") and line.endswith(": PASSED")
                    for line in judge.stdout), judge.output()
-        assert robot.requests == [True, False]
+        # true, then false (a call retried under load may repeat one; the order may not change)
+        assert robot.requests[0] is True and robot.requests[-1] is False, robot.requests
+        assert robot.requests == sorted(robot.requests, reverse=True), robot.requests
         results = json.loads((tmp_path / "r.json").read_text())
         assert results["passed"] is False and results["maneuvers"] == [] and results["commands"] == 0
         assert sim.alive(), sim.output()
