@@ -222,24 +222,33 @@ def nodes(
         specs.insert(0, _sim_spec(world, homework, seed, rtf, stamped, with_referee, sim))
 
     if with_referee:
-        # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many
-        # times real time, a process still starting up would otherwise lose seconds of the schedule.
-        ref_params: dict[str, Any] = {"use_sim_time": include_sim, "wait_for_cmd_vel": True}
-        if homework and namespace is not None:
-            ref_params.update({"activate_service": activate, "evaluate_service": evaluate})
-        if not homework:  # the lab's judge: the simulator's world and seed, the executive's maneuver
-            ref_params.update({"activate_service": LAB_ARM, "world": world, "maneuver": maneuver,
-                               **({"seed": int(seed)} if seed is not None else {})})
-        if stamped:
-            ref_params["cmd_vel_stamped"] = True
-        if results_json:
-            ref_params["json"] = str(results_json)
-        ref_params.update(referee or {})
-        specs.append(NodeSpec("referee", REFEREE_NAME, ref_params) if homework else
-                     NodeSpec("checkoff", CHECKOFF_NAME, ref_params))
+        services = (activate, evaluate) if homework and namespace is not None else None
+        specs.append(_judge_spec(homework, include_sim, services, world, maneuver, seed, stamped, results_json,
+                                 referee))
     for spec in specs:
         spec.namespace = (namespace or "").strip("/")
     return specs
+
+
+def _judge_spec(homework: bool, include_sim: bool, services: tuple[str, str] | None, world: str | None,
+                maneuver: str | None, seed: int | None, stamped: Any, results_json: str | None,
+                referee: dict[str, Any] | None) -> NodeSpec:
+    """The judge of the graph: the homework's referee (``services``: its activate and evaluate names in a
+    namespace), or the lab's check-off judge on the simulator's world and seed and the executive's maneuver."""
+    # t0 once the executive ticks (its first cmd_vel), not merely once its service exists: at many
+    # times real time, a process still starting up would otherwise lose seconds of the schedule.
+    params: dict[str, Any] = {"use_sim_time": include_sim, "wait_for_cmd_vel": True}
+    if services is not None:
+        params.update({"activate_service": services[0], "evaluate_service": services[1]})
+    if not homework:
+        params.update({"activate_service": LAB_ARM, "world": world, "maneuver": maneuver,
+                       **({"seed": int(seed)} if seed is not None else {})})
+    if stamped:
+        params["cmd_vel_stamped"] = True
+    if results_json:
+        params["json"] = str(results_json)
+    params.update(referee or {})
+    return NodeSpec("referee", REFEREE_NAME, params) if homework else NodeSpec("checkoff", CHECKOFF_NAME, params)
 
 
 def _checkoff_choices(maneuver: str | None, world: str | None) -> tuple[str, str]:

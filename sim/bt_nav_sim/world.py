@@ -440,6 +440,57 @@ def _generate_maze(
 _GENERATORS = {"cluttered": _generate_cluttered, "forest": _generate_forest, "maze": _generate_maze}
 
 
+def _parse_boxes(d: dict, where: str) -> tuple[list[tuple[float, float, float, float, float]], list[Appearing]]:
+    """The ``boxes`` entries: fixed ones as (x, y, length, thickness, yaw rad), and those that appear."""
+    boxes: list[tuple[float, float, float, float, float]] = []
+    appearing: list[Appearing] = []
+    for i, b in enumerate(d.get("boxes") or []):
+        bw = f"{where} box {i}"
+        box = (_num(b, "x", bw), _num(b, "y", bw), _num(b, "length", bw), _num(b, "thickness", bw),
+               math.radians(_num(b, "yaw_deg", bw, 0.0)))
+        if box[2] <= 0 or box[3] <= 0:
+            raise ValueError(f"{bw}: length and thickness must be > 0")
+        if "appear_within" in b:
+            appearing.append(_appearing(b, bw, box=box))
+        else:
+            boxes.append(box)
+    return boxes, appearing
+
+
+def _parse_circles(d: dict, where: str) -> tuple[list[list[float]], list[Appearing]]:
+    """The ``circles`` entries: fixed ones as [x, y, r], and those that appear."""
+    rows: list[list[float]] = []
+    appearing: list[Appearing] = []
+    for i, c in enumerate(d.get("circles") or []):
+        cw = f"{where} circle {i}"
+        r = _num(c, "r", cw)
+        if r <= 0:
+            raise ValueError(f"{cw}: r must be > 0")
+        if "appear_within" in c:
+            appearing.append(_appearing(c, cw, circle=(_num(c, "x", cw), _num(c, "y", cw), r)))
+        else:
+            rows.append([_num(c, "x", cw), _num(c, "y", cw), r])
+    return rows, appearing
+
+
+def _bounds(d: dict, where: str, segments: np.ndarray, circles: np.ndarray, appearing: list[Appearing],
+            spawn: tuple[float, float, float]) -> tuple[float, ...]:
+    """The plotting extent: ``bounds`` as written, else everything in the world plus a margin."""
+    if "bounds" in d:
+        bounds = tuple(float(v) for v in d["bounds"])
+        if len(bounds) != 4:
+            raise ValueError(f"{where}: bounds must be [xmin, ymin, xmax, ymax]")
+        return bounds
+    xs = [segments[:, 0], segments[:, 2], circles[:, 0] - circles[:, 2], circles[:, 0] + circles[:, 2]]
+    ys = [segments[:, 1], segments[:, 3], circles[:, 1] - circles[:, 2], circles[:, 1] + circles[:, 2]]
+    xs += [np.array([o.x - o.bound_r, o.x + o.bound_r]) for o in appearing]
+    ys += [np.array([o.y - o.bound_r, o.y + o.bound_r]) for o in appearing]
+    allx = np.concatenate(xs + [np.array([spawn[0]])])
+    ally = np.concatenate(ys + [np.array([spawn[1]])])
+    m = _BOUNDS_MARGIN
+    return (float(allx.min()) - m, float(ally.min()) - m, float(allx.max()) + m, float(ally.max()) + m)
+
+
 def world_from_dict(d: dict, seed: int | None = None) -> World:
     """Build a World from a parsed YAML mapping (schema in the module docstring).
 
@@ -463,34 +514,9 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
             raise ValueError(f"{where}: segment {i} must be [x1, y1, x2, y2], got {s!r}")
         seg_rows.append(np.asarray([float(v) for v in s], dtype=np.float64).reshape(1, 4))
 
-    boxes: list[tuple[float, float, float, float, float]] = []
-    appearing: list[Appearing] = []
-    for i, b in enumerate(d.get("boxes") or []):
-        bw = f"{where} box {i}"
-        box = (
-            _num(b, "x", bw),
-            _num(b, "y", bw),
-            _num(b, "length", bw),
-            _num(b, "thickness", bw),
-            math.radians(_num(b, "yaw_deg", bw, 0.0)),
-        )
-        if box[2] <= 0 or box[3] <= 0:
-            raise ValueError(f"{bw}: length and thickness must be > 0")
-        if "appear_within" in b:
-            appearing.append(_appearing(b, bw, box=box))
-        else:
-            boxes.append(box)
-
-    circle_rows: list[list[float]] = []
-    for i, c in enumerate(d.get("circles") or []):
-        cw = f"{where} circle {i}"
-        r = _num(c, "r", cw)
-        if r <= 0:
-            raise ValueError(f"{cw}: r must be > 0")
-        if "appear_within" in c:
-            appearing.append(_appearing(c, cw, circle=(_num(c, "x", cw), _num(c, "y", cw), r)))
-        else:
-            circle_rows.append([_num(c, "x", cw), _num(c, "y", cw), r])
+    boxes, appearing = _parse_boxes(d, where)
+    circle_rows, appearing_circles = _parse_circles(d, where)
+    appearing += appearing_circles
 
     def _segments() -> np.ndarray:
         parts = seg_rows + [box_segments(*b) for b in boxes]
@@ -512,19 +538,7 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
     segments = _segments()
     circles = np.asarray(circle_rows, dtype=np.float64).reshape(-1, 3)
 
-    if "bounds" in d:
-        bounds = tuple(float(v) for v in d["bounds"])
-        if len(bounds) != 4:
-            raise ValueError(f"{where}: bounds must be [xmin, ymin, xmax, ymax]")
-    else:
-        xs = [segments[:, 0], segments[:, 2], circles[:, 0] - circles[:, 2], circles[:, 0] + circles[:, 2]]
-        ys = [segments[:, 1], segments[:, 3], circles[:, 1] - circles[:, 2], circles[:, 1] + circles[:, 2]]
-        xs += [np.array([o.x - o.bound_r, o.x + o.bound_r]) for o in appearing]
-        ys += [np.array([o.y - o.bound_r, o.y + o.bound_r]) for o in appearing]
-        allx = np.concatenate(xs + [np.array([spawn[0]])])
-        ally = np.concatenate(ys + [np.array([spawn[1]])])
-        m = _BOUNDS_MARGIN
-        bounds = (float(allx.min()) - m, float(ally.min()) - m, float(allx.max()) + m, float(ally.max()) + m)
+    bounds = _bounds(d, where, segments, circles, appearing, spawn)
 
     maneuvers = tuple(str(m) for m in d.get("checkoff_maneuvers") or ())
     if not set(maneuvers) <= set(LAB_MANEUVERS):
