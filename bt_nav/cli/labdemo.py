@@ -67,7 +67,7 @@ def launch_line(run: dict[str, Any]) -> str:
     files = ", ".join(Path(f).relative_to(Path.cwd()).as_posix() if Path(f).is_relative_to(Path.cwd()) else f
                       for f in executive.parameter_files) or "none"
     values = ", ".join(f"{name} {run['parameters'][name]:g} {unit}" for name, unit in SHOWN_PARAMETERS)
-    arm = dict(executive.remappings).get("arm", "arm")
+    arm = dict(executive.remappings).get("arm", str(run["parameters"].get("arm_service", "arm")))
     return (f"[INFO] [{executive.name}]: up: params file {files}, maneuver {MANEUVER_TITLES[run['maneuver']]}, "
             f"{values}, arm service /{arm.lstrip('/')} (std_srvs/SetBool)")
 

@@ -103,7 +103,7 @@ class MissionCore:
         self.board.set("/odom", OdomSample())
         seed = int(self.params["random_seed"])
         self.tree.setup(node=node, clock=clock, events=self.events, evaluation_client=evaluation_client,
-                        random_seed=None if seed < 0 else seed)
+                        random_seed=None if seed < 0 else seed, arm_service=str(self.params["arm_service"]))
         self._fast_tick = compile_tick(self.root)
         self.nodes: list[py_trees.behaviour.Behaviour] = list(self.root.iterate())  # the shape is fixed from here on
         self.arm_leaf: ArmService = find_leaf(self.root, ArmService)

@@ -203,6 +203,10 @@ PARAMS: tuple[ParamSpec, ...] = (
     # --- the ROS edge (not read by the tree) --------------------------------------------------------
     ParamSpec("tick_rate_hz", 20.0, "Tree ticks per second (node clock, so sim time when use_sim_time).",
               "Hz", 1.0, 200.0, live=False, in_tree=False),
+    ParamSpec("arm_service", "arm", "Name of the std_srvs/SetBool service that arms (true) and disarms (false) "
+              "the robot; relative names follow the node's namespace, and a remap of the default (-r "
+              "arm:=...) still works. config/lab.yaml sets toggle_navigation, the lab's name, so the lab's "
+              "service exists with its params file alone.", live=False, in_tree=False),
     ParamSpec("cmd_vel_stamped", False, "Publish geometry_msgs/TwistStamped instead of Twist "
               "(TurtleBot3 on Jazzy).", live=False, in_tree=False),
     ParamSpec("frame_id", "base_link", "frame_id of stamped commands.", live=False, in_tree=False),

@@ -104,10 +104,12 @@ def test_atomic_change_is_judged_as_a_whole(h: Harness) -> None:
 
 
 @pytest.mark.parametrize(("profile", "says"), [("homework.yaml", r"maneuver C Smart Pivot"),
-                                               ("turtlebot3.yaml", r"cmd_vel /robot1/cmd_vel as TwistStamped")])
+                                               ("turtlebot3.yaml", r"cmd_vel /robot1/cmd_vel as TwistStamped"),
+                                               ("lab.yaml", r"arm server /robot1/toggle_navigation")])
 def test_the_params_files_apply_inside_a_namespace(ros_context: Any, profile: str, says: str) -> None:
     """The config files key their section ``/**/bt_nav_executive``: a plain ``bt_nav_executive:`` would
-    not match the node under ``/robot1`` and the executive would run on the defaults (maneuver none)."""
+    not match the node under ``/robot1`` and the executive would run on the defaults (maneuver none). The
+    lab's file names its service itself: no remap, and it follows the namespace."""
     config = REPO / "config" / profile
     process = ExecutiveProcess(["--ros-args", "-r", "__ns:=/robot1", "--params-file", str(config)])
     try:

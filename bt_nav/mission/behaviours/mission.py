@@ -43,7 +43,7 @@ class ArmService(Leaf):
     }
 
     def setup(self, **kwargs: Any) -> None:
-        """Create the SetBool server on the node, when there is one."""
+        """Create the SetBool server on the node, when there is one, named by ``arm_service``."""
         super().setup(**kwargs)
         self.service = None
         if self.node is not None:
@@ -53,7 +53,8 @@ class ArmService(Leaf):
             # keep every request: with the default keep-last-10 a burst of calls loses requests, and a
             # client waiting for its disarm confirmation would never hear back
             qos = QoSProfile(depth=1, history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
-            self.service = self.node.create_service(SetBool, "arm", self._on_request, qos_profile=qos)
+            name = str(kwargs.get("arm_service") or "arm")  # the arm_service parameter
+            self.service = self.node.create_service(SetBool, name, self._on_request, qos_profile=qos)
 
     def _on_request(self, request: Any, response: Any) -> Any:
         response.success, response.message = self.handle(bool(request.data))
