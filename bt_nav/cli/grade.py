@@ -79,6 +79,12 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-jitter", action="store_true", help="start exactly at each world's spawn")
     parser.add_argument("--json", default=None, help="write every run and the summary here (updated as runs finish)")
     parser.add_argument("--resume", action="store_true", help="keep the finished runs of --json's file, run the rest")
+    parser.add_argument("--exe", default=None, metavar="'CMD ...'",
+                        help="grade this command's node over DDS instead of bt_nav's tree in lock-step (appended: "
+                        "--ros-args -p use_sim_time:=true, and -p maneuver:=X with --maneuvers or --profile lab)")
+    parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
+    parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
+    parser.add_argument("--out", default=None, help="--exe: the grid's directory (default runs/grade-exe-<time>)")
     parser.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                         help="progress bar on stderr (auto: when stderr is a terminal)")
     return parser
@@ -128,8 +134,8 @@ def main(argv: list[str] | None = None) -> int:
         worlds = list_worlds("lab" if lab else "homework")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     try:
-        maneuvers = [normalise_maneuver(m.strip()) for m in (args.maneuvers or ("A,B,C" if lab else "none,A,B,C"))
-                     .split(",") if m.strip()]
+        default = "A,B,C" if lab else "none" if args.exe else "none,A,B,C"  # a foreign node: no maneuvers
+        maneuvers = [normalise_maneuver(m.strip()) for m in (args.maneuvers or default).split(",") if m.strip()]
         overrides = parse_assignments(args.overrides) or None
         sim_params = parse_assignments(args.sim_param) or None
         jobs = make_jobs(worlds, maneuvers, seeds, overrides, args.profile,
@@ -154,6 +160,10 @@ def main(argv: list[str] | None = None) -> int:
         if path is not None:
             _save(path, settings, [results[k] for k in by_key if k in results], complete=False)
 
+    if args.exe is not None:
+        if args.profile not in ("homework", "lab") or args.scheduler or args.resume:
+            parser.error("--exe grades with --profile homework or lab, locally (no --scheduler, no --resume)")
+        return _grade_exe(args, jobs, lab or args.maneuvers is not None)
     progress = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())
     if done:
         print(f"resuming: {len(done)} of {len(jobs)} missions already in {path}", file=sys.stderr)
@@ -172,3 +182,36 @@ def main(argv: list[str] | None = None) -> int:
     if path is not None:
         _save(path, settings, rows, complete=True)
     return 0 if total["passed"] == total["runs"] else 1
+
+
+def _grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool) -> int:
+    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.run.exegrade`); exit 0 only if every run passed,
+    128 + the signal after SIGINT/SIGTERM (every process of the runs stopped)."""
+    from bt_nav.ros.supervise import StopRequest
+    from bt_nav.run.exegrade import ExeSettings, format_exe_table, run_exe_grid, summarize_exe, write_exe_report
+
+    out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
+    settings = ExeSettings(args.exe, args.profile, out, args.timeout, args.rtf, maneuvers,
+                           None if args.no_jitter else DEFAULT_JITTER)
+    stop = StopRequest().install()
+    print(f"bt-nav grade: {len(jobs)} runs of {args.exe!r} ({args.profile} profile, {args.jobs} at a time, "
+          f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {out}/", flush=True)
+    started = time.perf_counter()
+
+    def show(row: dict[str, Any]) -> None:
+        print(f"  {row['world']} {row['maneuver']} seed {row['seed']}: {'PASSED' if row['passed'] else 'FAILED'} "
+              f"({row['reason']}; {row['wall_time']:.1f} s wall) {row['run_dir']}", flush=True)
+
+    try:
+        rows = run_exe_grid(jobs, settings, args.jobs, stop, show)
+    finally:
+        stop.closing = True
+        stop.restore()
+    print(format_exe_table(summarize_exe(rows)))
+    json_path, md_path = write_exe_report(rows, settings)
+    passed = sum(1 for r in rows if r["passed"])
+    print(f"{passed}/{len(rows)} passed in {time.perf_counter() - started:.1f} s wall; wrote {json_path}, {md_path}")
+    if stop.requested:
+        print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
+        return 128 + int(stop.signum or 2)
+    return 0 if rows and passed == len(rows) else 1

@@ -89,6 +89,21 @@ def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None
     return low + first
 
 
+def release_domain_id(domain: int) -> bool:
+    """Give up this process's claim on ``domain`` (from :func:`claim_domain_id`); False when it held none.
+
+    A grid that runs many DDS missions in one process claims a domain per run and must hand it back when
+    the run ends, or a long grid would run out of domains.
+    """
+    suffix = f"domain-{int(domain)}.lock"
+    for handle in list(_DOMAIN_CLAIMS):
+        if os.path.basename(handle.name) == suffix:
+            _DOMAIN_CLAIMS.remove(handle)
+            handle.close()  # closing the file drops the flock
+            return True
+    return False
+
+
 def launcher_domains(env: Mapping[str, str] | None = None) -> tuple[int, int]:
     """The range launchers claim from: ``$BT_NAV_DOMAIN_RANGE`` (``LOW-HIGH``) or :data:`LAUNCHER_DOMAINS`.
 

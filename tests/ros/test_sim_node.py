@@ -147,3 +147,33 @@ def test_refuses_an_unknown_profile() -> None:
     proc = Proc("sim", "--ros-args", "-p", "profile:=gazebo")
     assert proc.wait(20.0) == 2  # a refused configuration (bt_nav.ros.runner), as the executive's
     assert "unknown profile 'gazebo'" in proc.output()
+
+
+def test_a_reliable_subscriber_gets_scans_and_odometry(sim: Callable[..., tuple[Proc, Probe]],
+                                                        ros_context: Any) -> None:
+    """The lab's template subscribes ``create_subscription(LaserScan, 'scan', cb, 10)`` (RELIABLE, depth 10):
+    a best-effort writer offered it nothing (the probe's sensor-data reader still gets scans too)."""
+    import threading
+
+    import rclpy
+    from nav_msgs.msg import Odometry
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import LaserScan
+
+    proc, probe = sim("--profile", "lab")
+    node = rclpy.create_node("template_like", context=ros_context)
+    got: dict[str, int] = {"scan": 0, "odom": 0}
+    node.create_subscription(LaserScan, "scan", lambda m: got.__setitem__("scan", got["scan"] + 1), 10)
+    node.create_subscription(Odometry, "odom", lambda m: got.__setitem__("odom", got["odom"] + 1), 10)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    try:
+        wait_until(lambda: got["scan"] >= 5 and got["odom"] >= 5, 20.0, "scans and odometry on reliable readers",
+                   proc.output)
+        before = len(probe.scans)
+        wait_until(lambda: len(probe.scans) > before, 10.0, "scans on the best-effort probe too", proc.output)
+    finally:
+        executor.shutdown()
+        node.destroy_node()

@@ -8,6 +8,10 @@ What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
   at ``odom_rate_hz``, and one ``collisions`` message per collision *event* (rising edge of the
   physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``.
 
+QoS, so that any reasonable node connects: ``scan`` and ``odom`` are RELIABLE writers (depth 5 and 10),
+which serve reliable readers of any depth (the lab's template) and best-effort ones (sensor-data QoS) alike;
+``cmd_vel`` is read RELIABLE with depth 10 (the default of ``create_publisher(Twist, 'cmd_vel', 10)``).
+
 Every stamp is sim time. The node itself never uses ``use_sim_time``: it is the clock source.
 
 Several robots (``robots`` > 1, or ``robot_names``): one :class:`bt_nav_sim.multi.MultiSimCore` world, one
@@ -68,7 +72,7 @@ import rclpy
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
@@ -87,6 +91,8 @@ _ODOM_POSE_VAR = 1e-4
 _ODOM_TWIST_VAR = 1e-4
 # Re-anchor the pacing clock when the loop falls behind by more than this much wall time.
 _REANCHOR_S = 0.25
+#: What ``scan`` is offered with (see _RobotIO): RELIABLE matches reliable and best-effort subscribers alike.
+SCAN_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5, reliability=ReliabilityPolicy.RELIABLE)
 # While waiting for followers, /clock is republished this often (wall s): best effort may lose a sample.
 _CLOCK_REPEAT_S = 0.02
 
@@ -407,7 +413,10 @@ class _RobotIO:
         self.cmd = (0.0, 0.0)
         self.arrival_ns = -1  # sim time at which the latest command arrived
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-        self.scan_pub = node.create_publisher(LaserScan, f"{prefix}scan", qos_profile_sensor_data)
+        # Reliable, shallow: a reliable writer serves reliable readers (the lab's template subscribes with
+        # depth 10, the default) and best-effort ones (the executive's sensor-data QoS) alike; a best-effort
+        # writer served only the latter, and a student's node got no scan at all. Depth 5 as sensor data.
+        self.scan_pub = node.create_publisher(LaserScan, f"{prefix}scan", SCAN_QOS)
         self.odom_pub = node.create_publisher(Odometry, f"{prefix}odom", reliable)
         # Deeper history for the referee's and recorders' sake: a reader that falls a little behind
         # under load gets the samples resent instead of losing them.

@@ -1,0 +1,275 @@
+"""Grading any robot node over DDS (``bt-nav grade --exe 'CMD ...'``): the simulator and the profile's judge
+around a command that is not bt_nav's, once per world x maneuver x seed, each run isolated.
+
+Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (handed back at its end), a run
+directory of its own, and three process groups started by one :class:`bt_nav.ros.supervise.Launcher`:
+
+- the simulator node with ``follow`` off: it never waits on the node's command timing, so a node that
+  publishes from its scan callback, from a timer or only on change runs at the same pace, ``rtf`` sim
+  seconds per wall second (the node's sim-time timers tick that much faster too);
+- the user's command, with :func:`exe_ros_args` appended (exactly ``--ros-args -p use_sim_time:=true``, plus
+  ``-p maneuver:="X"`` when the grid has maneuvers); no remaps: a foreign node serves the homework's
+  ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` itself, or serves the lab's
+  ``toggle_navigation``;
+- the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
+  silent until armed) and without ``sync`` (the simulator follows nobody).
+
+The run ends when the judge exits (its JSON is the verdict), when the node exits first (the reason names its
+exit code), at the wall-time limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The
+output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run directory, the row
+``result.json``. Runs go in parallel in threads of this process (each only supervises its children).
+"""
+
+from __future__ import annotations
+
+import json
+import shlex
+import threading
+import time
+from collections import defaultdict
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+from bt_nav.ros.bringup import NodeSpec, nodes, param_arg
+from bt_nav.ros.supervise import (
+    Child,
+    Launcher,
+    StopRequest,
+    child_env,
+    claim_domain_id,
+    launcher_domains,
+    release_domain_id,
+)
+from bt_nav.run.grid import Job
+from bt_nav.run.rundir import make_run_dir
+from bt_nav.run.settings import DEFAULT_JITTER
+
+#: Seconds a stopped process group gets for SIGINT before SIGTERM (then 2 s before SIGKILL).
+STOP_GRACE = 3.0
+#: Wall seconds the judge's own timeout leaves before the run's limit, so it can still write a provisional report.
+JUDGE_MARGIN = 5.0
+
+
+@dataclass(frozen=True)
+class ExeSettings:
+    """What every run of an ``--exe`` grid shares."""
+
+    command: str  # the user's command line (shell words; no shell runs it)
+    profile: str  # homework (the referee) or lab (the check-off judge)
+    out: Path  # the grid's directory; one run directory per run below it
+    limit: float = 150.0  # wall seconds per run
+    rtf: float = 5.0  # sim seconds per wall second
+    maneuvers: bool = False  # append -p maneuver:=X
+    jitter: tuple[float, float] | None = DEFAULT_JITTER
+
+
+@dataclass(frozen=True)
+class ExeSpec:
+    """The user's command as a :class:`bt_nav.ros.supervise.Startable` (named ``node``)."""
+
+    argv: tuple[str, ...]
+    executable: str = "node"
+
+    def command(self, python: str | None = None) -> list[str]:
+        """The command as given, then its ROS arguments."""
+        return list(self.argv)
+
+
+def exe_ros_args(maneuver: str | None) -> list[str]:
+    """What is appended to the user's command: sim time, and the maneuver when the grid has maneuvers."""
+    args = ["--ros-args", "-p", "use_sim_time:=true"]
+    if maneuver is not None:
+        args += ["-p", param_arg("maneuver", maneuver)]
+    return args
+
+
+def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeSpec]:
+    """The simulator and the judge of ``job`` (the profile's graph without bt_nav's executive)."""
+    lab = settings.profile == "lab"
+    sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
+    if settings.jitter:
+        sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
+    judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False,
+             "timeout": max(1.0, settings.limit - JUDGE_MARGIN)}
+    specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
+                  seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
+    return [spec for spec in specs if spec.executable != "executive"]
+
+
+class _RunLogs:
+    """One log file per process of a run (sink of its :class:`Launcher`)."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = directory
+        self.files: dict[str, IO[str]] = {}
+        self.lock = threading.Lock()
+
+    def sink(self, name: str, line: str) -> None:
+        with self.lock:
+            stream = self.files.get(name)
+            if stream is None:
+                stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
+            stream.write(line + "\n")
+            stream.flush()
+
+    def close(self) -> None:
+        with self.lock:
+            for stream in self.files.values():
+                stream.close()
+
+
+def _wait(launcher: Launcher, judge: Child, node: Child, limit: float, stop: StopRequest | None,
+          started: float) -> tuple[str, str]:
+    """Wait for the judge's exit (``("verdict", "")``), or why there is none: ``(outcome, reason line)``."""
+    end = started + limit
+    while time.monotonic() < end:
+        if judge.poll() is not None:
+            return "verdict", ""
+        code = node.poll()
+        if code is not None:
+            return "node exited", (f"the node exited with code {code} after {time.monotonic() - started:.1f} s "
+                                   "wall, before the verdict (see node.log)")
+        sim = next(c for c in launcher.children if c.spec.executable == "sim")
+        if sim.poll() is not None:
+            return "sim exited", f"the simulator exited with code {sim.poll()} (see sim.log)"
+        if stop is not None and stop.requested:
+            return "stopped", f"stopped by {stop.name or 'a stop request'}"
+        time.sleep(0.05)
+    return "timeout", f"no verdict within {limit:g} s wall"
+
+
+def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) -> dict[str, Any]:
+    """``passed``, ``reason`` and the judge's JSON (when it wrote one) of a finished run."""
+    verdict = None
+    if results_json.is_file():
+        try:
+            verdict = json.loads(results_json.read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError):
+            verdict = None
+    if outcome == "verdict":
+        if verdict is None:
+            reason = f"the judge exited with code {judge.poll()} without a verdict (see {judge.name}.log)"
+        elif verdict.get("timed_out"):
+            reason = "the judge timed out: " + "; ".join(c["name"] for c in verdict.get("checks", [])
+                                                        if not c.get("passed")) + " not met"
+        else:
+            failed = [c["name"] for c in verdict.get("checks", []) if not c.get("passed")]
+            reason = "passed" if verdict.get("passed") else "failed: " + ", ".join(failed)
+    passed = outcome == "verdict" and verdict is not None and bool(verdict.get("passed"))
+    return {"passed": passed, "outcome": outcome, "reason": reason, "verdict": verdict}
+
+
+def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None) -> dict[str, Any]:
+    """One run of the grid (see the module docstring); its row, also written to ``result.json``."""
+    low, high = launcher_domains()
+    domain = claim_domain_id(low, high, start=hash(job.key))
+    run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}_seed{job.seed}")
+    results_json = run_dir / "verdict.json"
+    logs = _RunLogs(run_dir)
+    launcher = Launcher(child_env(domain), sink=logs.sink, stop=stop, driver="node")
+    argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None))
+    started = time.monotonic()
+    try:
+        sim_spec, judge_spec = exe_graph(job, settings, results_json)
+        launcher.start(sim_spec)
+        try:
+            node = launcher.start(ExeSpec(argv))
+        except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
+            row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
+                   "verdict": None}
+        else:
+            judge = launcher.start(judge_spec)
+            outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
+            row = _verdict_row(outcome, reason, judge, results_json)
+    finally:
+        launcher.shutdown(grace=STOP_GRACE)
+        logs.close()
+        release_domain_id(domain)
+    row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
+                "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
+                "wall_time": round(time.monotonic() - started, 2)})
+    (run_dir / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
+    return row
+
+
+def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, stop: StopRequest | None = None,
+                 on_row: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
+    """Every job, ``workers`` at a time; the rows in the jobs' order (a stop request: the finished ones)."""
+    rows: dict[str, dict[str, Any]] = {}
+    with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
+        pending: set[Future] = {pool.submit(run_exe_job, job, settings, stop) for job in jobs}
+        while pending:
+            done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+            for future in done:
+                if not future.cancelled():
+                    row = future.result()
+                    rows[row["job"]] = row
+                    if on_row is not None:
+                        on_row(row)
+            if stop is not None and stop.requested:
+                for future in pending:
+                    future.cancel()
+    return [rows[job.key] for job in jobs if job.key in rows]
+
+
+def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per world and maneuver: runs, passes, mean wall time and the reasons of the failures (counted)."""
+    cells: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    for row in rows:
+        cells[(row["world"], row["maneuver"])].append(row)
+    out = []
+    for (world, maneuver), cell in sorted(cells.items()):
+        reasons: dict[str, int] = defaultdict(int)
+        for row in cell:
+            if not row["passed"]:
+                reasons[row["reason"]] += 1
+        out.append({"world": world, "maneuver": maneuver, "runs": len(cell),
+                    "passed": sum(1 for r in cell if r["passed"]),
+                    "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons)})
+    return out
+
+
+def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
+    """The summary as a fixed-width table, like ``bt-nav grade``'s."""
+    head = f"{'world':<15} {'man':<4} {'pass':>7} {'wall/run':>8}  reasons of the failures"
+    rows = [f"{s['world']:<15} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
+            + ("; ".join(f"{reason} x{n}" for reason, n in s["reasons"].items()) or "-") for s in summary]
+    return "\n".join([head, "-" * len(head), *rows])
+
+
+def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings) -> str:
+    """The grid's report: pass rate per world (rows) and maneuver (columns), then every failure reason."""
+    maneuvers = sorted({s["maneuver"] for s in summary})
+    worlds = sorted({s["world"] for s in summary})
+    cell = {(s["world"], s["maneuver"]): s for s in summary}
+    runs = sum(s["runs"] for s in summary)
+    passed = sum(s["passed"] for s in summary)
+    lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
+             f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; {settings.rtf:g}x real time, "
+             f"{settings.limit:g} s wall per run.", "",
+             "| world | " + " | ".join(maneuvers) + " |", "|---|" + "---|" * len(maneuvers)]
+    for world in worlds:
+        lines.append(f"| {world} | " + " | ".join(
+            f"{cell[(world, m)]['passed']}/{cell[(world, m)]['runs']}" if (world, m) in cell else "-"
+            for m in maneuvers) + " |")
+    failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
+    if failures:
+        lines += ["", "## Failures", ""] + [f"- {w} {m}: {reason} (x{n})" for w, m, reason, n in failures]
+    return "\n".join(lines) + "\n"
+
+
+def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> tuple[Path, Path]:
+    """``grade.json`` (settings, summary, every row) and ``summary.md`` in the grid's directory."""
+    summary = summarize_exe(rows)
+    settings.out.mkdir(parents=True, exist_ok=True)
+    doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
+                        "rtf": settings.rtf, "appended": exe_ros_args("X" if settings.maneuvers else None)},
+           "summary": summary, "runs": list(rows)}
+    json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
+    json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    md_path.write_text(summary_markdown(summary, settings), encoding="utf-8")
+    return json_path, md_path
+

@@ -1,0 +1,57 @@
+"""``bt-nav grade --exe``: foreign nodes (tests/fixtures, plain rclpy) graded over real DDS, no process left."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import psutil
+import pytest
+
+from bt_nav.cli import grade
+from bt_nav.run.exegrade import exe_ros_args
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+def _grade(tmp_path: Path, fixture: str, *extra: str) -> tuple[int, dict]:
+    code = grade.main(["--exe", f"{sys.executable} {FIXTURES / fixture}", "--worlds", "stage_4", "--seeds", "1",
+                       "--jobs", "1", "--out", str(tmp_path / "grid"), *extra])
+    return code, json.loads((tmp_path / "grid" / "grade.json").read_text())
+
+
+def _no_children_left() -> None:
+    left = psutil.Process().children(recursive=True)
+    assert not left, f"processes left behind: {[(p.pid, p.cmdline()) for p in left]}"
+
+
+def test_what_is_appended() -> None:
+    assert exe_ros_args(None) == ["--ros-args", "-p", "use_sim_time:=true"]
+    assert exe_ros_args("A") == ["--ros-args", "-p", "use_sim_time:=true", "-p", 'maneuver:="A"']
+
+
+def test_the_homework_fixture_gets_a_verdict(tmp_path: Path) -> None:
+    code, doc = _grade(tmp_path, "homework_node.py", "--timeout", "120")
+    [row] = doc["runs"]
+    assert row["outcome"] == "verdict", row["reason"]
+    checks = {c["name"]: c["passed"] for c in row["verdict"]["checks"]}
+    assert checks["evaluation service called"] and checks["no collision"], row["verdict"]["report_lines"]
+    assert code == (0 if row["passed"] else 1)
+    assert row["wall_time"] < 60.0, "a node publishing from its scan callback runs at full speed"
+    run_dir = Path(row["run_dir"])
+    assert {"node.log", "sim.log", "referee.log", "result.json"} <= {p.name for p in run_dir.iterdir()}
+    assert "evaluate_mission called" in (run_dir / "node.log").read_text()
+    assert "| stage_4 |" in (tmp_path / "grid" / "summary.md").read_text()
+    _no_children_left()
+
+
+@pytest.mark.parametrize("profile", ["homework"])
+def test_a_node_crashing_at_start_is_a_verdict(tmp_path: Path, profile: str) -> None:
+    code, doc = _grade(tmp_path, "crash_node.py", "--timeout", "60", "--profile", profile)
+    [row] = doc["runs"]
+    assert code == 1 and not row["passed"]
+    assert row["outcome"] == "node exited" and "the node exited with code 1" in row["reason"], row["reason"]
+    assert row["wall_time"] < 40.0
+    assert "this node crashes at start" in (Path(row["run_dir"]) / "node.log").read_text()
+    _no_children_left()
