@@ -13,27 +13,9 @@ import pytest
 
 from bt_nav.mission.profiles import profile_parameters
 from bt_nav.testing import TickHarness
+from tests.behaviours.leafkit import Events
 
 MANEUVER_LEAF = {"A": "Randomizer", "B": "Retreat", "C": "SmartPivot"}
-
-
-class Events:
-    """Collects the one-line event messages."""
-
-    def __init__(self) -> None:
-        self.lines: list[tuple[str, str]] = []
-
-    def info(self, msg: str) -> None:
-        self.lines.append(("info", msg))
-
-    def warning(self, msg: str) -> None:
-        self.lines.append(("warning", msg))
-
-    def error(self, msg: str) -> None:
-        self.lines.append(("error", msg))
-
-    def text(self) -> str:
-        return "\n".join(msg for _, msg in self.lines)
 
 
 def lab(maneuver: str, **overrides: object) -> tuple[TickHarness, Events]:

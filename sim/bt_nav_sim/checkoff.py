@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from bt_nav_sim.lidar import LDS01, RayCaster
-from bt_nav_sim.referee_core import Activate, static_check
+from bt_nav_sim.referee_core import Activate, Verdict, static_check
 from bt_nav_sim.world import World
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
@@ -111,7 +111,7 @@ class _Reading:
     ahead: float  # distance to the first obstacle in the swept path (robot's width + margin)
 
 
-class CheckoffJudge:
+class CheckoffJudge(Verdict):
     """The lab's check-off: schedule, ground truth and commands, the maneuver episodes, the verdict."""
 
     def __init__(self, config: CheckoffConfig, world: World, *, update_world: bool = True) -> None:
@@ -410,20 +410,6 @@ class CheckoffJudge:
         cfg = self.config
         return (self.t0 or 0.0) + cfg.activate_at + cfg.armed_for + cfg.grace + cfg.static_after + 1.0
 
-    @property
-    def done(self) -> bool:
-        """The report is made."""
-        return self.report_time is not None
-
-    @property
-    def passed(self) -> bool:
-        """Every check passed (False until the report is made)."""
-        return self.done and bool(self.results()["passed"])
-
-    def _finish(self, t: float) -> None:
-        self.report_time = float(t)
-        self._results = self._evaluate(t)
-
     def _evaluate(self, now: float) -> dict[str, Any]:
         cfg = self.config
         t0 = self.t0 or 0.0
@@ -473,13 +459,6 @@ class CheckoffJudge:
         ok = self.activated is not None and self.deactivated is not None
         return {"name": "toggle_navigation answered", "passed": ok, "value": ok, "required": "true, then false",
                 "detail": ", ".join(parts)}
-
-    def results(self) -> dict[str, Any]:
-        """The verdict as a JSON-able dict (provisional, judged at the last sample, before :attr:`done`)."""
-        if self._results is not None:
-            return self._results
-        now = self._t[-1] if self._t else (self.t0 or 0.0)
-        return self._evaluate(now)
 
     def report_lines(self) -> list[str]:
         """One line per check (``name (detail): PASSED|FAILED``), then the overall verdict."""

@@ -91,7 +91,42 @@ CHECKS = (
 )
 
 
-class Referee:
+class Verdict:
+    """The verdict bookkeeping every judge here shares (the homework's referee, the lab's check-off judge):
+    the report is made once, at :meth:`_finish`; before it, :meth:`results` is provisional, judged at the
+    last ground-truth sample. A subclass provides ``_evaluate(now)``, ``_t`` (sample times) and ``t0``."""
+
+    report_time: float | None = None
+    _results: dict[str, Any] | None = None
+    _t: list[float]
+    t0: float | None
+
+    def _evaluate(self, now: float) -> dict[str, Any]:
+        raise NotImplementedError
+
+    @property
+    def done(self) -> bool:
+        """The report is made."""
+        return self.report_time is not None
+
+    @property
+    def passed(self) -> bool:
+        """Every check passed (False until the report is made)."""
+        return self.done and bool(self.results()["passed"])
+
+    def _finish(self, t: float) -> None:
+        self.report_time = float(t)
+        self._results = self._evaluate(t)
+
+    def results(self) -> dict[str, Any]:
+        """The verdict as a JSON-able dict (provisional, judged at the last sample, before :attr:`done`)."""
+        if self._results is not None:
+            return self._results
+        now = self._t[-1] if self._t else (self.t0 or 0.0)
+        return self._evaluate(now)
+
+
+class Referee(Verdict):
     """The homework referee: schedule, ground-truth bookkeeping and the final checks."""
 
     def __init__(self, config: RefereeConfig = RefereeConfig()) -> None:  # noqa: B008 - frozen dataclass
@@ -208,25 +243,11 @@ class Referee:
         return []
 
     # ------------------------------------------------------------------ verdict
-    @property
-    def done(self) -> bool:
-        """The report is made (after the settle time, or at the evaluation deadline)."""
-        return self.report_time is not None
-
-    @property
-    def passed(self) -> bool:
-        """Every check passed (False until the report is made)."""
-        return self.done and bool(self.results()["passed"])
-
     def _rel(self, t: float | None) -> float | None:
         """``t`` in seconds since t0 (None stays None)."""
         if t is None:
             return None
         return t - (self.t0 or 0.0)
-
-    def _finish(self, t: float) -> None:
-        self.report_time = float(t)
-        self._results = self._evaluate(t)
 
     def max_motion(self, start: float, end: float) -> tuple[float, float, int]:
         """(peak planar speed, peak turn rate, pairs seen) over sample pairs lying inside [start, end]."""
@@ -289,13 +310,6 @@ class Referee:
             "samples": len(self._t),
             "done": self.done,
         }
-
-    def results(self) -> dict[str, Any]:
-        """The verdict as a JSON-able dict (provisional, judged at the last sample, before :attr:`done`)."""
-        if self._results is not None:
-            return self._results
-        now = self._t[-1] if self._t else (self.t0 or 0.0)
-        return self._evaluate(now)
 
     def report_lines(self) -> list[str]:
         """One line per check, as the homework's evaluator prints them, then the overall verdict."""

@@ -30,6 +30,10 @@ class Events:
     def error(self, msg: str) -> None:  # noqa: D102
         self.lines.append(("error", msg))
 
+    def text(self) -> str:
+        """Every message, one per line."""
+        return "\n".join(msg for _, msg in self.lines)
+
     def count(self, level: str, text: str = "") -> int:
         """How many lines of ``level`` contain ``text``."""
         return sum(1 for lv, msg in self.lines if lv == level and text in msg)
