@@ -43,7 +43,7 @@ def test_a_robot_that_never_moves_fails(ros_context: Any, tmp_path: Path) -> Non
     try:
         judge = Proc("checkoff", "--maneuver", "A", "--world", "lab_object", "--json", str(tmp_path / "r.json"),
                      "--timeout", "60", "--ros-args", "-p", "activate_at:=1.0", "-p", "armed_for:=3.0",
-                     "-p", "static_after:=1.0")
+                     "-p", "static_after:=2.0")
         assert judge.wait(90.0) == 1, judge.output() + sim.output()
         assert "maneuvers performed (0 performed, required >= 1): FAILED" in judge.stdout, judge.output()
         assert judge.stdout[-1] == "overall: FAILED"
