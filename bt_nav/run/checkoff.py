@@ -23,16 +23,16 @@ ANNOUNCEMENT = re.compile(r"^(Randomizer|Retreat|SmartPivot): .*: turning (left|
 MATCH_WINDOW = 1.0
 
 
-def lab_judge(maneuver: str, world_of: Callable[[], World], config: CheckoffConfig | None = None
+def lab_judge(maneuver: str, world: World, config: CheckoffConfig | None = None
               ) -> Callable[[int, str], CheckoffJudge]:
-    """A referee factory (index, name) -> the check-off judge of ``maneuver`` on the simulated world
-    (``world_of()``: the simulator's own object, which reveals appearing objects itself)."""
+    """A referee factory (index, name) -> the check-off judge of ``maneuver`` on the simulated ``world``
+    (the simulator's own object, which reveals appearing objects itself)."""
     if maneuver not in MANEUVERS:
         raise ValueError(f"the lab's check-off judges maneuver A, B or C, not {maneuver!r}")
     cfg = config or CheckoffConfig(maneuver=maneuver)
 
     def make(_index: int, _name: str) -> CheckoffJudge:
-        return CheckoffJudge(cfg, world_of(), update_world=False)
+        return CheckoffJudge(cfg, world, update_world=False)
 
     return make
 

@@ -254,7 +254,7 @@ class Lockstep:
         self.clock = SimClock()
         self.sink = sink
         self.merge_steps = merge_steps
-        make_referee = referee or (lab_judge(self.maneuver, lambda: self.sim.world) if profile_name == "lab"
+        make_referee = referee or (lab_judge(self.maneuver, self.sim.world) if profile_name == "lab"
                                    else homework_referee(referee_config))
         self.robots: list[Robot] = []
         for i, (name, body) in enumerate(zip(self.sim.names, self.sim.cores, strict=True)):
