@@ -188,7 +188,9 @@ def _grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool) -
     """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.run.exegrade`); exit 0 only if every run passed,
     128 + the signal after SIGINT/SIGTERM (every process of the runs stopped)."""
     from bt_nav.ros.supervise import StopRequest
-    from bt_nav.run.exegrade import ExeSettings, format_exe_table, run_exe_grid, summarize_exe, write_exe_report
+    from bt_nav.run.exegrade import ExeSettings
+    from bt_nav.run.exegrid import run_exe_grid
+    from bt_nav.run.exereport import format_exe_table, summarize_exe, write_exe_report
 
     out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
     settings = ExeSettings(args.exe, args.profile, out, args.timeout, args.rtf, maneuvers,

@@ -17,7 +17,7 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
 The run ends when the judge exits (its JSON is the verdict), when the node exits first (the reason names its
 exit code), at the wall-time limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The
 output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run directory, the row
-``result.json``. Runs go in parallel in threads of this process (each only supervises its children).
+``result.json``. Grids: :mod:`bt_nav.run.exegrid`; reports: :mod:`bt_nav.run.exereport`.
 """
 
 from __future__ import annotations
@@ -26,9 +26,6 @@ import json
 import shlex
 import threading
 import time
-from collections import defaultdict
-from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -193,83 +190,3 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
                 "wall_time": round(time.monotonic() - started, 2)})
     (run_dir / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row
-
-
-def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, stop: StopRequest | None = None,
-                 on_row: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
-    """Every job, ``workers`` at a time; the rows in the jobs' order (a stop request: the finished ones)."""
-    rows: dict[str, dict[str, Any]] = {}
-    with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
-        pending: set[Future] = {pool.submit(run_exe_job, job, settings, stop) for job in jobs}
-        while pending:
-            done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-            for future in done:
-                if not future.cancelled():
-                    row = future.result()
-                    rows[row["job"]] = row
-                    if on_row is not None:
-                        on_row(row)
-            if stop is not None and stop.requested:
-                for future in pending:
-                    future.cancel()
-    return [rows[job.key] for job in jobs if job.key in rows]
-
-
-def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per world and maneuver: runs, passes, mean wall time and the reasons of the failures (counted)."""
-    cells: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
-    for row in rows:
-        cells[(row["world"], row["maneuver"])].append(row)
-    out = []
-    for (world, maneuver), cell in sorted(cells.items()):
-        reasons: dict[str, int] = defaultdict(int)
-        for row in cell:
-            if not row["passed"]:
-                reasons[row["reason"]] += 1
-        out.append({"world": world, "maneuver": maneuver, "runs": len(cell),
-                    "passed": sum(1 for r in cell if r["passed"]),
-                    "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons)})
-    return out
-
-
-def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
-    """The summary as a fixed-width table, like ``bt-nav grade``'s."""
-    head = f"{'world':<15} {'man':<4} {'pass':>7} {'wall/run':>8}  reasons of the failures"
-    rows = [f"{s['world']:<15} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
-            + ("; ".join(f"{reason} x{n}" for reason, n in s["reasons"].items()) or "-") for s in summary]
-    return "\n".join([head, "-" * len(head), *rows])
-
-
-def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings) -> str:
-    """The grid's report: pass rate per world (rows) and maneuver (columns), then every failure reason."""
-    maneuvers = sorted({s["maneuver"] for s in summary})
-    worlds = sorted({s["world"] for s in summary})
-    cell = {(s["world"], s["maneuver"]): s for s in summary}
-    runs = sum(s["runs"] for s in summary)
-    passed = sum(s["passed"] for s in summary)
-    lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
-             f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; {settings.rtf:g}x real time, "
-             f"{settings.limit:g} s wall per run.", "",
-             "| world | " + " | ".join(maneuvers) + " |", "|---|" + "---|" * len(maneuvers)]
-    for world in worlds:
-        lines.append(f"| {world} | " + " | ".join(
-            f"{cell[(world, m)]['passed']}/{cell[(world, m)]['runs']}" if (world, m) in cell else "-"
-            for m in maneuvers) + " |")
-    failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
-    if failures:
-        lines += ["", "## Failures", ""] + [f"- {w} {m}: {reason} (x{n})" for w, m, reason, n in failures]
-    return "\n".join(lines) + "\n"
-
-
-def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> tuple[Path, Path]:
-    """``grade.json`` (settings, summary, every row) and ``summary.md`` in the grid's directory."""
-    summary = summarize_exe(rows)
-    settings.out.mkdir(parents=True, exist_ok=True)
-    doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
-                        "rtf": settings.rtf, "appended": exe_ros_args("X" if settings.maneuvers else None)},
-           "summary": summary, "runs": list(rows)}
-    json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
-    json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    md_path.write_text(summary_markdown(summary, settings), encoding="utf-8")
-    return json_path, md_path
-
