@@ -81,7 +81,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--resume", action="store_true", help="keep the finished runs of --json's file, run the rest")
     parser.add_argument("--exe", default=None, metavar="'CMD ...'",
                         help="grade this command's node over DDS instead of bt_nav's tree in lock-step (appended: "
-                        "--ros-args -p use_sim_time:=true, and -p maneuver:=X with --maneuvers or --profile lab)")
+                        "--ros-args -p use_sim_time:=true, the profile's remaps -r arm:=<its arm service> (homework: "
+                        "also -r evaluate_mission:=/reactive_control/evaluate_mission), and -p maneuver:=X with "
+                        "--maneuvers or --profile lab)")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory (default runs/grade-exe-<time>)")

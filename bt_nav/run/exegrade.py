@@ -7,10 +7,11 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
 - the simulator node with ``follow`` off: it never waits on the node's command timing, so a node that
   publishes from its scan callback, from a timer or only on change runs at the same pace, ``rtf`` sim
   seconds per wall second (the node's sim-time timers tick that much faster too);
-- the user's command, with :func:`exe_ros_args` appended (exactly ``--ros-args -p use_sim_time:=true``, plus
-  ``-p maneuver:="X"`` when the grid has maneuvers); no remaps: a foreign node serves the homework's
-  ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` itself, or serves the lab's
-  ``toggle_navigation``;
+- the user's command, with :func:`exe_ros_args` appended (``--ros-args -p use_sim_time:=true``, the
+  profile's remaps of bt_nav's own names ``arm`` and ``evaluate_mission`` onto the assignment's, plus
+  ``-p maneuver:="X"`` when the grid has maneuvers): a foreign node serves the homework's
+  ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` under those names itself, or
+  serves the lab's ``toggle_navigation``;
 - the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
   silent until armed) and without ``sync`` (the simulator follows nobody).
 
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from bt_nav.ros.bringup import NodeSpec, nodes, param_arg
+from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
     Launcher,
@@ -75,9 +76,20 @@ class ExeSpec:
         return list(self.argv)
 
 
-def exe_ros_args(maneuver: str | None) -> list[str]:
-    """What is appended to the user's command: sim time, and the maneuver when the grid has maneuvers."""
+#: The remaps each profile appends: the assignment's service names for a node written against bt_nav's own
+#: (``arm``, ``evaluate_mission``); a remap of a name the node does not use changes nothing.
+PROFILE_REMAPS: dict[str, tuple[tuple[str, str], ...]] = {
+    "homework": (("arm", HOMEWORK_ACTIVATE), ("evaluate_mission", HOMEWORK_EVALUATE)),
+    "lab": (("arm", "/" + LAB_ARM),),
+}
+
+
+def exe_ros_args(maneuver: str | None, profile: str = "homework") -> list[str]:
+    """What is appended to the user's command: sim time, the profile's remaps, and the maneuver when the grid
+    has maneuvers."""
     args = ["--ros-args", "-p", "use_sim_time:=true"]
+    for name, target in PROFILE_REMAPS.get(profile, ()):
+        args += ["-r", f"{name}:={target}"]
     if maneuver is not None:
         args += ["-p", param_arg("maneuver", maneuver)]
     return args
@@ -167,7 +179,8 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     results_json = run_dir / "verdict.json"
     logs = _RunLogs(run_dir)
     launcher = Launcher(child_env(domain), sink=logs.sink, stop=stop, driver="node")
-    argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None))
+    argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
+                                                                  settings.profile))
     started = time.monotonic()
     try:
         sim_spec, judge_spec = exe_graph(job, settings, results_json)

@@ -62,8 +62,9 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> t
     """``grade.json`` (settings, summary, every row) and ``summary.md`` in the grid's directory."""
     summary = summarize_exe(rows)
     settings.out.mkdir(parents=True, exist_ok=True)
+    appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile)
     doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
-                        "rtf": settings.rtf, "appended": exe_ros_args("X" if settings.maneuvers else None)},
+                        "rtf": settings.rtf, "appended": appended},
            "summary": summary, "runs": list(rows)}
     json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")

@@ -27,8 +27,10 @@ def _no_children_left() -> None:
 
 
 def test_what_is_appended() -> None:
-    assert exe_ros_args(None) == ["--ros-args", "-p", "use_sim_time:=true"]
-    assert exe_ros_args("A") == ["--ros-args", "-p", "use_sim_time:=true", "-p", 'maneuver:="A"']
+    homework = ["-r", "arm:=/reactive_control/activate", "-r", "evaluate_mission:=/reactive_control/evaluate_mission"]
+    assert exe_ros_args(None) == ["--ros-args", "-p", "use_sim_time:=true", *homework]
+    assert exe_ros_args("A", "lab") == ["--ros-args", "-p", "use_sim_time:=true", "-r", "arm:=/toggle_navigation",
+                                        "-p", 'maneuver:="A"']
 
 
 def test_the_homework_fixture_gets_a_verdict(tmp_path: Path) -> None:
