@@ -5,7 +5,9 @@ raw to the mission's topics as they appear (:class:`bt_nav.ros.graphtap.GraphTap
 message with the sim time of the latest ``/clock`` and hands the CDR bytes to
 :class:`bt_nav.media.bag.MissionBag`. The executive's and referee's ``/rosout`` lines become
 ``/bt_nav/events``, and ``/bt_nav/mission`` says which world and seed the simulator runs (asked from its
-parameters), so a DDS bag looks like a lock-step one and ``bt-nav video`` can draw the world.
+parameters), so a DDS bag looks like a lock-step one and ``bt-nav video`` can draw the world. It prints
+``recording ...`` once it listens and ``first TOPIC at sim T s`` when a topic's first message arrives, so a
+launcher can wait until the bag covers what it needs (``bt-nav grade --exe`` does before it starts the judge).
 
 Stops on Ctrl-C / SIGTERM (the bag is closed properly) or after ``--duration`` wall seconds; the bag is
 flushed every second, so even a kill -9 leaves everything up to the last second readable.
@@ -71,9 +73,13 @@ class BagRecorder:
             self.bag.mission(self.tap.now_ns() * 1e-9, info)
 
     def _write(self, topic: str, msgtype: str, t_ns: int, data: bytes, qos: Any) -> None:
+        first = False
         with self.lock:
             if not self.bag.closed:
+                first = topic not in self.bag.counts
                 self.bag.write_raw(topic, t_ns, data, msgtype, qos)
+        if first:  # a launcher waits for the line of the topic it needs (bt_nav.run.exerecord)
+            print(f"first {topic} at sim {t_ns * 1e-9:.2f} s", flush=True)
 
     def _flush(self) -> None:
         with self.lock:

@@ -14,6 +14,8 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   serves the lab's ``toggle_navigation``;
 - the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
   silent until armed) and without ``sync`` (the simulator follows nobody).
+- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first and stopped last
+  (:mod:`bt_nav.run.exerecord`); the report draws each run's picture and films the failed runs from it.
 
 The run ends when the judge exits (its JSON is the verdict), when the node exits first (the reason names its
 exit code), at the wall-time limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The
@@ -41,6 +43,7 @@ from bt_nav.ros.supervise import (
     launcher_domains,
     release_domain_id,
 )
+from bt_nav.run.exerecord import bag_row, start_recorder
 from bt_nav.run.grid import Job
 from bt_nav.run.rundir import make_run_dir
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -62,6 +65,8 @@ class ExeSettings:
     rtf: float = 5.0  # sim seconds per wall second
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
+    record: str = "on"  # on, failures or off: each run's bag (bt_nav.run.exerecord.RECORD_MODES)
+    videos: str = "failures"  # failures, all or off: which runs the report films from their bags
 
 
 @dataclass(frozen=True)
@@ -182,8 +187,11 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                                   settings.profile))
     started = time.monotonic()
+    recorder = None
     try:
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
+        if settings.record != "off":  # first, so stopped last: its bag holds the whole run
+            recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed)
         launcher.start(sim_spec)
         try:
             node = launcher.start(ExeSpec(argv))
@@ -191,6 +199,8 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
         else:
+            if recorder is not None:
+                recorder.before_judge(node)
             judge = launcher.start(judge_spec)
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)
@@ -201,5 +211,6 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})
+    row.update(bag_row(run_dir, recorder))
     (run_dir / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row
