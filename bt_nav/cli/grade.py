@@ -87,6 +87,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory (default runs/grade-exe-<time>)")
+    parser.add_argument("--record", choices=("on", "failures", "off"), default="on", help="--exe: each run's bag, "
+                        "for report.html's pictures (failures: keep the failed runs' bags only; off: no pictures)")
+    parser.add_argument("--videos", choices=("failures", "all", "off"), default="failures",
+                        help="--exe: the runs report.html shows as videos (default failures)")
     parser.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                         help="progress bar on stderr (auto: when stderr is a terminal)")
     return parser
@@ -196,7 +200,7 @@ def _grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool) -
 
     out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
     settings = ExeSettings(args.exe, args.profile, out, args.timeout, args.rtf, maneuvers,
-                           None if args.no_jitter else DEFAULT_JITTER)
+                           None if args.no_jitter else DEFAULT_JITTER, args.record, args.videos)
     stop = StopRequest().install()
     print(f"bt-nav grade: {len(jobs)} runs of {args.exe!r} ({args.profile} profile, {args.jobs} at a time, "
           f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {out}/", flush=True)

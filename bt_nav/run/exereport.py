@@ -1,5 +1,6 @@
-"""The report of an ``--exe`` grid: per world and maneuver figures, a fixed-width table, ``grade.json`` and
-``summary.md`` in the grid's directory."""
+"""The report of an ``--exe`` grid: per world and maneuver figures, a fixed-width table, and in the grid's directory
+``grade.json``, ``summary.md`` and ``report.html`` with the pictures and videos it links
+(:mod:`bt_nav.run.exemedia`, :mod:`bt_nav.run.exehtml`)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.run.exegrade import ExeSettings, exe_ros_args
+from bt_nav.run.exehtml import report_html
+from bt_nav.run.exemedia import grid_figures, render_runs
 
 
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -55,18 +58,30 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings) -
     failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
     if failures:
         lines += ["", "## Failures", ""] + [f"- {w} {m}: {reason} (x{n})" for w, m, reason, n in failures]
+    lines += ["", "Every run's trajectory picture, the videos of the failed runs and the logs: "
+              "[report.html](report.html)."]
     return "\n".join(lines) + "\n"
 
 
-def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> tuple[Path, Path]:
-    """``grade.json`` (settings, summary, every row) and ``summary.md`` in the grid's directory."""
+def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings,
+                     workers: int | None = None) -> tuple[Path, Path]:
+    """``grade.json`` (settings, summary, every row with its pictures), ``summary.md`` and ``report.html`` in the
+    grid's directory, after drawing the runs' pictures and videos (``workers`` processes, default one per core).
+
+    Returns the JSON and Markdown paths; the page is ``report.html`` next to them.
+    """
     summary = summarize_exe(rows)
     settings.out.mkdir(parents=True, exist_ok=True)
+    media = render_runs(rows, settings.videos, settings.record, workers) if rows else {}
+    figures = grid_figures(rows, settings.out)
     appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile)
     doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
-                        "rtf": settings.rtf, "appended": appended},
-           "summary": summary, "runs": list(rows)}
+                        "rtf": settings.rtf, "appended": appended, "record": settings.record,
+                        "videos": settings.videos},
+           "summary": summary, "figures": figures,
+           "runs": [{**row, "media": media.get(row["job"])} for row in rows]}
     json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     md_path.write_text(summary_markdown(summary, settings), encoding="utf-8")
+    (settings.out / "report.html").write_text(report_html(rows, summary, settings, media, figures), encoding="utf-8")
     return json_path, md_path

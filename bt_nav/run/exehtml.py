@@ -1,0 +1,179 @@
+"""``report.html``: the page of an ``--exe`` grid, one static file next to ``grade.json``.
+
+Why static and relative: the grid's directory is what a teaching assistant zips and sends, or opens from a file
+manager; the page needs no server, no script and nothing from the network, and every link (pictures, videos,
+logs, JSON, bags) is relative to the page, so the directory works wherever it is unpacked. What it shows:
+
+- the command graded, the profile, the real-time factor and the wall-time limit per run;
+- the overall pass rate and the pass rate per world (rows) and maneuver (columns), each cell coloured from red
+  (none passed) to green (all passed), then every failure reason with its count;
+- the grid's figures (:func:`bt_nav.run.exemedia.grid_figures`);
+- one row per run: its trajectory picture as a thumbnail (a link to the full picture), verdict, reason, travelled
+  distance, wall time, the judge's findings when it gives any, links to its logs, ``verdict.json``,
+  ``result.json`` and bag, and the video of a failed run as a player.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+from urllib.parse import quote
+
+from bt_nav.run.exegrade import ExeSettings, exe_ros_args
+
+STYLE = """
+ body { font-family: sans-serif; margin: 1.5em; color: #222; max-width: 1400px; }
+ code { background: #f2f2ee; padding: 1px 4px; }
+ table { border-collapse: collapse; margin: 0.6em 0 1.2em; }
+ th, td { border: 1px solid #ccc; padding: 4px 8px; vertical-align: top; text-align: left; }
+ th { background: #f2f2ee; }
+ td.rate { text-align: center; font-weight: bold; }
+ .PASSED { background: #d8f0d8; color: #145214; font-weight: bold; }
+ .FAILED { background: #f6d6d6; color: #8b1010; font-weight: bold; }
+ .overall { font-size: 1.3em; }
+ .files a { margin-right: 0.6em; white-space: nowrap; }
+ td.num { white-space: nowrap; text-align: right; }
+ .note { color: #777; font-style: italic; }
+ img.thumb { width: 180px; border: 1px solid #ccc; }
+ img.figure { max-width: 100%; }
+"""
+
+
+def rate_colour(passed: int, runs: int) -> str:
+    """A cell's background: hue 0 (red, none passed) to 120 (green, all passed)."""
+    rate = passed / runs if runs else 0.0
+    return f"hsl({round(120 * rate)}, 65%, 82%)"
+
+
+def _rel(out: Path, path: Path) -> str:
+    """``path`` as a URL relative to the page in ``out`` (quoted, so any run name works)."""
+    return quote(Path(os.path.relpath(path, out)).as_posix())
+
+
+def _link(out: Path, path: Path, text: str) -> str:
+    """``<a>`` to ``path``, relative to the page in ``out``."""
+    return f'<a href="{_rel(out, path)}">{html.escape(text)}</a>'
+
+
+def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
+    passed = sum(1 for r in rows if r.get("passed"))
+    appended = " ".join(exe_ros_args("X" if settings.maneuvers else None, settings.profile))
+    return [f"<h1>Grade of <code>{html.escape(settings.command)}</code></h1>",
+            f'<p class="overall">overall: <b>{passed}/{len(rows)} passed '
+            f"({100 * passed / max(1, len(rows)):.1f} %)</b></p>",
+            "<table>",
+            f"<tr><th>command</th><td><code>{html.escape(settings.command)}</code> + "
+            f"<code>{html.escape(appended)}</code></td></tr>",
+            f"<tr><th>profile</th><td>{html.escape(settings.profile)}</td></tr>",
+            f"<tr><th>real-time factor</th><td>{settings.rtf:g}x (sim seconds per wall second)</td></tr>",
+            f"<tr><th>limit per run</th><td>{settings.limit:g} s wall</td></tr>",
+            f"<tr><th>recording</th><td>bags {html.escape(settings.record)}, videos "
+            f"{html.escape(settings.videos)}</td></tr>",
+            f"<tr><th>report made</th><td>{time.strftime('%Y-%m-%d %H:%M:%S')}</td></tr>",
+            "</table>"]
+
+
+def _rates(summary: Sequence[dict[str, Any]]) -> list[str]:
+    """The pass rate per world and maneuver, each cell coloured by its rate."""
+    maneuvers = sorted({s["maneuver"] for s in summary})
+    worlds = sorted({s["world"] for s in summary})
+    cell = {(s["world"], s["maneuver"]): s for s in summary}
+    lines = ["<h2>Pass rate per world and maneuver</h2>", "<table>",
+             "<tr><th>world</th>" + "".join(f"<th>{html.escape(m)}</th>" for m in maneuvers) + "</tr>"]
+    for world in worlds:
+        tds = []
+        for m in maneuvers:
+            s = cell.get((world, m))
+            tds.append("<td>-</td>" if s is None else
+                       f'<td class="rate" style="background: {rate_colour(s["passed"], s["runs"])}">'
+                       f"{s['passed']}/{s['runs']} ({100 * s['passed'] / s['runs']:.0f} %)</td>")
+        lines.append(f"<tr><th>{html.escape(world)}</th>{''.join(tds)}</tr>")
+    lines.append("</table>")
+    return lines
+
+
+def _failures(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -> list[str]:
+    """Every failure reason per world and maneuver with its count and a link to each run that failed so."""
+    failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
+    if not failures:
+        return []
+    lines = ["<h2>Why runs failed</h2>", "<ul>"]
+    for world, maneuver, reason, n in failures:
+        runs = [r for r in rows if not r.get("passed") and r["world"] == world and r["maneuver"] == maneuver
+                and r.get("reason") == reason]
+        links = ", ".join(f'<a href="#{quote(Path(r["run_dir"]).name)}">seed {r["seed"]}</a>' for r in runs)
+        lines.append(f"<li>{html.escape(world)} {html.escape(maneuver)}: {html.escape(reason)} (x{n}: {links})</li>")
+    return [*lines, "</ul>"]
+
+
+def _findings(row: dict[str, Any]) -> str:
+    """The judge's findings of a run (any JSON), one line each; empty when it gives none."""
+    found = row.get("findings")
+    if not found:
+        return ""
+    items = found if isinstance(found, list) else [found]
+    text = [item if isinstance(item, str) else json.dumps(item, sort_keys=True) for item in items]
+    return "<ul>" + "".join(f"<li>{html.escape(t)}</li>" for t in text) + "</ul>"
+
+
+def _files(out: Path, run_dir: Path) -> str:
+    """Links to a run's logs, JSON and bag (those that exist)."""
+    names = sorted(p.name for p in run_dir.glob("*.log")) + [
+        n for n in ("verdict.json", "result.json") if (run_dir / n).is_file()]
+    links = [_link(out, run_dir / n, n) for n in names]
+    if (run_dir / "bag").is_dir():
+        links.append(_link(out, run_dir / "bag", "bag/"))
+    return '<span class="files">' + " ".join(links) + "</span>"
+
+
+def _media_cells(out: Path, run_dir: Path, media: dict[str, Any]) -> tuple[str, str]:
+    """A run's thumbnail (a link to its full picture, or why there is none) and its video player with a link."""
+    if media.get("picture"):
+        pic = _rel(out, run_dir / media["picture"])
+        thumb = f'<a href="{pic}"><img class="thumb" src="{pic}" loading="lazy" alt="trajectory"></a>'
+    else:
+        pic, thumb = "", f'<span class="note">no picture: {html.escape(media.get("note") or "not drawn")}</span>'
+    video = ""
+    if media.get("video"):
+        video = (f'<video controls preload="none" width="360" src="{_rel(out, run_dir / media["video"])}" '
+                 f'poster="{pic}"></video><br>' + _link(out, run_dir / media["video"], media["video"]))
+    return thumb, video
+
+
+def _run_row(out: Path, row: dict[str, Any], media: dict[str, Any]) -> str:
+    """One run's table row (see the module docstring)."""
+    run_dir = Path(row["run_dir"])
+    verdict = "PASSED" if row.get("passed") else "FAILED"
+    thumb, video = _media_cells(out, run_dir, media)
+    travelled = (row.get("verdict") or {}).get("travelled")
+    name = f"{row['world']} {row['maneuver']} seed {row['seed']}"
+    cells = [thumb, _link(out, run_dir, name), verdict, html.escape(str(row.get("reason", ""))) + _findings(row),
+             "-" if travelled is None else f"{travelled:.2f} m", f"{row.get('wall_time', 0):.1f} s",
+             _files(out, run_dir), video]
+    classes = ["", "", verdict, "", "num", "num", "", ""]
+    tds = "".join(f'<td class="{c}">{text}</td>' if c else f"<td>{text}</td>" for c, text in zip(classes, cells,
+                                                                                                strict=True))
+    return f'<tr id="{html.escape(run_dir.name)}">{tds}</tr>'
+
+
+def report_html(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]], settings: ExeSettings,
+                media: dict[str, dict[str, Any]], figures: Sequence[str]) -> str:
+    """The whole page (see the module docstring); ``media`` by job key, ``figures`` relative to the page."""
+    out = settings.out
+    lines = ["<!doctype html>", '<html lang="en"><head><meta charset="utf-8">',
+             f"<title>grade: {html.escape(settings.command)}</title><style>{STYLE}</style></head><body>",
+             *_header(rows, settings), *_rates(summary), *_failures(rows, summary)]
+    if figures:
+        lines.append("<h2>Figures</h2>")
+        lines += [f'<p><img class="figure" src="{quote(f)}" alt="{html.escape(f)}"></p>' for f in figures]
+    lines += ["<h2>Runs</h2>", "<table>",
+              "<tr><th>trajectory</th><th>run</th><th>verdict</th><th>reason</th><th>travelled</th>"
+              "<th>wall</th><th>files</th><th>video</th></tr>"]
+    lines += [_run_row(out, row, media.get(row["job"], {})) for row in rows]
+    lines += ["</table>", "</body></html>"]
+    return "\n".join(lines) + "\n"

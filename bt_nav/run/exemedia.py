@@ -1,0 +1,256 @@
+"""The pictures and videos of an ``--exe`` grid's report, drawn from the runs' bags after the grid.
+
+Why after the grid and not at each run's end: drawing is CPU work (a trajectory picture about a second, a video of
+a 60 s mission ten or more), and during the grid the cores belong to the runs, whose simulators keep their real-time
+factor only while they get their share. Here they take every core (:func:`render_runs`, one process per core):
+
+- each run's **trajectory picture** ``trajectory.png`` in its run directory (:func:`bt_nav_sim.plot.plot_run`): the
+  world, the path from the bag's ground truth, start and end, and the judge's verdict with its collisions;
+- a **video** ``video.mp4`` (:func:`bt_nav.media.video.write_video`) of every failed run (``videos``: ``failures``,
+  ``all`` or ``off``);
+- the grid's figures next to ``report.html``: the **travelled distance** of every judged run as a histogram with
+  the homework's requirement marked (``distance.png``), and for the lab the **check-off turns** judged and within
+  their rule per run (``turns.png``).
+
+A run whose files are there already (a report made again, a resumed grid) is not drawn again. With ``record`` set
+to ``failures`` the bags of the passed runs are deleted once their pictures exist.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import os
+import shutil
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bt_nav.run.exerecord import BAG
+
+PICTURE = "trajectory.png"
+VIDEO = "video.mp4"
+DISTANCE = "distance.png"
+TURNS = "turns.png"
+#: Frames per second of the failed runs' videos (``bt-nav video``'s default).
+FPS = 10.0
+#: The homework check whose ``required`` value is the distance marked on the histogram.
+TRAVELLED_CHECK = "minimum travelled distance"
+
+
+def wants_video(row: dict[str, Any], videos: str) -> bool:
+    """Whether the report films this run: ``all``, or ``failures`` and it did not pass."""
+    return videos == "all" or (videos == "failures" and not row.get("passed"))
+
+
+def run_title(row: dict[str, Any]) -> str:
+    """``stage_4, maneuver none, seed 3``: what a picture of the run is titled with."""
+    return f"{row['world']}, maneuver {row['maneuver']}, seed {row['seed']}"
+
+
+def _results(row: dict[str, Any], record: Any) -> dict[str, Any]:
+    """What the picture prints: the judge's verdict, else the bag's own figures (a run without a verdict failed)."""
+    if row.get("verdict"):
+        return row["verdict"]
+    dist = record.truth.distance()
+    return {"passed": False, "travelled": float(dist[-1]) if dist.size else 0.0,
+            "collisions": len(record.collisions),
+            "collision_events": [c for c in record.collisions if "x" in c and "y" in c]}
+
+
+def _world(row: dict[str, Any], record: Any) -> Any:
+    """The run's world: the bag's ``/bt_nav/mission``, else the row's name and seed, else an empty one around the
+    path (a world file that moved since the run still gets its picture)."""
+    from bt_nav_sim.world import World, load_world
+
+    from bt_nav.media.video import world_of
+
+    world = world_of(record)
+    if world is not None:
+        return world
+    try:
+        return load_world(str(row["world"]), seed=int(row["seed"]))
+    except (OSError, ValueError, KeyError):
+        tr = record.truth
+        bounds = (float(tr.x.min()) - 1, float(tr.y.min()) - 1, float(tr.x.max()) + 1,
+                  float(tr.y.max()) + 1) if len(tr) else (-5.0, -5.0, 5.0, 5.0)
+        return World(name=str(row["world"]), segments=np.zeros((0, 4)), circles=np.zeros((0, 3)),
+                     spawn=(0.0, 0.0, 0.0), bounds=bounds)
+
+
+def _path(record: Any) -> Any:
+    """The bag's ground truth as a picture's path: coloured by branch when a bt_nav executive's tree is in the bag,
+    else one black line (a foreign node has no branches; the picture's "Stopped" grey would say it never moved)."""
+    from bt_nav.media.video import trajectory
+
+    path = trajectory(record)
+    if not record.trees:
+        path.branch = np.full(len(path), "path", dtype=object)
+    return path
+
+
+def _from_t0(record: Any, row: dict[str, Any]) -> Any:
+    """The record a video is made of: its time zero at the judge's t0 (``t0_sim`` of the verdict), so the film
+    skips the simulator's idle seconds before the judge started and its clock reads what the judge's report lines
+    say (activation at 5 s, ...). Without a verdict, from the bag's first message."""
+    t0 = (row.get("verdict") or {}).get("t0_sim")
+    if not isinstance(t0, int | float) or not record.start <= t0 < record.end:
+        return record
+    return dataclasses.replace(record, clock_start=float(t0))
+
+
+def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[str, Any]:
+    """The picture of a readable bag, and its video when ``film`` and it holds ground truth (what it cost)."""
+    from bt_nav_sim.plot import plot_run
+
+    from bt_nav.media.video import write_video
+
+    started = time.perf_counter()
+    world = _world(row, record)
+    moved = len(record.truth) > 0
+    title = run_title(row) + ("" if moved else " (no ground truth in its bag)")
+    plot_run(world, _path(record), _results(row, record), run_dir / PICTURE, title=title)
+    out: dict[str, Any] = {"picture_s": round(time.perf_counter() - started, 2),
+                           "note": "" if moved else "no ground truth in the bag: the world only, no video"}
+    if film and moved:
+        stats = write_video(_from_t0(record, row), run_dir / VIDEO, FPS, world)
+        out.update({"frames": stats.frames, "video_s": round(stats.seconds, 2)})
+    return out
+
+
+def _drawn(run_dir: Path, film: bool) -> bool:
+    """Whether a run's files are there already (a report made again, a resumed grid): then it is not drawn again."""
+    return (run_dir / PICTURE).is_file() and ((run_dir / VIDEO).is_file() or not film)
+
+
+def render_run(row: dict[str, Any], film: bool, keep_bag: bool) -> dict[str, Any]:
+    """One run's picture (and video when ``film``) from its bag; what exists afterwards and what it cost.
+
+    Runs in a worker process. A run without a bag gets neither, a run whose bag holds no ground truth (a node that
+    crashed at start) a picture of the world only; the ``note`` says so.
+    """
+    run_dir = Path(row["run_dir"])
+    picture, video, bag = run_dir / PICTURE, run_dir / VIDEO, run_dir / BAG
+    out: dict[str, Any] = {"job": row["job"], "note": ""}
+    if _drawn(run_dir, film):
+        out["note"] = "drawn before"
+    elif not bag.is_dir():
+        out["note"] = "no bag" if "bag_bytes" in row else "no bag (recording off)"
+    else:
+        from bt_nav.media.bag import BagError
+        from bt_nav.media.bagread import read_bag
+
+        try:
+            out.update(_draw(row, read_bag(bag), run_dir, film))
+        except BagError as exc:
+            out["note"] = f"bag unreadable: {exc}"
+    if not keep_bag and picture.is_file() and bag.is_dir():
+        shutil.rmtree(bag, ignore_errors=True)
+    out["picture"] = PICTURE if picture.is_file() else None
+    out["video"] = VIDEO if video.is_file() else None
+    return out
+
+
+def render_runs(rows: Sequence[dict[str, Any]], videos: str, record: str,
+                workers: int | None = None) -> dict[str, dict[str, Any]]:
+    """:func:`render_run` for every row, those with something to draw ``workers`` processes at a time (default:
+    one per core); by job key."""
+    tasks = [(row, wants_video(row, videos), record == "on" or (record == "failures" and not row.get("passed")))
+             for row in rows]
+    drawing = [(Path(row["run_dir"]) / BAG).is_dir() and not _drawn(Path(row["run_dir"]), film)
+               for row, film, _ in tasks]
+    todo = [task for task, draw in zip(tasks, drawing, strict=True) if draw]
+    workers = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+    done = {task[0]["job"]: render_run(*task) for task, draw in zip(tasks, drawing, strict=True) if not draw}
+    if workers == 1:
+        done.update({row["job"]: render_run(row, film, keep) for row, film, keep in todo})
+    else:
+        # spawn, not fork: the grid's process has threads (the launchers' output pumps), and a forked child of a
+        # threaded process may inherit a lock held mid-operation
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            done.update({out["job"]: out for out in pool.map(render_run, *zip(*todo, strict=True))})
+    return {row["job"]: done[row["job"]] for row in rows}
+
+
+def travelled_requirement(rows: Sequence[dict[str, Any]]) -> float | None:
+    """The distance the judge requires (its ``minimum travelled distance`` check), None when it checks none."""
+    for row in rows:
+        for check in (row.get("verdict") or {}).get("checks", ()):
+            if check.get("name") == TRAVELLED_CHECK and isinstance(check.get("required"), int | float):
+                return float(check["required"])
+    return None
+
+
+def distance_histogram(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
+    """The travelled distance of every judged run (passed green, failed red, stacked), the requirement dashed;
+    None when no run has a verdict."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from bt_nav_sim.plot import save_figure
+    from matplotlib.ticker import MaxNLocator
+
+    judged = [r for r in rows if r.get("verdict") and "travelled" in r["verdict"]]
+    if not judged:
+        return None
+    passed = [float(r["verdict"]["travelled"]) for r in judged if r.get("passed")]
+    failed = [float(r["verdict"]["travelled"]) for r in judged if not r.get("passed")]
+    fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=100)
+    try:
+        required = travelled_requirement(judged)
+        span = [*passed, *failed, *([required] if required is not None else [])]
+        lo, hi = min(span), max(span)
+        bins = np.linspace(lo - 0.25, hi + 0.25, min(30, max(6, len(judged))) + 1)  # the requirement inside
+        ax.hist([passed, failed], bins=bins, stacked=True, color=["#2ca02c", "#d62728"],
+                label=[f"passed ({len(passed)})", f"failed ({len(failed)})"])
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+        if required is not None:
+            ax.axvline(required, color="black", ls="--", lw=1.2, label=f"required {required:g} m")
+        ax.set_xlabel("travelled distance [m] (ground truth, as judged)")
+        ax.set_ylabel("runs")
+        unjudged = len(rows) - len(judged)
+        ax.set_title(f"travelled distance of {len(judged)} judged runs"
+                     + (f" ({unjudged} without a verdict not shown)" if unjudged else ""), fontsize=10)
+        ax.legend(fontsize=8)
+        return save_figure(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def turns_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
+    """The lab's check-off: per run, the maneuvers judged (light) and those within their rule (dark); None when
+    no verdict lists maneuvers (the homework's)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from bt_nav_sim.plot import save_figure
+
+    judged = [r for r in rows if r.get("verdict") and "maneuvers" in r["verdict"]]
+    if not judged:
+        return None
+    names = [f"{r['world']} {r['maneuver']} s{r['seed']}" for r in judged]
+    total = [len(r["verdict"]["maneuvers"]) for r in judged]
+    ok = [sum(1 for m in r["verdict"]["maneuvers"] if m.get("passed")) for r in judged]
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.3 * len(judged) + 2.0), 3.6), dpi=100)
+    try:
+        ax.bar(range(len(judged)), total, color="#c6dbef", label=f"judged ({sum(total)})")
+        ax.bar(range(len(judged)), ok, color="#2171b5", label=f"within their rule ({sum(ok)})")
+        ax.set_xticks(range(len(judged)), names, rotation=90, fontsize=7)
+        ax.set_ylabel("maneuvers")
+        ax.set_title("check-off turns per run", fontsize=10)
+        ax.legend(fontsize=8)
+        return save_figure(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def grid_figures(rows: Sequence[dict[str, Any]], out: Path) -> list[str]:
+    """The grid's figures in ``out`` (file names, relative to it): the distance histogram, the lab's turns."""
+    made = [distance_histogram(rows, out / DISTANCE), turns_figure(rows, out / TURNS)]
+    return [p.name for p in made if p is not None]
