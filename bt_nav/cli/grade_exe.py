@@ -8,6 +8,7 @@ grade's directory, fails every run alike or mixes two grades; both are refused w
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -21,8 +22,8 @@ from bt_nav.run.settings import DEFAULT_JITTER
 
 
 def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
-    """The grid's :class:`ExeSettings`: the program resolved, ``--out`` absolute for a cluster (its workers
-    may start elsewhere; the directory must be on a filesystem they share)."""
+    """The grid's :class:`ExeSettings`: the program resolved, the command run in this directory, ``--out``
+    absolute for a cluster (its workers may start elsewhere; both must be on a filesystem they share)."""
     from bt_nav.run.exegrade import ExeSettings
     from bt_nav.run.exegrid import resolve_program
 
@@ -32,7 +33,7 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
         raise ValueError("--exe writes grade.json into --out; --json is for lock-step grades")
     out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
     return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
-                       args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER)
+                       args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, os.getcwd())
 
 
 def _show(row: dict[str, Any]) -> None:

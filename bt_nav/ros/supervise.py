@@ -368,13 +368,14 @@ class Launcher:
         with self._lock:
             print(f"[{name:<{self._width}}] {line}", flush=True)
 
-    def start(self, spec: Startable, sink: LineSink | None = None) -> Child:
-        """Start one process; its stdout and stderr go line by line to ``sink`` (default: the launcher's)."""
+    def start(self, spec: Startable, sink: LineSink | None = None, cwd: str | None = None) -> Child:
+        """Start one process (in ``cwd``, default this process's); its stdout and stderr go line by line to ``sink``
+        (default: the launcher's)."""
         env = dict(self.env)
         env[WATCHDOG_ENV] = str(self._watch_read)
         popen = subprocess.Popen(spec.command(), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                  stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
-                                 errors="replace", pass_fds=(self._watch_read,),
+                                 errors="replace", pass_fds=(self._watch_read,), cwd=cwd,
                                  preexec_fn=child_preexec(os.getpid()))  # noqa: PLW1509 - see child_preexec
         out = sink or self.sink
         thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)

@@ -62,6 +62,7 @@ class ExeSettings:
     rtf: float = 5.0  # sim seconds per wall second
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
+    cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
         launcher.start(sim_spec)
         try:
-            node = launcher.start(ExeSpec(argv))
+            node = launcher.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}

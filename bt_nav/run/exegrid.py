@@ -46,7 +46,7 @@ STOPPED = "stopped"
 #: The outcome of a run bt_nav itself failed to run (it raised): a failed row in the report, run again by a resume.
 ERROR = "error"
 #: The settings a resumed grade must share with the grade it continues.
-SHARED = ("command", "profile", "limit", "rtf", "maneuvers", "jitter")
+SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter")
 #: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.
 CLUSTER_STOP_WAIT = 30.0
 
@@ -159,26 +159,24 @@ def error_row(job: Job, error: str) -> Row:
 
 
 def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
-    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already."""
+    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already; a run that
+    raises is an :func:`error_row` (here and on a cluster alike: retrying a bug would only repeat it)."""
     if stop is not None and stop.requested:
         return None
-    return run_exe_job(job, settings, stop)
+    try:
+        return run_exe_job(job, settings, stop)
+    except Exception as exc:  # one broken run must not sink the grid
+        return error_row(job, repr(exc))
 
 
 def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:
     """Every job, ``workers`` at a time in threads; rows as runs end. A stop cancels the runs not started."""
     with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
-        by_future: dict[Future, Job] = {pool.submit(run_unless_stopped, job, settings, stop): job for job in jobs}
-        pending = set(by_future)
+        pending: set[Future] = {pool.submit(run_unless_stopped, job, settings, stop) for job in jobs}
         while pending:
             done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
             for future in done:
-                if future.cancelled():
-                    continue
-                try:
-                    row = future.result()
-                except Exception as exc:  # one broken run must not sink the grid
-                    row = error_row(by_future[future], repr(exc))
+                row = None if future.cancelled() else future.result()
                 if row is not None:
                     yield row
             if stop is not None and stop.requested:
@@ -247,7 +245,7 @@ def _run_dask(jobs: Sequence[Job], settings: ExeSettings, scheduler: str, stop: 
                     row = future.result()
                 elif future.status == "cancelled":
                     continue
-                else:  # raised on every try, or its workers kept dying (KilledWorker)
+                else:  # its workers kept dying (KilledWorker), or it could not be unpickled there
                     row = error_row(futures[future], repr(future.exception()))
                 if row is not None:
                     yield row
