@@ -401,18 +401,29 @@ class Launcher:
             time.sleep(poll)
         return None
 
-    def shutdown(self, grace: float = 5.0) -> None:
-        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group)."""
-        for child in reversed(self.children):
+    def shutdown(self, grace: float = 5.0, *, together: bool = False) -> None:
+        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group).
+
+        ``together``: every child at once, each step to every live group and then one wait for them all, for
+        children whose order no longer matters (a grade's run after its verdict): the stop then takes the
+        slowest child's time instead of the sum of all of theirs.
+        """
+        live = list(reversed(self.children))
+        for group in [live] if together else [[child] for child in live]:
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
-                if child.poll() is not None:
+                running = [child for child in group if child.poll() is None]
+                if not running:
                     break
-                child.signal_group(signum)
-                try:
-                    child.popen.wait(timeout=wait)
-                except subprocess.TimeoutExpired:
-                    pass
-            child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
+                for child in running:
+                    child.signal_group(signum)
+                end = time.monotonic() + wait
+                for child in running:
+                    try:
+                        child.popen.wait(timeout=max(0.0, end - time.monotonic()))
+                    except subprocess.TimeoutExpired:
+                        pass
+            for child in group:
+                child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
         if unclean and self.last_word is not None:
             self.last_word()  # the driver may not have sent its stop: say it for it

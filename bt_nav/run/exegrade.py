@@ -196,7 +196,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)
     finally:
-        launcher.shutdown(grace=STOP_GRACE)
+        launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
