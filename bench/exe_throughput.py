@@ -78,8 +78,7 @@ def _sample(procs: dict[int, tuple[str, float]], root: int) -> None:
     for child in children:
         try:
             times = child.cpu_times()
-            procs[child.pid] = (procs[child.pid][0] if child.pid in procs else _kind(child.cmdline()),
-                                times.user + times.system)
+            procs[child.pid] = (_kind(child.cmdline()), times.user + times.system)  # after exec: its own name
         except psutil.Error:
             continue
 
@@ -113,15 +112,17 @@ def grade_once(seeds: int, rtf: float | None = None, jobs: int = JOBS, world: st
         by_kind[kind] = round(by_kind.get(kind, 0.0) + seconds, 2)
     cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     phases = [_phases(row) for row in rows]
+    medians = {key: median([p[key] for p in phases if p.get(key) is not None])
+               for key in ("wall_s", "startup_s", "mission_s", "shutdown_s", "sim_rtf")}
     return {"argv": argv, "rtf": rtf or 5.0, "jobs": jobs, "world": world, "runs": len(rows),
             "passed": sum(1 for row in rows if row["passed"]),
             "reasons": sorted({row["reason"] for row in rows if not row["passed"]}), "wall_s": round(wall, 1),
             "missions_per_min": round(60.0 * len(rows) / wall, 2), "cpu_s": round(cpu, 1),
             "cpu_s_per_mission": round(cpu / max(1, len(rows)), 2), "cpu_share_of_cores": round(cpu / wall / (
                 os.cpu_count() or 1), 2), "cpu_by_kind_s": by_kind, "per_run": phases,
-            "phases_median": {key: median([p[key] for p in phases if p.get(key) is not None])
-                              for key in ("wall_s", "startup_s", "mission_s", "shutdown_s", "sim_rtf")},
-            "returncode": proc.returncode}
+            "phases_median": medians, "returncode": proc.returncode,
+            # what --jobs runs at a time could reach if start-up and shutdown took no time at all
+            "mission_bound_per_min": round(60.0 * jobs / medians["mission_s"], 2) if medians["mission_s"] else None}
 
 
 def run(quick: bool = False, rtfs: tuple[float, ...] | None = None) -> dict[str, Any]:

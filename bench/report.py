@@ -245,15 +245,18 @@ def exe_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
         p = g["phases_median"]
         cpu = ", ".join(f"{kind} {seconds / max(1, g['runs']):.1f}" for kind, seconds in g["cpu_by_kind_s"].items())
         rows.append([g["rtf"], f"{g['passed']}/{g['runs']}", g["wall_s"], g["missions_per_min"], p["wall_s"],
-                     p["startup_s"], p["mission_s"], p["shutdown_s"], p["sim_rtf"], g["cpu_s_per_mission"], cpu,
+                     p["startup_s"], p["mission_s"], p["shutdown_s"], p["sim_rtf"], g.get("mission_bound_per_min"),
+                     g["cpu_s_per_mission"], cpu,
                      f"{100 * g['cpu_share_of_cores']:.0f} %", "; ".join(g["reasons"]) or "-"])
     lines += _table(["rtf", "passed", "grade wall s", "missions/min", "run wall s (median)", "start-up s",
-                     "mission s", "shutdown s", "sim rtf reached", "CPU s per mission", "CPU s per mission by process",
+                     "mission s", "shutdown s", "sim rtf reached", "bound by the mission /min",
+                     "CPU s per mission", "CPU s per mission by process",
                      "cores busy", "reasons of the failures"], rows)
     lines += ["", f"`bt-nav grade --exe '<venv>/bin/bt-nav executive' --worlds stage_4 --seeds {result['seeds']} "
               f"--jobs {result['jobs']}` in a subprocess. Per run (medians): start-up = run start to the judge's "
               "t0 (three Python processes up, the node's arm service found); mission = t0 to the verdict (~58 sim "
-              "s over the rtf reached); shutdown = verdict to the run's end. CPU: the grade and every process it "
+              "s over the rtf reached); shutdown = verdict to the run's end; bound by the mission = jobs x 60 / "
+              "mission s, the throughput with instant start-up and shutdown. CPU: the grade and every process it "
               "started (exact), split by process from 0.25 s samples (the grade itself not in the split)."]
     return lines
 
