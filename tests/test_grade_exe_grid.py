@@ -1,5 +1,5 @@
 """The ``--exe`` grid without DDS: the up-front checks, resume, stops and where runs go, with a stand-in for the
-run (:func:`bt_nav.run.exegrade.run_exe_job` replaced). The runs over real DDS: tests/ros/test_grade_exe_grid.py."""
+run (:func:`bt_nav.run.exegrade.run_exe_job` replaced). The runs over real DDS: tests/ros/test_grade_exe_grid_dds.py."""
 
 from __future__ import annotations
 
