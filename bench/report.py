@@ -233,12 +233,41 @@ def _mb(kb: int | None) -> str:
     return "-" if not kb else f"{kb / 1024:.1f}"
 
 
+def exe_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
+    """Benchmark 7: one row per grade (rtf), then where a run's wall time and the grade's CPU went."""
+    if "skipped" in result:
+        return [f"skipped: {result['skipped']}"]
+    rows, lines = [], []
+    for g in result["grades"]:
+        if "error" in g:
+            lines.append(f"rtf {g.get('rtf')}: failed: `{g['error'][-300:]}`")
+            continue
+        p = g["phases_median"]
+        cpu = ", ".join(f"{kind} {seconds / max(1, g['runs']):.1f}" for kind, seconds in g["cpu_by_kind_s"].items())
+        rows.append([g["rtf"], f"{g['passed']}/{g['runs']}", g["wall_s"], g["missions_per_min"], p["wall_s"],
+                     p["startup_s"], p["mission_s"], p["shutdown_s"], p["sim_rtf"], g.get("mission_bound_per_min"),
+                     g["cpu_s_per_mission"], cpu,
+                     f"{100 * g['cpu_share_of_cores']:.0f} %", "; ".join(g["reasons"]) or "-"])
+    lines += _table(["rtf", "passed", "grade wall s", "missions/min", "run wall s (median)", "start-up s",
+                     "mission s", "shutdown s", "sim rtf reached", "bound by the mission /min",
+                     "CPU s per mission", "CPU s per mission by process",
+                     "cores busy", "reasons of the failures"], rows)
+    lines += ["", f"`bt-nav grade --exe '<venv>/bin/bt-nav executive' --worlds stage_4 --seeds {result['seeds']} "
+              f"--jobs {result['jobs']}` in a subprocess. Per run (medians): start-up = run start to the judge's "
+              "t0 (three Python processes up, the node's arm service found); mission = t0 to the verdict (~58 sim "
+              "s over the rtf reached); shutdown = verdict to the run's end; bound by the mission = jobs x 60 / "
+              "mission s, the throughput with instant start-up and shutdown. CPU: the grade and every process it "
+              "started (exact), split by process from 0.25 s samples (the grade itself not in the split)."]
+    return lines
+
+
 SECTIONS = (
     ("tick", "1. Tick cost: tree vs hand-written if/else", tick_section),
     ("latency", "2. Reaction latency over DDS (scan -> cmd_vel)", latency_section),
     ("sim", "3. Simulator throughput", sim_section),
     ("quality", "4. Mission quality (referee, lock-step)", quality_section),
     ("memory", "5. Memory of the executive during a mission", memory_section),
+    ("exe", "7. Grading throughput over DDS (`bt-nav grade --exe`)", exe_section),
 )
 
 

@@ -8,6 +8,8 @@ Benchmarks (``--only`` picks some, comma-separated):
 ``quality``  referee verdicts over worlds x maneuvers x seeds (:mod:`bench.quality`)
 ``memory``   peak RSS of the executive during a ROS-path mission (:mod:`bench.memory`)
 ``video``    bag a lock-step mission and film it: render time of a 55 s mission at 10 fps (:mod:`bench.video`)
+``exe``      DDS grading throughput: missions/min of ``bt-nav grade --exe "bt-nav executive" --jobs 2``
+             (:mod:`bench.exe_throughput`)
 
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
 ``<out>/latest.md`` (the same as tables). With ``--only``, the sections not run this time are
@@ -39,9 +41,9 @@ from typing import Any
 
 from .common import DOMAIN_RANGE, REPO, Target, load_average, machine, now_iso
 
-BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video")
-#: The order they run in: the quiet single-process measurements first, the process pool last.
-ORDER = ("tick", "sim", "video", "latency", "memory", "quality")
+BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video", "exe")
+#: The order they run in: the quiet single-process measurements first, the process pools last.
+ORDER = ("tick", "sim", "video", "latency", "memory", "exe", "quality")
 SCHEMA = 1
 DEFAULT_OUT = REPO / "bench" / "results"
 #: Runs of the history shown in latest.md.
@@ -140,6 +142,14 @@ class Session:
 
         return video.run(quick=self.quick)
 
+    def exe(self) -> dict[str, Any]:
+        """Benchmark 7."""
+        if self.args.no_dds:
+            return {"skipped": "no DDS in this run (--no-dds)"}
+        from . import exe_throughput
+
+        return exe_throughput.run(quick=self.quick)
+
     def quality(self) -> dict[str, Any]:
         """Benchmark 4."""
         from . import quality
@@ -161,6 +171,8 @@ def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
         from .quality import targets
     elif name == "video":
         from .video import targets
+    elif name == "exe":
+        from .exe_throughput import targets
     else:
         return []
     return targets(result)

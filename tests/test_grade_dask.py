@@ -14,12 +14,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from dask_cluster import REPO, DaskProcesses
 
 from bt_nav.run.grid import make_jobs, run_grid
 from bt_nav.testing import wait_until
 
-REPO = Path(__file__).resolve().parents[1]
-DASK = Path(sys.executable).with_name("dask")
 WORLDS, MANEUVERS = ("stage_4", "corridor"), ("none", "B")
 
 
@@ -43,34 +42,9 @@ def test_local_cluster_matches_local_processes(local_rows: list[dict[str, Any]])
     assert _comparable(rows) == _comparable(local_rows)
 
 
-class _DaskProcesses:
-    """``dask scheduler`` and ``dask worker`` started as a user would, from the command line."""
-
-    def __init__(self, tmp: Path) -> None:
-        self.file = tmp / "scheduler.json"
-        self.procs: list[subprocess.Popen[bytes]] = []
-        self._start("scheduler", "--scheduler-file", str(self.file), "--host", "127.0.0.1", "--port", "0",
-                    "--no-dashboard")
-        wait_until(self.file.exists, 30, "the dask scheduler to write its file", interval=0.1)
-        self.workers = [self._start("worker", "--scheduler-file", str(self.file), "--nthreads", "1", "--no-nanny",
-                                    "--no-dashboard", "--host", "127.0.0.1") for _ in range(2)]
-
-    def _start(self, *args: str) -> subprocess.Popen[bytes]:
-        proc = subprocess.Popen([str(DASK), *args], cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                start_new_session=True)
-        self.procs.append(proc)
-        return proc
-
-    def close(self) -> None:
-        for proc in self.procs:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=10)
-
-
 def test_dask_cli_cluster_survives_a_killed_worker_and_resumes(tmp_path: Path,
                                                                 local_rows: list[dict[str, Any]]) -> None:
-    cluster = _DaskProcesses(tmp_path)
+    cluster = DaskProcesses(tmp_path)
     out = tmp_path / "grade.json"
     try:
         grade = subprocess.Popen([sys.executable, "-m", "bt_nav.cli", "grade", "--worlds", ",".join(WORLDS),

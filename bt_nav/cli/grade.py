@@ -78,7 +78,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="ideal or burger (per-wheel limits); default: the profile's")
     parser.add_argument("--no-jitter", action="store_true", help="start exactly at each world's spawn")
     parser.add_argument("--json", default=None, help="write every run and the summary here (updated as runs finish)")
-    parser.add_argument("--resume", action="store_true", help="keep the finished runs of --json's file, run the rest")
+    parser.add_argument("--resume", action="store_true", help="keep the finished runs of --json's file (--exe: of "
+                        "--out's run directories), run the rest")
     parser.add_argument("--exe", default=None, metavar="'CMD ...'",
                         help="grade this command's node over DDS instead of bt_nav's tree in lock-step (appended: "
                         "--ros-args -p use_sim_time:=true, the profile's remaps -r arm:=<its arm service> (homework: "
@@ -86,7 +87,8 @@ def _parser() -> argparse.ArgumentParser:
                         "--maneuvers or --profile lab)")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
-    parser.add_argument("--out", default=None, help="--exe: the grid's directory (default runs/grade-exe-<time>)")
+    parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "
+                        "(default runs/grade-exe-<time>); with --scheduler on a filesystem every worker shares")
     parser.add_argument("--record", choices=("on", "failures", "off"), default="on", help="--exe: each run's bag, "
                         "for report.html's pictures (failures: keep the failed runs' bags only; off: no pictures)")
     parser.add_argument("--videos", choices=("failures", "all", "off"), default="failures",
@@ -148,12 +150,19 @@ def main(argv: list[str] | None = None) -> int:
                          None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params)
         if lab:
             jobs = checkoff_jobs(jobs)
-        if args.resume and not args.json:
+        if args.exe is not None and args.profile not in ("homework", "lab"):
+            raise ValueError("--exe grades with --profile homework or lab")
+        lockstep_resume = args.resume and args.exe is None
+        if lockstep_resume and not args.json:
             raise ValueError("--resume needs --json FILE (the file to continue)")
         path = Path(args.json) if args.json else None
-        done = _load_done(path, jobs) if args.resume and path is not None and path.exists() else {}
+        done = _load_done(path, jobs) if lockstep_resume and path is not None and path.exists() else {}
     except ValueError as exc:
         parser.error(str(exc))
+    if args.exe is not None:
+        from bt_nav.cli.grade_exe import grade_exe
+
+        return grade_exe(args, jobs, lab or args.maneuvers is not None, parser)
     settings = {"profile": args.profile, "kinematics": args.kinematics, "seeds": seeds, "worlds": worlds,
                 "sim_params": sim_params or {},
                 "maneuvers": maneuvers, "overrides": overrides or {}, "jitter": not args.no_jitter,
@@ -166,10 +175,6 @@ def main(argv: list[str] | None = None) -> int:
         if path is not None:
             _save(path, settings, [results[k] for k in by_key if k in results], complete=False)
 
-    if args.exe is not None:
-        if args.profile not in ("homework", "lab") or args.scheduler or args.resume:
-            parser.error("--exe grades with --profile homework or lab, locally (no --scheduler, no --resume)")
-        return _grade_exe(args, jobs, lab or args.maneuvers is not None)
     progress = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())
     if done:
         print(f"resuming: {len(done)} of {len(jobs)} missions already in {path}", file=sys.stderr)
@@ -189,37 +194,3 @@ def main(argv: list[str] | None = None) -> int:
         _save(path, settings, rows, complete=True)
     return 0 if total["passed"] == total["runs"] else 1
 
-
-def _grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool) -> int:
-    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.run.exegrade`); exit 0 only if every run passed,
-    128 + the signal after SIGINT/SIGTERM (every process of the runs stopped)."""
-    from bt_nav.ros.supervise import StopRequest
-    from bt_nav.run.exegrade import ExeSettings
-    from bt_nav.run.exegrid import run_exe_grid
-    from bt_nav.run.exereport import format_exe_table, summarize_exe, write_exe_report
-
-    out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
-    settings = ExeSettings(args.exe, args.profile, out, args.timeout, args.rtf, maneuvers,
-                           None if args.no_jitter else DEFAULT_JITTER, args.record, args.videos)
-    stop = StopRequest().install()
-    print(f"bt-nav grade: {len(jobs)} runs of {args.exe!r} ({args.profile} profile, {args.jobs} at a time, "
-          f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {out}/", flush=True)
-    started = time.perf_counter()
-
-    def show(row: dict[str, Any]) -> None:
-        print(f"  {row['world']} {row['maneuver']} seed {row['seed']}: {'PASSED' if row['passed'] else 'FAILED'} "
-              f"({row['reason']}; {row['wall_time']:.1f} s wall) {row['run_dir']}", flush=True)
-
-    try:
-        rows = run_exe_grid(jobs, settings, args.jobs, stop, show)
-    finally:
-        stop.closing = True
-        stop.restore()
-    print(format_exe_table(summarize_exe(rows)))
-    json_path, md_path = write_exe_report(rows, settings)
-    passed = sum(1 for r in rows if r["passed"])
-    print(f"{passed}/{len(rows)} passed in {time.perf_counter() - started:.1f} s wall; wrote {json_path}, {md_path}")
-    if stop.requested:
-        print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
-        return 128 + int(stop.signum or 2)
-    return 0 if rows and passed == len(rows) else 1

@@ -368,13 +368,14 @@ class Launcher:
         with self._lock:
             print(f"[{name:<{self._width}}] {line}", flush=True)
 
-    def start(self, spec: Startable, sink: LineSink | None = None) -> Child:
-        """Start one process; its stdout and stderr go line by line to ``sink`` (default: the launcher's)."""
+    def start(self, spec: Startable, sink: LineSink | None = None, cwd: str | None = None) -> Child:
+        """Start one process (in ``cwd``, default this process's); its stdout and stderr go line by line to ``sink``
+        (default: the launcher's)."""
         env = dict(self.env)
         env[WATCHDOG_ENV] = str(self._watch_read)
         popen = subprocess.Popen(spec.command(), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                  stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
-                                 errors="replace", pass_fds=(self._watch_read,),
+                                 errors="replace", pass_fds=(self._watch_read,), cwd=cwd,
                                  preexec_fn=child_preexec(os.getpid()))  # noqa: PLW1509 - see child_preexec
         out = sink or self.sink
         thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)
@@ -400,18 +401,29 @@ class Launcher:
             time.sleep(poll)
         return None
 
-    def shutdown(self, grace: float = 5.0) -> None:
-        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group)."""
-        for child in reversed(self.children):
+    def shutdown(self, grace: float = 5.0, *, together: bool = False) -> None:
+        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group).
+
+        ``together``: every child at once, each step to every live group and then one wait for them all, for
+        children whose order no longer matters (a grade's run after its verdict): the stop then takes the
+        slowest child's time instead of the sum of all of theirs.
+        """
+        live = list(reversed(self.children))
+        for group in [live] if together else [[child] for child in live]:
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
-                if child.poll() is not None:
+                running = [child for child in group if child.poll() is None]
+                if not running:
                     break
-                child.signal_group(signum)
-                try:
-                    child.popen.wait(timeout=wait)
-                except subprocess.TimeoutExpired:
-                    pass
-            child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
+                for child in running:
+                    child.signal_group(signum)
+                end = time.monotonic() + wait
+                for child in running:
+                    try:
+                        child.popen.wait(timeout=max(0.0, end - time.monotonic()))
+                    except subprocess.TimeoutExpired:
+                        pass
+            for child in group:
+                child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
         if unclean and self.last_word is not None:
             self.last_word()  # the driver may not have sent its stop: say it for it

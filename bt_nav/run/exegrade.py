@@ -67,6 +67,7 @@ class ExeSettings:
     jitter: tuple[float, float] | None = DEFAULT_JITTER
     record: str = "on"  # on, failures or off: each run's bag (bt_nav.run.exerecord.RECORD_MODES)
     videos: str = "failures"  # failures, all or off: which runs the report films from their bags
+    cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
 
 
 @dataclass(frozen=True)
@@ -194,7 +195,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed)
         launcher.start(sim_spec)
         try:
-            node = launcher.start(ExeSpec(argv))
+            node = launcher.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
@@ -205,7 +206,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)
     finally:
-        launcher.shutdown(grace=STOP_GRACE)
+        launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,

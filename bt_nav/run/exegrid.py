@@ -1,32 +1,281 @@
 """Running an ``--exe`` grid: every :class:`bt_nav.run.grid.Job` through :func:`bt_nav.run.exegrade.run_exe_job`,
-``workers`` at a time in threads of this process (each thread only supervises its run's children)."""
+here or on a Dask cluster, resumable, with the checks that refuse a grid before any run starts.
+
+Where runs go: ``workers`` threads of this process (each thread only supervises its run's three process
+groups: no py_trees in-process, so threads are enough), or, with ``scheduler``, one Dask task per run on the
+cluster's workers. A worker claims the domains of its runs itself (per machine, :mod:`bt_nav.ros.supervise`),
+and writes each run's directory under the grid's ``out``, which must therefore be a path every worker sees
+(a shared filesystem) and is made absolute before the tasks leave. A worker that dies loses its running runs,
+which the scheduler reruns elsewhere (in a run directory ``NAME-2``); rows are collected per job key, so each
+job is counted once. A worker thread per run: ``dask worker --nthreads N`` runs N at a time.
+
+Stops: this process's :class:`~bt_nav.ros.supervise.StopRequest` stops local runs directly; on a cluster it
+sets a Dask :class:`distributed.Event` of the grid that every running task polls (:class:`ClusterStop`), and
+tasks not yet started return without starting anything. A stopped run's row has outcome ``stopped``.
+
+Resume: the grid's directory holds ``grid.json`` (what every run shares) and each run's ``result.json``;
+:func:`prepare_out` refuses a directory that already holds a grade unless resuming, refuses to resume a
+grade of another command or other settings, and returns the finished runs (those with a verdict or a real
+failure; not those stopped or lost), which are kept instead of run again.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import json
+import os
+import shlex
+import shutil
+import signal
+import sys
+import time
+import zlib
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from dataclasses import asdict
+from pathlib import Path
 from typing import Any
 
 from bt_nav.ros.supervise import StopRequest
 from bt_nav.run.exegrade import ExeSettings, run_exe_job
-from bt_nav.run.grid import Job
+from bt_nav.run.grid import Job, progress_bar
+
+#: The grid's own file in its directory: the settings every run shares, and the jobs.
+GRID_FILE = "grid.json"
+#: The outcome of a run cut short by a stop: no result; left out of the report, run again by a resume.
+STOPPED = "stopped"
+#: The outcome of a run bt_nav itself failed to run (it raised): a failed row in the report, run again by a resume.
+ERROR = "error"
+#: The settings a resumed grade must share with the grade it continues.
+SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter")
+#: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.
+CLUSTER_STOP_WAIT = 30.0
+
+Row = dict[str, Any]
 
 
-def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, stop: StopRequest | None = None,
-                 on_row: Callable[[dict[str, Any]], None] | None = None) -> list[dict[str, Any]]:
-    """Every job, ``workers`` at a time; the rows in the jobs' order (a stop request: the finished ones)."""
-    rows: dict[str, dict[str, Any]] = {}
+def finished(row: Row) -> bool:
+    """Whether a row is a result of the node (a verdict or a real failure of the node), not a run cut short or
+    one bt_nav failed to run: what a resume keeps."""
+    return row.get("outcome") not in (STOPPED, ERROR)
+
+
+# ---------------------------------------------------------------------------------------------- up-front checks
+def resolve_program(command: str) -> str:
+    """``command`` with its program as the absolute path that will run.
+
+    A bare name is looked up on ``PATH``, then next to this Python (``.venv/bin/bt-nav grade --exe
+    "bt-nav executive"`` works without an activated venv); a path is taken relative to the current directory.
+
+    Raises:
+        ValueError: an empty or badly quoted command, or a program that is not there or not executable: the
+            grid is refused before any run, instead of every run failing alike.
+    """
+    try:
+        argv = shlex.split(command)
+    except ValueError as exc:
+        raise ValueError(f"--exe {command!r}: {exc}") from None
+    if not argv:
+        raise ValueError("--exe: an empty command")
+    program = argv[0]
+    if "/" in program:
+        path = Path(program).expanduser().absolute()
+        if not path.is_file():
+            raise ValueError(f"--exe: program {program!r} not found")
+        if not os.access(path, os.X_OK):
+            raise ValueError(f"--exe: program {program!r} is not executable")
+        found = str(path)
+    else:
+        here = Path(sys.executable).parent
+        found = shutil.which(program) or shutil.which(program, path=str(here)) or ""
+        if not found:
+            raise ValueError(f"--exe: program {program!r} not found on PATH nor in {here}")
+        found = str(Path(found).absolute())
+    return shlex.join([found, *argv[1:]])
+
+
+def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
+    shared = {name: getattr(settings, name) for name in SHARED}
+    shared["jitter"] = list(settings.jitter) if settings.jitter else None
+    return {**shared, "jobs": [job.key for job in jobs]}
+
+
+def prepare_out(settings: ExeSettings, jobs: Sequence[Job], resume: bool) -> dict[str, Row]:
+    """Check the grid's directory, write its ``grid.json``; the finished runs to keep (job key -> row).
+
+    Raises:
+        ValueError: ``out`` holds something already and ``resume`` is off (a grade is never mixed with
+            another); or, resuming, ``out`` holds no grade, or one of another command or other settings.
+    """
+    out, grid_file = settings.out, settings.out / GRID_FILE
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out} is a file, not a directory")
+    held = out.is_dir() and any(out.iterdir())
+    done: dict[str, Row] = {}
+    if held and not resume:
+        what = "a grade" if grid_file.exists() else "files"
+        raise ValueError(f"--out {out} holds {what} already: add --resume to continue it, or choose a new "
+                         "directory (grades are never mixed)")
+    if held:
+        try:
+            before = json.loads(grid_file.read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError) as exc:
+            raise ValueError(f"--resume: {out} holds no grade to continue ({GRID_FILE}: {exc})") from None
+        now = _grid_doc(settings, jobs)
+        differ = [f"{name} {before.get(name)!r} there, {now[name]!r} now" for name in SHARED
+                  if before.get(name) != now[name]]
+        if differ:
+            raise ValueError(f"--resume: the grade in {out} differs: " + "; ".join(differ))
+        done = finished_runs(out, jobs)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = grid_file.with_name(GRID_FILE + ".tmp")
+    tmp.write_text(json.dumps(_grid_doc(settings, jobs), indent=1) + "\n", encoding="utf-8")
+    tmp.replace(grid_file)
+    return done
+
+
+def finished_runs(out: Path, jobs: Sequence[Job]) -> dict[str, Row]:
+    """The finished runs (:func:`finished`) in ``out``'s run directories that are jobs of this grid, by job key
+    (the newest ``result.json`` when a job has several)."""
+    wanted = {job.key for job in jobs}
+    found: dict[str, tuple[float, Row]] = {}
+    for path in out.glob("*/result.json"):
+        try:
+            row = json.loads(path.read_text(encoding="utf-8"))
+            stamp = path.stat().st_mtime
+        except (OSError, json.JSONDecodeError):
+            continue  # a run killed mid-write: run it again
+        key = row.get("job") if isinstance(row, dict) else None
+        if key in wanted and finished(row) and stamp >= found.get(key, (-1.0, {}))[0]:
+            found[key] = (stamp, row)
+    return {key: row for key, (_, row) in found.items()}
+
+
+# ---------------------------------------------------------------------------------------------- running
+def error_row(job: Job, error: str) -> Row:
+    """The row of a run that raised inside bt_nav (not the node's fault): failed, never lost, rerun on resume."""
+    return {"passed": False, "outcome": ERROR, "reason": f"bt_nav failed to run it: {error}", "verdict": None,
+            "job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed, "profile": job.profile,
+            "run_dir": "", "wall_time": 0.0}
+
+
+def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
+    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already; a run that
+    raises is an :func:`error_row` (here and on a cluster alike: retrying a bug would only repeat it)."""
+    if stop is not None and stop.requested:
+        return None
+    try:
+        return run_exe_job(job, settings, stop)
+    except Exception as exc:  # one broken run must not sink the grid
+        return error_row(job, repr(exc))
+
+
+def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:
+    """Every job, ``workers`` at a time in threads; rows as runs end. A stop cancels the runs not started."""
     with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
-        pending: set[Future] = {pool.submit(run_exe_job, job, settings, stop) for job in jobs}
+        pending: set[Future] = {pool.submit(run_unless_stopped, job, settings, stop) for job in jobs}
         while pending:
             done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
             for future in done:
-                if not future.cancelled():
-                    row = future.result()
-                    rows[row["job"]] = row
-                    if on_row is not None:
-                        on_row(row)
+                row = None if future.cancelled() else future.result()
+                if row is not None:
+                    yield row
             if stop is not None and stop.requested:
                 for future in pending:
                     future.cancel()
+
+
+class ClusterStop(StopRequest):
+    """A stop request read on a Dask worker from the grid's :class:`distributed.Event` (at most once per
+    ``poll`` s: each read is a round trip to the scheduler). Installs no signal handler."""
+
+    def __init__(self, event: str, poll: float = 1.0) -> None:
+        super().__init__()
+        self.event = event
+        self.poll = poll
+        self._checked = float("-inf")
+
+    @property
+    def requested(self) -> bool:  # noqa: D102 - StopRequest's
+        if self.signum is None and time.monotonic() - self._checked >= self.poll:
+            self._checked = time.monotonic()
+            try:
+                from distributed import Event
+
+                if Event(self.event).is_set():
+                    self.signum = int(signal.SIGTERM)
+            except Exception:  # the scheduler unreachable: keep running, the run has its own limit
+                pass
+        return self.signum is not None
+
+    @property
+    def name(self) -> str:  # noqa: D102 - StopRequest's
+        return "the stop of bt-nav grade" if self.signum is not None else ""
+
+
+def run_cluster_task(job: Job, settings: ExeSettings, event: str) -> Row | None:
+    """What a Dask worker runs for one job: :func:`run_unless_stopped` with the grid's :class:`ClusterStop`."""
+    return run_unless_stopped(job, settings, ClusterStop(event))
+
+
+def grid_token(settings: ExeSettings) -> str:
+    """A short name of the grid (its directory and command): two grades on one cluster never share a task key."""
+    return f"{zlib.crc32(json.dumps(asdict(settings), default=str, sort_keys=True).encode()):08x}"
+
+
+def _run_dask(jobs: Sequence[Job], settings: ExeSettings, scheduler: str, stop: StopRequest | None,
+              retries: int = 3) -> Iterator[Row]:
+    """Every job as a Dask task on the cluster of ``scheduler`` (tcp://host:port or a scheduler file); rows as
+    runs end, each job once. A stop sets the grid's event and waits up to :data:`CLUSTER_STOP_WAIT` s for the
+    running tasks' stopped rows."""
+    from distributed import Client, Event
+
+    kwargs = {"scheduler_file": scheduler} if scheduler.endswith(".json") else {"address": scheduler}
+    token = grid_token(settings)
+    with Client(**kwargs, timeout="30s") as client:
+        event = Event(f"bt-nav-exe-stop-{token}", client=client)
+        event.clear()
+        futures = {client.submit(run_cluster_task, job, settings, event.name, key=f"bt-nav-exe-{token}-{job.key}",
+                                 pure=False, retries=retries): job for job in jobs}
+        pending, deadline = set(futures), None
+        while pending:
+            ended = [future for future in pending if future.done()]
+            for future in ended:
+                pending.discard(future)
+                if future.status == "finished":
+                    row = future.result()
+                elif future.status == "cancelled":
+                    continue
+                else:  # its workers kept dying (KilledWorker), or it could not be unpickled there
+                    row = error_row(futures[future], repr(future.exception()))
+                if row is not None:
+                    yield row
+            if stop is not None and stop.requested and deadline is None:
+                event.set()
+                deadline = time.monotonic() + CLUSTER_STOP_WAIT
+            if deadline is not None and time.monotonic() > deadline:
+                client.cancel(list(pending))
+                return
+            if not ended:
+                time.sleep(0.2)
+
+
+def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, stop: StopRequest | None = None,
+                 on_row: Callable[[Row], None] | None = None, *, scheduler: str | None = None,
+                 done: dict[str, Row] | None = None, progress: bool = False) -> list[Row]:
+    """Every job not in ``done`` (job key -> row), here (``workers`` threads) or on the Dask cluster of
+    ``scheduler``; ``on_row`` sees each new row as its run ends. Returns the rows in the jobs' order: those of
+    ``done``, then what ran (on a stop: stopped runs too, and nothing for the runs never started)."""
+    rows = dict(done or {})
+    todo = [job for job in jobs if job.key not in rows]
+    stream = _run_dask(todo, settings, scheduler, stop) if scheduler else _run_local(todo, settings, workers, stop)
+    passed = sum(1 for row in rows.values() if row["passed"])
+    with progress_bar(len(jobs), len(jobs) - len(todo), progress, "run") as bar:
+        for row in stream:
+            rows[row["job"]] = row
+            if row.get("outcome") != STOPPED:
+                passed += bool(row["passed"])
+                bar.update(1)
+                bar.set_postfix_str(f"{passed} passed", refresh=True)
+            if on_row is not None:
+                on_row(row)
     return [rows[job.key] for job in jobs if job.key in rows]

@@ -117,6 +117,12 @@ def make_jobs(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iter
             for w in worlds for m in maneuvers for s in seed_list(seeds)]
 
 
+def progress_bar(total: int, initial: int, enabled: bool, unit: str) -> tqdm:
+    """The grids' progress bar (lock-step and ``--exe``): on stderr, so stdout keeps only results; a disabled
+    one draws nothing. Lines printed while it shows go through ``tqdm.write`` so it is redrawn below them."""
+    return tqdm(total=total, initial=initial, disable=not enabled, unit=unit, dynamic_ncols=True, file=sys.stderr)
+
+
 def run_grid(jobs: Sequence[Job], processes: int = 2, scheduler: str | None = None,
              done: dict[str, dict[str, Any]] | None = None, progress: bool = False,
              on_result: Callable[[dict[str, dict[str, Any]]], None] | None = None) -> list[dict[str, Any]]:
@@ -127,8 +133,7 @@ def run_grid(jobs: Sequence[Job], processes: int = 2, scheduler: str | None = No
     results = dict(done or {})
     todo = [job for job in jobs if job.key not in results]
     stream = run_dask(todo, scheduler) if scheduler else run_local(todo, processes)
-    with tqdm(total=len(jobs), initial=len(jobs) - len(todo), disable=not progress, unit="mission",
-              dynamic_ncols=True, file=sys.stderr) as bar:
+    with progress_bar(len(jobs), len(jobs) - len(todo), progress, "mission") as bar:
         for job, summary in stream:
             results[job.key] = summary
             bar.update(1)

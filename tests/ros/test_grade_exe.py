@@ -21,8 +21,13 @@ def _grade(tmp_path: Path, fixture: str, *extra: str) -> tuple[int, dict]:
     return code, json.loads((tmp_path / "grid" / "grade.json").read_text())
 
 
-def _no_children_left() -> None:
-    left = psutil.Process().children(recursive=True)
+def _child_pids() -> set[int]:
+    """This process's descendants now (e.g. multiprocessing's resource tracker, left by an earlier test's pool)."""
+    return {p.pid for p in psutil.Process().children(recursive=True)}
+
+
+def _no_children_left(before: set[int]) -> None:
+    left = [p for p in psutil.Process().children(recursive=True) if p.pid not in before]
     assert not left, f"processes left behind: {[(p.pid, p.cmdline()) for p in left]}"
 
 
@@ -34,6 +39,7 @@ def test_what_is_appended() -> None:
 
 
 def test_the_homework_fixture_gets_a_verdict(tmp_path: Path) -> None:
+    before = _child_pids()
     code, doc = _grade(tmp_path, "homework_node.py", "--timeout", "120")
     [row] = doc["runs"]
     assert row["outcome"] == "verdict", row["reason"]
@@ -45,15 +51,16 @@ def test_the_homework_fixture_gets_a_verdict(tmp_path: Path) -> None:
     assert {"node.log", "sim.log", "referee.log", "result.json"} <= {p.name for p in run_dir.iterdir()}
     assert "evaluate_mission called" in (run_dir / "node.log").read_text()
     assert "| stage_4 |" in (tmp_path / "grid" / "summary.md").read_text()
-    _no_children_left()
+    _no_children_left(before)
 
 
 @pytest.mark.parametrize("profile", ["homework"])
 def test_a_node_crashing_at_start_is_a_verdict(tmp_path: Path, profile: str) -> None:
+    before = _child_pids()
     code, doc = _grade(tmp_path, "crash_node.py", "--timeout", "60", "--profile", profile)
     [row] = doc["runs"]
     assert code == 1 and not row["passed"]
     assert row["outcome"] == "node exited" and "the node exited with code 1" in row["reason"], row["reason"]
     assert row["wall_time"] < 40.0
     assert "this node crashes at start" in (Path(row["run_dir"]) / "node.log").read_text()
-    _no_children_left()
+    _no_children_left(before)

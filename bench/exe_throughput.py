@@ -1,0 +1,148 @@
+"""Benchmark 7: grading throughput over DDS: missions per minute of ``bt-nav grade --exe "<bt-nav executive>"
+--jobs 2``, as a user runs it (a subprocess, the venv's console script), and where each run's wall time goes.
+
+Why: a grade of a foreign node is N missions of three Python processes each (simulator, node, judge) at
+``--rtf`` sim seconds per wall second; on a 2-core machine its throughput is bounded by the mission's sim
+length over the rtf (about 60 sim s from the judge's t0 to its report), by the processes' start-up and
+shutdown around it, and by the CPU the six processes of two runs need. The section says which.
+
+Per run (from its run directory): start-up (run start to the judge's ``t0`` line: the three processes are up
+and the judge found the node's arm service), the mission (t0 to the verdict file),
+the shutdown (verdict to ``result.json``), and the rtf the simulator reached (its last log line). CPU: every
+process of the grade, exactly (user + system of the grade's waited-for descendants, ``RUSAGE_CHILDREN``), and
+split by process kind from samples every 0.25 s (a process's last 0.25 s can be missed).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from .common import DOMAIN_RANGE, REPO, Target, at_least, median
+
+TARGET_PER_MINUTE = 10.0
+JOBS = 2
+#: Log stamps of rcutils' default format: ``[INFO] [1795468726.310777631] [name]: ...``.
+_STAMP = re.compile(r"^\[\w+\] \[(\d+\.\d+)\]")
+_SIM_END = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s wall \(([\d.]+)x real time\)")
+KINDS = (("referee", "referee"), ("checkoff", "judge"), (" sim ", "sim"), ("executive", "node"))
+
+
+def _kind(cmdline: list[str]) -> str:
+    text = " " + " ".join(cmdline) + " "
+    return next((kind for needle, kind in KINDS if needle in text), "grade")
+
+
+def _stamps(path: Path, needle: str = "") -> list[float]:
+    """The epoch stamps of ``path``'s log lines (those containing ``needle``)."""
+    try:
+        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError:
+        return []
+    return [float(m.group(1)) for line in lines if needle in line and (m := _STAMP.match(line))]
+
+
+def _phases(row: dict[str, Any]) -> dict[str, Any]:
+    """Where one run's wall time went (see the module docstring); None where a file or line is missing."""
+    run_dir = Path(row["run_dir"])
+    try:
+        end = (run_dir / "result.json").stat().st_mtime
+        verdict = (run_dir / "verdict.json").stat().st_mtime
+    except OSError:
+        return {"wall_s": row.get("wall_time")}
+    start = end - float(row["wall_time"])
+    t0 = _stamps(run_dir / "referee.log", "t0 = sim")
+    sim_end = _SIM_END.search((run_dir / "sim.log").read_text(errors="replace")) if (run_dir / "sim.log").exists() \
+        else None
+    return {"wall_s": row["wall_time"], "startup_s": None if not t0 else round(t0[0] - start, 2),
+            "mission_s": None if not t0 else round(verdict - t0[0], 2), "shutdown_s": round(end - verdict, 2),
+            "sim_rtf": float(sim_end.group(3)) if sim_end else None}
+
+
+def _sample(procs: dict[int, tuple[str, float]], root: int) -> None:
+    """Record the CPU seconds of every descendant of ``root`` by pid (kind, latest reading)."""
+    import psutil
+
+    try:
+        children = psutil.Process(root).children(recursive=True)
+    except psutil.Error:
+        return
+    for child in children:
+        try:
+            times = child.cpu_times()
+            procs[child.pid] = (_kind(child.cmdline()), times.user + times.system)  # after exec: its own name
+        except psutil.Error:
+            continue
+
+
+def grade_once(seeds: int, rtf: float | None = None, jobs: int = JOBS, world: str = "stage_4") -> dict[str, Any]:
+    """One ``bt-nav grade --exe`` of bt_nav's executive over ``seeds`` seeds; its throughput and breakdown."""
+    bt_nav = str(Path(sys.executable).with_name("bt-nav"))
+    out = Path(tempfile.mkdtemp(prefix="bench-exe-")) / "grade"
+    argv = [bt_nav, "grade", "--exe", f"{bt_nav} executive", "--worlds", world, "--seeds", str(seeds), "--jobs",
+            str(jobs), "--out", str(out), "--progress", "off", *(["--rtf", f"{rtf:g}"] if rtf else [])]
+    env = {**os.environ, "BT_NAV_DOMAIN_RANGE": f"{DOMAIN_RANGE[0]}-{DOMAIN_RANGE[1]}",
+           "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    started = time.monotonic()
+    log = out.with_name("grade.log")
+    with open(log, "w", encoding="utf-8") as stream:
+        proc = subprocess.Popen(argv, cwd=REPO, env=env, stdout=stream, stderr=subprocess.STDOUT)
+        procs: dict[int, tuple[str, float]] = {}
+        while proc.poll() is None:
+            _sample(procs, proc.pid)
+            time.sleep(0.25)
+    wall = time.monotonic() - started
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    output = log.read_text(encoding="utf-8", errors="replace")
+    try:
+        rows = json.loads((out / "grade.json").read_text(encoding="utf-8"))["runs"]
+    except (OSError, ValueError, KeyError):
+        return {"error": f"bt-nav grade exited with {proc.returncode}: {output[-2000:]}", "argv": argv}
+    by_kind: dict[str, float] = {}
+    for kind, seconds in procs.values():
+        by_kind[kind] = round(by_kind.get(kind, 0.0) + seconds, 2)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    phases = [_phases(row) for row in rows]
+    medians = {key: median([p[key] for p in phases if p.get(key) is not None])
+               for key in ("wall_s", "startup_s", "mission_s", "shutdown_s", "sim_rtf")}
+    return {"argv": argv, "rtf": rtf or 5.0, "jobs": jobs, "world": world, "runs": len(rows),
+            "passed": sum(1 for row in rows if row["passed"]),
+            "reasons": sorted({row["reason"] for row in rows if not row["passed"]}), "wall_s": round(wall, 1),
+            "missions_per_min": round(60.0 * len(rows) / wall, 2), "cpu_s": round(cpu, 1),
+            "cpu_s_per_mission": round(cpu / max(1, len(rows)), 2), "cpu_share_of_cores": round(cpu / wall / (
+                os.cpu_count() or 1), 2), "cpu_by_kind_s": by_kind, "per_run": phases,
+            "phases_median": medians, "returncode": proc.returncode,
+            # what --jobs runs at a time could reach if start-up and shutdown took no time at all
+            "mission_bound_per_min": round(60.0 * jobs / medians["mission_s"], 2) if medians["mission_s"] else None}
+
+
+def run(quick: bool = False, rtfs: tuple[float, ...] | None = None) -> dict[str, Any]:
+    """The default grade (rtf 5) over 8 seeds (2 when quick), then the same at the other ``rtfs``, for the
+    speed-versus-verdicts trade."""
+    seeds = 2 if quick else 8
+    grades = []
+    for rtf in (5.0, *(rtfs if rtfs is not None else (() if quick else (8.0,)))):
+        print(f"  bt-nav grade --exe 'bt-nav executive' --jobs {JOBS} --seeds {seeds} --rtf {rtf:g} ...", flush=True)
+        result = grade_once(seeds, rtf)
+        print(f"    {result.get('missions_per_min')} missions/min, {result.get('passed')}/{result.get('runs')} passed, "
+              f"{result.get('cpu_s_per_mission')} CPU s per mission", flush=True)
+        grades.append(result)
+    return {"seeds": seeds, "jobs": JOBS, "grades": grades}
+
+
+def targets(result: dict[str, Any]) -> list[Target]:
+    """Issue 22's aim: >= 10 missions per minute with --jobs 2, at the default rtf."""
+    main = result["grades"][0] if result.get("grades") else {}
+    value = main.get("missions_per_min")
+    return [Target("exe_missions_per_min", "exe", f"bt-nav grade --exe 'bt-nav executive' --jobs {JOBS}, rtf "
+                   f"{main.get('rtf', 5.0):g}: missions per minute ({main.get('passed')}/{main.get('runs')} passed)",
+                   f">= {TARGET_PER_MINUTE:g}", value, "missions/min", at_least(value, TARGET_PER_MINUTE))]

@@ -1,0 +1,87 @@
+"""``bt-nav grade --exe 'CMD ...'``: the options of a DDS grade checked before any run, the runs (here or on a
+Dask cluster, :mod:`bt_nav.run.exegrid`), a line per run under a progress bar, the report.
+
+Why the checks come first: a grid of a command that cannot start, or one that would write into another
+grade's directory, fails every run alike or mixes two grades; both are refused with exit 2 instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from bt_nav.run.grid import Job
+from bt_nav.run.settings import DEFAULT_JITTER
+
+
+def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
+    """The grid's :class:`ExeSettings`: the program resolved, the command run in this directory, ``--out``
+    absolute for a cluster (its workers may start elsewhere; both must be on a filesystem they share)."""
+    from bt_nav.run.exegrade import ExeSettings
+    from bt_nav.run.exegrid import resolve_program
+
+    if args.resume and not args.out:
+        raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
+    if args.json:
+        raise ValueError("--exe writes grade.json into --out; --json is for lock-step grades")
+    out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
+    return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
+                       args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
+                       args.videos, os.getcwd())
+
+
+def _show(row: dict[str, Any]) -> None:
+    """One line per run as it ends (above the progress bar, when there is one)."""
+    label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
+    tqdm.write(f"  {row['world']} {row['maneuver']} seed {row['seed']}: {label} ({row['reason']}; "
+               f"{row['wall_time']:.1f} s wall) {row['run_dir']}", file=sys.stdout)
+    sys.stdout.flush()
+
+
+def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, parser: argparse.ArgumentParser) -> int:
+    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.run.exegrade`); exit 0 only if every run passed,
+    2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
+    stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
+    from bt_nav.ros.supervise import StopRequest
+    from bt_nav.run.exegrid import STOPPED, prepare_out, run_exe_grid
+    from bt_nav.run.exereport import format_exe_table, summarize_exe, write_exe_report
+
+    try:
+        settings = _settings(args, maneuvers)
+        done = prepare_out(settings, jobs, args.resume)
+    except ValueError as exc:
+        parser.error(str(exc))
+    where = f"on {args.scheduler}" if args.scheduler else f"{args.jobs} at a time"
+    print(f"bt-nav grade: {len(jobs)} runs of {settings.command!r} ({args.profile} profile, {where}, "
+          f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {settings.out}/", flush=True)
+    if args.resume:
+        print(f"resuming: {len(done)} of {len(jobs)} runs already in {settings.out}", file=sys.stderr, flush=True)
+    progress = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())
+    stop = StopRequest().install()
+    started = time.perf_counter()
+    try:
+        rows = run_exe_grid(jobs, settings, args.jobs, stop, _show, scheduler=args.scheduler, done=done,
+                            progress=progress)
+    finally:
+        stop.closing = True
+        stop.restore()
+    ended = [row for row in rows if row["outcome"] != STOPPED]
+    print(format_exe_table(summarize_exe(ended)))
+    json_path, md_path = write_exe_report(ended, settings)
+    passed = sum(1 for r in ended if r["passed"])
+    print(f"{passed}/{len(ended)} passed in {time.perf_counter() - started:.1f} s wall; wrote {json_path}, {md_path}, "
+          f"{settings.out / 'report.html'}")
+    if len(ended) < len(jobs):
+        print(f"bt-nav grade: {len(jobs) - len(ended)} of {len(jobs)} runs without a result (not in the report): "
+              f"bt-nav grade ... --out {settings.out} --resume runs them", file=sys.stderr)
+    if stop.requested:
+        print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
+        return 128 + int(stop.signum or 2)
+    return 0 if ended and passed == len(ended) == len(jobs) else 1
