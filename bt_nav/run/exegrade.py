@@ -50,6 +50,8 @@ from bt_nav.run.settings import DEFAULT_JITTER
 
 #: Seconds a stopped process group gets for SIGINT before SIGTERM (then 2 s before SIGKILL).
 STOP_GRACE = 3.0
+#: Wall seconds the judge waits for the node's /clock subscription before t0 (then it starts anyway).
+ROBOT_CLOCK_WAIT = 20.0
 #: Wall seconds the judge's own timeout leaves before the run's limit, so it can still write a provisional report.
 JUDGE_MARGIN = 5.0
 
@@ -107,7 +109,7 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
     sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
-    judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False,
+    judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False, "robot_clock_wait": ROBOT_CLOCK_WAIT,
              "timeout": max(1.0, settings.limit - JUDGE_MARGIN)}
     specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)

@@ -8,7 +8,8 @@ calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``rep
 1. t0: wait until the robot's SetBool service (parameter ``activate_service``) exists, ``/clock`` runs and
    ground truth arrives (and the simulator listens on ``sim_sync``, for at most ``sync_wait`` wall
    seconds); with ``wait_for_cmd_vel`` also until the robot's first ``cmd_vel`` (its executive ticks on sim
-   time, not merely starts up);
+   time, not merely starts up); with ``robot_clock_wait`` also until a node of the robot's has subscribed
+   ``/clock`` for ``robot_clock_settle`` wall seconds (its sim clock runs before the first request);
 2. a timer on the node clock (sim time) calls ``step`` at the judge's ``rate_hz``; each activate action
    becomes an asynchronous SetBool call, answered through ``on_activate_result`` (a request unanswered for
    ``call_timeout`` wall seconds is sent again, ``call_retries`` times, then counts as failed and the
@@ -70,6 +71,9 @@ DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
     "sync_wait": (5.0, "wall s to wait for the simulator to listen on sim_sync before starting anyway"),
     "service_wait": (0.0, "sim s to wait for the activate service before starting anyway (0: wait)"),
     "wait_for_cmd_vel": (False, "also wait for the robot's first cmd_vel before t0 (its executive ticks)"),
+    "robot_clock_wait": (0.0, "wall s to wait before t0 for a node of the robot's to subscribe /clock and keep it "
+                              "robot_clock_settle s (0: do not wait); after that t0 comes anyway"),
+    "robot_clock_settle": (1.0, "wall s a robot's /clock subscription must exist before t0 (see robot_clock_wait)"),
     "cmd_vel_type": ("auto", "cmd_vel message type: auto (as the robot publishes it), Twist or TwistStamped"),
     "cmd_vel_stamped": (False, "cmd_vel is geometry_msgs/TwistStamped (same as cmd_vel_type TwistStamped)"),
 }
@@ -99,6 +103,9 @@ class JudgeNode(Node):
         self.call_retries = int(p["call_retries"])
         self.service_wait = float(p["service_wait"])
         self.sync_wait = float(p["sync_wait"])
+        self.robot_clock_wait = float(p["robot_clock_wait"])
+        self.robot_clock_settle = float(p["robot_clock_settle"])
+        self._robot_clock_since: float | None = None  # wall time a robot's /clock subscription was first seen
         self.activate_name = str(p["activate_service"])
         self.call_name = self.activate_name.rstrip("/").rsplit("/", 1)[-1]  # activate, toggle_navigation
         self.wall_start = time.monotonic() if wall_start is None else wall_start
@@ -218,7 +225,31 @@ class JudgeNode(Node):
         if self.sync_pub is not None and self.sync_pub.get_subscription_count() == 0 \
                 and time.monotonic() - self.wall_start < self.sync_wait:
             missing.append("a simulator listening on sim_sync")
+        if not self._robot_clock_ready():
+            missing.append("the robot's /clock subscription")
         return missing
+
+    #: Nodes of the grading itself: their /clock subscriptions are not the robot's.
+    OWN_NODES = frozenset({"bt_nav_sim", "bt_nav_recorder"})
+
+    def _robot_clock_ready(self) -> bool:
+        """With ``robot_clock_wait``: a node that is not ours has subscribed /clock at least
+        ``robot_clock_settle`` wall s ago, or the wait is over.
+
+        A node on sim time refuses or mistimes what happens before its first /clock message (an arm request
+        at sim 5 s reached a node whose clock had not started: measured under load at 5x real time, where
+        discovery takes a wall second, i.e. 5 sim s). A node on wall time never subscribes; it is started
+        anyway after the wait (and the graph audit says so)."""
+        if self.robot_clock_wait <= 0.0:
+            return True
+        now = time.monotonic()
+        if self._robot_clock_since is None:
+            own = self.OWN_NODES | {self.get_name()}
+            if any(info.node_name not in own for info in self.get_subscriptions_info_by_topic("/clock")):
+                self._robot_clock_since = now
+        if self._robot_clock_since is not None and now - self._robot_clock_since >= self.robot_clock_settle:
+            return True
+        return now - self.wall_start >= self.robot_clock_wait
 
     def _try_start(self) -> None:
         now = self.now()
