@@ -272,10 +272,10 @@ def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, s
     with progress_bar(len(jobs), len(jobs) - len(todo), progress, "run") as bar:
         for row in stream:
             rows[row["job"]] = row
-            if row.get("outcome") != STOPPED:
-                passed += bool(row["passed"])
-                bar.update(1)
-                bar.set_postfix_str(f"{passed} passed", refresh=True)
             if on_row is not None:
                 on_row(row)
+            if row.get("outcome") != STOPPED:
+                passed += bool(row["passed"])
+                bar.set_postfix_str(f"{passed} passed", refresh=False)
+                bar.update(1)
     return [rows[job.key] for job in jobs if job.key in rows]

@@ -38,6 +38,13 @@ def _grade(command: str, out: Path, *extra: str) -> list[str]:
             "--progress", "off", "--timeout", "120", *extra]
 
 
+#: The compared grids run at 3x real time: half the CPU per wall second of the default, so that the judges of
+#: two runs at once keep up on a 2-core machine that other work shares.
+COMPARED = ("--rtf", "3")
+#: How the referee details a check it had no samples for (sim/bt_nav_sim/referee_core.py).
+NO_DATA = "no ground truth"
+
+
 def _marked(mark: str) -> list[psutil.Process]:
     """Every live process carrying ``mark`` in its environment."""
     found = []
@@ -113,10 +120,31 @@ def test_sigterm_mid_grid_leaves_no_process_and_resume_runs_the_rest(tmp_path: P
 
 
 def _verdicts(out: Path) -> dict[str, Any]:
-    """Per job: what must not depend on where a run ran (wall times and DDS timing aside)."""
+    """Per job: what must not depend on where a run ran: the outcome, each check the judge could evaluate, and
+    ``passed`` when it could evaluate them all. A check the judge had no data for (``no ground truth over ...``:
+    a judge starved of CPU on a loaded machine missed the samples of its window) says nothing about the node,
+    so it is left out, and so is ``passed`` then."""
     rows = json.loads((out / "grade.json").read_text())["runs"]
-    return {r["job"]: (r["passed"], r["outcome"], [(c["name"], c["passed"]) for c in (r["verdict"] or {})
-                                                    .get("checks", [])]) for r in rows}
+    out_: dict[str, Any] = {}
+    for r in rows:
+        checks = (r["verdict"] or {}).get("checks", [])
+        judged = [(c["name"], c["passed"]) for c in checks if not str(c.get("detail", "")).startswith(NO_DATA)]
+        out_[r["job"]] = (r["outcome"], judged, r["passed"] if len(judged) == len(checks) else "unjudged")
+    return out_
+
+
+def _same(dask: dict[str, Any], local: dict[str, Any]) -> bool:
+    """The same verdicts, where both sides judged (see :func:`_verdicts`)."""
+    if dask.keys() != local.keys():
+        return False
+    for job in dask:
+        (outcome_a, checks_a, passed_a), (outcome_b, checks_b, passed_b) = dask[job], local[job]
+        both = {name for name, _ in checks_a} & {name for name, _ in checks_b}
+        if outcome_a != outcome_b or [c for c in checks_a if c[0] in both] != [c for c in checks_b if c[0] in both]:
+            return False
+        if "unjudged" not in (passed_a, passed_b) and passed_a != passed_b:
+            return False
+    return True
 
 
 def test_a_dask_grid_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: Path) -> None:
@@ -124,7 +152,7 @@ def test_a_dask_grid_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: 
     cluster = DaskProcesses(tmp_path, workers=2, nthreads=1, env=_env(mark), cwd=tmp_path)  # not the grade's cwd
     grade: subprocess.Popen[str] | None = None
     try:
-        grade = subprocess.Popen(_grade(HOMEWORK, tmp_path / "dask_hw", "--seeds", "2", "--scheduler",
+        grade = subprocess.Popen(_grade(HOMEWORK, tmp_path / "dask_hw", "--seeds", "2", *COMPARED, "--scheduler",
                                         str(cluster.file)), cwd=REPO, env=_env(mark), stdout=subprocess.PIPE,
                                  stderr=subprocess.PIPE, text=True, start_new_session=True)
         victim = psutil.Process(cluster.workers[0].pid)
@@ -136,7 +164,8 @@ def test_a_dask_grid_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: 
         assert not alive, f"the killed worker's run outlived it: {_describe(alive)}"
         stdout, stderr = grade.communicate(timeout=300)
         assert grade.returncode in (0, 1), stdout + stderr
-        crash = subprocess.run(_grade(CRASH, tmp_path / "dask_crash", "--seeds", "2", "--scheduler", str(cluster.file)),
+        crash = subprocess.run(_grade(CRASH, tmp_path / "dask_crash", "--seeds", "2", *COMPARED, "--scheduler",
+                                      str(cluster.file)),
                                cwd=REPO, env=_env(mark), capture_output=True, text=True, timeout=200)
         assert crash.returncode == 1, crash.stdout + crash.stderr
     finally:
@@ -146,10 +175,13 @@ def test_a_dask_grid_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: 
     rows = json.loads((tmp_path / "dask_hw" / "grade.json").read_text())["runs"]
     assert len(rows) == 2 and any(r["run_dir"].endswith("-2") for r in rows), "the lost run was not rerun"
     for name in ("hw", "crash"):
-        local = subprocess.run(_grade(HOMEWORK if name == "hw" else CRASH, tmp_path / f"local_{name}", "--seeds", "2",
-                                      "--jobs", "2"), cwd=REPO, env=_env(mark), capture_output=True, text=True,
-                               timeout=300)
+        command = HOMEWORK if name == "hw" else CRASH
+        local = subprocess.run(_grade(command, tmp_path / f"local_{name}", "--seeds", "2", *COMPARED, "--jobs", "2"),
+                               cwd=REPO, env=_env(mark), capture_output=True, text=True, timeout=300)
         assert local.returncode in (0, 1), local.stdout + local.stderr
-        assert _verdicts(tmp_path / f"dask_{name}") == _verdicts(tmp_path / f"local_{name}")
-    assert all(outcome == "node exited" for _, outcome, _ in _verdicts(tmp_path / "dask_crash").values())
+        dask, here = _verdicts(tmp_path / f"dask_{name}"), _verdicts(tmp_path / f"local_{name}")
+        assert _same(dask, here), f"Dask {dask}\nlocal {here}"
+    assert all(outcome == "node exited" for outcome, _, _ in _verdicts(tmp_path / "dask_crash").values())
+    hw = _verdicts(tmp_path / "dask_hw").values()
+    assert all(("evaluation service called", True) in checks for _, checks, _ in hw), hw
     wait_until(lambda: not _marked(mark), 15, "every process of the grids to end", lambda: _describe(_marked(mark)))
