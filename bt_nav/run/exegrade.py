@@ -14,8 +14,9 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   serves the lab's ``toggle_navigation``;
 - the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
   silent until armed) and without ``sync`` (the simulator follows nobody).
-- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first and stopped last
-  (:mod:`bt_nav.run.exerecord`); the report draws each run's picture and films the failed runs from it.
+- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first (the simulator once it
+  listens) and stopped first when the run ends (:mod:`bt_nav.run.exerecord`); the report draws each run's picture and
+  films the failed runs from it.
 
 The run ends when the judge exits (its JSON is the verdict), when the node exits first (the reason names its
 exit code), at the wall-time limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The
@@ -193,7 +194,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     recorder = None
     try:
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
-        if settings.record != "off":  # first, so stopped last: its bag holds the whole run
+        if settings.record != "off":  # first and listening before the simulator starts
             recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed)
         launcher.start(sim_spec)
         try:
@@ -202,18 +203,18 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
         else:
-            if recorder is not None:
-                recorder.before_judge(node)
             judge = launcher.start(judge_spec)
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)
     finally:
+        if recorder is not None:
+            recorder.stop()  # closes its bag while the others stop
         launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})
-    row.update(bag_row(run_dir, recorder))
+    row.update(bag_row(run_dir, recorder, (row.get("verdict") or {}).get("t0_sim")))
     (run_dir / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row

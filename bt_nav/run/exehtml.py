@@ -131,11 +131,15 @@ def _files(out: Path, run_dir: Path) -> str:
     return '<span class="files">' + " ".join(links) + "</span>"
 
 
-def _media_cells(out: Path, run_dir: Path, media: dict[str, Any]) -> tuple[str, str]:
-    """A run's thumbnail (a link to its full picture, or why there is none) and its video player with a link."""
+def _media_cells(out: Path, row: dict[str, Any], media: dict[str, Any]) -> tuple[str, str]:
+    """A run's thumbnail (a link to its full picture, or why there is none; a bag that began after the judge's t0
+    says so) and its video player with a link."""
+    run_dir = Path(row["run_dir"])
     if media.get("picture"):
         pic = _rel(out, run_dir / media["picture"])
         thumb = f'<a href="{pic}"><img class="thumb" src="{pic}" loading="lazy" alt="trajectory"></a>'
+        if row.get("bag_after_t0_s"):
+            thumb += f'<br><span class="note">bag from t0 + {row["bag_after_t0_s"]:g} s</span>'
     else:
         pic, thumb = "", f'<span class="note">no picture: {html.escape(media.get("note") or "not drawn")}</span>'
     video = ""
@@ -149,7 +153,7 @@ def _run_row(out: Path, row: dict[str, Any], media: dict[str, Any]) -> str:
     """One run's table row (see the module docstring)."""
     run_dir = Path(row["run_dir"])
     verdict = "PASSED" if row.get("passed") else "FAILED"
-    thumb, video = _media_cells(out, run_dir, media)
+    thumb, video = _media_cells(out, row, media)
     travelled = (row.get("verdict") or {}).get("travelled")
     name = f"{row['world']} {row['maneuver']} seed {row['seed']}"
     cells = [thumb, _link(out, run_dir, name), verdict, html.escape(str(row.get("reason", ""))) + _findings(row),

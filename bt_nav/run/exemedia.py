@@ -18,13 +18,16 @@ to ``failures`` the bags of the passed runs are deleted once their pictures exis
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
-import multiprocessing
+import json
 import os
 import shutil
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -157,8 +160,8 @@ def render_run(row: dict[str, Any], film: bool, keep_bag: bool) -> dict[str, Any
 
 def render_runs(rows: Sequence[dict[str, Any]], videos: str, record: str,
                 workers: int | None = None) -> dict[str, dict[str, Any]]:
-    """:func:`render_run` for every row, those with something to draw ``workers`` processes at a time (default:
-    one per core); by job key."""
+    """:func:`render_run` for every row, those with something to draw in ``workers`` processes (default: one per
+    core); by job key."""
     tasks = [(row, wants_video(row, videos), record == "on" or (record == "failures" and not row.get("passed")))
              for row in rows]
     drawing = [(Path(row["run_dir"]) / BAG).is_dir() and not _drawn(Path(row["run_dir"]), film)
@@ -169,11 +172,46 @@ def render_runs(rows: Sequence[dict[str, Any]], videos: str, record: str,
     if workers == 1:
         done.update({row["job"]: render_run(row, film, keep) for row, film, keep in todo})
     else:
-        # spawn, not fork: the grid's process has threads (the launchers' output pumps), and a forked child of a
-        # threaded process may inherit a lock held mid-operation
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            done.update({out["job"]: out for out in pool.map(render_run, *zip(*todo, strict=True))})
+        done.update(_in_processes([todo[i::workers] for i in range(workers)]))
     return {row["job"]: done[row["job"]] for row in rows}
+
+
+def _in_processes(chunks: list[list[tuple[dict[str, Any], bool, bool]]]) -> dict[str, dict[str, Any]]:
+    """Each chunk of :func:`render_run` tasks in a ``python -m bt_nav.run.exemedia TASKS.json`` process of its own,
+    all at once; what each drew comes back on its stdout (a few hundred bytes a run).
+
+    Why processes of our own and not multiprocessing: a process pool leaves its resource tracker running in the
+    grid's process until that exits (a child the grid did not mean to keep), and forking a process with threads
+    (the launchers' pumps, a Dask client's) may copy a lock in mid-use.
+    """
+    with tempfile.TemporaryDirectory(prefix="bt_nav_media_") as tmp:
+        procs = []
+        for k, chunk in enumerate(chunks):
+            tasks, errors = Path(tmp) / f"tasks{k}.json", Path(tmp) / f"errors{k}.txt"
+            tasks.write_text(json.dumps(chunk), encoding="utf-8")
+            with open(errors, "w", encoding="utf-8") as err:
+                procs.append((subprocess.Popen([sys.executable, "-m", "bt_nav.run.exemedia", str(tasks)],
+                                               stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
+                                               text=True), chunk, errors))
+        done: dict[str, dict[str, Any]] = {}
+        for proc, chunk, errors in procs:
+            out, _ = proc.communicate()
+            try:
+                done.update({media["job"]: media for media in json.loads(out)})
+            except (json.JSONDecodeError, TypeError, KeyError):
+                why = (errors.read_text(encoding="utf-8").strip().splitlines() or [f"exit {proc.returncode}"])[-1]
+                done.update({row["job"]: {"job": row["job"], "note": f"drawing failed: {why}", "picture": None,
+                                          "video": None} for row, _, _ in chunk})
+    return done
+
+
+def main() -> None:
+    """``python -m bt_nav.run.exemedia TASKS.json``: the :func:`render_run` tasks of the file (a JSON list of
+    ``[row, film, keep_bag]``), what each drew on stdout (a JSON list)."""
+    tasks = json.loads(Path(sys.argv[1]).read_text(encoding="utf-8"))
+    with contextlib.redirect_stdout(sys.stderr):  # stdout carries the answer only, whatever a library prints
+        done = [render_run(row, bool(film), bool(keep)) for row, film, keep in tasks]
+    json.dump(done, sys.stdout)
 
 
 def travelled_requirement(rows: Sequence[dict[str, Any]]) -> float | None:
@@ -254,3 +292,7 @@ def grid_figures(rows: Sequence[dict[str, Any]], out: Path) -> list[str]:
     """The grid's figures in ``out`` (file names, relative to it): the distance histogram, the lab's turns."""
     made = [distance_histogram(rows, out / DISTANCE), turns_figure(rows, out / TURNS)]
     return [p.name for p in made if p is not None]
+
+
+if __name__ == "__main__":
+    main()

@@ -54,7 +54,8 @@ def grid(mission_bag: Path, tmp_path_factory: pytest.TempPathFactory) -> dict[st
     """The three runs reported once (``record="failures"``, ``videos="failures"``)."""
     out = tmp_path_factory.mktemp("exe") / "grid"
     rows = [_row(out, mission_bag, 0, True, _verdict(True, 8.6), "passed"),
-            _row(out, mission_bag, 1, False, _verdict(False, 7.4), "failed: minimum travelled distance"),
+            {**_row(out, mission_bag, 1, False, _verdict(False, 7.4), "failed: minimum travelled distance"),
+             "bag_after_t0_s": 2.5},
             _row(out, None, 2, False, None, "the node exited with code 1 after 1.2 s wall, before the verdict")]
     settings = ExeSettings(COMMAND, "homework", out, limit=150.0, rtf=5.0, record="failures", videos="failures")
     write_exe_report(rows, settings, workers=2)
@@ -91,6 +92,7 @@ def test_the_page_says_the_grade(grid: dict[str, Any]) -> None:
     assert text.count('class="FAILED"') == 2 and text.count('class="PASSED"') == 1
     assert "failed: minimum travelled distance" in text and 'href="#stage_4_none_seed1"' in text
     assert "no picture: no bag" in text, "the crashed run says why it has no picture"
+    assert text.count("bag from t0 + ") == 1 and "bag from t0 + 2.5 s" in text, "a late bag says so"
 
 
 def test_each_run_with_a_bag_has_its_picture_and_only_failures_a_video(grid: dict[str, Any]) -> None:
@@ -152,6 +154,20 @@ def test_recording_off_says_so(tmp_path: Path) -> None:
     del row["bag_bytes"]
     write_exe_report([row], ExeSettings("node", "homework", out, record="off", videos="off"))
     assert "no picture: no bag (recording off)" in (out / "report.html").read_text()
+    assert not broken_links(out / "report.html")
+
+
+def test_an_unreadable_bag_leaves_a_note_not_a_broken_report(grid: dict[str, Any], tmp_path: Path) -> None:
+    out = tmp_path / "grid"
+    rows = [_row(out, grid["out"] / "stage_4_none_seed1" / "bag", 0, False, _verdict(False, 7.0), "failed"),
+            _row(out, grid["out"] / "stage_4_none_seed1" / "bag", 1, False, _verdict(False, 7.0), "failed")]
+    for mcap in (out / "stage_4_none_seed1" / "bag").glob("*.mcap"):
+        mcap.write_bytes(b"not a bag at all")
+    write_exe_report(rows, ExeSettings("node", "homework", out), workers=2)  # two drawing processes
+    media = {r["seed"]: r["media"] for r in json.loads((out / "grade.json").read_text())["runs"]}
+    assert media[0]["picture"] == "trajectory.png" and media[0]["video"] == "video.mp4"
+    assert media[1]["picture"] is None and media[1]["note"].startswith("bag unreadable"), media[1]
+    assert "no picture: bag unreadable" in (out / "report.html").read_text()
     assert not broken_links(out / "report.html")
 
 
