@@ -309,6 +309,10 @@ class Child:
         self.spec = spec
         self.popen = popen
         self.thread = thread
+        #: Set by :meth:`Launcher.shutdown` when the child was still running: the signal it ended after
+        #: (SIGINT, SIGTERM or SIGKILL), and the wall seconds from the first signal to its end.
+        self.stopped_by: signal.Signals | None = None
+        self.stop_seconds = 0.0
 
     @property
     def name(self) -> str:
@@ -401,8 +405,13 @@ class Launcher:
         return None
 
     def shutdown(self, grace: float = 5.0) -> None:
-        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group)."""
+        """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group).
+
+        Which signal ended each running child is kept (:attr:`Child.stopped_by`): a graded node that ignores
+        SIGINT cannot be stopped with Ctrl-C, and its grader says so.
+        """
         for child in reversed(self.children):
+            first = time.monotonic()
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
                 if child.poll() is not None:
                     break
@@ -410,7 +419,8 @@ class Launcher:
                 try:
                     child.popen.wait(timeout=wait)
                 except subprocess.TimeoutExpired:
-                    pass
+                    continue
+                child.stopped_by, child.stop_seconds = signum, time.monotonic() - first
             child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
         if unclean and self.last_word is not None:
