@@ -309,6 +309,10 @@ class Child:
         self.spec = spec
         self.popen = popen
         self.thread = thread
+        #: Set by :meth:`Launcher.shutdown` when the child was still running: the signal it ended after
+        #: (SIGINT, SIGTERM or SIGKILL), and the wall seconds from the first signal to its end.
+        self.stopped_by: signal.Signals | None = None
+        self.stop_seconds = 0.0
 
     @property
     def name(self) -> str:
@@ -407,9 +411,13 @@ class Launcher:
         ``together``: every child at once, each step to every live group and then one wait for them all, for
         children whose order no longer matters (a grade's run after its verdict): the stop then takes the
         slowest child's time instead of the sum of all of theirs.
+
+        Which signal ended each running child is kept (:attr:`Child.stopped_by`): a graded node that ignores
+        SIGINT cannot be stopped with Ctrl-C, and its grader says so.
         """
         live = list(reversed(self.children))
         for group in [live] if together else [[child] for child in live]:
+            first = time.monotonic()
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
                 running = [child for child in group if child.poll() is None]
                 if not running:
@@ -421,7 +429,8 @@ class Launcher:
                     try:
                         child.popen.wait(timeout=max(0.0, end - time.monotonic()))
                     except subprocess.TimeoutExpired:
-                        pass
+                        continue
+                    child.stopped_by, child.stop_seconds = signum, time.monotonic() - first
             for child in group:
                 child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]

@@ -13,21 +13,28 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` under those names itself, or
   serves the lab's ``toggle_navigation``;
 - the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
-  silent until armed) and without ``sync`` (the simulator follows nobody).
+  silent until armed), without ``sync`` (the simulator follows nobody), with ``robot_clock_wait`` (t0 once the
+  node's /clock subscription has settled), with ``start_wait`` (a node that never offers its arm service gets a
+  failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
+  (:mod:`bt_nav_sim.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
+  flood ...);
 - unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first (the simulator once it
   listens) and stopped first when the run ends (:mod:`bt_nav.run.exerecord`); the report draws each run's picture and
   films the failed runs from it.
 
-The run ends when the judge exits (its JSON is the verdict), when the node exits first (the reason names its
-exit code), at the wall-time limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The
-output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run directory, the row
-``result.json``. Grids: :mod:`bt_nav.run.exegrid`; reports: :mod:`bt_nav.run.exereport`.
+The run ends when the judge exits (its JSON is the verdict), when the node exits first with an error (the
+reason names its exit code; a node that ends by itself with 0 still gets its verdict), at the wall-time
+limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the
+audit's plus how the node ended (it ignored SIGINT, it ended before the verdict), each also appended to its
+``reason``. The output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run
+directory, the row ``result.json``. Grids: :mod:`bt_nav.run.exegrid`; reports: :mod:`bt_nav.run.exereport`.
 """
 
 from __future__ import annotations
 
 import json
 import shlex
+import signal
 import threading
 import time
 from dataclasses import dataclass
@@ -55,6 +62,9 @@ STOP_GRACE = 3.0
 ROBOT_CLOCK_WAIT = 20.0
 #: Wall seconds the judge's own timeout leaves before the run's limit, so it can still write a provisional report.
 JUDGE_MARGIN = 5.0
+#: Wall seconds the judge waits for the node's arm service before a failed verdict (a Python node on a loaded
+#: machine starts within a few; at most a third of the judge's time).
+START_WAIT = 20.0
 
 
 @dataclass(frozen=True)
@@ -110,8 +120,10 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
     sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
-    judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False, "robot_clock_wait": ROBOT_CLOCK_WAIT,
-             "timeout": max(1.0, settings.limit - JUDGE_MARGIN)}
+    timeout = max(1.0, settings.limit - JUDGE_MARGIN)
+    judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False, "timeout": timeout,
+             "start_wait": round(min(START_WAIT, timeout / 3.0), 1), "audit": True,
+             "robot_clock_wait": ROBOT_CLOCK_WAIT}
     specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
     return [spec for spec in specs if spec.executable != "executive"]
@@ -141,13 +153,17 @@ class _RunLogs:
 
 def _wait(launcher: Launcher, judge: Child, node: Child, limit: float, stop: StopRequest | None,
           started: float) -> tuple[str, str]:
-    """Wait for the judge's exit (``("verdict", "")``), or why there is none: ``(outcome, reason line)``."""
+    """Wait for the judge's exit (``("verdict", "")``), or why there is none: ``(outcome, reason line)``.
+
+    A node that exits with 0 ended by itself (some call ``rclpy.shutdown()`` after their mission): the judge
+    still judges what the robot did; any other exit code is a crash and ends the run now.
+    """
     end = started + limit
     while time.monotonic() < end:
         if judge.poll() is not None:
             return "verdict", ""
         code = node.poll()
-        if code is not None:
+        if code is not None and code != 0:
             return "node exited", (f"the node exited with code {code} after {time.monotonic() - started:.1f} s "
                                    "wall, before the verdict (see node.log)")
         sim = next(c for c in launcher.children if c.spec.executable == "sim")
@@ -170,6 +186,8 @@ def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) ->
     if outcome == "verdict":
         if verdict is None:
             reason = f"the judge exited with code {judge.poll()} without a verdict (see {judge.name}.log)"
+        elif verdict.get("not_started"):
+            reason = f"not judged: {verdict['not_started']}"
         elif verdict.get("timed_out"):
             reason = "the judge timed out: " + "; ".join(c["name"] for c in verdict.get("checks", [])
                                                         if not c.get("passed")) + " not met"
@@ -177,7 +195,27 @@ def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) ->
             failed = [c["name"] for c in verdict.get("checks", []) if not c.get("passed")]
             reason = "passed" if verdict.get("passed") else "failed: " + ", ".join(failed)
     passed = outcome == "verdict" and verdict is not None and bool(verdict.get("passed"))
-    return {"passed": passed, "outcome": outcome, "reason": reason, "verdict": verdict}
+    findings = list(verdict.get("findings") or []) if verdict is not None else []
+    return _with_findings({"passed": passed, "outcome": outcome, "reason": reason, "verdict": verdict}, findings)
+
+
+def _with_findings(row: dict[str, Any], findings: list[str]) -> dict[str, Any]:
+    """``row`` with ``findings`` added to its list and appended to its reason (what the judge's checks miss)."""
+    row["findings"] = [*row.get("findings", []), *findings]
+    if findings:
+        row["reason"] = "; ".join([row["reason"], *findings])
+    return row
+
+
+def _ending_findings(node: Child | None) -> list[str]:
+    """How the node ended, when the judge cannot see it: by itself before the run was over, or not on SIGINT."""
+    if node is None:
+        return []
+    if node.stopped_by is None and node.poll() == 0:
+        return ["the node ended by itself (exit code 0) before the run was over (see node.log)"]
+    if node.stopped_by is not None and node.stopped_by != signal.SIGINT:
+        return [f"the node ignored SIGINT (stopped by {node.stopped_by.name} after {node.stop_seconds:.1f} s)"]
+    return []
 
 
 def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None) -> dict[str, Any]:
@@ -192,6 +230,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
                                                                   settings.profile))
     started = time.monotonic()
     recorder = None
+    node = None
     try:
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
         if settings.record != "off":  # first and listening before the simulator starts
@@ -212,6 +251,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
+    _with_findings(row, _ending_findings(node))
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})

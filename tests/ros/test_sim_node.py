@@ -177,3 +177,70 @@ def test_a_reliable_subscriber_gets_scans_and_odometry(sim: Callable[..., tuple[
     finally:
         executor.shutdown()
         node.destroy_node()
+
+
+def _spun_node(ros_context: Any, name: str) -> tuple[Any, Any]:
+    """A plain rclpy node in the test's context with its own executor spinning in a thread (node, executor)."""
+    import threading
+
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    node = rclpy.create_node(name, context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    return node, executor
+
+
+def test_a_default_subscription_gets_ground_truth(sim: Callable[..., tuple[Proc, Probe]], ros_context: Any) -> None:
+    """The homework's own evaluator subscribes ``/ground_truth_odom`` with the default QoS (reliable, depth 10)."""
+    from nav_msgs.msg import Odometry
+
+    proc, _ = sim()
+    node, executor = _spun_node(ros_context, "evaluator_like")
+    got: list[Any] = []
+    node.create_subscription(Odometry, "/ground_truth_odom", got.append, 10)
+    try:
+        wait_until(lambda: len(got) >= 5, 20.0, "ground truth on a default subscription", proc.output)
+        assert got[-1].header.frame_id == "world"
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+
+
+@pytest.mark.parametrize("follow", [False, True])
+def test_cmd_vel_reader_reliability(sim: Callable[..., tuple[Proc, Probe]], ros_context: Any, follow: bool) -> None:
+    """Without ``follow`` (``bt-nav grade --exe``) the reader is best effort, so a node publishing commands with
+    sensor-data QoS drives the robot; with ``follow`` (bt_nav's executive, reliable) it stays reliable."""
+    from geometry_msgs.msg import Twist
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    proc, probe = sim("--ros-args", "-p", f"follow:={str(follow).lower()}", "-p", "noise:=false")
+    def readers() -> list[Any]:
+        return [r for r in probe.node.get_subscriptions_info_by_topic("/cmd_vel") if r.node_name == "bt_nav_sim"]
+
+    wait_until(lambda: len(readers()) == 1, 20.0, "the simulator's cmd_vel reader on the graph", proc.output)
+    [reader] = readers()
+    expected = ReliabilityPolicy.RELIABLE if follow else ReliabilityPolicy.BEST_EFFORT
+    assert reader.qos_profile.reliability == expected
+    assert any("cmd_vel read " + expected.name.lower() in line for line in proc.stderr), proc.output()
+    if follow:
+        return
+    node, executor = _spun_node(ros_context, "best_effort_driver")
+    pub = node.create_publisher(Twist, "cmd_vel", QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+    command = Twist()
+    command.linear.x = 0.2
+    node.create_timer(0.05, lambda: pub.publish(command))
+    try:
+        wait_until(lambda: probe.last_truth().pose.pose.position.x > SPAWN[0] + 0.1, 20.0,
+                   "the robot to move on best-effort commands", proc.output)
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+
+
+def test_refuses_an_unknown_cmd_vel_reliability() -> None:
+    proc = Proc("sim", "--ros-args", "-p", "cmd_vel_reliability:=sometimes")
+    assert proc.wait(20.0) == 2
+    assert "cmd_vel_reliability must be auto, reliable or best_effort" in proc.output()

@@ -22,9 +22,24 @@ calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``rep
    results (with the run's facts) go to ``json`` and the process exits 0 when every check passed, 1 when
    one failed, 2 on timeout or when stopped first.
 
+What the robot node did wrong that no check can see (``audit``, on by default): a
+:class:`bt_nav_sim.nodes.audit.GraphAudit` samples the ROS graph about once per wall second and reads
+``cmd_vel`` (no subscription to ``scan`` or ``/clock``, no publisher on ``cmd_vel``, the arm service never
+offered, a message type or QoS that cannot match ours, NaN/inf commands, a command flood). Its findings are
+logged as ``finding: ...`` warnings (stderr, not the report on stdout) and listed under ``findings`` in the
+JSON, in every ending: verdict, timeout, or no start.
+
+No start (``start_wait`` > 0, what ``bt-nav grade --exe`` sets): when only the robot's part of t0 (its
+service, its first ``cmd_vel``) is still missing after ``start_wait`` wall seconds, the judge does not wait
+out its ``timeout``: it prints ``NOT JUDGED: <what> never appeared within <s> s wall``, writes that as
+``not_started`` in the JSON (``passed`` false) and exits 1, a failed verdict in seconds instead of a timeout.
+
 Sim-time faithfulness (``sync``): the node tells the simulator where its clock is on ``sim_sync`` and holds
 sim time while a call is in flight (see :mod:`bt_nav_sim.nodes.simulator`), so a busy CPU never makes the
-judge late. A wall-clock ``timeout`` bounds the whole run (``TIMEOUT`` line, provisional report, exit 2).
+judge late. Without ``sync`` (``bt-nav grade --exe``: the simulator waits for nobody) a busy judge may fall
+behind the ground truth queued for it; a step then waits until the poses have caught up with the node clock
+(within ``TRUTH_LAG``), so a late judge judges late, never on missing poses. A wall-clock ``timeout`` bounds
+the whole run (``TIMEOUT`` line, provisional report, exit 2).
 
 Time base: every log line says the node clock's sim time and the schedule's time since t0, ``sim 58.50 s
 (t0 + 54.50 s)``: the executive logs sim time too, so the two read side by side. The report lines count
@@ -53,10 +68,13 @@ from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.rosutil import declare_node_parameters
+from bt_nav_sim.nodes.audit import GraphAudit
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
 FINAL_CALL_WAIT = 1.0
+#: Sim s that ground truth may lag the node clock before a step waits for it (see JudgeNode._on_step).
+TRUTH_LAG = 0.25
 #: ``cmd_vel_type`` values: the message class of each (auto: whatever the robot publishes).
 CMD_TYPES = {"Twist": Twist, "TwistStamped": TwistStamped}
 
@@ -70,6 +88,9 @@ DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
     "sync_rate_hz": (20.0, "heartbeat rate on sim_sync, Hz of sim time"),
     "sync_wait": (5.0, "wall s to wait for the simulator to listen on sim_sync before starting anyway"),
     "service_wait": (0.0, "sim s to wait for the activate service before starting anyway (0: wait)"),
+    "start_wait": (0.0, "wall s to wait for the robot's service (and first cmd_vel, if waited for) before a "
+                        "failed verdict without a start (0: wait until the timeout)"),
+    "audit": (True, "watch the graph and cmd_vel for what the robot did wrong that no check sees (findings)"),
     "wait_for_cmd_vel": (False, "also wait for the robot's first cmd_vel before t0 (its executive ticks)"),
     "robot_clock_wait": (0.0, "wall s to wait before t0 for a node of the robot's to subscribe /clock and keep it "
                               "robot_clock_settle s (0: do not wait); after that t0 comes anyway"),
@@ -102,6 +123,7 @@ class JudgeNode(Node):
         self.call_timeout = float(p["call_timeout"])
         self.call_retries = int(p["call_retries"])
         self.service_wait = float(p["service_wait"])
+        self.start_wait = float(p["start_wait"])
         self.sync_wait = float(p["sync_wait"])
         self.robot_clock_wait = float(p["robot_clock_wait"])
         self.robot_clock_settle = float(p["robot_clock_settle"])
@@ -111,6 +133,7 @@ class JudgeNode(Node):
         self.wall_start = time.monotonic() if wall_start is None else wall_start
         self._init_state()
         self._create_interfaces(p)
+        self.audit = GraphAudit(self, self.activate_name) if bool(p["audit"]) else None
         self.get_logger().info(f"waiting for {self.activate_name} and /clock; {self.schedule_text()}")
 
     # -------------------------------------------------------------- subclass hooks
@@ -136,7 +159,10 @@ class JudgeNode(Node):
         self.timed_out = False
         self.calls = 0
         self._truth_seq: int | None = None  # publication sequence number of the last ground truth
+        self._truth_t: float | None = None  # stamp of the last ground truth taken (sim s)
         self.foreign: str | None = None  # why the judged messages cannot all be this run's
+        self.not_started: str | None = None  # why the robot was never judged (start_wait)
+        self.findings: list[str] = []  # the audit's, at the end
         self._cmd_sub: Any = None
 
     def _create_interfaces(self, p: dict[str, Any]) -> None:
@@ -195,6 +221,8 @@ class JudgeNode(Node):
         if time.monotonic() - self.wall_start > self.timeout or self.foreign is not None:
             self._give_up()
             return True
+        if self.audit is not None:
+            self.audit.sample()
         self._subscribe_cmd_vel()
         self._expire_calls()
         if not self.started:
@@ -262,6 +290,9 @@ class JudgeNode(Node):
             self.get_logger().warning(f"{' and '.join(missing)} did not appear within {self.service_wait:g} s: "
                                       "starting anyway")
             missing = []
+        if missing and 0.0 < self.start_wait <= time.monotonic() - self.wall_start and set(missing) <= robot:
+            self._give_no_start(missing)
+            return
         if missing:
             # Judging needs the ground truth from the start and a simulator that waits for this node;
             # discovery between processes can take seconds on a loaded machine.
@@ -279,6 +310,12 @@ class JudgeNode(Node):
         if self.finished or self._finish_by is not None:
             return
         now = self.now()
+        if self._truth_t is not None and now - self._truth_t > TRUTH_LAG:
+            # Ground truth up to now is still queued: a busy judge behind a simulator that does not wait for
+            # it (no sync). Judge nothing ahead of the poses, or a window at the end holds none of them and a
+            # still robot fails "static"; the next step tries again.
+            self.get_logger().debug(f"{self.stamp(now)}: ground truth at {self._truth_t:.2f} s: step deferred")
+            return
         for action in self.judge.step(now):
             self._call(bool(action.data), now)
         if self.judge.done:
@@ -388,6 +425,7 @@ class JudgeNode(Node):
             self._truth_seen = True
             return
         t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        self._truth_t = t
         if self.judge.t0 is not None and t < self.judge.t0:
             return
         pose = msg.pose.pose
@@ -416,6 +454,18 @@ class JudgeNode(Node):
         sys.stdout.flush()
         self._write_json(lines)
 
+    def _give_no_start(self, missing: list[str]) -> None:
+        """The robot's part of t0 never came within ``start_wait``: a failed verdict now, not a timeout later."""
+        self.leave()
+        self.finished = True
+        self.exit_code = EXIT_FAILED
+        what = [f"the service {self.resolve_service_name(m)}" if m == self.activate_name else m for m in missing]
+        hint = self.audit.service_hint() if self.audit is not None and self.activate_name in missing else ""
+        self.not_started = f"{' and '.join(what)} never appeared within {self.start_wait:g} s wall{hint}"
+        print(f"NOT JUDGED: {self.not_started}")
+        sys.stdout.flush()
+        self._write_json([], exclude=("service",) if self.activate_name in missing else ())
+
     def _give_up(self) -> None:
         self.leave()
         self.finished = True
@@ -434,11 +484,21 @@ class JudgeNode(Node):
         sys.stdout.flush()
         self._write_json(lines)
 
-    def _write_json(self, lines: list[str]) -> None:
+    def _write_json(self, lines: list[str], exclude: tuple[str, ...] = ()) -> None:
+        """The results, the run's facts and the audit's findings (logged here too); ``exclude``: findings the
+        ending already states."""
+        if self.audit is not None:
+            self.findings = self.audit.findings(exclude)
+            for finding in self.findings:
+                self.get_logger().warning(f"finding: {finding}")
         if not self.json_path:
             return
         results = dict(self.judge.results())
+        if self.not_started is not None:
+            results["passed"] = False
         results.update({
+            "findings": self.findings,
+            "not_started": self.not_started,
             "report_lines": lines,
             "timed_out": self.timed_out,
             "foreign": self.foreign,

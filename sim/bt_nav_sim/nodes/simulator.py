@@ -8,9 +8,15 @@ What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
   at ``odom_rate_hz``, and one ``collisions`` message per collision *event* (rising edge of the
   physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``.
 
-QoS, so that any reasonable node connects: ``scan`` and ``odom`` are RELIABLE writers (depth 5 and 10),
-which serve reliable readers of any depth (the lab's template) and best-effort ones (sensor-data QoS) alike;
-``cmd_vel`` is read RELIABLE with depth 10 (the default of ``create_publisher(Twist, 'cmd_vel', 10)``).
+QoS, so that any reasonable node connects (a reader matches a writer when the writer's reliability is at
+least the reader's): ``scan``, ``odom`` and ``ground_truth_odom`` are RELIABLE writers (depth 5, 10 and
+100), which serve reliable readers of any depth (the lab's template, the homework evaluator's default
+subscription to ``/ground_truth_odom``) and best-effort ones (sensor-data QoS) alike; ``/clock`` is
+BEST_EFFORT depth 1, what every ROS 2 time source subscribes with. ``cmd_vel`` is read with depth 10 and
+``cmd_vel_reliability``: BEST_EFFORT (it matches reliable and best-effort writers: a node publishing with
+sensor-data QoS is heard too) unless ``follow`` is on, where ``auto`` keeps RELIABLE: there the writer is
+bt_nav's own executive (reliable), and the run's faithfulness rests on every one of its commands arriving.
+Every writer and reader is VOLATILE, so a node's TRANSIENT_LOCAL ("latched") publisher matches too.
 
 Every stamp is sim time. The node itself never uses ``use_sim_time``: it is the clock source.
 
@@ -98,6 +104,20 @@ _CLOCK_REPEAT_S = 0.02
 
 
 # ---------------------------------------------------------------------------------------------- ROS node
+def cmd_vel_qos(reliability: str, follow: bool) -> QoSProfile:
+    """The ``cmd_vel`` reader's QoS (see the module docstring): best effort hears every writer; ``auto`` keeps
+    reliable while following, where the writer is our executive and a lost command would change the run.
+
+    Raises:
+        ValueError: an unknown ``reliability`` (the node refuses to start rather than guess).
+    """
+    if reliability not in ("auto", "reliable", "best_effort"):
+        raise ValueError(f"cmd_vel_reliability must be auto, reliable or best_effort, got {reliability!r}")
+    best_effort = reliability == "best_effort" or (reliability == "auto" and not follow)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                      reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE)
+
+
 def _quaternion(yaw: float) -> tuple[float, float, float, float]:
     """(x, y, z, w) of a rotation by ``yaw`` about +z."""
     return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
@@ -140,6 +160,8 @@ class SimulatorNode(Node):
         "spawn_y": (math.nan, "spawn y, m (NaN: the world's spawn)"),
         "spawn_yaw": (math.nan, "spawn heading, rad (NaN: the world's spawn)"),
         "cmd_vel_stamped": (False, "subscribe geometry_msgs/TwistStamped instead of Twist"),
+        "cmd_vel_reliability": ("auto", "cmd_vel reader: best_effort (hears reliable and best-effort writers), "
+                                        "reliable, or auto (best_effort without follow, reliable with it)"),
         "cmd_vel_timeout": (0.0, "sim s after which the last command expires (0: it persists)"),
         "actuation_latency": (0.0, "sim s between a command (as _live holds it, after cmd_vel_timeout) and the "
                                    "wheels, like a real base's serial and motor-controller delay (0.1-0.15 s)"),
@@ -169,7 +191,10 @@ class SimulatorNode(Node):
         self._read_pacing(p)
         self._clock_msg = Clock()
         self._create_publishers()
-        self.robots = [_RobotIO(self, prefix, i, bool(p["cmd_vel_stamped"])) for i, prefix in enumerate(prefixes)]
+        cmd_qos = cmd_vel_qos(str(p["cmd_vel_reliability"]), self.follow)
+        self.cmd_reliability = cmd_qos.reliability.name.lower()  # best_effort or reliable, for the start-up line
+        self.robots = [_RobotIO(self, prefix, i, bool(p["cmd_vel_stamped"]), cmd_qos)
+                       for i, prefix in enumerate(prefixes)]
         self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
         self._init_shared_state()
         self.get_logger().info(self._describe())
@@ -215,7 +240,7 @@ class SimulatorNode(Node):
         return (f"world {w.name} {spawns}; "
                 f"profile {config.profile}: {m.num_beams} beams, {m.range_min}-{m.range_max} m, {m.rate_hz:g} Hz, "
                 f"noise {'on' if config.noise else 'off'}; {c.params.kinematics} kinematics; "
-                f"physics {config.physics_rate_hz:g} Hz; {pace}")
+                f"physics {config.physics_rate_hz:g} Hz; {pace}; cmd_vel read {self.cmd_reliability}")
 
     # -------------------------------------------------------------- lifecycle
     def start(self) -> None:
@@ -405,7 +430,7 @@ class _RobotIO:
     """One simulated robot's topics: publishers, reused messages and the latest command (``prefix`` is
     ``""`` for the single robot of today's topic names, else ``"<name>/"``)."""
 
-    def __init__(self, node: SimulatorNode, prefix: str, index: int, stamped: bool) -> None:
+    def __init__(self, node: SimulatorNode, prefix: str, index: int, stamped: bool, cmd_qos: QoSProfile) -> None:
         self.node = node
         self.prefix = prefix
         self.core: SimCore = node.sim.cores[index]
@@ -425,10 +450,10 @@ class _RobotIO:
         self.collision_pub = node.create_publisher(String, f"{prefix}collisions", QoSProfile(depth=50))
         if stamped:
             node.create_subscription(TwistStamped, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), 10)
+                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), cmd_qos)
         else:
             node.create_subscription(Twist, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), 10)
+                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), cmd_qos)
         if prefix:  # this robot's referee speaks on its own namespace's sim_sync
             node.create_subscription(String, f"{prefix}sim_sync", node._on_sync, QoSProfile(depth=50))
         # Messages are reused: publish() serialises synchronously, so only the fields change.

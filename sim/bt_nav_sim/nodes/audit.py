@@ -1,0 +1,257 @@
+"""What a judged robot node did wrong that the judge's checks cannot see: found on the ROS graph and on ``cmd_vel``.
+
+The checks judge motion, so a node that never heard a scan, or that the simulator never heard, only gets
+"travelled 0.00 m". :class:`GraphAudit` names the cause in words a student can act on. From the judge's
+node, about once per wall second (:meth:`GraphAudit.sample`), it looks at
+
+- every node that is not ours (ours: hidden ``_`` names and ``bt_nav_*`` names, the simulator, judges and
+  recorders, except the executive, which is graded like any node): which topics it subscribes and publishes
+  (with which message type), which services it offers;
+- every pair of one of its endpoints and one of ours on a topic: a different message type (TwistStamped on a
+  Twist ``cmd_vel``) or QoS policies that cannot match (:func:`rclpy.qos.qos_check_compatible`, e.g. a
+  reliable reader of a best-effort writer, a transient-local reader of a volatile writer): either way not
+  one message passes, and DDS says so only in the process that loses them;
+- the robot's commands, through a best-effort reader of ``cmd_vel`` (it hears reliable and best-effort
+  writers): messages holding NaN or inf are counted, and the writer's publication sequence numbers give its
+  rate even when this reader cannot keep up with a flood.
+
+:meth:`GraphAudit.findings` turns the whole run into sentences: nothing on the graph at all, no
+subscription to ``scan`` or ``/clock`` (not on sim time), no publisher on ``cmd_vel``, the arm service never
+offered or offered with another type, a type or QoS mismatch, non-finite commands, a flood (more than
+:data:`FLOOD_RATE` commands per sim second). An absence is judged over the whole run (a node may subscribe
+late); a mismatch seen once is a finding, and is logged when it is first seen.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from geometry_msgs.msg import Twist, TwistStamped
+from rclpy.node import Node
+from rclpy.qos import QoSCompatibility, QoSProfile, ReliabilityPolicy, qos_check_compatible
+
+#: Commands per sim second beyond any controller (bt_nav's executive sends 20, the homework's suggested 10).
+FLOOD_RATE = 1000.0
+#: Wall seconds between two looks at the graph.
+SAMPLE_PERIOD = 1.0
+#: Names of ours start so; the executive is the graded node when bt_nav's own is graded with ``--exe``.
+OUR_PREFIX = "bt_nav_"
+GRADED = frozenset({"bt_nav_executive"})
+TWIST, TWIST_STAMPED = "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"
+COMMAND_TYPES = {TWIST: Twist, TWIST_STAMPED: TwistStamped}
+SET_BOOL = "std_srvs/srv/SetBool"
+#: What the graph calls the node of an endpoint discovered before the node itself.
+UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"
+
+
+def is_ours(name: str) -> bool:
+    """Whether a node name is one of ours (or hidden): its endpoints are the reference, not the judged."""
+    return name.startswith("_") or (name.startswith(OUR_PREFIX) and name not in GRADED)
+
+
+def describe_qos(qos: QoSProfile) -> str:
+    """The policies that decide matching and that the graph reports (depth is not carried by discovery)."""
+    return f"{qos.reliability.name.lower()}, {qos.durability.name.lower()}"
+
+
+@dataclass
+class CommandStats:
+    """What the audit's reader heard on ``cmd_vel``: counts, and the writer's sequence numbers over time."""
+
+    received: int = 0
+    non_finite: int = 0
+    first: tuple[int, float, float] | None = None  # (sequence number, sim s, wall s) of the rate's baseline
+    last: tuple[int, float, float] | None = None
+
+    def add(self, values: tuple[float, ...], seq: int | None, sim: float, wall: float) -> None:
+        """One command; a sequence number that does not grow is another writer: the rate starts over."""
+        self.received += 1
+        if not all(math.isfinite(v) for v in values):
+            self.non_finite += 1
+        if seq is None:
+            return
+        if self.last is None or seq <= self.last[0]:
+            self.first = (seq, sim, wall)
+        self.last = (seq, sim, wall)
+
+    def rates(self) -> tuple[float, float] | None:
+        """(published per sim s, per wall s) since the baseline, once half a sim second has passed."""
+        if self.first is None or self.last is None or self.last[1] - self.first[1] < 0.5:
+            return None
+        count = self.last[0] - self.first[0]
+        return count / (self.last[1] - self.first[1]), count / max(1e-6, self.last[2] - self.first[2])
+
+
+class GraphAudit:
+    """The audit of one judged robot (see the module docstring), run from the judge's node.
+
+    Args:
+        node: the judge's node (its namespace resolves the relative names; its name is ours).
+        service: the robot's arm service (SetBool), as the judge calls it.
+        inputs: topics the robot must subscribe, with the message type expected there.
+        command: the topic the robot must publish its commands on (Twist or TwistStamped).
+    """
+
+    def __init__(self, node: Node, service: str, inputs: tuple[tuple[str, str], ...] = (
+            ("scan", "sensor_msgs/msg/LaserScan"), ("/clock", "rosgraph_msgs/msg/Clock")),
+            command: str = "cmd_vel") -> None:
+        self.node = node
+        self.service = node.resolve_service_name(service)
+        self.inputs = tuple((node.resolve_topic_name(topic), kind) for topic, kind in inputs)
+        self.command = node.resolve_topic_name(command)
+        self.nodes: set[str] = set()  # foreign nodes ever seen
+        self.subscribed: dict[str, set[str]] = {}  # topic -> message types foreign nodes subscribe it with
+        self.published: dict[str, set[str]] = {}
+        self.offered: dict[str, set[str]] = {}  # service -> types foreign nodes offer it with
+        self.problems: dict[str, str] = {}  # mismatches seen, by what they concern (logged when first seen)
+        self.commands = CommandStats()
+        self._reader: Any = None
+        self._reader_failed = False
+        self._last = -math.inf
+
+    # -------------------------------------------------------------- sampling
+    def sample(self, force: bool = False) -> None:
+        """Look at the graph (at most once per :data:`SAMPLE_PERIOD` wall s unless ``force``)."""
+        now = time.monotonic()
+        if not force and now - self._last < SAMPLE_PERIOD:
+            return
+        self._last = now
+        try:
+            self._sample_nodes()
+            self._sample_topics()
+            self._watch_commands()
+        except Exception as exc:  # the graph changing under a query (a node leaving), or rclpy shutting down
+            self.node.get_logger().debug(f"graph audit skipped a sample: {exc!r}")
+
+    def _sample_nodes(self) -> None:
+        for name, namespace in self.node.get_node_names_and_namespaces():
+            if is_ours(name):
+                continue
+            self.nodes.add(f"{namespace.rstrip('/')}/{name}")
+            for service, types in self.node.get_service_names_and_types_by_node(name, namespace):
+                self.offered.setdefault(service, set()).update(types)
+
+    def _sample_topics(self) -> None:
+        for topic, _ in self.node.get_topic_names_and_types():
+            publishers = self.node.get_publishers_info_by_topic(topic)
+            subscriptions = self.node.get_subscriptions_info_by_topic(topic)
+            # An endpoint discovered before its node's name is nobody's yet: the next sample names it.
+            publishers = [e for e in publishers if e.node_name != UNKNOWN_NODE]
+            subscriptions = [e for e in subscriptions if e.node_name != UNKNOWN_NODE]
+            theirs_pub = [e for e in publishers if not is_ours(e.node_name)]
+            theirs_sub = [e for e in subscriptions if not is_ours(e.node_name)]
+            for endpoint in theirs_pub:
+                self.published.setdefault(topic, set()).add(endpoint.topic_type)
+            for endpoint in theirs_sub:
+                self.subscribed.setdefault(topic, set()).add(endpoint.topic_type)
+            ours_pub = [e for e in publishers if is_ours(e.node_name)]
+            ours_sub = [e for e in subscriptions if is_ours(e.node_name)]
+            for theirs in theirs_sub:
+                for ours in ours_pub:
+                    self._check_pair(topic, ours, theirs, theirs_publish=False)
+            for theirs in theirs_pub:
+                for ours in ours_sub:
+                    self._check_pair(topic, theirs, ours, theirs_publish=True)
+
+    def _check_pair(self, topic: str, publisher: Any, subscription: Any, theirs_publish: bool) -> None:
+        """A finding when a writer and a reader of one topic, one theirs and one ours, can never match."""
+        theirs, ours = (publisher, subscription) if theirs_publish else (subscription, publisher)
+        verb, our_verb = ("publishes", "reads") if theirs_publish else ("subscribes to", "publishes")
+        who = theirs.node_name
+        if publisher.topic_type != subscription.topic_type:
+            key = f"type {topic} {who} {theirs.topic_type}"
+            text = (f"{who} {verb} {topic} as {theirs.topic_type}, but {ours.node_name} {our_verb} "
+                    f"{ours.topic_type}: not one message passes")
+        else:
+            compatibility, reason = qos_check_compatible(publisher.qos_profile, subscription.qos_profile)
+            if compatibility != QoSCompatibility.ERROR:
+                return
+            key = f"qos {topic} {who} {describe_qos(theirs.qos_profile)}"
+            text = (f"incompatible QoS on {topic}: {who} {verb} it {describe_qos(theirs.qos_profile)}, "
+                    f"{ours.node_name} {our_verb} it {describe_qos(ours.qos_profile)} "
+                    f"({reason.removeprefix('ERROR: ').rstrip(';')}): not one message passes")
+        if key not in self.problems:
+            self.problems[key] = text
+            self.node.get_logger().warning(f"finding: {text}")
+
+    def _watch_commands(self) -> None:
+        """Read ``cmd_vel`` best effort (every writer matches) once a foreign node publishes a command type there."""
+        if self._reader is not None or self._reader_failed:
+            return
+        kinds = sorted(self.published.get(self.command, set()) & set(COMMAND_TYPES))
+        if not kinds:
+            return
+        stamped = kinds[0] == TWIST_STAMPED
+        try:
+            self._reader = self.node.create_subscription(
+                COMMAND_TYPES[kinds[0]], self.command,
+                lambda msg, info: self._on_command(msg.twist if stamped else msg, info),
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
+        except Exception as exc:  # this process already uses cmd_vel with the other type: DDS refuses a second
+            self._reader_failed = True
+            self.node.get_logger().warning(f"graph audit: cannot read {self.command} as {kinds[0]}: {exc}")
+
+    @property
+    def hears_commands(self) -> bool:
+        """Whether the audit's own ``cmd_vel`` reader exists (a foreign command publisher was seen)."""
+        return self._reader is not None
+
+    def _on_command(self, twist: Any, info: Any) -> None:
+        values = (twist.linear.x, twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y, twist.angular.z)
+        seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+        self.commands.add(values, seq, self.node.get_clock().now().nanoseconds * 1e-9, time.monotonic())
+
+    # -------------------------------------------------------------- findings
+    def service_hint(self) -> str:
+        """What the foreign nodes offer instead of the arm service (`` (...)``), or ""."""
+        types = self.offered.get(self.service)
+        if types:
+            return f" (offered as {', '.join(sorted(types))}, not {SET_BOOL})" if SET_BOOL not in types else ""
+        others = sorted(name for name, kinds in self.offered.items() if SET_BOOL in kinds)
+        return f" (the node offers {SET_BOOL} as {', '.join(others)})" if others else ""
+
+    def findings(self, exclude: tuple[str, ...] = ()) -> list[str]:
+        """Everything found over the run, after a last look (``exclude``: ``service`` when said elsewhere)."""
+        self.sample(force=True)
+        if not self.nodes:
+            return ["no node besides the simulator and the judge ever appeared on the ROS graph (did the command "
+                    "start a ROS 2 node in this ROS_DOMAIN_ID?)"]
+        found = [self._missing_input(topic, kind) for topic, kind in self.inputs if topic not in self.subscribed]
+        if self.command not in self.published:
+            found.append(f"no node published on {self.command}" + self._elsewhere(self.published, set(COMMAND_TYPES),
+                                                                                "publishes"))
+        if "service" not in exclude and SET_BOOL not in self.offered.get(self.service, set()):
+            found.append(f"the service {self.service} " + (
+                f"was offered as {', '.join(sorted(self.offered[self.service]))}, not {SET_BOOL}"
+                if self.service in self.offered else f"was never offered{self.service_hint()}"))
+        found += list(self.problems.values())
+        found += self._command_findings()
+        return found
+
+    def _missing_input(self, topic: str, kind: str) -> str:
+        hint = self._elsewhere(self.subscribed, {kind}, "subscribes")
+        if topic.endswith("/clock"):
+            return (f"no node subscribed to {topic}: the node does not run on sim time (use_sim_time:=true was "
+                    f"given with --ros-args; does it pass its arguments to rclpy.init?){hint}")
+        return f"no node subscribed to {topic}: the node never received one message from it{hint}"
+
+    @staticmethod
+    def _elsewhere(endpoints: dict[str, set[str]], kinds: set[str], verb: str) -> str:
+        """`` (it <verb> <type> on <topics>)`` for foreign endpoints of the wanted types on other topics."""
+        topics = sorted(topic for topic, types in endpoints.items() if types & kinds)
+        return f" (it {verb} {'/'.join(sorted(kinds))} on {', '.join(topics)})" if topics else ""
+
+    def _command_findings(self) -> list[str]:
+        stats = self.commands
+        found = []
+        if stats.non_finite:
+            found.append(f"{stats.non_finite} of {stats.received} cmd_vel messages held NaN or inf values "
+                         "(the simulator takes them as a stop)")
+        rates = stats.rates()
+        if rates is not None and rates[0] > FLOOD_RATE:
+            found.append(f"cmd_vel flood: {rates[0]:.0f} messages per sim s ({rates[1]:.0f} per wall s); "
+                         "a controller sends 10 to 50")
+        return found

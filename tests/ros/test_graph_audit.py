@@ -1,0 +1,137 @@
+"""The judges' graph audit over real DDS, in-process: a student-like node with every fault the audit names,
+a well-behaved one with none, and stand-ins for our simulator (its name and its endpoints' QoS)."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+import rclpy
+from bt_nav_sim.nodes.audit import FLOOD_RATE, GraphAudit, is_ours
+from geometry_msgs.msg import Twist, TwistStamped
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.signals import SignalHandlerOptions
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
+from simtools import wait_until
+from std_srvs.srv import SetBool
+
+BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+@pytest.fixture
+def graph(ros_context: Any) -> Iterator[tuple[Any, GraphAudit]]:
+    """(student, audit): a fake simulator offering its topics as the simulator node does, the audit run from a
+    node named like a judge, and a factory of the judged node. The three are processes of their own to DDS
+    (each its own context: one participant may not hold two types on one topic); all spin in one thread."""
+    executors: list[SingleThreadedExecutor] = []
+    made: list[Any] = []
+
+    def make_node(name: str) -> Any:
+        context = rclpy.Context()
+        rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+        node = rclpy.create_node(name, context=context)
+        executors.append(SingleThreadedExecutor(context=context))
+        executors[-1].add_node(node)
+        made.append(node)
+        return node
+
+    sim = make_node("bt_nav_sim")
+    sim.create_publisher(LaserScan, "/scan", QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
+    sim.create_publisher(Clock, "/clock", QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+    sim.create_subscription(Twist, "/cmd_vel", lambda msg: None, BEST_EFFORT)
+    audit = GraphAudit(make_node("bt_nav_test_judge"), "/reactive_control/activate")
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set():
+            for executor in list(executors):
+                executor.spin_once(timeout_sec=0.01)
+
+    thread = threading.Thread(target=spin, daemon=True)
+    thread.start()
+    yield lambda: make_node("reactive_control"), audit
+    stop.set()
+    thread.join(timeout=2.0)
+    for node, executor in zip(made, executors, strict=True):
+        node.destroy_node()
+        executor.shutdown()
+        rclpy.try_shutdown(context=executor.context)
+
+
+def _findings_once(audit: GraphAudit, *words: str, timeout: float = 20.0) -> list[str]:
+    """The audit's findings once every one of ``words`` is in them (discovery takes a moment)."""
+    found: list[str] = []
+
+    def ready() -> bool:
+        found[:] = audit.findings()
+        return all(any(w in f for f in found) for w in words)
+
+    wait_until(ready, timeout, f"findings naming {words}", lambda: "\n".join(found))
+    return found
+
+
+def test_ours_and_theirs() -> None:
+    assert is_ours("bt_nav_sim") and is_ours("bt_nav_referee") and is_ours("bt_nav_demo_recorder")
+    assert is_ours("_ros2cli_daemon_0") and not is_ours("reactive_control")
+    assert not is_ours("bt_nav_executive"), "bt_nav's executive graded with --exe is the judged node"
+
+
+def test_nothing_on_the_graph(graph: tuple[Any, GraphAudit]) -> None:
+    _, audit = graph
+    assert audit.findings() == ["no node besides the simulator and the judge ever appeared on the ROS graph (did "
+                                "the command start a ROS 2 node in this ROS_DOMAIN_ID?)"]
+
+
+def test_a_well_behaved_node_has_no_findings(graph: tuple[Any, GraphAudit]) -> None:
+    student, audit = graph
+    node = student()
+    node.create_subscription(LaserScan, "scan", lambda msg: None, 10)  # the lab's template: reliable
+    node.create_subscription(Clock, "/clock", lambda msg: None, BEST_EFFORT)  # what use_sim_time creates
+    pub = node.create_publisher(Twist, "cmd_vel", 10)
+    node.create_service(SetBool, "/reactive_control/activate", lambda req, res: res)
+    node.create_timer(0.05, lambda: pub.publish(Twist()))
+    wait_until(lambda: audit.sample(force=True) or (audit.commands.received > 0
+                                                    and "/reactive_control/activate" in audit.offered), 20.0,
+               "the node's commands and service seen by the audit", lambda: str(audit.findings()))
+    assert audit.findings() == []
+
+
+def test_every_fault_is_named(graph: tuple[Any, GraphAudit]) -> None:
+    """Transient-local scan reader (the simulator's writer is volatile), TwistStamped on a Twist topic, no /clock
+    reader, the arm service under another name, NaN and a flood of commands."""
+    student, audit = graph
+    node = student()
+    node.create_subscription(LaserScan, "scan", lambda msg: None,
+                             QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    pub = node.create_publisher(TwistStamped, "cmd_vel", qos_profile_sensor_data)
+    node.create_service(SetBool, "/activate", lambda req, res: res)
+    wait_until(lambda: audit.sample(force=True) or audit.hears_commands, 20.0, "the audit's cmd_vel reader")
+    time.sleep(0.5)  # the reader's match with the writer
+    cmd = TwistStamped()
+    cmd.twist.linear.x = math.nan
+    start = time.monotonic()
+    while time.monotonic() - start < 1.0:  # a flood: as fast as this loop turns, for a second
+        pub.publish(cmd)
+    time.sleep(0.5)  # what is on the wire is taken: the counts stand still from here
+    found = _findings_once(audit, "incompatible QoS", "TwistStamped", "/clock", "never offered", "NaN", "flood")
+    text = "\n".join(found)
+    assert ("incompatible QoS on /scan: reactive_control subscribes to it reliable, transient_local, bt_nav_sim "
+            "publishes it reliable, volatile (Volatile publisher and transient local subscription)") in text, text
+    assert ("reactive_control publishes /cmd_vel as geometry_msgs/msg/TwistStamped, but bt_nav_sim reads "
+            "geometry_msgs/msg/Twist") in text, text
+    assert "no node subscribed to /clock: the node does not run on sim time" in text
+    assert ("the service /reactive_control/activate was never offered (the node offers std_srvs/srv/SetBool as "
+            "/activate)") in text
+    flood = next(f for f in found if f.startswith("cmd_vel flood"))
+    rate = float(flood.split()[2])  # the judge's clock is wall time here: per "sim" s is per wall s
+    assert FLOOD_RATE < rate == pytest.approx(audit.commands.rates()[0], rel=0.01)
+    nan = next(f for f in found if "NaN" in f)
+    words = nan.split()  # "<non-finite> of <received> cmd_vel messages held NaN or inf values ..."
+    assert words[0] == words[2] and int(words[0]) > 0, nan  # every one of them was NaN
+    assert not any("/scan" in f and "no node subscribed" in f for f in found), "it does subscribe (wrongly)"
