@@ -43,6 +43,8 @@ TURNS = "turns.png"
 FPS = 10.0
 #: The homework check whose ``required`` value is the distance marked on the histogram.
 TRAVELLED_CHECK = "minimum travelled distance"
+#: What :func:`render_run` is given for one run: its row, whether to film it, whether to keep its bag.
+Task = tuple[dict[str, Any], bool, bool]
 
 
 def wants_video(row: dict[str, Any], videos: str) -> bool:
@@ -172,11 +174,27 @@ def render_runs(rows: Sequence[dict[str, Any]], videos: str, record: str,
     if workers == 1:
         done.update({row["job"]: render_run(row, film, keep) for row, film, keep in todo})
     else:
-        done.update(_in_processes([todo[i::workers] for i in range(workers)]))
+        done.update(_in_processes(balanced(todo, workers)))
     return {row["job"]: done[row["job"]] for row in rows}
 
 
-def _in_processes(chunks: list[list[tuple[dict[str, Any], bool, bool]]]) -> dict[str, dict[str, Any]]:
+#: Relative cost of drawing a run: a picture, a picture and a video (about ten times as long).
+PICTURE_COST, VIDEO_COST = 1, 10
+
+
+def balanced(tasks: list[Task], workers: int) -> list[list[Task]]:
+    """``tasks`` in ``workers`` chunks of about equal cost (the videos first, each to the least loaded chunk), so two
+    failed runs are not filmed one after the other while another process only draws pictures."""
+    chunks: list[list[Task]] = [[] for _ in range(workers)]
+    load = [0] * workers
+    for task in sorted(tasks, key=lambda t: -(PICTURE_COST + VIDEO_COST * t[1])):
+        k = load.index(min(load))
+        chunks[k].append(task)
+        load[k] += PICTURE_COST + VIDEO_COST * task[1]
+    return [chunk for chunk in chunks if chunk]
+
+
+def _in_processes(chunks: list[list[Task]]) -> dict[str, dict[str, Any]]:
     """Each chunk of :func:`render_run` tasks in a ``python -m bt_nav.run.exemedia TASKS.json`` process of its own,
     all at once; what each drew comes back on its stdout (a few hundred bytes a run).
 
@@ -268,6 +286,7 @@ def turns_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from bt_nav_sim.plot import save_figure
+    from matplotlib.ticker import MaxNLocator
 
     judged = [r for r in rows if r.get("verdict") and "maneuvers" in r["verdict"]]
     if not judged:
@@ -280,9 +299,11 @@ def turns_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
         ax.bar(range(len(judged)), total, color="#c6dbef", label=f"judged ({sum(total)})")
         ax.bar(range(len(judged)), ok, color="#2171b5", label=f"within their rule ({sum(ok)})")
         ax.set_xticks(range(len(judged)), names, rotation=90, fontsize=7)
+        ax.set_ylim(0, max([*total, 1]) * 1.35)  # room for the legend above the bars
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_ylabel("maneuvers")
         ax.set_title("check-off turns per run", fontsize=10)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="upper right", ncols=2)
         return save_figure(fig, path)
     finally:
         plt.close(fig)

@@ -17,7 +17,7 @@ import pytest
 from bt_nav.media.bagread import read_bag
 from bt_nav.run.exegrade import ExeSettings
 from bt_nav.run.exehtml import rate_colour
-from bt_nav.run.exemedia import FPS, distance_histogram, travelled_requirement, turns_figure
+from bt_nav.run.exemedia import FPS, balanced, distance_histogram, travelled_requirement, turns_figure
 from bt_nav.run.exereport import write_exe_report
 from tests.media.reportkit import broken_links, mp4_frames, page_links
 
@@ -203,3 +203,11 @@ def test_a_browser_shows_every_picture_and_plays_the_video(grid: dict[str, Any])
     assert len(images) == 3 and all(width > 0 for _, width in images), images  # histogram + two thumbnails
     assert [(src, width, err) for src, width, _, err in videos] == [("stage_4_none_seed1/video.mp4", 1280, None)]
     assert videos[0][2] == pytest.approx(grid["media"][1]["frames"] / FPS, abs=0.2)
+
+
+def test_the_videos_are_shared_out_between_the_drawing_processes() -> None:
+    tasks = [({"job": str(k)}, k in (0, 2), True) for k in range(6)]  # two films among six runs
+    chunks = balanced(tasks, 2)
+    assert sorted(len([t for t in c if t[1]]) for c in chunks) == [1, 1], "one film per process"
+    assert sorted(t[0]["job"] for c in chunks for t in c) == [str(k) for k in range(6)]
+    assert balanced(tasks[:1], 2) == [[tasks[0]]], "no empty process"
