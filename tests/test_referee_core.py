@@ -209,3 +209,31 @@ def test_yaw_seam_is_not_a_spin() -> None:
         ref.observe(i / 30, 0.0, 0.0, math.pi - 1e-6 if i % 2 else -math.pi + 1e-6)
     _, peak_w, pairs = ref.max_motion(0.0, 1.0)
     assert pairs == 19 and peak_w < 0.01
+
+
+def test_late_poses_stamped_before_the_report_are_judged_on_catch_up() -> None:
+    """Over DDS a busy judge's clock runs ahead of the poses queued for it: the report comes when the last
+    second's poses are not in yet, so "static at the end" has none; once they arrive, catch_up judges them."""
+    ref = Referee()
+    ref.start(0.0)
+    held: list[float] = []
+    for k in range(int(60 * RATE)):
+        t = k / RATE
+        if t >= 56.0:
+            held.append(t)  # still queued when the clock says 57 s and the report is made
+        else:
+            ref.observe(t, 0.0, 0.0, 0.0)
+        if t == 54.0:
+            ref.on_evaluate(t)
+        if k % 15 == 0:
+            for action in ref.step(t):
+                ref.on_activate_result(t, action.data, True)
+        if ref.done:
+            break
+    assert ref.done and "static at the end" in failed(ref)
+    for t in held:
+        ref.observe(t, 0.0, 0.0, 0.0)
+    ref.observe(ref.report_time + 0.5, 5.0, 5.0, 0.0)  # stamped after the report: not judged
+    ref.catch_up()
+    assert "static at the end" not in failed(ref)
+    assert ref.results()["max_distance_from_start"] == 0.0

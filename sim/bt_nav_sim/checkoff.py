@@ -181,15 +181,15 @@ class CheckoffJudge(Verdict):
 
     def on_command(self, t: float, v: float, w: float) -> None:
         """A ``cmd_vel`` the robot's node published (non-finite values read as 0, as the base does)."""
-        if self.done:
+        if self._late(t):
             return
         v, w = float(v), float(w)
         self.commands.append((float(t), v if math.isfinite(v) else 0.0, w if math.isfinite(w) else 0.0))
 
     def observe(self, t: float, x: float, y: float, yaw: float) -> None:
-        """One ground-truth pose; out-of-order or post-report samples are ignored. While armed the
-        trigger readings are cast here, against the world as it is now."""
-        if self.done or (self._t and t <= self._t[-1]):
+        """One ground-truth pose; out-of-order samples and those stamped after the report are ignored. While
+        armed the trigger readings are cast here, against the world as it is now."""
+        if self._late(t) or (self._t and t <= self._t[-1]):
             return
         if self.update_world and self.world.appearing:
             self.world.update([(x, y)])
@@ -209,7 +209,7 @@ class CheckoffJudge(Verdict):
 
     def on_collision(self, t: float, x: float, y: float) -> None:
         """A collision event (the start of one contact)."""
-        if not self.done:
+        if not self._late(t):
             self.collisions.append((float(t), float(x), float(y)))
 
     def on_evaluate(self, t: float) -> tuple[bool, str]:

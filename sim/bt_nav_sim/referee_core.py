@@ -94,7 +94,9 @@ CHECKS = (
 class Verdict:
     """The verdict bookkeeping every judge here shares (the homework's referee, the lab's check-off judge):
     the report is made once, at :meth:`_finish`; before it, :meth:`results` is provisional, judged at the
-    last ground-truth sample. A subclass provides ``_evaluate(now)``, ``_t`` (sample times) and ``t0``."""
+    last ground-truth sample. Inputs stamped after the report are ignored; those stamped before it that arrive
+    after it (queued behind a busy driver's clock) are kept, and :meth:`catch_up` judges them. A subclass
+    provides ``_evaluate(now)``, ``_t`` (sample times) and ``t0``."""
 
     report_time: float | None = None
     _results: dict[str, Any] | None = None
@@ -117,6 +119,16 @@ class Verdict:
     def _finish(self, t: float) -> None:
         self.report_time = float(t)
         self._results = self._evaluate(t)
+
+    def _late(self, t: float) -> bool:
+        """Stamped after the report (an input stamped before it but delivered after it still counts)."""
+        return self.report_time is not None and t > self.report_time
+
+    def catch_up(self) -> None:
+        """Judge again at the report time, with the inputs stamped before it that arrived after it (a driver
+        whose inputs queue up behind its clock calls this before it reports; in lock-step it changes nothing)."""
+        if self.report_time is not None:
+            self._results = self._evaluate(self.report_time)
 
     def results(self) -> dict[str, Any]:
         """The verdict as a JSON-able dict (provisional, judged at the last sample, before :attr:`done`)."""
@@ -160,12 +172,12 @@ class Referee(Verdict):
             self.t0 = float(t0)
 
     def observe(self, t: float, x: float, y: float, yaw: float) -> None:
-        """One ground-truth pose sample; out-of-order or post-report samples are ignored.
+        """One ground-truth pose sample; out-of-order samples and those stamped after the report are ignored.
 
         Travelled distance accumulates from the first activation request (the robot cannot move
         legitimately before it), the distance from the start is measured from the first sample.
         """
-        if self.done or (self._t and t <= self._t[-1]):
+        if self._late(t) or (self._t and t <= self._t[-1]):
             return
         if self._t:
             if self.activation_requested is not None and t > self.activation_requested:
@@ -178,7 +190,7 @@ class Referee(Verdict):
 
     def on_collision(self, t: float, x: float, y: float) -> None:
         """A collision event (the start of one contact, not every blocked physics step)."""
-        if not self.done:
+        if not self._late(t):
             self.collisions.append((float(t), float(x), float(y)))
 
     def on_evaluate(self, t: float) -> tuple[bool, str]:

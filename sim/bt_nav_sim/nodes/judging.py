@@ -37,9 +37,9 @@ out its ``timeout``: it prints ``NOT JUDGED: <what> never appeared within <s> s 
 Sim-time faithfulness (``sync``): the node tells the simulator where its clock is on ``sim_sync`` and holds
 sim time while a call is in flight (see :mod:`bt_nav_sim.nodes.simulator`), so a busy CPU never makes the
 judge late. Without ``sync`` (``bt-nav grade --exe``: the simulator waits for nobody) a busy judge may fall
-behind the ground truth queued for it; a step then waits until the poses have caught up with the node clock
-(within ``TRUTH_LAG``), so a late judge judges late, never on missing poses. A wall-clock ``timeout`` bounds
-the whole run (``TIMEOUT`` line, provisional report, exit 2).
+behind the ground truth queued for it; its report is then judged again once the poses stamped before it are
+in (``catch_up``), never on missing poses. A wall-clock ``timeout`` bounds the whole run (``TIMEOUT`` line,
+provisional report, exit 2).
 
 Time base: every log line says the node clock's sim time and the schedule's time since t0, ``sim 58.50 s
 (t0 + 54.50 s)``: the executive logs sim time too, so the two read side by side. The report lines count
@@ -73,8 +73,9 @@ from bt_nav_sim.nodes.audit import GraphAudit
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
 FINAL_CALL_WAIT = 1.0
-#: Sim s that ground truth may lag the node clock before a step waits for it (see JudgeNode._on_step).
-TRUTH_LAG = 0.25
+#: The report waits until ground truth is taken up to this many sim s before its time, for at most TRUTH_WAIT
+#: wall s more (see JudgeNode._caught_up).
+TRUTH_LAG, TRUTH_WAIT = 0.1, 5.0
 #: ``cmd_vel_type`` values: the message class of each (auto: whatever the robot publishes).
 CMD_TYPES = {"Twist": Twist, "TwistStamped": TwistStamped}
 
@@ -227,9 +228,22 @@ class JudgeNode(Node):
         self._expire_calls()
         if not self.started:
             self._try_start()
-        elif self._finish_by is not None and (not self._pending or time.monotonic() > self._finish_by):
+        elif self._finish_by is not None and (not self._pending or time.monotonic() > self._finish_by) \
+                and self._caught_up():
             self._conclude()
         return self.finished
+
+    def _caught_up(self) -> bool:
+        """Ground truth up to the report time has been taken (or ``TRUTH_WAIT`` more wall seconds passed).
+
+        Without ``sync`` (``bt-nav grade --exe``: the simulator waits for nobody) a busy judge falls behind the
+        poses queued for it, while its clock (latest /clock only) does not: the report is made on time, and
+        judged again (:meth:`catch_up`) on the poses stamped before it, once they are in. Otherwise a window
+        at the end could hold none of them and a robot standing still fails "static".
+        """
+        report = self.judge.report_time
+        return (report is None or self._truth_t is None or self._truth_t >= report - TRUTH_LAG
+                or time.monotonic() > self._finish_by + TRUTH_WAIT)
 
     def close(self) -> None:
         """Stopped before the verdict (a signal, a shutdown): say so and let the simulator go on."""
@@ -310,12 +324,6 @@ class JudgeNode(Node):
         if self.finished or self._finish_by is not None:
             return
         now = self.now()
-        if self._truth_t is not None and now - self._truth_t > TRUTH_LAG:
-            # Ground truth up to now is still queued: a busy judge behind a simulator that does not wait for
-            # it (no sync). Judge nothing ahead of the poses, or a window at the end holds none of them and a
-            # still robot fails "static"; the next step tries again.
-            self.get_logger().debug(f"{self.stamp(now)}: ground truth at {self._truth_t:.2f} s: step deferred")
-            return
         for action in self.judge.step(now):
             self._call(bool(action.data), now)
         if self.judge.done:
@@ -445,6 +453,7 @@ class JudgeNode(Node):
 
     # -------------------------------------------------------------- the end
     def _conclude(self) -> None:
+        self.judge.catch_up()
         self.leave()
         self.finished = True
         self.exit_code = EXIT_PASSED if self.judge.passed else EXIT_FAILED

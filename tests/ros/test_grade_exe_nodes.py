@@ -1,0 +1,132 @@
+"""``bt-nav grade --exe`` on students' nodes (tests/fixtures, plain rclpy): two written as the course suggests get
+their verdicts at full speed; each faulty one gets a verdict within its limit whose reason names the fault, its
+output kept in node.log, and no process left behind."""
+
+from __future__ import annotations
+
+import json
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+import psutil
+
+from bt_nav.cli import grade
+from bt_nav.run.exegrade import _ending_findings, _with_findings
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+def _grade(tmp_path: Path, fixture: str, timeout: float, *extra: str) -> dict[str, Any]:
+    """The one row of grading ``fixture`` once (stage_4 seed 0 unless ``extra`` says otherwise)."""
+    out = tmp_path / "grid"
+    code = grade.main(["--exe", f"{sys.executable} {FIXTURES / fixture}", "--worlds", "stage_4", "--seeds", "1",
+                       "--jobs", "1", "--timeout", str(timeout), "--out", str(out), *extra])
+    [row] = json.loads((out / "grade.json").read_text())["runs"]
+    assert code == (0 if row["passed"] else 1), row["reason"]
+    assert row["wall_time"] < timeout, f"over its limit: {row['wall_time']} s"
+    left = psutil.Process().children(recursive=True)
+    assert not left, f"processes left behind: {[(p.pid, p.cmdline()) for p in left]}"
+    return row
+
+
+def _sim_seconds(row: dict[str, Any]) -> float:
+    """Sim seconds from the simulator's start to the judge's report."""
+    return row["verdict"]["t0_sim"] + row["verdict"]["times"]["report"]
+
+
+def _checks(row: dict[str, Any]) -> dict[str, bool]:
+    return {c["name"]: c["passed"] for c in row["verdict"]["checks"]}
+
+
+# ---------------------------------------------------------------------------------------------- as suggested
+def test_the_suggested_timer_node_passes_at_full_speed(tmp_path: Path) -> None:
+    """The homework's suggested approach, cmd_vel from a 10 Hz timer, scan best effort: passed, nothing found."""
+    row = _grade(tmp_path, "timer_node.py", 90)
+    assert row["outcome"] == "verdict" and row["passed"], row["reason"]
+    assert row["findings"] == [] and row["reason"] == "passed"
+    assert row["wall_time"] < 0.6 * _sim_seconds(row), "not graded faster than real time"
+    assert "evaluate_mission called" in (Path(row["run_dir"]) / "node.log").read_text()
+
+
+def test_the_lab_template_node_gets_its_checkoff_verdict(tmp_path: Path) -> None:
+    """The lab's template (reliable scan of depth 10, commands from the scan callback, toggle_navigation) turning
+    only until its front is clear: armed, creeping and turning as the judge saw it, never the Randomizer's
+    90-180 deg."""
+    row = _grade(tmp_path, "lab_template_node.py", 120, "--profile", "lab", "--worlds", "lab_object",
+                 "--maneuvers", "A")
+    assert row["outcome"] == "verdict" and not row["passed"] and row["findings"] == [], row["reason"]
+    checks = _checks(row)
+    maneuvers = {name: ok for name, ok in checks.items() if name.startswith("maneuver ")}
+    assert maneuvers and not all(maneuvers.values()), row["verdict"]["report_lines"]
+    assert all(ok for name, ok in checks.items() if name not in maneuvers), row["verdict"]["report_lines"]
+    failed = [line for line in row["verdict"]["report_lines"] if line.startswith("maneuver ") and "FAILED" in line]
+    assert failed and all("failed: angle" in line for line in failed), failed
+    assert row["wall_time"] < 0.6 * _sim_seconds(row), "not graded faster than real time"
+
+
+# ---------------------------------------------------------------------------------------------- faults
+def test_a_node_that_never_offers_the_service(tmp_path: Path) -> None:
+    row = _grade(tmp_path, "noservice_node.py", 60)
+    assert row["outcome"] == "verdict" and not row["passed"]
+    # the judge's wait: a third of (60 - 5) s
+    assert row["reason"] == ("not judged: the service /reactive_control/activate never appeared within 18.3 s wall "
+                             "(the node offers std_srvs/srv/SetBool as /activate)"), row["reason"]
+    assert row["wall_time"] < 40.0
+
+
+def test_nan_commands_are_counted(tmp_path: Path) -> None:
+    row = _grade(tmp_path, "nan_node.py", 90)
+    assert row["outcome"] == "verdict" and not row["passed"]
+    [nan] = [f for f in row["findings"] if "NaN" in f]
+    assert nan in row["reason"]
+    count, _, received = nan.split()[:3]
+    assert 0 < int(count) <= int(received) and nan.endswith("held NaN or inf values (the simulator takes them as a "
+                                                            "stop)")
+    assert not _checks(row)["minimum travelled distance"]
+
+
+def test_a_cmd_vel_flood_is_reported_with_its_rate(tmp_path: Path) -> None:
+    row = _grade(tmp_path, "flood_node.py", 120)
+    assert row["outcome"] == "verdict"
+    [flood] = [f for f in row["findings"] if f.startswith("cmd_vel flood: ")]
+    assert float(flood.split()[2]) > 1000.0 and "per sim s" in flood and flood in row["reason"]
+
+
+def test_twist_stamped_on_a_twist_topic_is_named(tmp_path: Path) -> None:
+    row = _grade(tmp_path, "stamped_node.py", 90)
+    assert row["outcome"] == "verdict" and not row["passed"]
+    assert row["findings"] == ["reactive_control publishes /cmd_vel as geometry_msgs/msg/TwistStamped, but bt_nav_sim "
+                               "reads geometry_msgs/msg/Twist: not one message passes"], row["findings"]
+
+
+def test_a_node_ignoring_sigint_is_killed_and_named(tmp_path: Path) -> None:
+    row = _grade(tmp_path, "hang_node.py", 90)
+    assert row["outcome"] == "verdict"
+    assert row["findings"][-1].startswith("the node ignored SIGINT (stopped by SIGKILL after "), row["findings"]
+    assert row["reason"].endswith(row["findings"][-1])
+    assert "evaluate_mission called" in (Path(row["run_dir"]) / "node.log").read_text()  # its output is kept
+
+
+# ---------------------------------------------------------------------------------------------- the row's words
+class _Ended:
+    """What _ending_findings reads of a launched child."""
+
+    def __init__(self, code: int | None, stopped_by: signal.Signals | None, seconds: float = 0.0) -> None:
+        self.code, self.stopped_by, self.stop_seconds = code, stopped_by, seconds
+
+    def poll(self) -> int | None:
+        return self.code
+
+
+def test_how_the_node_ended() -> None:
+    assert _ending_findings(_Ended(-2, signal.SIGINT, 0.4)) == []  # stopped as asked
+    assert _ending_findings(_Ended(1, None)) == []  # a crash: the reason already says so
+    assert _ending_findings(_Ended(0, None)) == ["the node ended by itself (exit code 0) before the run was over "
+                                                 "(see node.log)"]
+    assert _ending_findings(_Ended(-15, signal.SIGTERM, 3.04)) == ["the node ignored SIGINT (stopped by SIGTERM "
+                                                                   "after 3.0 s)"]
+    row = _with_findings({"reason": "passed"}, ["a", "b"])
+    assert row == {"reason": "passed; a; b", "findings": ["a", "b"]}
+    assert _with_findings({"reason": "passed", "findings": ["a"]}, []) == {"reason": "passed", "findings": ["a"]}
