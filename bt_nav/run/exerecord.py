@@ -53,8 +53,8 @@ RECORD_MODES = ("on", "failures", "off")
 
 #: The recorder's Fast DDS profile: it announces itself every 0.25 s instead of every 3 s (as the tests' nodes do,
 #: tests/ros/fastdds_tests.xml). Why: when the simulator misses the recorder's start-up announcements on a loaded
-#: machine, the two find each other only at the next periodic one, 3 s later (15 s of sim time at 5x). Only the
-#: recorder gets it: the simulator, the judge and the node graded run as they would without a bag.
+#: machine, the two find each other only at the next periodic one, 3 s later (15 s of sim time at 5x). Every
+#: process of a graded run gets it (:func:`bt_nav.run.exegrade.run_env`); the recorder also when started alone.
 RECORDER_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
  <participant profile_name="bt_nav_recorder" is_default_profile="true"><rtps><builtin><discovery_config>
