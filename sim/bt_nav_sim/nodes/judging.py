@@ -68,7 +68,7 @@ from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.rosutil import declare_node_parameters
-from bt_nav_sim.nodes.audit import GraphAudit
+from bt_nav_sim.nodes.audit import GraphAudit, is_ours
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
@@ -271,9 +271,6 @@ class JudgeNode(Node):
             missing.append("the robot's /clock subscription")
         return missing
 
-    #: Nodes of the grading itself: their /clock subscriptions are not the robot's.
-    OWN_NODES = frozenset({"bt_nav_sim", "bt_nav_recorder"})
-
     def _robot_clock_ready(self) -> bool:
         """With ``robot_clock_wait``: a node that is not ours has subscribed /clock at least
         ``robot_clock_settle`` wall s ago, or the wait is over.
@@ -286,8 +283,7 @@ class JudgeNode(Node):
             return True
         now = time.monotonic()
         if self._robot_clock_since is None:
-            own = self.OWN_NODES | {self.get_name()}
-            if any(info.node_name not in own for info in self.get_subscriptions_info_by_topic("/clock")):
+            if any(not is_ours(info.node_name) for info in self.get_subscriptions_info_by_topic("/clock")):
                 self._robot_clock_since = now
         if self._robot_clock_since is not None and now - self._robot_clock_since >= self.robot_clock_settle:
             return True
