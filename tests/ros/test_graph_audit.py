@@ -27,8 +27,9 @@ BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
 @pytest.fixture
 def graph(ros_context: Any) -> Iterator[tuple[Any, GraphAudit]]:
     """(student, audit): a fake simulator offering its topics as the simulator node does, the audit run from a
-    node named like a judge, and a factory of the judged node. The three are processes of their own to DDS
-    (each its own context: one participant may not hold two types on one topic); all spin in one thread."""
+    node named like a judge, and a factory of the judged node (or, given a name, of any other). Each is a
+    process of its own to DDS (its own context: one participant may not hold two types on one topic); all spin
+    in one thread."""
     executors: list[SingleThreadedExecutor] = []
     made: list[Any] = []
 
@@ -55,7 +56,7 @@ def graph(ros_context: Any) -> Iterator[tuple[Any, GraphAudit]]:
 
     thread = threading.Thread(target=spin, daemon=True)
     thread.start()
-    yield lambda: make_node("reactive_control"), audit
+    yield lambda name="reactive_control": make_node(name), audit
     stop.set()
     thread.join(timeout=2.0)
     for node, executor in zip(made, executors, strict=True):
@@ -99,6 +100,29 @@ def test_a_well_behaved_node_has_no_findings(graph: tuple[Any, GraphAudit]) -> N
     wait_until(lambda: audit.sample(force=True) or (audit.commands.received > 0
                                                     and "/reactive_control/activate" in audit.offered), 20.0,
                "the node's commands and service seen by the audit", lambda: str(audit.findings()))
+    assert audit.findings() == []
+
+
+def test_observers_are_no_reference(graph: tuple[Any, GraphAudit]) -> None:
+    """A best-effort command writer suits the simulator; that our recorder reads reliably (and so hears
+    nothing) concerns the recording, not the robot: no finding, whichever of our readers was discovered first."""
+    student, audit = graph
+    recorder = student("bt_nav_recorder")
+    recorder.create_subscription(Twist, "/cmd_vel", lambda msg: None, 10)
+    node = student()
+    node.create_subscription(LaserScan, "scan", lambda msg: None, 10)
+    node.create_subscription(Clock, "/clock", lambda msg: None, BEST_EFFORT)
+    pub = node.create_publisher(Twist, "cmd_vel", qos_profile_sensor_data)
+    node.create_service(SetBool, "/reactive_control/activate", lambda req, res: res)
+    node.create_timer(0.05, lambda: pub.publish(Twist()))
+
+    def seen() -> bool:
+        audit.sample(force=True)
+        readers = {e.node_name for e in audit.node.get_subscriptions_info_by_topic("/cmd_vel")}
+        return audit.commands.received > 0 and {"bt_nav_sim", "bt_nav_recorder"} <= readers
+
+    wait_until(seen, 20.0, "the node's commands and both readers seen", lambda: str(audit.findings()))
+    audit.sample(force=True)
     assert audit.findings() == []
 
 

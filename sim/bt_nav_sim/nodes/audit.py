@@ -40,6 +40,9 @@ SAMPLE_PERIOD = 1.0
 #: Names of ours start so; the executive is the graded node when bt_nav's own is graded with ``--exe``.
 OUR_PREFIX = "bt_nav_"
 GRADED = frozenset({"bt_nav_executive"})
+#: Ours that only watch (record, view, print): a writer they cannot read still reaches the robot's world, so
+#: they are no reference for the type and QoS checks (and naming one would depend on discovery order).
+OBSERVERS = frozenset({"bt_nav_recorder", "bt_nav_viewer", "bt_nav_tree_watcher", "bt_nav_demo_terminal"})
 TWIST, TWIST_STAMPED = "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"
 COMMAND_TYPES = {TWIST: Twist, TWIST_STAMPED: TwistStamped}
 SET_BOOL = "std_srvs/srv/SetBool"
@@ -147,8 +150,8 @@ class GraphAudit:
                 self.published.setdefault(topic, set()).add(endpoint.topic_type)
             for endpoint in theirs_sub:
                 self.subscribed.setdefault(topic, set()).add(endpoint.topic_type)
-            ours_pub = [e for e in publishers if is_ours(e.node_name)]
-            ours_sub = [e for e in subscriptions if is_ours(e.node_name)]
+            ours_pub = [e for e in publishers if is_ours(e.node_name) and e.node_name not in OBSERVERS]
+            ours_sub = [e for e in subscriptions if is_ours(e.node_name) and e.node_name not in OBSERVERS]
             for theirs in theirs_sub:
                 for ours in ours_pub:
                     self._check_pair(topic, ours, theirs, theirs_publish=False)
