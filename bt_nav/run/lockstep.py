@@ -63,7 +63,8 @@ class RefereeLike(Protocol):
     """The driver protocol of :class:`bt_nav_sim.referee_core.Referee`, which the engine drives.
 
     Optional: ``on_command(t, v, w)``, called with every command a tree publishes (after its tick, at the
-    tick's sim time), when the object has it."""
+    tick's sim time), and ``on_walkers(t, circles)``, called before each ground-truth pose in a world with
+    people walking, when the object has them."""
 
     done: bool
     passed: bool
@@ -122,6 +123,7 @@ class Robot:
         self.clock = clock
         self.referee = referee
         self._on_command = getattr(referee, "on_command", None)
+        self._on_walkers = getattr(referee, "on_walkers", None)
         self.sink = sink
         self.events = EventLog(clock, sink)
         client = LocalTriggerClient(default=self._evaluate, clock=clock)
@@ -139,13 +141,16 @@ class Robot:
         self.events.info(f"referee: evaluate_mission -> {message}")
         return TriggerResponse(ok, message)
 
-    def deliver(self, out: Any) -> None:
-        """Odometry and ground truth, a scan and a collision event, as the simulator node publishes them."""
+    def deliver(self, out: Any, walkers: np.ndarray | None = None) -> None:
+        """Odometry and ground truth, a scan and a collision event, as the simulator node publishes them;
+        ``walkers``: where the people walking are (the simulator's ``walkers`` message), None if none."""
         sim, t, s, sink = self.sim, self.clock.now, self.sim.state, self.sink
         if out.collision:
             self.referee.on_collision(t, s.x, s.y)
             self.events.warning(f"collision at ({s.x:.2f}, {s.y:.2f})")
         if out.odom:
+            if walkers is not None and self._on_walkers is not None:
+                self._on_walkers(t, walkers)
             self.referee.observe(t, s.x, s.y, s.yaw)
             self.core.feed_odom(sim.odom_yaw, t, x=sim.odom_x, y=sim.odom_y)
             samples = self.samples
@@ -294,8 +299,9 @@ class Lockstep:
         end_ns = round((duration if duration is not None else hard_stop) * 1e9)
         while sim.t_ns <= end_ns:
             self.clock.now = sim.t
+            walkers = sim.walkers.circles() if len(sim.walkers) else None
             for robot, out in zip(robots, outs, strict=True):
-                robot.deliver(out)
+                robot.deliver(out, walkers)
             if sink is not None:
                 sink.clock(sim.t)
             if sim.t_ns >= next_referee:

@@ -26,6 +26,10 @@ first obstacle in the robot's swept path) are cast noise-free from the true pose
 sample while armed, so they reflect the world as it was at that moment (objects that appear later do not
 count). See :meth:`CheckoffJudge._judge_episode` for the rules.
 
+People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
+from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
+pose), so a maneuver that a person passing in front of the robot triggered is judged like any other.
+
 Appearing objects (``appear_within`` in a world file): the judge's ray caster sees an object once it has
 appeared. ``update_world=True`` (default) reveals them from the poses the judge observes; that is what a
 judge with a world of its own needs (over DDS), and it is harmless on a world the simulator shares
@@ -83,6 +87,9 @@ class CheckoffConfig:
     move_on_within: float = 10.0  # s after settling in which the robot must move on ...
     move_on_distance: float = 0.02  # ... by this much (or start another episode)
     side_tie: float = 0.15  # C: left and right closer than this count as a tie (either side passes)
+    # s: among people walking, the robot decided on a scan up to this old (LDS-01: a 0.2 s period, plus a
+    # tick): the trigger holds if it held at any sample this long before the episode's start
+    scan_age: float = 0.3
     open_space: float = 3.0  # C: both sides beyond this count as a tie too
     aeb_distance: float = 0.35  # an obstacle this close in the swept path makes a turn an AEB recovery
     aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned)
@@ -133,6 +140,7 @@ class CheckoffJudge(Verdict):
         self._yaw: list[float] = []
         self._uyaw: list[float] = []  # unwrapped yaw
         self._readings: list[_Reading | None] = []
+        self._walkers: list[tuple[float, np.ndarray]] = []  # (t, circles (K, 3)) as the simulator reported them
         self.commands: list[tuple[float, float, float]] = []
         self.collisions: list[tuple[float, float, float]] = []
         self.travelled = 0.0
@@ -205,7 +213,20 @@ class CheckoffJudge(Verdict):
         self._y.append(float(y))
         self._yaw.append(float(yaw))
         self._uyaw.append(uyaw)
-        self._readings.append(self._read(x, y, yaw) if self._armed_at(t) else None)
+        self._readings.append(self._read(x, y, yaw, self._walkers_at(t)) if self._armed_at(t) else None)
+
+    def on_walkers(self, t: float, circles: Any) -> None:
+        """Where the people walking were at ``t`` (circles (K, 3): x, y, r); out-of-order samples are dropped."""
+        if self._walkers and t <= self._walkers[-1][0]:
+            return
+        self._walkers.append((float(t), np.asarray(circles, dtype=np.float64).reshape(-1, 3)))
+
+    def _walkers_at(self, t: float) -> np.ndarray | None:
+        """The walkers of the last sample at or before ``t`` (else the first one; None without walkers)."""
+        if not self._walkers:
+            return None
+        i = bisect.bisect_right(self._walkers, t + 1e-9, key=lambda s: s[0]) - 1
+        return self._walkers[max(0, i)][1]
 
     def on_collision(self, t: float, x: float, y: float) -> None:
         """A collision event (the start of one contact)."""
@@ -225,9 +246,10 @@ class CheckoffJudge(Verdict):
             return False
         return self.deactivation_requested is None or t <= self.deactivation_requested + self.config.grace
 
-    def _read(self, x: float, y: float, yaw: float) -> _Reading:
-        """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range)."""
-        r = self.caster.true_ranges(float(x), float(y), float(yaw))
+    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None) -> _Reading:
+        """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range), the
+        people walking included."""
+        r = self.caster.true_ranges(float(x), float(y), float(yaw), walkers)
         along, across = r * self._cos, np.abs(r * self._sin)
         in_path = (along > 0.0) & (across <= self.config.half_width)
         return _Reading(front=float(r[self._front].min()), left=float(r[self._left].min()),
@@ -318,7 +340,7 @@ class CheckoffJudge(Verdict):
         """
         cfg = self.config
         start = self.commands[a][0]
-        reading = self._readings[self._index_at(start)] if self._t else None
+        reading = self._reading_at(start)
         trigger, trigger_text = self._trigger(reading)
         # A recovery: the robot stood (it braked), its path was blocked, and the trigger did not hold even
         # without the margin (the margin is the robot's benefit of the doubt for its own maneuvers, not a
@@ -346,6 +368,20 @@ class CheckoffJudge(Verdict):
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items()}}
+
+    def _reading_at(self, start: float) -> _Reading | None:
+        """The trigger reading of an episode starting at ``start``: the sample at it; among people walking,
+        the first sample of the last ``scan_age`` s at which the trigger held, if one did (a person moves
+        half a metre in the time a scan takes to reach the robot's decision)."""
+        if not self._t:
+            return None
+        i = self._index_at(start)
+        if self._walkers:
+            first = self._index_at(start - self.config.scan_age)
+            for reading in self._readings[first:i + 1]:
+                if reading is not None and self._trigger(reading)[0]:
+                    return reading
+        return self._readings[i]
 
     def _stood_before(self, a: int) -> float:
         """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""

@@ -12,6 +12,11 @@ places, both through :attr:`SimCore.crowd` (the other robots as circles of their
 
 Robots move one after the other within a step, each against the others' current poses, so two robots
 can never overlap. One physics step at a time (no merged steps): the others move meanwhile.
+
+People walking (:mod:`bt_nav_sim.walkers`, a world's ``walkers``) enter the same way: each step they walk
+first (giving way to the robots where they stand), then the robots move against them and the others; a
+robot's crowd is the other robots and the walkers. A world with walkers is stepped one step at a time even
+with one robot.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from dataclasses import replace
 import numpy as np
 
 from bt_nav_sim.core import SimConfig, SimCore, StepOutput, spawn_pose
+from bt_nav_sim.walkers import Walkers
 from bt_nav_sim.world import World, load_world
 
 #: Offset between the robots' maneuver-A seeds (robot i > 0: seed + i * stride; a prime, so the seeds of
@@ -110,7 +116,10 @@ class MultiSimCore:
         configs = [replace(config, actuation_latency=float(lat)) for lat in latencies] or [config] * n
         self.cores = [SimCore(configs[i], self.world, index=i, spawn=None if i == 0 and not starts else poses[i])
                       for i in range(n)]
+        self.walkers = Walkers(self.world.walkers, seed)
+        self._alone = n == 1 and not len(self.walkers)  # the single-robot core's own (merged) stepping
         self._check_apart()
+        self._update_crowds()
 
     def _check_apart(self) -> None:
         """Refuse start poses that overlap another robot (a world that starts in a collision)."""
@@ -163,12 +172,12 @@ class MultiSimCore:
     def advance(self, commands: Sequence[tuple[float, float]], steps: int = 1) -> list[StepOutput]:
         """``steps`` physics steps, each robot under its own (v, w); then what became due for each.
 
-        One robot: exactly :meth:`SimCore.advance` (merged steps allowed). Several: one step at a time,
-        the robots moved in order against each other's current poses.
+        One robot: exactly :meth:`SimCore.advance` (merged steps allowed). Several, or people walking: one
+        step at a time, the walkers first, then the robots in order against each other's current poses.
         """
         if len(commands) != len(self.cores):
             raise ValueError(f"{len(commands)} commands for {len(self.cores)} robots")
-        if len(self.cores) == 1:
+        if self._alone:
             return [self.cores[0].advance(commands[0][0], commands[0][1], steps)]
         outs: list[StepOutput] = []
         for _ in range(max(1, int(steps))):
@@ -176,11 +185,15 @@ class MultiSimCore:
         return outs
 
     def steps_until(self, t_ns: int) -> int:
-        """Steps a caller may merge: :meth:`SimCore.steps_until` alone, one step among several robots."""
-        return self.cores[0].steps_until(t_ns) if len(self.cores) == 1 else 1
+        """Steps a caller may merge: :meth:`SimCore.steps_until` alone, one step among several robots or
+        walkers."""
+        return self.cores[0].steps_until(t_ns) if self._alone else 1
 
     def _step_all(self, commands: Sequence[tuple[float, float]]) -> list[StepOutput]:
-        """One physics step of every robot, contacts between robots, then each robot's outputs."""
+        """One physics step of the walkers and of every robot, contacts between robots, then each robot's
+        outputs."""
+        if len(self.walkers):
+            self.walkers.step(self.step_ns * 1e-9, self._robots())
         hits = []
         for i, core in enumerate(self.cores):
             core.crowd = self._others(i)
@@ -189,13 +202,18 @@ class MultiSimCore:
         self._update_crowds()  # the scans see the others where they are now
         return [core.finish_step(hit or touch, 1) for core, hit, touch in zip(self.cores, hits, touching, strict=True)]
 
-    def _others(self, i: int) -> np.ndarray:
-        """Every robot but ``i`` as a circle (x, y, radius), at its current pose."""
-        return np.array([(c.state.x, c.state.y, c.params.radius) for j, c in enumerate(self.cores) if j != i],
+    def _robots(self) -> np.ndarray:
+        """Every robot as a circle (x, y, radius), at its current pose."""
+        return np.array([(c.state.x, c.state.y, c.params.radius) for c in self.cores],
                         dtype=np.float64).reshape(-1, 3)
 
+    def _others(self, i: int) -> np.ndarray:
+        """What robot ``i`` may meet: every other robot and every walker as a circle (x, y, radius)."""
+        robots = np.delete(self._robots(), i, axis=0)
+        return np.vstack([robots, self.walkers.circles()]) if len(self.walkers) else robots
+
     def _update_crowds(self) -> None:
-        if len(self.cores) > 1:
+        if not self._alone:
             for i, core in enumerate(self.cores):
                 core.crowd = self._others(i)
 

@@ -13,6 +13,8 @@ World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
     circles: [{x: 2, y: 2, r: 0.12}]   # optional, cylinders
       # any box or circle may add  appear_within: 0.6  (m): hidden (to the LiDAR and to contacts) until a
       # robot's centre comes within that distance of the object's centre, then it stays (see below)
+    walkers:                           # optional, people pacing a path there and back (bt_nav_sim.walkers)
+      - {path: [[1, 0], [1, 4]], r: 0.2, speed: 1.0, pause: 1.0}   # phase: s into the walk (default: seeded)
     checkoff_maneuvers: [A, C]         # optional, lab arenas: the lab maneuvers this world can check off
     bounds: [xmin, ymin, xmax, ymax]   # optional, plotting extent; default: obstacles + margin
     generator:                         # optional, random clutter drawn from a seed
@@ -76,6 +78,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, path_distance, walker_from_dict
+
 WORLDS_DIR = Path(__file__).parent / "worlds"
 #: Name prefix of the lab's check-off arenas among the bundled worlds.
 LAB_PREFIX = "lab_"
@@ -83,6 +87,8 @@ LAB_PREFIX = "lab_"
 LAB_MANEUVERS = ("A", "B", "C")
 #: How much ``appear_within`` must exceed an appearing object's bounding radius (m), see the docstring.
 MIN_APPEAR_MARGIN = 0.2
+#: The robot a walker's path must keep clear of at the spawn (TurtleBot3 Burger's disk, m).
+SPAWN_ROBOT_RADIUS = 0.12
 
 # Margin added around the obstacles when a world does not give explicit plotting bounds.
 _BOUNDS_MARGIN = 0.25
@@ -136,6 +142,7 @@ class World:
     boxes: tuple = ()  # original boxes (cx, cy, length, thickness, yaw_rad), for filled drawing
     appearing: tuple[Appearing, ...] = ()  # hidden until a robot comes near (see the module docstring)
     checkoff_maneuvers: tuple[str, ...] = ()  # lab arenas: the maneuvers this world can check off
+    walkers: tuple[WalkerSpec, ...] = ()  # people walking (their state is the run's: bt_nav_sim.walkers.Walkers)
     # Precomputed per-segment direction and squared length for clearance(); derived, not constructor args.
     _seg_d: np.ndarray = field(init=False, repr=False)
     _seg_inv_len2: np.ndarray = field(init=False, repr=False)
@@ -148,6 +155,7 @@ class World:
         object.__setattr__(self, "boxes", tuple(tuple(float(v) for v in b) for b in self.boxes))
         object.__setattr__(self, "appearing", tuple(self.appearing))
         object.__setattr__(self, "checkoff_maneuvers", tuple(str(m) for m in self.checkoff_maneuvers))
+        object.__setattr__(self, "walkers", tuple(self.walkers))
         self._set_obstacles(self.segments, self.circles, self.boxes)
         if self.appearing:  # the static part, and which appearing objects are shown (none yet)
             object.__setattr__(self, "_static", (self.segments, self.circles, self.boxes))
@@ -474,7 +482,7 @@ def _parse_circles(d: dict, where: str) -> tuple[list[list[float]], list[Appeari
 
 
 def _bounds(d: dict, where: str, segments: np.ndarray, circles: np.ndarray, appearing: list[Appearing],
-            spawn: tuple[float, float, float]) -> tuple[float, ...]:
+            spawn: tuple[float, float, float], walkers: tuple[WalkerSpec, ...] = ()) -> tuple[float, ...]:
     """The plotting extent: ``bounds`` as written, else everything in the world plus a margin."""
     if "bounds" in d:
         bounds = tuple(float(v) for v in d["bounds"])
@@ -485,6 +493,8 @@ def _bounds(d: dict, where: str, segments: np.ndarray, circles: np.ndarray, appe
     ys = [segments[:, 1], segments[:, 3], circles[:, 1] - circles[:, 2], circles[:, 1] + circles[:, 2]]
     xs += [np.array([o.x - o.bound_r, o.x + o.bound_r]) for o in appearing]
     ys += [np.array([o.y - o.bound_r, o.y + o.bound_r]) for o in appearing]
+    xs += [np.concatenate([w.path[:, 0] - w.radius, w.path[:, 0] + w.radius]) for w in walkers]
+    ys += [np.concatenate([w.path[:, 1] - w.radius, w.path[:, 1] + w.radius]) for w in walkers]
     allx = np.concatenate(xs + [np.array([spawn[0]])])
     ally = np.concatenate(ys + [np.array([spawn[1]])])
     m = _BOUNDS_MARGIN
@@ -538,13 +548,40 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
     segments = _segments()
     circles = np.asarray(circle_rows, dtype=np.float64).reshape(-1, 3)
 
-    bounds = _bounds(d, where, segments, circles, appearing, spawn)
+    walkers = _parse_walkers(d, where, spawn)
+    bounds = _bounds(d, where, segments, circles, appearing, spawn, walkers)
 
     maneuvers = tuple(str(m) for m in d.get("checkoff_maneuvers") or ())
     if not set(maneuvers) <= set(LAB_MANEUVERS):
         raise ValueError(f"{where}: checkoff_maneuvers must be among {', '.join(LAB_MANEUVERS)}, got {maneuvers}")
-    return World(name=name, segments=segments, circles=circles, spawn=spawn, bounds=bounds, boxes=tuple(boxes),
-                 appearing=tuple(appearing), checkoff_maneuvers=maneuvers)
+    world = World(name=name, segments=segments, circles=circles, spawn=spawn, bounds=bounds, boxes=tuple(boxes),
+                  appearing=tuple(appearing), checkoff_maneuvers=maneuvers, walkers=walkers)
+    _check_walkers_clear(world)
+    return world
+
+
+def _check_walkers_clear(world: World) -> None:
+    """Refuse a walker whose path runs through a wall or an obstacle (checked every 2 cm)."""
+    for i, spec in enumerate(world.walkers):
+        for k in range(int(spec.length / 0.02) + 1):
+            x, y = spec.point_at(k * 0.02)
+            if world.clearance(x, y) < spec.radius:
+                raise ValueError(f"world {world.name!r} walker {i}: its path at ({x:.2f}, {y:.2f}) runs into "
+                                 f"an obstacle (clearance {world.clearance(x, y):.2f} m < r {spec.radius} m)")
+
+
+def _parse_walkers(d: dict, where: str, spawn: tuple[float, float, float]) -> tuple[WalkerSpec, ...]:
+    """The ``walkers`` entries; none may pass so near the spawn that a run could start in a contact."""
+    walkers = []
+    for i, entry in enumerate(d.get("walkers") or []):
+        ww = f"{where} walker {i}"
+        spec = walker_from_dict(entry, ww)
+        gap = path_distance(spec, spawn[0], spawn[1]) - spec.radius - SPAWN_ROBOT_RADIUS
+        if gap < SPAWN_CLEARANCE:
+            raise ValueError(f"{ww}: its path passes {gap:.2f} m from a robot at the spawn; keep at least "
+                             f"{SPAWN_CLEARANCE} m")
+        walkers.append(spec)
+    return tuple(walkers)
 
 
 def _appearing(entry: dict, where: str, *, box: tuple[float, float, float, float, float] | None = None,

@@ -14,13 +14,15 @@ from simtools import Proc, StubRobot
 LAB_ARM = "/toggle_navigation"
 
 
-@pytest.mark.parametrize(("maneuver", "world"), [("C", "lab_object"), ("B", "lab_dead_end")])
+@pytest.mark.parametrize(("maneuver", "world"), [("C", "lab_object"), ("B", "lab_dead_end"), ("A", "lab_passerby")])
 def test_the_executive_in_lab_mode_passes_its_checkoff(maneuver: str, world: str, tmp_path: Path) -> None:
     """``sim-run --profile checkoff``: simulator, executive (config/lab.yaml, toggle_navigation) and the judge
-    node; the run's exit code is the judge's."""
+    node; the run's exit code is the judge's. Among people walking (lab_passerby) the judge reads where they
+    were from the simulator's ``walkers``."""
     started = time.monotonic()
     results = tmp_path / "results.json"
-    run = Proc("sim-run", "--profile", "checkoff", "--maneuver", maneuver, "--rtf", "0", "--json", str(results))
+    run = Proc("sim-run", "--profile", "checkoff", "--maneuver", maneuver, "--world", world, "--rtf", "0",
+               "--json", str(results))
     code = run.wait(150.0)
     wall = time.monotonic() - started
     assert code == 0, run.output()

@@ -49,6 +49,8 @@ CHECKPOINTS: dict[str, tuple[float, list[tuple[float, float]]]] = {
     "long_corridor": (0.8, [(-0.2, 0.0), (7.0, 0.0), (7.0, 2.5), (2.0, 2.5), (2.0, 4.6), (6.2, 4.6),
                             (3.4, 0.0), (4.5, 2.4)]),
     # the far end of every aisle, both ends of the main lane, between the mid-lane pallet and the wall
+    # every corner of the lobby, behind the bench, between the pillars (the people do not block a grid)
+    "lobby": (0.7, [(0.4, 0.4), (7.6, 0.4), (0.4, 5.6), (6.8, 5.0), (5.2, 3.0), (3.0, 3.05)]),
     "warehouse": (1.1, [(0.75, 0.4), (3.0, 0.4), (5.1, 0.4), (7.2, 0.4), (9.3, 0.4), (11.4, 1.2),
                         (0.4, 7.6), (11.6, 7.6), (8.0, 7.5)]),
 }
@@ -318,7 +320,8 @@ LAB_WORLDS = list_worlds("lab")
 
 
 def test_lab_arenas_are_listed_apart() -> None:
-    assert set(LAB_WORLDS) == {"lab_object", "lab_dead_end", "lab_narrow_gap", "lab_cluttered", "lab_appearing"}
+    assert set(LAB_WORLDS) == {"lab_object", "lab_dead_end", "lab_narrow_gap", "lab_cluttered", "lab_appearing",
+                               "lab_passerby"}
     assert not set(LAB_WORLDS) & set(list_worlds())
     assert sorted(list_worlds() + LAB_WORLDS) == list_worlds("all")
 

@@ -172,6 +172,9 @@ class JudgeNode(Node):
         self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,  # (msg, info): see _own_truth
                                  QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(String, "collisions", self._on_collision, QoSProfile(depth=50))
+        if hasattr(self.judge, "on_walkers"):  # the people walking, for a judge that casts the robot's view
+            self.create_subscription(String, "walkers", self._on_walkers,
+                                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self._cmd_vel_seen = not bool(p["wait_for_cmd_vel"])
         self._cmd_type = "TwistStamped" if bool(p["cmd_vel_stamped"]) else str(p["cmd_vel_type"])
         if self._cmd_type not in (*CMD_TYPES, "auto"):
@@ -446,6 +449,14 @@ class JudgeNode(Node):
             self.get_logger().warning(f"unreadable collision event {msg.data!r}: {exc}")
             return
         self.judge.on_collision(t, x, y)
+
+    def _on_walkers(self, msg: Any) -> None:
+        try:
+            sample = json.loads(msg.data)
+            t, circles = float(sample["t"]), sample["circles"]
+            self.judge.on_walkers(t, circles)
+        except (ValueError, KeyError, TypeError) as exc:
+            self.get_logger().warning(f"unreadable walkers sample {msg.data[:80]!r}: {exc}")
 
     # -------------------------------------------------------------- the end
     def _conclude(self) -> None:

@@ -6,7 +6,9 @@ What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
   until the next one, like Gazebo's diff drive; ``cmd_vel_timeout`` can make it expire instead);
 - publishes ``/clock`` (every step), ``scan`` at the LiDAR's rate, ``odom`` and ``ground_truth_odom``
   at ``odom_rate_hz``, and one ``collisions`` message per collision *event* (rising edge of the
-  physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``.
+  physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``; in a world with people walking
+  (``walkers``, :mod:`bt_nav_sim.walkers`) also ``walkers`` with every ground-truth sample, JSON
+  ``{"t", "circles": [[x, y, r], ...]}``, for judges and viewers (the robot sees them in its scans).
 
 QoS, so that any reasonable node connects (a reader matches a writer when the writer's reliability is at
 least the reader's): ``scan``, ``odom`` and ``ground_truth_odom`` are RELIABLE writers (depth 5, 10 and
@@ -448,6 +450,9 @@ class _RobotIO:
         self.truth_pub = node.create_publisher(Odometry, f"{prefix}ground_truth_odom",
                                                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.collision_pub = node.create_publisher(String, f"{prefix}collisions", QoSProfile(depth=50))
+        self.walkers = node.sim.walkers if len(node.sim.walkers) else None
+        self.walkers_pub = None if self.walkers is None else node.create_publisher(
+            String, f"{prefix}walkers", QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         if stamped:
             node.create_subscription(TwistStamped, f"{prefix}cmd_vel",
                                      lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), cmd_qos)
@@ -496,6 +501,10 @@ class _RobotIO:
             self._publish_collision(out.t_ns, state)
         if out.odom:
             core = self.core
+            if self.walkers_pub is not None:  # before the pose it goes with: a judge reads it first
+                circles = np.round(self.walkers.circles(), 4).tolist()
+                self.walkers_pub.publish(String(data=json.dumps({"t": round(out.t_ns * 1e-9, 6),
+                                                                 "circles": circles})))
             self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
             self.odom_pub.publish(self._odom_msg)
             self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
