@@ -340,7 +340,8 @@ class CheckoffJudge(Verdict):
         """
         cfg = self.config
         start = self.commands[a][0]
-        reading = self._reading_at(start)
+        candidates = self._readings_at(start)
+        reading = candidates[0]
         trigger, trigger_text = self._trigger(reading)
         # A recovery: the robot stood (it braked), its path was blocked, and the trigger did not hold even
         # without the margin (the margin is the robot's benefit of the doubt for its own maneuvers, not a
@@ -355,6 +356,9 @@ class CheckoffJudge(Verdict):
         motion = self._max_displacement(start + cfg.brake_allowance, settle) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
         angle_ok, rule = self._angle_rule(angle, reading)
+        for other in candidates[1:]:  # among people: the side may follow any reading the robot could have had
+            if not angle_ok:
+                angle_ok, rule = self._angle_rule(angle, other)
         moved_on, moved_text = self._moved_on(settle, next_start, now)
         if interrupted:  # the disarm stopped it: its angle is whatever it had reached
             angle_ok, rule = True, "interrupted by the disarm (angle not judged)"
@@ -369,19 +373,19 @@ class CheckoffJudge(Verdict):
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items()}}
 
-    def _reading_at(self, start: float) -> _Reading | None:
-        """The trigger reading of an episode starting at ``start``: the sample at it; among people walking,
-        the first sample of the last ``scan_age`` s at which the trigger held, if one did (a person moves
-        half a metre in the time a scan takes to reach the robot's decision)."""
+    def _readings_at(self, start: float) -> list[_Reading | None]:
+        """The trigger readings an episode starting at ``start`` may have been decided on: the sample at it;
+        among people walking, those of the last ``scan_age`` s at which the trigger held, if any did (a
+        person moves half a metre in the time a scan takes to reach the robot's decision), oldest first."""
         if not self._t:
-            return None
+            return [None]
         i = self._index_at(start)
         if self._walkers:
             first = self._index_at(start - self.config.scan_age)
-            for reading in self._readings[first:i + 1]:
-                if reading is not None and self._trigger(reading)[0]:
-                    return reading
-        return self._readings[i]
+            held = [r for r in self._readings[first:i + 1] if r is not None and self._trigger(r)[0]]
+            if held:
+                return held
+        return [self._readings[i]]
 
     def _stood_before(self, a: int) -> float:
         """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""

@@ -126,6 +126,10 @@ def _draw_world(ax: Any, world: World) -> None:
         ax.plot([x1, x2], [y1, y2], color="#222222", lw=2.0, solid_capstyle="round", zorder=2)
     for cx, cy, r in world.circles:
         ax.add_patch(Circle((cx, cy), r, facecolor="#555555", edgecolor="#222222", lw=0.5, zorder=2))
+    for walker in world.walkers:  # people walking: the lane they pace, as wide as they are
+        ax.plot(walker.path[:, 0], walker.path[:, 1], color="#e377c2", lw=2.0, alpha=0.35,
+                solid_capstyle="round", zorder=1.5)
+        ax.plot(walker.path[:, 0], walker.path[:, 1], color="#e377c2", lw=0.8, ls=":", zorder=1.6)
 
 
 def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: Mapping[str, Any],

@@ -115,3 +115,29 @@ def test_the_bundled_worlds_with_people() -> None:
             sim.advance([(0.0, 0.0)])
         assert not np.allclose(start, sim.walkers.xy)  # they walk
         assert sim.collisions == 0 and math.isfinite(float(sim.walkers.xy.sum()))
+
+
+def _judge_a_turn_after_a_person_passed(walkers: bool) -> dict:
+    """Maneuver A's judge: armed at 5 s, a robot standing at (-2, 0) facing +x; a person 0.3 m ahead until
+    t = 6.0 s who is gone by 6.2 s, when the robot starts a 120 deg turn in place (it decided on the older
+    scan). ``walkers``: whether the simulator reported the person (else the judge sees a static world)."""
+    judge = CheckoffJudge(CheckoffConfig(maneuver="A"), world_from_dict({"name": "w", "boxes": ROOM}))
+    judge.start(0.0)
+    for k in range(0, 161):  # ground truth at 20 Hz, 0..8 s
+        t = k * 0.05
+        for action in judge.step(t):
+            judge.on_activate_result(t, action.data, True)
+        if walkers:
+            judge.on_walkers(t, [[-1.5, 0.0, 0.2]] if t <= 6.0 else [[-1.5, 3.0, 0.2]])
+        turned = math.radians(120.0) * min(1.0, max(0.0, (t - 6.2) / 1.0))
+        judge.observe(t, -2.0, 0.0, turned)
+        judge.on_command(t, 0.0, 2.0 if 6.2 <= t < 7.2 else 0.0)
+    (episode,) = judge.results()["maneuvers"]
+    return episode
+
+
+def test_a_turn_on_a_person_who_just_left_is_judged_on_the_scan_the_robot_had() -> None:
+    seen = _judge_a_turn_after_a_person_passed(walkers=True)
+    assert seen["trigger"] and seen["angle_ok"] and seen["readings"]["front"] == pytest.approx(0.3, abs=0.01)
+    unseen = _judge_a_turn_after_a_person_passed(walkers=False)
+    assert not unseen["trigger"], unseen  # the judge without the person: nothing ahead, the trigger failed
