@@ -167,7 +167,7 @@ def _finish(run: dict[str, Any], opts: argparse.Namespace, rec: Any, verdict: di
 
         world = load_world(run["world"], seed=None if opts.seed < 0 else opts.seed)
         title = f"{world.name}, lab check-off of maneuver {run['maneuver']}, seed {opts.seed} (ROS, sim time)"
-        written.append(plot_run(world, traj, verdict, run_dir / "trajectory.png", title=title))
+        written.append(plot_run(world, traj, verdict, run_dir / "trajectory.png", title=title, min_distance=None))
     except Exception as exc:  # a missing matplotlib must not hide the verdict
         print(f"bt-nav demo: no trajectory picture: {exc}", file=sys.stderr)
     if opts.video and bag_dir:

@@ -104,12 +104,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, default=0.0, help="stop after this many wall seconds (0: Ctrl-C)")
     parser.add_argument("--world", help="world name for /bt_nav/mission (default: the simulator's parameter)")
     parser.add_argument("--seed", type=int, help="seed for /bt_nav/mission (default: the simulator's)")
+    parser.add_argument("--profile", help="profile for /bt_nav/mission, e.g. lab (default: the simulator's)")
     parser.add_argument("--wall-time", action="store_true", help="no /clock on this graph: stamp with wall time")
     parser.add_argument("--no-ask", action="store_true", help="do not ask the simulator for world and seed")
     parser.add_argument("--events-executor", action="store_true",
                         help="spin rclpy's experimental EventsExecutor (about half the CPU; used by grade --exe)")
     args = parser.parse_args(argv)
-    mission = {k: v for k, v in (("world", args.world), ("seed", args.seed)) if v is not None}
+    mission = {k: v for k, v in (("world", args.world), ("seed", args.seed), ("profile", args.profile))
+               if v is not None}
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())

@@ -48,6 +48,7 @@ from bt_nav.media.treetext import parse_snapshot
 CLOCK, SCAN, ODOM, TRUTH, CMD = "/clock", "/scan", "/odom", "/ground_truth_odom", "/cmd_vel"
 TREE, EVENTS, MISSION, COLLISIONS, ROSOUT = ("/bt_nav_executive/tree", "/bt_nav/events", "/bt_nav/mission",
                                              "/collisions", "/rosout")
+WALKERS = "/walkers"  # the simulator's people walking (JSON {"t", "circles"}), in worlds that have them
 
 
 @dataclass(frozen=True)
@@ -72,11 +73,12 @@ TOPICS: dict[str, TopicSpec] = {
     EVENTS: TopicSpec("std_msgs/msg/String", depth=100),
     MISSION: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
     COLLISIONS: TopicSpec("std_msgs/msg/String", depth=50),
+    WALKERS: TopicSpec("std_msgs/msg/String", depth=100),
 }
 
 
 #: Topics a robot publishes in its namespace (the others, /clock and /bt_nav/mission, exist once per bag).
-ROBOT_TOPICS: tuple[str, ...] = (SCAN, ODOM, TRUTH, CMD, TREE, EVENTS, COLLISIONS)
+ROBOT_TOPICS: tuple[str, ...] = (SCAN, ODOM, TRUTH, CMD, TREE, EVENTS, COLLISIONS, WALKERS)
 
 
 def split_namespace(topic: str) -> tuple[str, str]:
@@ -278,6 +280,10 @@ class MissionBag:
     def collision(self, t: float, x: float, y: float, yaw: float = 0.0) -> None:
         """/collisions: the simulator's JSON collision event."""
         self.string(COLLISIONS, t, json.dumps({"t": round(t, 4), "x": x, "y": y, "yaw": yaw}))
+
+    def walkers(self, t: float, circles: Any) -> None:
+        """/walkers: where the people walking are, as the simulator node publishes it."""
+        self.string(WALKERS, t, json.dumps({"t": round(t, 6), "circles": np.round(circles, 4).tolist()}))
 
     def mission(self, t: float, info: dict[str, Any]) -> None:
         """/bt_nav/mission: JSON facts about the run (world, maneuver, seed, profile, verdict...)."""

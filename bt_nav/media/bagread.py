@@ -19,6 +19,7 @@ ground truth, in name order. Its top-level fields are the first robot's (plus th
 
 from __future__ import annotations
 
+import bisect
 import json
 import math
 from collections.abc import Iterator
@@ -38,6 +39,7 @@ from bt_nav.media.bag import (
     SCAN,
     TREE,
     TRUTH,
+    WALKERS,
     BagError,
     split_namespace,
     typestore,
@@ -125,6 +127,7 @@ class MissionRecord:
     trees: list[tuple[float, str]] = field(default_factory=list)
     events: list[tuple[float, str]] = field(default_factory=list)
     collisions: list[dict[str, Any]] = field(default_factory=list)
+    walkers: list[tuple[float, np.ndarray]] = field(default_factory=list)  # (t, circles (K, 3)): people walking
     mission: dict[str, Any] = field(default_factory=dict)
     start: float = 0.0
     end: float = 0.0
@@ -145,6 +148,13 @@ class MissionRecord:
         from the same instant, and the first /clock is where the bag's sim time begins (0 in lock-step).
         """
         return self.start if self.clock_start is None else self.clock_start
+
+    def walkers_at(self, t: float) -> np.ndarray | None:
+        """The people walking at ``t`` (circles (K, 3) of the latest sample at or before it); None if none."""
+        if not self.walkers:
+            return None
+        k = bisect.bisect_right(self.walkers, t, key=lambda sample: sample[0]) - 1
+        return self.walkers[k][1] if k >= 0 else None
 
     def scan_at(self, t: float) -> tuple[float, np.ndarray, np.ndarray] | None:
         """The latest scan at or before ``t`` as (its stamp, x, y): its returns in the world frame, placed from
@@ -252,6 +262,7 @@ class _Collector:
         self.trees: list[tuple[float, str]] = []
         self.events: list[tuple[float, str]] = []
         self.collisions: list[dict[str, Any]] = []
+        self.walkers: list[tuple[float, np.ndarray]] = []
         self.mission: dict[str, Any] = {}
         self.counts: dict[str, int] = {}
         self.t_min, self.t_max = float("inf"), float("-inf")
@@ -280,6 +291,10 @@ class _Collector:
             self.events.append((t, msg.data))
         elif topic == COLLISIONS:
             self.collisions.append(_json_or_text(msg.data))
+        elif topic == WALKERS:
+            circles = _json_or_text(msg.data).get("circles")
+            if isinstance(circles, list):
+                self.walkers.append((t, np.asarray(circles, dtype=np.float64).reshape(-1, 3)))
         elif topic == MISSION:
             info = _json_or_text(msg.data)
             self.mission.update(info)
@@ -306,7 +321,7 @@ class _Collector:
                 rec.robots[namespace.strip("/")] = robot
         if rec.robots and not self.truth:
             first = next(iter(rec.robots.values()))
-            for name in ("truth", "odom", "scans", "cmd", "trees", "events", "collisions"):
+            for name in ("truth", "odom", "scans", "cmd", "trees", "events", "collisions", "walkers"):
                 setattr(rec, name, getattr(first, name))
         return rec
 
@@ -318,7 +333,8 @@ class _Collector:
         return MissionRecord(path=path, counts=self.counts, truth=Poses.from_rows(self.truth),
                              odom=Poses.from_rows(self.odom), scans=scans,
                              cmd=np.asarray(self.cmd, dtype=np.float64).reshape(-1, 3), trees=self.trees,
-                             events=self.events, collisions=self.collisions, mission=self.mission,
+                             events=self.events, collisions=self.collisions, walkers=self.walkers,
+                             mission=self.mission,
                              start=self.t_min if self.counts else 0.0, end=self.t_max if self.counts else 0.0,
                              truncated=truncated, clock_start=self.clock_start)
 

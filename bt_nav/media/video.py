@@ -356,12 +356,14 @@ class VideoRenderer:
         return img
 
     def _draw_start(self, d: Any, truth: Any = None, colour: tuple[int, int, int] = (31, 119, 180)) -> None:
-        """The start point and the 1.5 m circle around it (of ``truth``, default the record's)."""
+        """The start point and the homework's 1.5 m circle around it (of ``truth``, default the record's; the
+        lab has no circle)."""
         truth = self.rec.truth if truth is None else truth
         if len(truth):
             cx, cy = self.view.px(truth.x[0], truth.y[0])
-            r = MIN_DISTANCE * self.view.scale
-            d.ellipse([cx - r, cy - r, cx + r, cy + r], outline=colour, width=2)
+            if self.rec.mission.get("profile") != "lab":
+                r = MIN_DISTANCE * self.view.scale
+                d.ellipse([cx - r, cy - r, cx + r, cy + r], outline=colour, width=2)
             d.ellipse([cx - 5, cy - 5, cx + 5, cy + 5], fill=colour)
 
     def _draw_world(self, d: Any) -> None:
@@ -404,6 +406,14 @@ class VideoRenderer:
         for u, w in zip(px.tolist(), py.tolist(), strict=True):
             d.rectangle([u - 1.5, w - 1.5, u + 1.5, w + 1.5], fill=colour)
 
+    def _draw_walkers(self, d: Any, t: float) -> None:
+        """The people walking where the simulator last said they were (pink disks), if the bag has them."""
+        circles = self.rec.walkers_at(t)
+        for x, y, r in ([] if circles is None else circles.tolist()):
+            px, py = self.view.px(x, y)
+            s = r * self.view.scale
+            d.ellipse([px - s, py - s, px + s, py + s], fill=(240, 170, 215), outline=(200, 60, 150), width=2)
+
     def _draw_robot(self, d: Any, x: float, y: float, yaw: float, fill: tuple[int, int, int] = (40, 40, 40)) -> None:
         px, py = self.view.px(x, y)
         r = ROBOT_RADIUS * self.view.scale
@@ -423,6 +433,7 @@ class VideoRenderer:
         img = self.layer.copy()
         d = self._Draw.Draw(img)
         pose = tr.at(t)
+        self._draw_walkers(d, t)
         if pose is not None:
             self._draw_scan(d, t)
             self._draw_robot(d, *pose)
@@ -594,7 +605,8 @@ def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
                "collision_events": [c for c in record.collisions if "x" in c and "y" in c]}
     if "passed" in record.mission:
         results["passed"] = bool(record.mission["passed"])
-    return plot_run(world, trajectory(record), results, out, title=f"{world.name} (bag {record.path.name})")
+    return plot_run(world, trajectory(record), results, out, title=f"{world.name} (bag {record.path.name})",
+                    min_distance=None if record.mission.get("profile") == "lab" else MIN_DISTANCE)
 
 
 def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path:
@@ -663,6 +675,7 @@ class TracksRenderer(VideoRenderer):
             self._extend_track(tr, tr.index(t) + 1)
         img = self.layer.copy()
         d = self._Draw.Draw(img)
+        self._draw_walkers(d, t)
         for tr in self.tracks:
             pose = tr.rec.truth.at(t)
             if pose is not None:

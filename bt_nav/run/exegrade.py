@@ -249,7 +249,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     try:
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
         if settings.record != "off":  # first and listening before the simulator starts
-            recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed)
+            recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed, settings.profile)
         launcher.start(sim_spec)
         try:
             node = launcher.start(ExeSpec(argv), cwd=settings.cwd)

@@ -118,7 +118,8 @@ def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[s
     world = _world(row, record)
     moved = len(record.truth) > 0
     title = run_title(row) + ("" if moved else " (no ground truth in its bag)")
-    plot_run(world, _path(record), _results(row, record), run_dir / PICTURE, title=title)
+    plot_run(world, _path(record), _results(row, record), run_dir / PICTURE, title=title,
+             min_distance=None if row.get("profile") == "lab" else 1.5)
     out: dict[str, Any] = {"picture_s": round(time.perf_counter() - started, 2),
                            "note": "" if moved else "no ground truth in the bag: the world only, no video"}
     if film and moved:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH
+from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
 
 #: The bag's directory name inside the run directory.
 BAG = "bag"
@@ -45,7 +45,7 @@ READY_TIMEOUT = 10.0
 #: log lines as events, a bt_nav executive's tree). Not ``/clock`` (every message is stamped with its sim time
 #: anyway, and at 5x real time it is the busiest topic) nor ``/odom`` (what the node sees; the pictures use ground
 #: truth): fewer messages, less of the recorder's CPU taken from the run.
-RUN_TOPICS = (SCAN, TRUTH, CMD, COLLISIONS, ROSOUT, TREE)
+RUN_TOPICS = (SCAN, TRUTH, CMD, COLLISIONS, ROSOUT, TREE, WALKERS)
 #: What ``--record`` accepts: every run's bag kept, only the failed runs' (the passed runs' deleted once their
 #: trajectory picture is drawn), or no bag at all (a benchmark; no pictures, no videos).
 RECORD_MODES = ("on", "failures", "off")
@@ -87,6 +87,7 @@ class RecordSpec:
     bag: Path
     world: str
     seed: int
+    profile: str = "homework"
     executable: str = "record"
 
     def command(self, python: str | None = None) -> list[str]:
@@ -95,7 +96,8 @@ class RecordSpec:
         own = [] if any(os.environ.get(v) for v in PROFILE_VARIABLES) else [  # the user's profile stays
             f"{v}={recorder_profile()}" for v in PROFILE_VARIABLES]
         return [*(["env", *own] if own else []), python or sys.executable, "-m", "bt_nav.cli", "record",
-                str(self.bag), "--world", self.world, "--seed", str(self.seed), "--no-ask", "--events-executor",
+                str(self.bag), "--world", self.world, "--seed", str(self.seed), "--profile", self.profile, "--no-ask",
+                "--events-executor",
                 "--topics", *RUN_TOPICS]
 
 
@@ -139,11 +141,11 @@ class RecorderWatch:
 
 
 def start_recorder(launcher: Any, sink: Callable[[str, str], None], run_dir: Path, world: str,
-                   seed: int) -> RecorderWatch:
+                   seed: int, profile: str = "homework") -> RecorderWatch:
     """Start the run's recorder (``run_dir/bag``) on ``launcher`` and wait until it listens (see the module
     docstring); start the simulator after this."""
     watch = RecorderWatch(sink)
-    watch.child = launcher.start(RecordSpec(run_dir / BAG, world, seed), sink=watch.sink)
+    watch.child = launcher.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
     watch.wait_listening()
     return watch
 

@@ -151,6 +151,8 @@ class Robot:
         if out.odom:
             if walkers is not None and self._on_walkers is not None:
                 self._on_walkers(t, walkers)
+            if walkers is not None and sink is not None:
+                sink.walkers(t, walkers)
             self.referee.observe(t, s.x, s.y, s.yaw)
             self.core.feed_odom(sim.odom_yaw, t, x=sim.odom_x, y=sim.odom_y)
             samples = self.samples

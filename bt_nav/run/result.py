@@ -130,6 +130,7 @@ class RunResult:
         r0 = self.results[0]
         title = f"{r0.world}, maneuver {r0.maneuver}, seed {r0.seed}"
         if len(self.results) == 1:
-            return plot_run(r0.world_model, r0.trajectory, r0.results, path, title=title)
+            return plot_run(r0.world_model, r0.trajectory, r0.results, path, title=title,
+                            min_distance=None if r0.profile == "lab" else 1.5)
         runs = [(n, r.trajectory, r.results) for n, r in zip(self.names, self.results, strict=True)]
         return plot_robots(r0.world_model, runs, path, title=f"{title}, {len(self.results)} robots")

@@ -7,7 +7,7 @@ engine. Times are sim seconds throughout (the one time base of a lock-step run).
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 from bt_nav.mission.scan import Scan
 
@@ -24,6 +24,7 @@ class MissionSink(Protocol):
     def cmd(self, t: float, v: float, w: float) -> None: ...  # noqa: D102
     def tree(self, t: float, snapshot: str) -> None: ...  # noqa: D102
     def event(self, t: float, text: str) -> None: ...  # noqa: D102
+    def walkers(self, t: float, circles: Any) -> None: ...  # noqa: D102
 
 
 class RunSink(MissionSink, Protocol):

@@ -133,7 +133,7 @@ def _draw_world(ax: Any, world: World) -> None:
 
 
 def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: Mapping[str, Any],
-             path: str | Path, title: str | None = None, min_distance: float = 1.5) -> Path:
+             path: str | Path, title: str | None = None, min_distance: float | None = 1.5) -> Path:
     """Draw one run to ``path`` (format from the suffix, e.g. .png or .svg); returns the path.
 
     ``results`` is the referee's results dict (``passed``, ``travelled``, ``max_distance_from_start``,
@@ -153,7 +153,8 @@ def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: 
     try:
         _draw_world(ax, world)
         sx, sy = (float(traj.x[0]), float(traj.y[0])) if len(traj) else world.spawn[:2]
-        ax.add_patch(Circle((sx, sy), min_distance, fill=False, ls="--", lw=1.0, color="#1f77b4", zorder=3))
+        if min_distance is not None:  # the homework's circle (the lab has none)
+            ax.add_patch(Circle((sx, sy), min_distance, fill=False, ls="--", lw=1.0, color="#1f77b4", zorder=3))
         if len(traj) > 1:
             points = np.column_stack([traj.x, traj.y])
             segs = np.stack([points[:-1], points[1:]], axis=1)
@@ -173,8 +174,9 @@ def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: 
         handles += [
             Line2D([], [], marker="o", ls="", color="#1f77b4", label="start"),
             Line2D([], [], marker="s", ls="", color="black", label="end"),
-            Line2D([], [], ls="--", color="#1f77b4", label=f"{min_distance} m from start"),
         ]
+        if min_distance is not None:
+            handles.append(Line2D([], [], ls="--", color="#1f77b4", label=f"{min_distance} m from start"))
         if traj.segments_of("Maneuver"):
             handles.append(Line2D([], [], marker="D", ls="", mfc="none", mec=BRANCH_COLOURS["Maneuver"],
                                   label="maneuver start"))

@@ -12,13 +12,24 @@ from typing import TYPE_CHECKING
 import pytest
 import yaml
 
-from bt_nav.media.bag import CLOCK, COLLISIONS, EVENTS, ROBOT_TOPICS, SCAN, TOPICS, TREE, BagError, MissionBag
+from bt_nav.media.bag import (
+    CLOCK,
+    COLLISIONS,
+    EVENTS,
+    ROBOT_TOPICS,
+    SCAN,
+    TOPICS,
+    TREE,
+    WALKERS,
+    BagError,
+    MissionBag,
+)
 from bt_nav.media.bagread import read_bag
 
 if TYPE_CHECKING:
     from conftest import RobotsBag  # tests/media/conftest.py
 
-EXPECTED = [topic for topic in TOPICS if topic != COLLISIONS]  # no collision in this mission
+EXPECTED = [topic for topic in TOPICS if topic not in (COLLISIONS, WALKERS)]  # no collision, no people here
 
 
 def test_rosbags_reader_counts_every_topic(robots_bag: RobotsBag) -> None:
@@ -28,7 +39,7 @@ def test_rosbags_reader_counts_every_topic(robots_bag: RobotsBag) -> None:
         counts = {c.topic: c.msgcount for c in reader.connections}
         types = {c.topic: c.msgtype for c in reader.connections}
     expected = [(topic, name) for name in EXPECTED for topic in robots_bag.topics(name)]
-    assert len(expected) == len(EXPECTED) + (robots_bag.robots - 1) * (len(ROBOT_TOPICS) - 1)
+    assert len(expected) == len(EXPECTED) + (robots_bag.robots - 1) * (len(ROBOT_TOPICS) - 2)
     for topic, name in expected:
         assert counts.get(topic, 0) > 0, topic
         assert types[topic] == TOPICS[name].msgtype
@@ -120,3 +131,22 @@ def test_killed_writer_leaves_a_readable_bag(tmp_path: Path) -> None:
 def test_existing_directory_is_refused(tmp_path: Path) -> None:
     with pytest.raises(BagError, match="exists"):
         MissionBag(tmp_path)
+
+
+def test_people_walking_are_recorded_and_filmed(tmp_path: Path) -> None:
+    """A lock-step bag of a world with people holds /walkers as the simulator node publishes it; the record
+    gives where they were at any time, and a video frame draws them (the pink of their disks)."""
+    import numpy as np
+
+    from bt_nav.media.video import renderer_for
+    from bt_nav.run.lockstep import run_mission
+
+    with MissionBag(tmp_path / "bag", mission={"world": "lab_passerby", "profile": "lab"}) as bag:
+        run_mission("lab_passerby", "A", 0, profile="lab", duration=8.0, sink=bag)
+    record = read_bag(tmp_path / "bag")
+    assert record.counts[WALKERS] == record.counts["/ground_truth_odom"]
+    early, late = record.walkers_at(1.0), record.walkers_at(7.0)
+    assert early.shape == (3, 3) and np.all(early[:, 2] == 0.2) and not np.allclose(early, late)
+    assert record.walkers_at(-1.0) is None
+    frame = np.asarray(renderer_for(record).frame(7.0))
+    assert np.any(np.all(frame == (240, 170, 215), axis=-1)), "the people are drawn"
