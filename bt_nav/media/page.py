@@ -56,10 +56,15 @@ function draw(st) {
   if (st.trail.length) {
     const s0 = view.px(st.trail[0][0], st.trail[0][1]);
     ctx.strokeStyle = "#1f77b4"; ctx.lineWidth = 1.5; ctx.setLineDash([6, 4]);
-    ctx.beginPath(); ctx.arc(s0[0], s0[1], 1.5 * view.s, 0, 7); ctx.stroke(); ctx.setLineDash([]);
+    if (st.circle) { ctx.beginPath(); ctx.arc(s0[0], s0[1], 1.5 * view.s, 0, 7); ctx.stroke(); }
+    ctx.setLineDash([]);
     ctx.strokeStyle = "#2ca02c"; ctx.lineWidth = 3; ctx.beginPath();
     st.trail.forEach(([x, y], i) => { const p = view.px(x, y); i ? ctx.lineTo(p[0], p[1]) : ctx.moveTo(p[0], p[1]); });
     ctx.stroke();
+  }
+  ctx.fillStyle = "#f0aad7"; ctx.strokeStyle = "#c83c96"; ctx.lineWidth = 2;
+  for (const [x, y, r] of (st.walkers || [])) {
+    const c = view.px(x, y); ctx.beginPath(); ctx.arc(c[0], c[1], r * view.s, 0, 7); ctx.fill(); ctx.stroke();
   }
   ctx.fillStyle = "#e62828";
   for (const [x, y] of st.scan) { const p = view.px(x, y); ctx.fillRect(p[0] - 1.5, p[1] - 1.5, 3, 3); }

@@ -27,7 +27,7 @@ from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
 
-from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, typestore
+from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, WALKERS, typestore
 from bt_nav.media.bagread import MissionRecord
 from bt_nav.media.page import PAGE
 from bt_nav.media.treetext import active_path, parse_snapshot
@@ -100,12 +100,13 @@ class LiveScene(Scene):
         self.tree: list[dict[str, Any]] = []
         self.events: deque[str] = deque(maxlen=EVENT_LINES)
         self.cmd = (0.0, 0.0)
+        self.walkers: list[list[float]] = []
         self.mission: dict[str, Any] = {}
         self.world_loader: Any = None  # callable(mission dict) -> World or None, set by the command
 
     def feed(self, topic: str, msgtype: str, t_ns: int, data: bytes, _qos: Any = None) -> None:
         """One message from the graph (the GraphTap handler signature)."""
-        if topic not in (TRUTH, ODOM, SCAN, TREE, EVENTS, CMD, MISSION):
+        if topic not in (TRUTH, ODOM, SCAN, TREE, EVENTS, CMD, MISSION, WALKERS):
             return
         msg = self.ts.deserialize_cdr(data, msgtype)
         with self.lock:
@@ -131,6 +132,8 @@ class LiveScene(Scene):
             self.events.append(f"[{self.t:7.2f}] {msg.data}")
         elif topic == CMD:
             self.cmd = (msg.linear.x, msg.angular.z)
+        elif topic == WALKERS:
+            self.walkers = json.loads(msg.data).get("circles", [])
         elif topic == MISSION:
             self.mission.update(json.loads(msg.data) if msg.data.startswith("{") else {})
             if self.world_loader is not None and self.world is None:
@@ -141,7 +144,8 @@ class LiveScene(Scene):
             pts = scan_points(*self.pose, *self.scan) if self.pose and self.scan else []
             return {"mode": "live", "t": round(self.t, 3), "pose": list(self.pose) if self.pose else None,
                     "trail": list(self.trail), "scan": pts, "tree": self.tree, "events": list(self.events),
-                    "cmd": list(self.cmd), "version": self.version}
+                    "cmd": list(self.cmd), "walkers": self.walkers,
+                    "circle": self.mission.get("profile") != "lab", "version": self.version}
 
 
 class BagScene(Scene):
@@ -203,9 +207,12 @@ class BagScene(Scene):
         j = next((n for n in range(len(rec.trees) - 1, -1, -1) if rec.trees[n][0] <= t), -1)
         events = [f"[{et:7.2f}] {text}" for et, text in rec.events if et <= t][-EVENT_LINES:]
         c = int(np.searchsorted(rec.cmd[:, 0], t, side="right")) - 1 if len(rec.cmd) else -1
+        walkers = rec.walkers_at(t)
         return {"mode": "bag", "t": round(t, 3), "start": rec.start, "end": rec.end, "playing": self.playing,
                 "pose": pose, "trail": trail, "scan": pts, "tree": tree_json(rec.trees[j][1]) if j >= 0 else [],
-                "events": events, "cmd": rec.cmd[c, 1:].tolist() if c >= 0 else [0.0, 0.0], "version": self.version}
+                "events": events, "cmd": rec.cmd[c, 1:].tolist() if c >= 0 else [0.0, 0.0],
+                "walkers": [] if walkers is None else walkers.tolist(), "circle": rec.mission.get("profile") != "lab",
+                "version": self.version}
 
 
 def page_html() -> bytes:

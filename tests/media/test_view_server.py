@@ -94,3 +94,20 @@ def test_stream_sends_states(server: ViewServer) -> None:
             data += sock.recv(65536)
     payload = data.split(b"\ndata: ", 1)[1].split(b"\n\n", 1)[0]
     assert json.loads(payload)["mode"] == "bag"
+
+
+def test_people_walking_are_in_the_state_and_the_lab_has_no_circle(tmp_path: Path) -> None:
+    from bt_nav.media.bag import MissionBag
+    from bt_nav.run.lockstep import run_mission
+
+    with MissionBag(tmp_path / "bag", mission={"world": "lab_passerby", "profile": "lab"}) as bag:
+        run_mission("lab_passerby", "A", 0, profile="lab", duration=3.0, sink=bag)
+    rec = read_bag(tmp_path / "bag")
+    scene = BagScene(rec, world_of(rec))
+    try:
+        scene.control({"t": 2.0})
+        state = scene.state()
+        assert len(state["walkers"]) == 3 and all(len(c) == 3 for c in state["walkers"])
+        assert state["circle"] is False
+    finally:
+        scene.close()
