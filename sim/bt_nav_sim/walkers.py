@@ -95,15 +95,6 @@ def walker_from_dict(entry: dict, where: str) -> WalkerSpec:
     return spec
 
 
-def path_distance(spec: WalkerSpec, x: float, y: float) -> float:
-    """Distance from (x, y) to the walker's path (its centre line)."""
-    a, d = spec.path[:-1], np.diff(spec.path, axis=0)
-    len2 = np.einsum("ij,ij->i", d, d)
-    t = np.clip(np.einsum("ij,ij->i", np.array([x, y]) - a, d) / np.where(len2 > 0, len2, 1.0), 0.0, 1.0)
-    e = a + t[:, None] * d - np.array([x, y])
-    return float(np.sqrt(np.einsum("ij,ij->i", e, e).min()))
-
-
 class Walkers:
     """The people of one run: where each is, and one step of their walk (see the module docstring)."""
 

@@ -78,7 +78,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, path_distance, walker_from_dict
+from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, walker_from_dict
 
 WORLDS_DIR = Path(__file__).parent / "worlds"
 #: Name prefix of the lab's check-off arenas among the bundled worlds.
@@ -576,7 +576,7 @@ def _parse_walkers(d: dict, where: str, spawn: tuple[float, float, float]) -> tu
     for i, entry in enumerate(d.get("walkers") or []):
         ww = f"{where} walker {i}"
         spec = walker_from_dict(entry, ww)
-        gap = path_distance(spec, spawn[0], spawn[1]) - spec.radius - SPAWN_ROBOT_RADIUS
+        gap = _path_distance(spec.path, spawn[0], spawn[1]) - spec.radius - SPAWN_ROBOT_RADIUS
         if gap < SPAWN_CLEARANCE:
             raise ValueError(f"{ww}: its path passes {gap:.2f} m from a robot at the spawn; keep at least "
                              f"{SPAWN_CLEARANCE} m")
