@@ -87,9 +87,10 @@ class CheckoffConfig:
     move_on_within: float = 10.0  # s after settling in which the robot must move on ...
     move_on_distance: float = 0.02  # ... by this much (or start another episode)
     side_tie: float = 0.15  # C: left and right closer than this count as a tie (either side passes)
-    # s: among people walking, the robot decided on a scan up to this old (LDS-01: a 0.2 s period, plus a
-    # tick): the trigger holds if it held at any sample this long before the episode's start
-    scan_age: float = 0.3
+    # s: among people walking, the robot decided on a scan up to this old (LDS-01: a 0.2 s period, a 0.05 s
+    # tick, up to 0.05 s of DDS delay in sim time, and slack): the trigger holds if it held at any sample this
+    # long before the episode's start
+    scan_age: float = 0.4
     open_space: float = 3.0  # C: both sides beyond this count as a tie too
     aeb_distance: float = 0.35  # an obstacle this close in the swept path makes a turn an AEB recovery
     aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned)
@@ -382,10 +383,17 @@ class CheckoffJudge(Verdict):
         i = self._index_at(start)
         if self._walkers:
             first = self._index_at(start - self.config.scan_age)
-            held = [r for r in self._readings[first:i + 1] if r is not None and self._trigger(r)[0]]
+            window = [self._readings[k] or self._cast_at(k) for k in range(first, i + 1)]
+            held = [r for r in window if self._trigger(r)[0]]
             if held:
                 return held
         return [self._readings[i]]
+
+    def _cast_at(self, k: int) -> _Reading:
+        """The reading of sample ``k`` though it was taken before the arming (an episode that starts at the arming
+        may have been decided on a scan from just before it)."""
+        t = self._t[k]
+        return self._read(self._x[k], self._y[k], self._yaw[k], self._walkers_at(t))
 
     def _stood_before(self, a: int) -> float:
         """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""

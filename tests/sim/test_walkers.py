@@ -117,10 +117,11 @@ def test_the_bundled_worlds_with_people() -> None:
         assert sim.collisions == 0 and math.isfinite(float(sim.walkers.xy.sum()))
 
 
-def _judge_a_turn_after_a_person_passed(walkers: bool) -> dict:
+def _judge_a_turn_after_a_person_passed(walkers: bool, leaves: float = 6.0, turns: float = 6.2) -> dict:
     """Maneuver A's judge: armed at 5 s, a robot standing at (-2, 0) facing +x; a person 0.3 m ahead until
-    t = 6.0 s who is gone by 6.2 s, when the robot starts a 120 deg turn in place (it decided on the older
-    scan). ``walkers``: whether the simulator reported the person (else the judge sees a static world)."""
+    ``leaves`` who is gone by ``turns``, when the robot starts a 120 deg turn in place for 1 s (it decided on
+    the older scan). ``walkers``: whether the simulator reported the person (else the judge sees a static
+    world)."""
     judge = CheckoffJudge(CheckoffConfig(maneuver="A"), world_from_dict({"name": "w", "boxes": ROOM}))
     judge.start(0.0)
     for k in range(0, 161):  # ground truth at 20 Hz, 0..8 s
@@ -128,10 +129,10 @@ def _judge_a_turn_after_a_person_passed(walkers: bool) -> dict:
         for action in judge.step(t):
             judge.on_activate_result(t, action.data, True)
         if walkers:
-            judge.on_walkers(t, [[-1.5, 0.0, 0.2]] if t <= 6.0 else [[-1.5, 3.0, 0.2]])
-        turned = math.radians(120.0) * min(1.0, max(0.0, (t - 6.2) / 1.0))
+            judge.on_walkers(t, [[-1.5, 0.0, 0.2]] if t <= leaves + 1e-9 else [[-1.5, 3.0, 0.2]])
+        turned = math.radians(120.0) * min(1.0, max(0.0, (t - turns) / 1.0))
         judge.observe(t, -2.0, 0.0, turned)
-        judge.on_command(t, 0.0, 2.0 if 6.2 <= t < 7.2 else 0.0)
+        judge.on_command(t, 0.0, 2.0 if turns - 1e-9 <= t < turns + 1.0 else 0.0)
     (episode,) = judge.results()["maneuvers"]
     return episode
 
@@ -141,3 +142,6 @@ def test_a_turn_on_a_person_who_just_left_is_judged_on_the_scan_the_robot_had() 
     assert seen["trigger"] and seen["angle_ok"] and seen["readings"]["front"] == pytest.approx(0.3, abs=0.01)
     unseen = _judge_a_turn_after_a_person_passed(walkers=False)
     assert not unseen["trigger"], unseen  # the judge without the person: nothing ahead, the trigger failed
+    # the turn that starts as the robot is armed, on the scan of a person who passed just before the arming
+    at_arming = _judge_a_turn_after_a_person_passed(walkers=True, leaves=4.95, turns=5.05)
+    assert at_arming["trigger"] and at_arming["readings"]["front"] == pytest.approx(0.3, abs=0.01), at_arming
