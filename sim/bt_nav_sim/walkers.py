@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -46,10 +46,17 @@ class WalkerSpec:
     pause: float = 1.0  # s standing at each end
     phase: float | None = None  # s into the cycle at time 0; None: drawn from the seed
 
-    @property
-    def length(self) -> float:
-        """Length of the path (m)."""
-        return float(np.hypot(*np.diff(self.path, axis=0).T).sum())
+    # Derived once (a walker steps every physics step): each piece of the path and the whole length.
+    _pieces: np.ndarray = field(init=False, repr=False)
+    _piece_lengths: np.ndarray = field(init=False, repr=False)
+    length: float = field(init=False)  # m, the path's length
+
+    def __post_init__(self) -> None:
+        pieces = np.diff(self.path, axis=0)
+        lengths = np.hypot(pieces[:, 0], pieces[:, 1])
+        object.__setattr__(self, "_pieces", pieces)
+        object.__setattr__(self, "_piece_lengths", lengths)
+        object.__setattr__(self, "length", float(lengths.sum()))
 
     @property
     def cycle(self) -> float:
@@ -58,10 +65,8 @@ class WalkerSpec:
 
     def point_at(self, along: float) -> tuple[float, float]:
         """The point ``along`` metres along the path (clamped to its ends)."""
-        seg = np.diff(self.path, axis=0)
-        lengths = np.hypot(seg[:, 0], seg[:, 1])
-        along = min(max(along, 0.0), float(lengths.sum()))
-        for (x, y), (dx, dy), length in zip(self.path[:-1], seg, lengths, strict=True):
+        along = min(max(along, 0.0), self.length)
+        for (x, y), (dx, dy), length in zip(self.path[:-1], self._pieces, self._piece_lengths, strict=True):
             if along <= length and length > 0:
                 f = along / length
                 return float(x + f * dx), float(y + f * dy)
