@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bt_nav_sim.walkers import walkers_message
 
 from bt_nav.media.treetext import parse_snapshot
 
@@ -283,7 +284,7 @@ class MissionBag:
 
     def walkers(self, t: float, circles: Any) -> None:
         """/walkers: where the people walking are, as the simulator node publishes it."""
-        self.string(WALKERS, t, json.dumps({"t": round(t, 6), "circles": np.round(circles, 4).tolist()}))
+        self.string(WALKERS, t, walkers_message(t, circles))
 
     def mission(self, t: float, info: dict[str, Any]) -> None:
         """/bt_nav/mission: JSON facts about the run (world, maneuver, seed, profile, verdict...)."""

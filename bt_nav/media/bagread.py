@@ -20,6 +20,7 @@ ground truth, in name order. Its top-level fields are the first robot's (plus th
 from __future__ import annotations
 
 import bisect
+import contextlib
 import json
 import math
 from collections.abc import Iterator
@@ -28,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from bt_nav_sim.walkers import read_walkers_message
 
 from bt_nav.media.bag import (
     CLOCK,
@@ -292,9 +294,8 @@ class _Collector:
         elif topic == COLLISIONS:
             self.collisions.append(_json_or_text(msg.data))
         elif topic == WALKERS:
-            circles = _json_or_text(msg.data).get("circles")
-            if isinstance(circles, list):
-                self.walkers.append((t, np.asarray(circles, dtype=np.float64).reshape(-1, 3)))
+            with contextlib.suppress(ValueError):  # an unreadable sample is skipped, like an unknown topic
+                self.walkers.append((t, read_walkers_message(msg.data)[1]))
         elif topic == MISSION:
             info = _json_or_text(msg.data)
             self.mission.update(info)

@@ -26,6 +26,7 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
+from bt_nav_sim.walkers import read_walkers_message
 
 from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, WALKERS, typestore
 from bt_nav.media.bagread import MissionRecord
@@ -133,7 +134,7 @@ class LiveScene(Scene):
         elif topic == CMD:
             self.cmd = (msg.linear.x, msg.angular.z)
         elif topic == WALKERS:
-            self.walkers = json.loads(msg.data).get("circles", [])
+            self.walkers = read_walkers_message(msg.data)[1].tolist()
         elif topic == MISSION:
             self.mission.update(json.loads(msg.data) if msg.data.startswith("{") else {})
             if self.world_loader is not None and self.world is None:

@@ -24,6 +24,7 @@ World YAML (see :mod:`bt_nav_sim.world`)::
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -72,6 +73,21 @@ class WalkerSpec:
                 return float(x + f * dx), float(y + f * dy)
             along -= length
         return float(self.path[-1, 0]), float(self.path[-1, 1])
+
+
+def walkers_message(t: float, circles: np.ndarray) -> str:
+    """The ``walkers`` message's text (std_msgs/String): JSON ``{"t": sim s, "circles": [[x, y, r], ...]}``, as
+    the simulator node publishes it and bags record it."""
+    return json.dumps({"t": round(float(t), 6), "circles": np.round(circles, 4).tolist()})
+
+
+def read_walkers_message(text: str) -> tuple[float, np.ndarray]:
+    """(t, circles (K, 3)) of a ``walkers`` message's text; ValueError when it is not one."""
+    try:
+        sample = json.loads(text)
+        return float(sample["t"]), np.asarray(sample["circles"], dtype=np.float64).reshape(-1, 3)
+    except (KeyError, TypeError, ValueError) as exc:  # json.JSONDecodeError is a ValueError
+        raise ValueError(f"not a walkers message: {text[:80]!r}") from exc
 
 
 def walker_from_dict(entry: dict, where: str) -> WalkerSpec:

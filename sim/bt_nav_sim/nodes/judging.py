@@ -69,6 +69,7 @@ from std_srvs.srv import SetBool
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.rosutil import declare_node_parameters
 from bt_nav_sim.nodes.audit import GraphAudit, is_ours
+from bt_nav_sim.walkers import read_walkers_message
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
@@ -452,11 +453,11 @@ class JudgeNode(Node):
 
     def _on_walkers(self, msg: Any) -> None:
         try:
-            sample = json.loads(msg.data)
-            t, circles = float(sample["t"]), sample["circles"]
-            self.judge.on_walkers(t, circles)
-        except (ValueError, KeyError, TypeError) as exc:
-            self.get_logger().warning(f"unreadable walkers sample {msg.data[:80]!r}: {exc}")
+            t, circles = read_walkers_message(msg.data)
+        except ValueError as exc:
+            self.get_logger().warning(f"unreadable walkers sample: {exc}")
+            return
+        self.judge.on_walkers(t, circles)
 
     # -------------------------------------------------------------- the end
     def _conclude(self) -> None:

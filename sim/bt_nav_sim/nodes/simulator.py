@@ -91,6 +91,7 @@ from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.multi import MultiSimCore, parse_starts
 from bt_nav_sim.pacing import Followers
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
+from bt_nav_sim.walkers import walkers_message
 
 NODE_NAME = "bt_nav_sim"
 
@@ -502,9 +503,7 @@ class _RobotIO:
         if out.odom:
             core = self.core
             if self.walkers_pub is not None:  # before the pose it goes with: a judge reads it first
-                circles = np.round(self.walkers.circles(), 4).tolist()
-                self.walkers_pub.publish(String(data=json.dumps({"t": round(out.t_ns * 1e-9, 6),
-                                                                 "circles": circles})))
+                self.walkers_pub.publish(String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles())))
             self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
             self.odom_pub.publish(self._odom_msg)
             self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
