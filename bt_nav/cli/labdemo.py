@@ -163,11 +163,12 @@ def _finish(run: dict[str, Any], opts: argparse.Namespace, rec: Any, verdict: di
     written = [run_dir / "run.json", *[p for p in (Path(run["results"]), run_dir / "trajectory.json") if p.is_file()]]
     try:
         from bt_nav_sim import load_world
-        from bt_nav_sim.plot import plot_run
+        from bt_nav_sim.plot import plot_run, start_circle
 
         world = load_world(run["world"], seed=None if opts.seed < 0 else opts.seed)
         title = f"{world.name}, lab check-off of maneuver {run['maneuver']}, seed {opts.seed} (ROS, sim time)"
-        written.append(plot_run(world, traj, verdict, run_dir / "trajectory.png", title=title, min_distance=None))
+        written.append(plot_run(world, traj, verdict, run_dir / "trajectory.png", title=title,
+                                min_distance=start_circle("lab")))
     except Exception as exc:  # a missing matplotlib must not hide the verdict
         print(f"bt-nav demo: no trajectory picture: {exc}", file=sys.stderr)
     if opts.video and bag_dir:

@@ -43,7 +43,6 @@ WIDTH, HEIGHT = 1280, 720
 MAP_W, MAP_H = 720, 560  # map panel (top left); the tree panel fills the rest of the top
 CONSOLE_Y = MAP_H  # console strip: full width below
 ROBOT_RADIUS = 0.105  # m: the Burger's footprint circumradius
-MIN_DISTANCE = 1.5  # m: the homework's circle around the start
 BG, INK, GRID, WALL = (250, 250, 247), (30, 30, 30), (228, 228, 222), (70, 70, 70)
 PANEL_BG, CONSOLE_BG, CONSOLE_INK = (244, 244, 250), (22, 24, 28), (210, 215, 220)
 STATUS_COLOURS = {"SUCCESS": (30, 140, 50), "FAILURE": (200, 40, 40), "RUNNING": (30, 90, 220),
@@ -361,8 +360,11 @@ class VideoRenderer:
         truth = self.rec.truth if truth is None else truth
         if len(truth):
             cx, cy = self.view.px(truth.x[0], truth.y[0])
-            if self.rec.mission.get("profile") != "lab":
-                r = MIN_DISTANCE * self.view.scale
+            from bt_nav_sim.plot import start_circle
+
+            radius = start_circle(self.rec.mission.get("profile"))
+            if radius is not None:
+                r = radius * self.view.scale
                 d.ellipse([cx - r, cy - r, cx + r, cy + r], outline=colour, width=2)
             d.ellipse([cx - 5, cy - 5, cx + 5, cy + 5], fill=colour)
 
@@ -590,7 +592,7 @@ def trajectory(record: MissionRecord) -> Any:
 
 def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
     """The trajectory picture (:func:`bt_nav_sim.plot.plot_run`) of a bag; the verdict from /bt_nav/mission."""
-    from bt_nav_sim.plot import plot_run
+    from bt_nav_sim.plot import plot_run, start_circle
     from bt_nav_sim.world import World
 
     world = world if world is not None else world_of(record)
@@ -606,7 +608,7 @@ def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
     if "passed" in record.mission:
         results["passed"] = bool(record.mission["passed"])
     return plot_run(world, trajectory(record), results, out, title=f"{world.name} (bag {record.path.name})",
-                    min_distance=None if record.mission.get("profile") == "lab" else MIN_DISTANCE)
+                    min_distance=start_circle(record.mission.get("profile")))
 
 
 def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path:

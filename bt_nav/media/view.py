@@ -26,6 +26,7 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
+from bt_nav_sim.plot import start_circle
 from bt_nav_sim.walkers import read_walkers_message
 
 from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, WALKERS, typestore
@@ -146,7 +147,7 @@ class LiveScene(Scene):
             return {"mode": "live", "t": round(self.t, 3), "pose": list(self.pose) if self.pose else None,
                     "trail": list(self.trail), "scan": pts, "tree": self.tree, "events": list(self.events),
                     "cmd": list(self.cmd), "walkers": self.walkers,
-                    "circle": self.mission.get("profile") != "lab", "version": self.version}
+                    "circle": start_circle(self.mission.get("profile")) is not None, "version": self.version}
 
 
 class BagScene(Scene):
@@ -212,7 +213,8 @@ class BagScene(Scene):
         return {"mode": "bag", "t": round(t, 3), "start": rec.start, "end": rec.end, "playing": self.playing,
                 "pose": pose, "trail": trail, "scan": pts, "tree": tree_json(rec.trees[j][1]) if j >= 0 else [],
                 "events": events, "cmd": rec.cmd[c, 1:].tolist() if c >= 0 else [0.0, 0.0],
-                "walkers": [] if walkers is None else walkers.tolist(), "circle": rec.mission.get("profile") != "lab",
+                "walkers": [] if walkers is None else walkers.tolist(),
+                "circle": start_circle(rec.mission.get("profile")) is not None,
                 "version": self.version}
 
 

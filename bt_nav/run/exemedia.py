@@ -110,7 +110,7 @@ def _from_t0(record: Any, row: dict[str, Any]) -> Any:
 
 def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[str, Any]:
     """The picture of a readable bag, and its video when ``film`` and it holds ground truth (what it cost)."""
-    from bt_nav_sim.plot import plot_run
+    from bt_nav_sim.plot import plot_run, start_circle
 
     from bt_nav.media.video import write_video
 
@@ -119,7 +119,7 @@ def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[s
     moved = len(record.truth) > 0
     title = run_title(row) + ("" if moved else " (no ground truth in its bag)")
     plot_run(world, _path(record), _results(row, record), run_dir / PICTURE, title=title,
-             min_distance=None if row.get("profile") == "lab" else 1.5)
+             min_distance=start_circle(row.get("profile")))
     out: dict[str, Any] = {"picture_s": round(time.perf_counter() - started, 2),
                            "note": "" if moved else "no ground truth in the bag: the world only, no video"}
     if film and moved:

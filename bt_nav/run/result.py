@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.plot import Trajectory, plot_robots, plot_run
+from bt_nav_sim.plot import Trajectory, plot_robots, plot_run, start_circle
 from bt_nav_sim.world import World
 
 from bt_nav.run.checkoff import checkoff_summary
@@ -131,6 +131,6 @@ class RunResult:
         title = f"{r0.world}, maneuver {r0.maneuver}, seed {r0.seed}"
         if len(self.results) == 1:
             return plot_run(r0.world_model, r0.trajectory, r0.results, path, title=title,
-                            min_distance=None if r0.profile == "lab" else 1.5)
+                            min_distance=start_circle(r0.profile))
         runs = [(n, r.trajectory, r.results) for n, r in zip(self.names, self.results, strict=True)]
         return plot_robots(r0.world_model, runs, path, title=f"{title}, {len(self.results)} robots")

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, box_corners
 
 #: Branch labels, in legend order.
@@ -130,6 +131,12 @@ def _draw_world(ax: Any, world: World) -> None:
         ax.plot(walker.path[:, 0], walker.path[:, 1], color="#e377c2", lw=2.0, alpha=0.35,
                 solid_capstyle="round", zorder=1.5)
         ax.plot(walker.path[:, 0], walker.path[:, 1], color="#e377c2", lw=0.8, ls=":", zorder=1.6)
+
+
+def start_circle(profile: str | None) -> float | None:
+    """Radius of the circle a picture of a run draws around its start: the homework's "minimum distance from
+    start" (1.5 m); None for the lab, which has no such check."""
+    return None if profile == "lab" else RefereeConfig().min_distance_from_start
 
 
 def plot_run(world: World, trajectory: Trajectory | Mapping[str, Any], results: Mapping[str, Any],
