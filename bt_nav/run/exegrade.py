@@ -35,11 +35,10 @@ from __future__ import annotations
 import json
 import shlex
 import signal
-import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
 from bt_nav.ros.supervise import (
@@ -53,7 +52,7 @@ from bt_nav.ros.supervise import (
 )
 from bt_nav.run.exerecord import PROFILE_VARIABLES, bag_row, recorder_profile, start_recorder
 from bt_nav.run.grid import Job
-from bt_nav.run.rundir import make_run_dir
+from bt_nav.run.rundir import LogFiles, make_run_dir
 from bt_nav.run.settings import DEFAULT_JITTER
 
 #: Seconds a stopped process group gets for SIGINT before SIGTERM (then 2 s before SIGKILL).
@@ -144,28 +143,6 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
     return [spec for spec in specs if spec.executable != "executive"]
 
 
-class _RunLogs:
-    """One log file per process of a run (sink of its :class:`Launcher`)."""
-
-    def __init__(self, directory: Path) -> None:
-        self.directory = directory
-        self.files: dict[str, IO[str]] = {}
-        self.lock = threading.Lock()
-
-    def sink(self, name: str, line: str) -> None:
-        with self.lock:
-            stream = self.files.get(name)
-            if stream is None:
-                stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
-            stream.write(line + "\n")
-            stream.flush()
-
-    def close(self) -> None:
-        with self.lock:
-            for stream in self.files.values():
-                stream.close()
-
-
 def _wait(launcher: Launcher, judge: Child, node: Child, limit: float, stop: StopRequest | None,
           started: float) -> tuple[str, str]:
     """Wait for the judge's exit (``("verdict", "")``), or why there is none: ``(outcome, reason line)``.
@@ -239,7 +216,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     domain = claim_domain_id(low, high, start=hash(job.key))
     run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
-    logs = _RunLogs(run_dir)
+    logs = LogFiles(run_dir)
     launcher = Launcher(run_env(domain), sink=logs.sink, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                                   settings.profile))

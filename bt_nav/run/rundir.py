@@ -32,7 +32,36 @@ def make_run_dir(out: Path, name: str) -> Path:
     raise FileExistsError(f"{out / name}: 999 runs of that name already")
 
 
-class Logs:
+class LogFiles:
+    """One log file per process of a run, ``<name>.log``, opened on its first line (a launcher's sink)."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = directory
+        self.files: dict[str, IO[str]] = {}
+        self._lock = threading.Lock()
+
+    def _stream(self, name: str) -> IO[str]:
+        """``name``'s file (opened now if this is its first line); the caller holds the lock."""
+        stream = self.files.get(name)
+        if stream is None:
+            stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
+        return stream
+
+    def sink(self, name: str, line: str) -> None:
+        """Launcher sink: the line into ``name``'s file, flushed (a run cut short keeps what it logged)."""
+        with self._lock:
+            stream = self._stream(name)
+            stream.write(line + "\n")
+            stream.flush()
+
+    def close(self) -> None:
+        """Close every log file."""
+        with self._lock:
+            for stream in self.files.values():
+                stream.close()
+
+
+class Logs(LogFiles):
     """Per-node log files; a judge's report lines (anything not an rcutils log line) go to stdout.
 
     Every log line is prefixed with one time base: ``sim 37.65 s [wall 3.2 s]`` (the newest ground
@@ -42,14 +71,12 @@ class Logs:
     """
 
     def __init__(self, directory: Path, echo_logs: bool, sim_time: Any = None) -> None:
-        self.directory = directory
+        super().__init__(directory)
         self.echo_logs = echo_logs
         self.sim_time = sim_time or (lambda: None)
         self.wall0 = time.monotonic()
-        self.files: dict[str, IO[str]] = {}
         self.verdict: list[str] = []
         self.quiet_from_now = False
-        self._lock = threading.Lock()
 
     def stamp(self) -> str:
         """``sim 37.65 s [wall 3.2 s]`` (sim ``-`` before the first ground truth)."""
@@ -60,9 +87,7 @@ class Logs:
     def sink(self, name: str, line: str) -> None:
         """Launcher sink: log file always; stdout for report lines (and warnings, unless quiet)."""
         with self._lock:
-            stream = self.files.get(name)
-            if stream is None:
-                stream = self.files[name] = open(self.directory / f"{name}.log", "w", encoding="utf-8")  # noqa: SIM115
+            stream = self._stream(name)
             is_log = line.startswith("[")
             stream.write((f"{self.stamp()} {line}" if is_log else line) + "\n")
             if name.rsplit("_", 1)[-1] in JUDGES and not is_log:
@@ -71,9 +96,3 @@ class Logs:
             elif self.echo_logs and not self.quiet_from_now and (
                     name == "referee" or any(lvl in line for lvl in ("[WARN]", "[ERROR]", "[FATAL]"))):
                 print(f"  {self.stamp()} [{name}] {line}", flush=True)
-
-    def close(self) -> None:
-        """Close every log file."""
-        with self._lock:
-            for stream in self.files.values():
-                stream.close()
