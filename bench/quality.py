@@ -21,7 +21,7 @@ from typing import Any
 
 from bt_nav_sim.world import list_worlds
 
-from bt_nav.run.grid import grade, overall, summarize
+from bt_nav.grading.grid import grade, overall, summarize
 
 from .common import Target, at_least
 

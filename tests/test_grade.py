@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from bt_nav.cli.grade import format_table, main
-from bt_nav.run.grid import grade, summarize
+from bt_nav.grading.grid import grade, summarize
 
 
 def test_tiny_grid_in_parallel_matches_serial() -> None:

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from dask_cluster import REPO, DaskProcesses
 
-from bt_nav.run.grid import make_jobs, run_grid
+from bt_nav.grading.grid import make_jobs, run_grid
 from bt_nav.testing import wait_until
 
 WORLDS, MANEUVERS = ("stage_4", "corridor"), ("none", "B")

@@ -1,5 +1,6 @@
 """The ``--exe`` grid without DDS: the up-front checks, resume, stops and where runs go, with a stand-in for the
-run (:func:`bt_nav.run.exegrade.run_exe_job` replaced). The runs over real DDS: tests/ros/test_grade_exe_grid_dds.py."""
+run (:func:`bt_nav.grading.node_run.run_exe_job` replaced).
+The runs over real DDS: tests/ros/test_grade_exe_grid_dds.py."""
 
 from __future__ import annotations
 
@@ -15,10 +16,10 @@ from typing import Any
 import pytest
 
 from bt_nav.cli import grade
+from bt_nav.grading import node_grid
+from bt_nav.grading.grid import Job, make_jobs
+from bt_nav.grading.node_run import ExeSettings
 from bt_nav.ros.supervise import StopRequest
-from bt_nav.run import exegrid
-from bt_nav.run.exegrade import ExeSettings
-from bt_nav.run.grid import Job, make_jobs
 from bt_nav.run.rundir import make_run_dir
 
 JOBS = make_jobs(["stage_4", "corridor"], ["none"], 2)
@@ -60,27 +61,27 @@ class FakeRuns:
 def test_a_bare_name_is_found_on_path_then_next_to_this_python(monkeypatch: pytest.MonkeyPatch) -> None:
     venv_bin = Path(sys.executable).parent
     monkeypatch.setenv("PATH", "/nonexistent")  # the venv not activated
-    resolved = exegrid.resolve_program("bt-nav executive --x 'a b'")
+    resolved = node_grid.resolve_program("bt-nav executive --x 'a b'")
     assert resolved == f"{venv_bin.absolute() / 'bt-nav'} executive --x 'a b'"
     monkeypatch.setenv("PATH", str(venv_bin))
-    assert exegrid.resolve_program("python -c pass").startswith(str(venv_bin.absolute() / "python") + " ")
+    assert node_grid.resolve_program("python -c pass").startswith(str(venv_bin.absolute() / "python") + " ")
 
 
 def test_a_missing_or_unusable_program_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(ValueError, match="'no-such-node-xyz' not found on PATH nor in"):
-        exegrid.resolve_program("no-such-node-xyz --ros-args")
+        node_grid.resolve_program("no-such-node-xyz --ros-args")
     with pytest.raises(ValueError, match="not found"):
-        exegrid.resolve_program(str(tmp_path / "missing.py"))
+        node_grid.resolve_program(str(tmp_path / "missing.py"))
     script = tmp_path / "node.sh"
     script.write_text("#!/bin/sh\n")
     with pytest.raises(ValueError, match="not executable"):
-        exegrid.resolve_program(str(script))
+        node_grid.resolve_program(str(script))
     script.chmod(script.stat().st_mode | stat.S_IXUSR)
     monkeypatch.chdir(tmp_path)
-    assert exegrid.resolve_program("./node.sh 1") == f"{script} 1"  # a relative path made absolute
+    assert node_grid.resolve_program("./node.sh 1") == f"{script} 1"  # a relative path made absolute
     for bad in ("", "   ", "'unbalanced"):
         with pytest.raises(ValueError):
-            exegrid.resolve_program(bad)
+            node_grid.resolve_program(bad)
 
 
 def test_the_cli_refuses_a_missing_program_before_any_run(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -94,30 +95,30 @@ def test_the_cli_refuses_a_missing_program_before_any_run(tmp_path: Path, capsys
 # ---------------------------------------------------------------------------------------------- the directory
 def test_an_out_holding_anything_is_refused_without_resume(tmp_path: Path) -> None:
     out = tmp_path / "g"
-    assert exegrid.prepare_out(_settings(out), JOBS, resume=False) == {}
+    assert node_grid.prepare_out(_settings(out), JOBS, resume=False) == {}
     assert json.loads((out / "grid.json").read_text())["jobs"] == [job.key for job in JOBS]
     with pytest.raises(ValueError, match="holds a grade already: add --resume"):
-        exegrid.prepare_out(_settings(out), JOBS, resume=False)
+        node_grid.prepare_out(_settings(out), JOBS, resume=False)
     other = tmp_path / "other"
     other.mkdir()
     (other / "notes.txt").write_text("mine")
     with pytest.raises(ValueError, match="holds files already"):
-        exegrid.prepare_out(_settings(other), JOBS, resume=False)
+        node_grid.prepare_out(_settings(other), JOBS, resume=False)
     with pytest.raises(ValueError, match="holds no grade to continue"):
-        exegrid.prepare_out(_settings(other), JOBS, resume=True)
+        node_grid.prepare_out(_settings(other), JOBS, resume=True)
     empty = tmp_path / "empty"
     empty.mkdir()
-    assert exegrid.prepare_out(_settings(empty), JOBS, resume=False) == {}
+    assert node_grid.prepare_out(_settings(empty), JOBS, resume=False) == {}
 
 
 def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Path) -> None:
     out = tmp_path / "g"
     settings = _settings(out)
-    exegrid.prepare_out(settings, JOBS, resume=False)
+    node_grid.prepare_out(settings, JOBS, resume=False)
     with pytest.raises(ValueError, match="rtf 5.0 there, 8.0 now"):
-        exegrid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
+        node_grid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
     with pytest.raises(ValueError, match="command"):
-        exegrid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
+        node_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
     fake = FakeRuns()
     kept = fake(JOBS[0], settings)
     for job, outcome in ((JOBS[1], "stopped"), (JOBS[2], "error")):
@@ -126,7 +127,7 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
     stray = dict(kept, job="maze|none|0|homework|-|0.05m10deg")  # another grid's job
     (make_run_dir(out, "stray") / "result.json").write_text(json.dumps(stray))
     (make_run_dir(out, "torn") / "result.json").write_text('{"passed": tr')  # killed mid-write
-    done = exegrid.prepare_out(settings, JOBS, resume=True)
+    done = node_grid.prepare_out(settings, JOBS, resume=True)
     assert done == {JOBS[0].key: kept}
 
 
@@ -134,25 +135,25 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
 def test_local_runs_keep_done_rows_and_a_raising_run_is_a_failed_row(tmp_path: Path,
                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     fake = FakeRuns(raise_for=(1,))
-    monkeypatch.setattr(exegrid, "run_exe_job", fake)
+    monkeypatch.setattr(node_grid, "run_exe_job", fake)
     settings = _settings(tmp_path / "g")
     done = {JOBS[0].key: fake(JOBS[0], settings)}
     fake.ran.clear()
     seen: list[str] = []
-    rows = exegrid.run_exe_grid(JOBS, settings, 2, on_row=lambda row: seen.append(row["job"]), done=done)
+    rows = node_grid.run_exe_grid(JOBS, settings, 2, on_row=lambda row: seen.append(row["job"]), done=done)
     assert [row["job"] for row in rows] == [job.key for job in JOBS]
     assert sorted(fake.ran) == sorted(seen) == sorted(job.key for job in JOBS[1:]), "a done run ran again"
     errors = [row for row in rows if row["outcome"] == "error"]
     assert [row["seed"] for row in errors] == [1, 1] and "bt_nav broke" in errors[0]["reason"]
-    assert not any(exegrid.finished(row) for row in errors)
+    assert not any(node_grid.finished(row) for row in errors)
 
 
 def test_a_local_stop_stops_running_runs_and_starts_no_other(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     fake = FakeRuns(hold_for=(0, 1))
-    monkeypatch.setattr(exegrid, "run_exe_job", fake)
+    monkeypatch.setattr(node_grid, "run_exe_job", fake)
     stop = StopRequest()
     threading.Timer(0.5, lambda: setattr(stop, "signum", 15)).start()
-    rows = exegrid.run_exe_grid(JOBS, _settings(tmp_path / "g"), 2, stop)
+    rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "g"), 2, stop)
     assert [row["outcome"] for row in rows] == ["stopped", "stopped"]
     assert len(fake.ran) == 2, "runs started after the stop"
 
@@ -163,9 +164,9 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
     from distributed import LocalCluster
 
     fake = FakeRuns(raise_for=(1,))
-    monkeypatch.setattr(exegrid, "run_exe_job", fake)
+    monkeypatch.setattr(node_grid, "run_exe_job", fake)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
-        rows = exegrid.run_exe_grid(JOBS, _settings(tmp_path / "a"), scheduler=cluster.scheduler_address)
+        rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "a"), scheduler=cluster.scheduler_address)
         assert [row["job"] for row in rows] == [job.key for job in JOBS]
         assert sorted(fake.ran) == sorted(job.key for job in JOBS), "a job ran twice"
         assert [row["outcome"] for row in rows] == ["verdict", "error", "verdict", "error"]
@@ -175,7 +176,7 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
         stop = StopRequest()
         threading.Timer(2.0, lambda: setattr(stop, "signum", 15)).start()
         started = time.monotonic()
-        rows = exegrid.run_exe_grid(JOBS, _settings(tmp_path / "b"), stop=stop, scheduler=cluster.scheduler_address)
+        rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "b"), stop=stop, scheduler=cluster.scheduler_address)
     assert time.monotonic() - started < 25, "the stop did not reach the running tasks"
     assert [row["outcome"] for row in rows] == ["stopped", "stopped"]
     assert all(row["reason"] == "stopped" for row in rows) and len(fake.ran) == 2
@@ -184,7 +185,7 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
 def test_the_cli_shows_progress_and_resumes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                             capsys: pytest.CaptureFixture) -> None:
     fake = FakeRuns()
-    monkeypatch.setattr(exegrid, "run_exe_job", fake)
+    monkeypatch.setattr(node_grid, "run_exe_job", fake)
     out = tmp_path / "g"
     argv = ["--exe", f"{sys.executable} -c pass", "--worlds", "stage_4,corridor", "--seeds", "2", "--out", str(out)]
     assert grade.main([*argv, "--progress", "on"]) == 1  # corridor fails

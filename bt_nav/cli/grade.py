@@ -1,7 +1,7 @@
 """Batch grading: lock-step missions over worlds x maneuvers x seeds, in local processes or on a Dask cluster.
 
 Every mission is deterministic per (world, maneuver, seed, profile, kinematics), so a grade is
-reproducible, two grades can be compared run by run, and where a mission ran (:mod:`bt_nav.run.grid`)
+reproducible, two grades can be compared run by run, and where a mission ran (:mod:`bt_nav.grading.grid`)
 does not change its result. ``--json`` is rewritten as missions finish, so ``--resume`` can continue an
 interrupted grid from it without running any mission twice.
 """
@@ -20,9 +20,9 @@ from bt_nav_sim.physics import KINEMATICS
 from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.cli.options import add_mission_options
+from bt_nav.grading.grid import Job, make_jobs, run_grid, summarize
+from bt_nav.grading.grid import overall as overall
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
-from bt_nav.run.grid import Job, make_jobs, run_grid, summarize
-from bt_nav.run.grid import overall as overall
 from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, tree_settings
 
 

@@ -1,5 +1,5 @@
 """``bt-nav grade --exe 'CMD ...'``: the options of a DDS grade checked before any run, the runs (here or on a
-Dask cluster, :mod:`bt_nav.run.exegrid`), a line per run under a progress bar, the report.
+Dask cluster, :mod:`bt_nav.grading.node_grid`), a line per run under a progress bar, the report.
 
 Why the checks come first: a grid of a command that cannot start, or one that would write into another
 grade's directory, fails every run alike or mixes two grades; both are refused with exit 2 instead.
@@ -17,15 +17,15 @@ from typing import Any
 
 from tqdm import tqdm
 
-from bt_nav.run.grid import Job
+from bt_nav.grading.grid import Job
 from bt_nav.run.settings import DEFAULT_JITTER
 
 
 def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
     """The grid's :class:`ExeSettings`: the program resolved, the command run in this directory, ``--out``
     absolute for a cluster (its workers may start elsewhere; both must be on a filesystem they share)."""
-    from bt_nav.run.exegrade import ExeSettings
-    from bt_nav.run.exegrid import resolve_program
+    from bt_nav.grading.node_grid import resolve_program
+    from bt_nav.grading.node_run import ExeSettings
 
     if args.resume and not args.out:
         raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
@@ -46,12 +46,12 @@ def _show(row: dict[str, Any]) -> None:
 
 
 def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, parser: argparse.ArgumentParser) -> int:
-    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.run.exegrade`); exit 0 only if every run passed,
+    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.grading.node_run`); exit 0 only if every run passed,
     2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
+    from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
+    from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
-    from bt_nav.run.exegrid import STOPPED, prepare_out, run_exe_grid
-    from bt_nav.run.exereport import format_exe_table, summarize_exe, write_exe_report
 
     try:
         settings = _settings(args, maneuvers)

@@ -1,8 +1,8 @@
 """The run layer: how a mission is run, for one robot or several, in lock-step or over DDS.
 
 Between the commands (:mod:`bt_nav.cli`, argument parsing and printing) and the layers below (the mission
-core, the ROS edge, the simulator): every command that runs a mission calls this package, so demo,
-lockstep, grade, sim-run and the benchmarks cannot drift apart.
+core, the ROS edge, the simulator): every command that runs a mission calls this package (directly or through
+:mod:`bt_nav.grading`), so demo, lockstep, grade, sim-run and the benchmarks cannot drift apart.
 
 - :mod:`bt_nav.run.settings`: one way to choose a mission's parameters (profile, ``--set``, defaults).
 - :mod:`bt_nav.run.lockstep`: the one lock-step loop over :class:`bt_nav_sim.multi.MultiSimCore` and a list
@@ -11,4 +11,6 @@ lockstep, grade, sim-run and the benchmarks cannot drift apart.
 - :mod:`bt_nav.run.sinks`: the sink protocol a recorder of the run implements (the rosbag2 writer does).
 - :mod:`bt_nav.run.recorder`, :mod:`bt_nav.run.rosmission`, :mod:`bt_nav.run.rundir`: a mission over DDS
   (start the graph, a recorder and a referee per robot, wait, collect) and where it writes its files.
+
+Grading many missions (grids, the ``--exe`` grader, reports) is the layer above: :mod:`bt_nav.grading`.
 """

@@ -20,6 +20,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("simulator nodes", ("bt_nav_sim.nodes",)),
     ("testing", ("bt_nav.testing",)),
     ("run", ("bt_nav.run",)),
+    ("grading", ("bt_nav.grading",)),
     ("commands", ("bt_nav.cli",)),
     ("bench", ("bench",)),
 ]

@@ -14,11 +14,11 @@ from typing import Any
 
 import pytest
 
+from bt_nav.grading.html import rate_colour
+from bt_nav.grading.media import FPS, balanced, distance_histogram, travelled_requirement, turns_figure
+from bt_nav.grading.node_run import ExeSettings
+from bt_nav.grading.report import write_exe_report
 from bt_nav.media.bagread import read_bag
-from bt_nav.run.exegrade import ExeSettings
-from bt_nav.run.exehtml import rate_colour
-from bt_nav.run.exemedia import FPS, balanced, distance_histogram, travelled_requirement, turns_figure
-from bt_nav.run.exereport import write_exe_report
 from tests.media.reportkit import broken_links, mp4_frames, page_links
 
 T0 = 5.0  # the made-up judge's t0 (sim s): the failed run's video starts there

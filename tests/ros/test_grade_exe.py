@@ -10,7 +10,7 @@ import psutil
 import pytest
 
 from bt_nav.cli import grade
-from bt_nav.run.exegrade import exe_ros_args
+from bt_nav.grading.node_run import exe_ros_args
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 

@@ -19,7 +19,7 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   (:mod:`bt_nav_sim.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
   flood ...);
 - unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first (the simulator once it
-  listens) and stopped first when the run ends (:mod:`bt_nav.run.exerecord`); the report draws each run's picture and
+  listens) and stopped first when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and
   films the failed runs from it.
 
 The run ends when the judge exits (its JSON is the verdict), when the node exits first with an error (the
@@ -27,7 +27,7 @@ reason names its exit code; a node that ends by itself with 0 still gets its ver
 limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the
 audit's plus how the node ended (it ignored SIGINT, it ended before the verdict), each also appended to its
 ``reason``. The output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run
-directory, the row ``result.json``. Grids: :mod:`bt_nav.run.exegrid`; reports: :mod:`bt_nav.run.exereport`.
+directory, the row ``result.json``. Grids: :mod:`bt_nav.grading.node_grid`; reports: :mod:`bt_nav.grading.report`.
 """
 
 from __future__ import annotations
@@ -40,6 +40,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bt_nav.grading.grid import Job
+from bt_nav.grading.node_bag import PROFILE_VARIABLES, bag_row, recorder_profile, start_recorder
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
@@ -50,8 +52,6 @@ from bt_nav.ros.supervise import (
     launcher_domains,
     release_domain_id,
 )
-from bt_nav.run.exerecord import PROFILE_VARIABLES, bag_row, recorder_profile, start_recorder
-from bt_nav.run.grid import Job
 from bt_nav.run.rundir import LogFiles, make_run_dir
 from bt_nav.run.settings import DEFAULT_JITTER
 
@@ -77,7 +77,7 @@ class ExeSettings:
     rtf: float = 5.0  # sim seconds per wall second
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
-    record: str = "on"  # on, failures or off: each run's bag (bt_nav.run.exerecord.RECORD_MODES)
+    record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.node_bag.RECORD_MODES)
     videos: str = "failures"  # failures, all or off: which runs the report films from their bags
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
 

@@ -7,7 +7,7 @@ logs, JSON, bags) is relative to the page, so the directory works wherever it is
 - the command graded, the profile, the real-time factor and the wall-time limit per run;
 - the overall pass rate and the pass rate per world (rows) and maneuver (columns), each cell coloured from red
   (none passed) to green (all passed), then every failure reason with its count;
-- the grid's figures (:func:`bt_nav.run.exemedia.grid_figures`);
+- the grid's figures (:func:`bt_nav.grading.media.grid_figures`);
 - one row per run: its trajectory picture as a thumbnail (a link to the full picture), verdict, reason, travelled
   distance, wall time, the judge's findings when it gives any, links to its logs, ``verdict.json``,
   ``result.json`` and bag, and the video of a failed run as a player.
@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from bt_nav.run.exegrade import ExeSettings, exe_ros_args
+from bt_nav.grading.node_run import ExeSettings, exe_ros_args
 
 STYLE = """
  body { font-family: sans-serif; margin: 1.5em; color: #222; max-width: 1400px; }

@@ -1,5 +1,6 @@
-"""Running an ``--exe`` grid: every :class:`bt_nav.run.grid.Job` through :func:`bt_nav.run.exegrade.run_exe_job`,
-here or on a Dask cluster, resumable, with the checks that refuse a grid before any run starts.
+"""Running an ``--exe`` grid: every :class:`bt_nav.grading.grid.Job` through
+:func:`bt_nav.grading.node_run.run_exe_job`, here or on a Dask cluster, resumable, with the checks that refuse
+a grid before any run starts.
 
 Where runs go: ``workers`` threads of this process (each thread only supervises its run's three process
 groups: no py_trees in-process, so threads are enough), or, with ``scheduler``, one Dask task per run on the
@@ -35,9 +36,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from bt_nav.grading.grid import Job, progress_bar
+from bt_nav.grading.node_run import ExeSettings, run_exe_job
 from bt_nav.ros.supervise import StopRequest
-from bt_nav.run.exegrade import ExeSettings, run_exe_job
-from bt_nav.run.grid import Job, progress_bar
 
 #: The grid's own file in its directory: the settings every run shares, and the jobs.
 GRID_FILE = "grid.json"

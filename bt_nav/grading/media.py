@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.run.exerecord import BAG
+from bt_nav.grading.node_bag import BAG
 
 PICTURE = "trajectory.png"
 VIDEO = "video.mp4"
@@ -196,7 +196,7 @@ def balanced(tasks: list[Task], workers: int) -> list[list[Task]]:
 
 
 def _in_processes(chunks: list[list[Task]]) -> dict[str, dict[str, Any]]:
-    """Each chunk of :func:`render_run` tasks in a ``python -m bt_nav.run.exemedia TASKS.json`` process of its own,
+    """Each chunk of :func:`render_run` tasks in a ``python -m bt_nav.grading.media TASKS.json`` process of its own,
     all at once; what each drew comes back on its stdout (a few hundred bytes a run).
 
     Why processes of our own and not multiprocessing: a process pool leaves its resource tracker running in the
@@ -209,7 +209,7 @@ def _in_processes(chunks: list[list[Task]]) -> dict[str, dict[str, Any]]:
             tasks, errors = Path(tmp) / f"tasks{k}.json", Path(tmp) / f"errors{k}.txt"
             tasks.write_text(json.dumps(chunk), encoding="utf-8")
             with open(errors, "w", encoding="utf-8") as err:
-                procs.append((subprocess.Popen([sys.executable, "-m", "bt_nav.run.exemedia", str(tasks)],
+                procs.append((subprocess.Popen([sys.executable, "-m", "bt_nav.grading.media", str(tasks)],
                                                stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL,
                                                text=True), chunk, errors))
         done: dict[str, dict[str, Any]] = {}
@@ -225,7 +225,7 @@ def _in_processes(chunks: list[list[Task]]) -> dict[str, dict[str, Any]]:
 
 
 def main() -> None:
-    """``python -m bt_nav.run.exemedia TASKS.json``: the :func:`render_run` tasks of the file (a JSON list of
+    """``python -m bt_nav.grading.media TASKS.json``: the :func:`render_run` tasks of the file (a JSON list of
     ``[row, film, keep_bag]``), what each drew on stdout (a JSON list)."""
     tasks = json.loads(Path(sys.argv[1]).read_text(encoding="utf-8"))
     with contextlib.redirect_stdout(sys.stderr):  # stdout carries the answer only, whatever a library prints

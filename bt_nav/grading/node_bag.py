@@ -19,7 +19,7 @@ t0 on, but put the judge's start (seconds on a loaded machine) after the recorde
 
 The recorder spins rclpy's events executor (half the CPU of the default one) and records only what the report draws
 (:data:`RUN_TOPICS`). The pictures and videos are drawn from the bags after the grid, in the report step
-(:mod:`bt_nav.run.exemedia`), so they cost the timed runs nothing.
+(:mod:`bt_nav.grading.media`), so they cost the timed runs nothing.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ RECORD_MODES = ("on", "failures", "off")
 #: The recorder's Fast DDS profile: it announces itself every 0.25 s instead of every 3 s (as the tests' nodes do,
 #: tests/ros/fastdds_tests.xml). Why: when the simulator misses the recorder's start-up announcements on a loaded
 #: machine, the two find each other only at the next periodic one, 3 s later (15 s of sim time at 5x). Every
-#: process of a graded run gets it (:func:`bt_nav.run.exegrade.run_env`); the recorder also when started alone.
+#: process of a graded run gets it (:func:`bt_nav.grading.node_run.run_env`); the recorder also when started alone.
 RECORDER_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
  <participant profile_name="bt_nav_recorder" is_default_profile="true"><rtps><builtin><discovery_config>

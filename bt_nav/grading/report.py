@@ -1,6 +1,6 @@
 """The report of an ``--exe`` grid: per world and maneuver figures, a fixed-width table, and in the grid's directory
 ``grade.json``, ``summary.md`` and ``report.html`` with the pictures and videos it links
-(:mod:`bt_nav.run.exemedia`, :mod:`bt_nav.run.exehtml`)."""
+(:mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`)."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav.run.exegrade import ExeSettings, exe_ros_args
-from bt_nav.run.exehtml import report_html
-from bt_nav.run.exemedia import grid_figures, render_runs
+from bt_nav.grading.html import report_html
+from bt_nav.grading.media import grid_figures, render_runs
+from bt_nav.grading.node_run import ExeSettings, exe_ros_args
 
 
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -1,0 +1,14 @@
+"""The grading layer: many missions judged and reported, for a student checking a node or an instructor
+grading a class.
+
+It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and below the commands:
+
+- :mod:`bt_nav.grading.grid`: lock-step grids (worlds x maneuvers x seeds) in local processes or on Dask,
+  their summary figures.
+- :mod:`bt_nav.grading.node_run`: one run of any robot node over DDS (``bt-nav grade --exe``): the simulator
+  and the profile's judge around a foreign command, isolated in a ROS domain and a directory of its own.
+- :mod:`bt_nav.grading.node_bag`: that run's bag (``bt-nav record`` as one more child of the run).
+- :mod:`bt_nav.grading.node_grid`: a grid of such runs, here or on Dask, resumable.
+- :mod:`bt_nav.grading.report`, :mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`: the grid's report
+  (``grade.json``, ``summary.md``, ``report.html``) with its pictures and videos.
+"""
