@@ -1,0 +1,167 @@
+"""A class graded in one command: a manifest of students (name and command each), one ``--exe`` grid per student
+on the same worlds, maneuvers, LiDARs and seeds, and one class page over them.
+
+Why a layer over the single grid and not a bigger grid: each student's grid stays exactly what ``bt-nav grade --exe``
+writes for one node (its own directory, ``grade.json``, ``report.html``, resumable), so a student's result read from
+the class directory equals grading that student alone, and an interrupted class resumes student by student. The class
+page only reads those ``grade.json`` files: ``class.json`` (every student's cells and findings), ``class.md`` and
+``class.html`` (students x cells pass rates coloured like the grid's page, each student's findings, links to their
+reports).
+
+The manifest (``--class FILE``) is YAML: a mapping ``name: command``, or a list of ``{name: ..., command: ...}``.
+A name becomes a directory: letters, digits, ``.``, ``_`` and ``-`` only, unique.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from bt_nav.grading.html import STYLE, rate_colour
+
+#: What a student's name may hold (it names their grid's directory).
+NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
+
+
+@dataclass(frozen=True)
+class Student:
+    """One line of the manifest: who, and the command that starts their node."""
+
+    name: str
+    command: str
+
+
+def read_manifest(path: Path) -> list[Student]:
+    """The students of a manifest file (ValueError naming the problem: unreadable, empty, a bad or repeated name)."""
+    try:
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        raise ValueError(f"cannot read the class manifest {path}: {exc}") from None
+    if isinstance(doc, dict) and set(doc) == {"students"}:
+        doc = doc["students"]
+    if isinstance(doc, dict):
+        pairs = list(doc.items())
+    elif isinstance(doc, list) and all(isinstance(e, dict) and {"name", "command"} <= set(e) for e in doc):
+        pairs = [(e["name"], e["command"]) for e in doc]
+    else:
+        raise ValueError(f"{path}: a class manifest is a mapping 'name: command' or a list of "
+                         "{name: ..., command: ...}")
+    students = [Student(str(name), str(command).strip()) for name, command in pairs]
+    if not students:
+        raise ValueError(f"{path}: no students")
+    seen: set[str] = set()
+    for s in students:
+        if not NAME.match(s.name):
+            raise ValueError(f"{path}: student name {s.name!r} must be letters, digits, '.', '_' or '-' "
+                             "(it names a directory)")
+        if s.name in seen:
+            raise ValueError(f"{path}: student {s.name!r} appears twice")
+        if not s.command:
+            raise ValueError(f"{path}: student {s.name!r} has no command")
+        seen.add(s.name)
+    return students
+
+
+def cell_key(row: dict[str, Any]) -> str:
+    """A grid cell's label: world, maneuver and (when the grid varies it) LiDAR."""
+    lidar = row.get("lidar") or ""
+    return " ".join(part for part in (row["world"], row["maneuver"], lidar) if part)
+
+
+def student_summary(name: str, grid_dir: Path) -> dict[str, Any]:
+    """One student's line of the class: pass counts per cell, bt_nav errors apart, findings with their counts."""
+    path = grid_dir / "grade.json"
+    if not path.is_file():
+        return {"name": name, "dir": grid_dir.name, "graded": False, "cells": {}, "findings": {}, "runs": 0,
+                "passed": 0, "errors": 0}
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    cells: dict[str, list[int]] = defaultdict(lambda: [0, 0])
+    findings: dict[str, int] = defaultdict(int)
+    errors = 0
+    for row in doc.get("runs", []):
+        if row.get("outcome") == "bt_nav error":
+            errors += 1
+            continue
+        cell = cells[cell_key(row)]
+        cell[0] += bool(row.get("passed"))
+        cell[1] += 1
+        for finding in row.get("findings") or []:
+            findings[finding] += 1
+    for finding in doc.get("findings") or []:  # the grid's own (e.g. across LiDARs)
+        findings[finding] += 1
+    return {"name": name, "dir": grid_dir.name, "graded": True, "cells": {k: v for k, v in sorted(cells.items())},
+            "findings": dict(findings), "runs": sum(v[1] for v in cells.values()),
+            "passed": sum(v[0] for v in cells.values()), "errors": errors,
+            "reasons": _reasons(doc.get("runs", []))}
+
+
+def _reasons(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
+    """The failure reasons of a student's runs, counted (bt_nav errors are not a student's failure)."""
+    out: dict[str, int] = defaultdict(int)
+    for row in rows:
+        if not row.get("passed") and row.get("outcome") != "bt_nav error":
+            out[row.get("reason", "?")] += 1
+    return dict(out)
+
+
+def write_class_page(out: Path, students: Sequence[Student], title: str) -> tuple[Path, Path, Path]:
+    """``class.json``, ``class.md`` and ``class.html`` in ``out`` from each student's grid in ``out/<name>``."""
+    rows = [student_summary(s.name, out / s.name) for s in students]
+    cells = sorted({c for r in rows for c in r["cells"]})
+    doc = {"title": title, "cells": cells, "students": rows,
+           "commands": {s.name: s.command for s in students}}
+    json_path, md_path, html_path = out / "class.json", out / "class.md", out / "class.html"
+    json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    md_path.write_text(class_markdown(rows, cells, title), encoding="utf-8")
+    html_path.write_text(class_html(rows, cells, title), encoding="utf-8")
+    return json_path, md_path, html_path
+
+
+def _rate(cell: list[int] | None) -> str:
+    return f"{cell[0]}/{cell[1]}" if cell else "-"
+
+
+def class_markdown(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
+    """The class as Markdown: one row per student, one column per cell, then each student's findings."""
+    lines = [f"# {title}", "", "| student | passed | " + " | ".join(cells) + " | bt_nav errors |",
+             "|---|---|" + "---|" * len(cells) + "---|"]
+    for r in rows:
+        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "not graded"
+        lines.append(f"| [{r['name']}]({r['dir']}/report.html) | {total} | "
+                     + " | ".join(_rate(r["cells"].get(c)) for c in cells) + f" | {r['errors']} |")
+    for r in rows:
+        said = [*(f"{reason} (x{n})" for reason, n in r.get("reasons", {}).items()),
+                *(f"finding: {f} (x{n})" for f, n in r["findings"].items())]
+        if said:
+            lines += ["", f"## {r['name']}", "", *(f"- {line}" for line in said)]
+    return "\n".join(lines) + "\n"
+
+
+def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
+    """The class page: a static file, every link relative (the class directory can be zipped and sent)."""
+    esc = html.escape
+    head = "".join(f"<th>{esc(c)}</th>" for c in cells)
+    body = []
+    for r in rows:
+        link = f'<a href="{esc(r["dir"])}/report.html">{esc(r["name"])}</a>' if r["graded"] else esc(r["name"])
+        tds = "".join(
+            f'<td class="rate" style="background:{rate_colour(*r["cells"][c])}">{_rate(r["cells"][c])}</td>'
+            if c in r["cells"] else "<td>-</td>" for c in cells)
+        said = [*(f"{reason} (x{n})" for reason, n in r.get("reasons", {}).items()),
+                *(f"finding: {f} (x{n})" for f, n in r["findings"].items())]
+        notes = "<br>".join(esc(s) for s in said) or ('<span class="note">nothing to say</span>' if r["graded"]
+                                                       else '<span class="note">not graded yet</span>')
+        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "-"
+        body.append(f"<tr><td>{link}</td><td class=\"num\">{total}</td>{tds}<td class=\"num\">{r['errors']}</td>"
+                    f"<td>{notes}</td></tr>")
+    return (f"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{esc(title)}</title><style>{STYLE}</style>"
+            f"</head><body><h1>{esc(title)}</h1><table><tr><th>student</th><th>passed</th>{head}"
+            f"<th>bt_nav errors</th><th>failures and findings</th></tr>{''.join(body)}</table></body></html>\n")
