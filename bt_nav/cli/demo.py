@@ -141,6 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, last_word=lambda: [
         publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
     logs.sim_time = mission.recorders[names[0]].sim_time
+    logs.clock = mission.recorders[names[0]].clock
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if bag_dir \
         else None
     try:

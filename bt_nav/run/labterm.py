@@ -11,10 +11,15 @@ prints the judge's report lines), and the terminal shows, stamped with sim time,
 - the executive's maneuver and emergency-brake lines (``Randomizer: ...``, ``AEB: ...``) as they happen;
   not tick statistics, not the scan checker's chatter.
 
+Each line is stamped with the sim time it happened at its source: a node's line with the sim time of its log
+call (the line's own wall stamp mapped by ``/clock``: :meth:`bt_nav.run.rundir.Logs.line_time`), a judge's call
+with the sim time the judge wrote into it; never the time this process read it, which at 22x real time lagged
+by seconds.
+
 With a bag (``--bag``/``--video``) every shown line and every report line is also published on
 ``/bt_nav/events`` (:data:`bt_nav.media.bag.EVENTS`, latched) by :class:`EventPublisher`; ``bt-nav record``
 records that topic instead of turning ``/rosout`` into events, so the bag's events, and the video's console
-strip, are exactly the terminal's lines, stamped with the sim time at which the recorder got them.
+strip, are exactly the terminal's lines, stamped with the sim time at which this process published them.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ from bt_nav_sim.plot import MANEUVER_TIPS
 
 from bt_nav.media.bag import EVENTS
 from bt_nav.ros.bringup import EXECUTIVE_NAME
-from bt_nav.run.rundir import Logs
+from bt_nav.run.rundir import Logs, split_stamp
 
 #: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
 SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
@@ -102,7 +107,7 @@ class LabTerminal:
 
     def show(self, text: str, t: float | None = None) -> None:
         """One terminal line at sim time ``t`` (default: the newest ground truth), published as an event."""
-        t = self.logs.sim_time() if t is None else t
+        t = self.logs.line_time() if t is None else t
         with self._lock:
             self.lines.append((t, text))
             self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
@@ -118,6 +123,8 @@ class LabTerminal:
     def sink(self, name: str, line: str) -> None:
         """Launcher sink: the log files, then what the lab's terminal shows of ``line``."""
         self.logs.sink(name, line)
+        wall_ns, line = split_stamp(line)
+        when = self.logs.line_time(wall_ns) if wall_ns is not None else None
         match = LOG_LINE.match(line)
         if name.endswith("checkoff"):
             if match is None:
@@ -127,9 +134,9 @@ class LabTerminal:
         elif name.endswith("executive") and match is not None:
             message = match["msg"]
             if message.startswith(f"{EXECUTIVE_NAME} up:"):
-                self.show(self.launch_line)
+                self.show(self.launch_line, when)
             elif message.split(":", 1)[0] in SHOWN_LABELS:
-                self.show(f"[{match['level']}] [{match['node']}]: {message}")
+                self.show(f"[{match['level']}] [{match['node']}]: {message}", when)
 
     def _judge_line(self, message: str) -> None:
         """The judge's toggle_navigation calls and replies, as ``ros2 service call`` shows them."""
