@@ -71,10 +71,14 @@ class GraphTap:
         events_topic: where /rosout lines of ``bt_nav*`` nodes go (as std_msgs/String CDR).
         sim_time: stamp messages before the first /clock with 0 (False: with wall time, for a graph
             without a simulator).
+        message_info: take each sample's DDS source timestamp (rclpy's MessageInfo). False for rclpy's
+            ``EventsExecutor``, which fails on such callbacks in Jazzy (``SystemError: null argument to internal
+            routine``, tried here): then /clock is mapped by its arrival (best effort, depth 1: the freshest
+            sample) and a message without a stamp of its own gets the newest /clock on arrival.
     """
 
     def __init__(self, node: Any, topics: Iterable[str], handler: Handler, events_topic: str = "/bt_nav/events",
-                 sim_time: bool = True) -> None:
+                 sim_time: bool = True, message_info: bool = True) -> None:
         from rclpy.serialization import serialize_message
         from std_msgs.msg import String
 
@@ -85,6 +89,7 @@ class GraphTap:
         self.clock = SimClock()
         self._serialize, self._String = serialize_message, String
         self.sim_time = sim_time
+        self.message_info = message_info
         self._clock_sub()
         if "/rosout" in self.wanted:
             self._rosout_sub()
@@ -124,10 +129,10 @@ class GraphTap:
 
         def on_clock(msg: Any, info: Any) -> None:  # two parameters: rclpy passes the MessageInfo
             self.clock_ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
-            if isinstance(info, dict) and info.get("source_timestamp"):
-                self.clock.add(info["source_timestamp"], self.clock_ns)
+            sent = info.get("source_timestamp") if isinstance(info, dict) else None
+            self.clock.add(sent or time.time_ns(), self.clock_ns)
 
-        self.node.create_subscription(Clock, "/clock", on_clock, qos)
+        self.node.create_subscription(Clock, "/clock", self._with_info(on_clock), qos)
 
     def _rosout_sub(self) -> None:
         from rcl_interfaces.msg import Log
@@ -139,7 +144,7 @@ class GraphTap:
                 self.handler(self.events_topic, "std_msgs/msg/String", when, data, None)
 
         self.subscribed["/rosout"] = "rcl_interfaces/msg/Log"
-        self.node.create_subscription(Log, "/rosout", on_log, QoSProfile(depth=100))
+        self.node.create_subscription(Log, "/rosout", self._with_info(on_log), QoSProfile(depth=100))
 
     def _discover(self) -> None:
         for topic, types in self.node.get_topic_names_and_types():
@@ -157,7 +162,8 @@ class GraphTap:
                 self.node.get_logger().warning(f"cannot tap {topic} ({msgtype}): {exc}")
                 self.subscribed[topic] = msgtype
                 continue
-            self.node.create_subscription(cls, topic, self._callback(topic, msgtype, offered), qos, raw=True)
+            self.node.create_subscription(cls, topic, self._with_info(self._callback(topic, msgtype, offered)), qos,
+                                          raw=True)
             self.subscribed[topic] = msgtype
 
     @staticmethod
@@ -167,6 +173,12 @@ class GraphTap:
         return QoSProfile(depth=100,
                           reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+    def _with_info(self, callback: Callable[[Any, Any], None]) -> Callable[..., None]:
+        """``callback(msg, info)`` as rclpy must call it: with the MessageInfo, or (``message_info`` off) without."""
+        if self.message_info:
+            return callback
+        return lambda msg: callback(msg, None)
 
     def _callback(self, topic: str, msgtype: str, offered: Any) -> Callable[[bytes, Any], None]:
         def on_message(data: bytes, info: Any) -> None:

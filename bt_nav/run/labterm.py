@@ -140,13 +140,72 @@ class LabTerminal:
 
     def _judge_line(self, message: str) -> None:
         """The judge's toggle_navigation calls and replies, as ``ros2 service call`` shows them."""
-        call = CALL_LINE.match(message)
-        if call is None:
-            return
-        t = float(call["t"])
-        if call["ok"] is None:
-            for text in service_call_lines(f"/{call['call']}", call["data"] == "true"):
-                self.show(text, t)
-        else:
-            for text in service_reply_lines(call["ok"] == "success", call["message"]):
-                self.show(text, t)
+        call = judge_call(message)
+        for text in call[1] if call else ():
+            self.show(text, call[0])
+
+
+def judge_call(message: str) -> tuple[float, list[str]] | None:
+    """A judge's log message about its service call or the reply (:data:`CALL_LINE`): its sim time and the
+    terminal lines ``ros2 service call`` prints for it; None for any other message."""
+    call = CALL_LINE.match(message)
+    if call is None:
+        return None
+    if call["ok"] is None:
+        return float(call["t"]), service_call_lines(f"/{call['call']}", call["data"] == "true")
+    return float(call["t"]), service_reply_lines(call["ok"] == "success", call["message"])
+
+
+#: A line in rcutils' default console format, ``[INFO] [1712345678.123456789] [node]: text`` (a student's node
+#: logs so unless it sets ``RCUTILS_CONSOLE_OUTPUT_FORMAT``): the wall time of the log call is in it.
+DEFAULT_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
+
+
+class NodeTerminal:
+    """The terminal of ``bt-nav demo --exe``: a student's own node in place of bt_nav's executive.
+
+    Shows, stamped with the sim time each happened (:class:`bt_nav.ros.simclock.SimClock`): every line the node
+    prints (its log lines at their log call; a plain ``print`` when it is read), the judge's service calls and
+    replies as ``ros2 service call`` prints them, and the judge's report lines as they are. Not the simulator's
+    or the recorder's lines (they are in the run's log files).
+
+    Args:
+        clock: the map from wall to sim time (the demo's recorder node's).
+        out: prints one terminal line (default ``print``).
+    """
+
+    def __init__(self, clock: Any, out: Callable[[str], Any] | None = None) -> None:
+        self.clock = clock
+        self.out = out or (lambda text: print(text, flush=True))
+        self.lines: list[tuple[float | None, str]] = []
+        self._lock = threading.Lock()
+
+    def show(self, text: str, t: float | None) -> None:
+        """One terminal line at sim time ``t`` (None: not known yet)."""
+        with self._lock:
+            self.lines.append((t, text))
+            self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
+
+    def _sim(self, wall_s: float | None = None) -> float | None:
+        import time
+
+        sim = self.clock.sim_at(time.time_ns() if wall_s is None else round(wall_s * 1e9))
+        return None if sim is None else sim * 1e-9
+
+    def sink(self, name: str, line: str) -> None:
+        """Launcher sink (after the run's log files)."""
+        if name == "node":
+            match = DEFAULT_LOG_LINE.match(line)
+            if match is None:
+                self.show(line, self._sim())
+            else:
+                self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
+        elif name in ("referee", "checkoff"):
+            log = DEFAULT_LOG_LINE.match(line)
+            if log is None:
+                with self._lock:
+                    self.out(line)  # a report line: its times are the judge's own
+                return
+            call = judge_call(log["msg"])
+            for text in call[1] if call else ():
+                self.show(text, call[0])
