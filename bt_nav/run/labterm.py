@@ -161,6 +161,10 @@ def judge_call(message: str) -> tuple[float, list[str]] | None:
 DEFAULT_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
 
 
+#: Lines of a Python traceback (a process stopped while it starts): not a report line.
+PYTHON_ERROR = re.compile(r"^(?:Traceback |\s|\w+(?:Error|Interrupt|Exception)\b)")
+
+
 class NodeTerminal:
     """The terminal of ``bt-nav demo --exe``: a student's own node in place of bt_nav's executive.
 
@@ -203,8 +207,9 @@ class NodeTerminal:
         elif name in ("referee", "checkoff"):
             log = DEFAULT_LOG_LINE.match(line)
             if log is None:
-                with self._lock:
-                    self.out(line)  # a report line: its times are the judge's own
+                if not PYTHON_ERROR.match(line):  # a judge stopped early says so in its log file, not here
+                    with self._lock:
+                        self.out(line)  # a report line: its times are the judge's own
                 return
             call = judge_call(log["msg"])
             for text in call[1] if call else ():
