@@ -21,11 +21,6 @@ import bisect
 import threading
 from collections import deque
 
-#: Wall ns past the newest /clock pair that a time is extrapolated over at most (the sim may be held).
-MAX_EXTRAPOLATION_NS = 200_000_000
-#: Wall ns of /clock pairs the rate of the sim is measured over (for extrapolation only).
-RATE_WINDOW_NS = 500_000_000
-
 
 class SimClock:
     """Pairs (wall ns at the source, sim ns) of ``/clock``; :meth:`sim_at` maps a wall instant to sim time.
@@ -60,9 +55,14 @@ class SimClock:
             return self._sim[-1] if self._sim else None
 
     def sim_at(self, wall_ns: int) -> int | None:
-        """Sim ns at wall instant ``wall_ns``: interpolated between the /clock samples around it; after the newest
-        one extrapolated at the recent rate (at most :data:`MAX_EXTRAPOLATION_NS` of wall time); None before the
-        first sample (the caller falls back to what it had)."""
+        """Sim ns at wall instant ``wall_ns``: interpolated between the /clock samples around it, the newest one's
+        after it; None before the first sample (the caller falls back to what it had).
+
+        Why not extrapolate past the newest: the simulator may be holding (waiting for a follower), and a guess
+        that a later sample corrects downwards would put two lines sent in order into the bag out of order
+        (measured on the lab demo's terminal lines). Held at the newest sample, the map only ever grows with
+        wall time, and a line is at most one /clock sample (10 ms of sim time) early.
+        """
         with self._lock:
             if not self._wall or wall_ns < self._wall[0]:
                 return None
@@ -71,11 +71,4 @@ class SimClock:
             if k + 1 < len(self._wall):
                 w1, s1 = self._wall[k + 1], self._sim[k + 1]
                 return s0 + (s1 - s0) * (wall_ns - w0) // max(1, w1 - w0)
-            return s0 + round(self._rate() * min(wall_ns - w0, MAX_EXTRAPOLATION_NS))
-
-    def _rate(self) -> float:
-        """Sim seconds per wall second over the last :data:`RATE_WINDOW_NS` (the caller holds the lock)."""
-        w1, s1 = self._wall[-1], self._sim[-1]
-        k = bisect.bisect_left(self._wall, w1 - RATE_WINDOW_NS)
-        w0, s0 = self._wall[k], self._sim[k]
-        return (s1 - s0) / (w1 - w0) if w1 > w0 else 0.0
+            return s0
