@@ -105,6 +105,7 @@ def run_lab(opts: argparse.Namespace) -> int:
     mission = RosMission(run["specs"], ["robot1"], env, sink=terminal.sink, stop=stop,
                          last_word=lambda: publish_zero_twist(domain, topic="/cmd_vel", stamped=stamped))
     logs.sim_time = mission.recorders["robot1"].sim_time
+    logs.clock = mission.recorders["robot1"].clock
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics()) if bag_dir else None
     try:
         code = mission.supervise(opts.timeout + GRACE, run_dir)

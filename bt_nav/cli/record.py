@@ -2,7 +2,8 @@
 
 For users without the ros2 CLI. It runs in its own process (never inside the executive's), subscribes
 raw to the mission's topics as they appear (:class:`bt_nav.ros.graphtap.GraphTap`), stamps every
-message with the sim time of the latest ``/clock`` and hands the CDR bytes to
+message with its sim time at the source (its header stamp, else the sim time it was sent: not when this
+process got round to it, which lags by seconds at 20x on a busy machine) and hands the CDR bytes to
 :class:`bt_nav.media.bag.MissionBag`. The executive's and referee's ``/rosout`` lines become
 ``/bt_nav/events``, and ``/bt_nav/mission`` says which world and seed the simulator runs (asked from its
 parameters), so a DDS bag looks like a lock-step one and ``bt-nav video`` can draw the world. It prints
@@ -58,7 +59,7 @@ class BagRecorder:
         self.lock = threading.Lock()
         self.ros = ThreadedNode("bt_nav_recorder", events=events)
         try:
-            self.tap = GraphTap(self.ros.node, topics, self._write, sim_time=sim_time)
+            self.tap = GraphTap(self.ros.node, topics, self._write, sim_time=sim_time, message_info=not events)
         except BaseException:
             self.ros.close()
             self.bag.close()

@@ -36,6 +36,7 @@ import json
 import shlex
 import signal
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -210,23 +211,32 @@ def _ending_findings(node: Child | None) -> list[str]:
     return []
 
 
-def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None) -> dict[str, Any]:
-    """One run of the grid (see the module docstring); its row, also written to ``result.json``."""
+def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None,
+                sink: Callable[[str, str], None] | None = None,
+                on_start: Callable[[int, Path], None] | None = None) -> dict[str, Any]:
+    """One run of the grid (see the module docstring); its row, also written to ``result.json``.
+
+    ``sink`` also gets every line of every process (after its log file: ``bt-nav demo --exe`` shows them);
+    ``on_start`` is called with the run's domain and directory before any process starts (the demo's clock node).
+    """
     low, high = launcher_domains()
     domain = claim_domain_id(low, high, start=hash(job.key))
     run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
     logs = LogFiles(run_dir)
-    launcher = Launcher(run_env(domain), sink=logs.sink, stop=stop, driver="node")
+    tee = logs.sink if sink is None else (lambda name, line: (logs.sink(name, line), sink(name, line)))
+    launcher = Launcher(run_env(domain), sink=tee, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                                   settings.profile))
     started = time.monotonic()
     recorder = None
     node = None
     try:
+        if on_start is not None:
+            on_start(domain, run_dir)
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
         if settings.record != "off":  # first and listening before the simulator starts
-            recorder = start_recorder(launcher, logs.sink, run_dir, job.world, job.seed, settings.profile)
+            recorder = start_recorder(launcher, tee, run_dir, job.world, job.seed, settings.profile)
         launcher.start(sim_spec)
         try:
             node = launcher.start(ExeSpec(argv), cwd=settings.cwd)

@@ -5,9 +5,11 @@ schemas, CDR payloads and the offered QoS profiles) without a ROS install, so ``
 Foxglove and PlotJuggler open what lock-step writes in-process and what ``bt-nav record`` writes from
 DDS. Nothing here encodes MCAP or CDR by hand, and nothing imports rclpy.
 
-Every message is a standard ROS 2 type (:data:`TOPICS`). Timestamps are sim time in nanoseconds (the
-bag's receive time, and each header stamp where the type has one), so a lock-step bag and a DDS bag of
-the same mission look alike.
+Every message is a standard ROS 2 type (:data:`TOPICS`). Timestamps are sim time in nanoseconds, and a
+message's bag time is its time *at the source*: its header stamp where the type has one (lock-step writes the
+two equal; ``bt-nav record`` takes the stamp, :func:`message_time_ns`), else the sim time at which it was sent
+(:mod:`bt_nav.ros.simclock`), never the time a busy recorder got round to it. So a lock-step bag and a DDS
+bag of the same mission look alike, and a turn recorded at 20x real time is seen turning.
 
 How lock-step uses it (``bt-nav lockstep --bag DIR``): :class:`MissionBag` satisfies
 :class:`bt_nav.run.sinks.MissionSink`, so pass it as ``sink``::
@@ -36,6 +38,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -92,6 +95,45 @@ def split_namespace(topic: str) -> tuple[str, str]:
         if topic.endswith(base) and len(topic) > len(base) + 1 and topic.startswith("/"):
             return topic[:-len(base)], base
     return "", topic
+
+
+#: Sim seconds a message's own stamp may lie before the time it got into the bag (a recorder's backlog: up to
+#: 2.8 s measured at 11x) and after it (clocks of two processes), and still be taken as its time. Outside, the
+#: stamp is on another clock (a node stamping with wall time in a sim-time graph) and the bag's time stands.
+STAMP_MAX_AGE, STAMP_MAX_LEAD = 60.0, 1.0
+_STAMPED: dict[str, bool] = {}
+
+
+def own_stamp_ns(msgtype: str, cdr: bytes) -> int | None:
+    """The stamp a message carries, read from its CDR bytes: a ``std_msgs/Header`` or a ``Clock``'s time as its
+    first field (Odometry, LaserScan, TwistStamped, Clock); None for a type without one or a stamp of 0.
+
+    Why from the bytes: the first field of such a message is a builtin_interfaces/Time (int32 sec, uint32
+    nanosec) right after CDR's 4-byte encapsulation header, whose second byte says the byte order; the
+    recorder needs it for every message and must not deserialise them all. ``rcl_interfaces/Log``'s stamp is
+    left out: it is the log call's wall time (see :mod:`bt_nav.ros.simclock`), not the graph's clock.
+    """
+    stamped = _STAMPED.get(msgtype)
+    if stamped is None:
+        try:
+            fields = typestore().fielddefs[msgtype][1]
+        except KeyError:
+            fields = []
+        first = fields[0][1][1] if fields else ""
+        stamped = _STAMPED[msgtype] = first == "std_msgs/msg/Header" or msgtype == "rosgraph_msgs/msg/Clock"
+    if not stamped or len(cdr) < 12:
+        return None
+    sec, nanosec = struct.unpack_from("<iI" if cdr[1] == 1 else ">iI", cdr, 4)
+    ns = sec * 1_000_000_000 + nanosec
+    return ns if ns > 0 else None
+
+
+def message_time_ns(stamp_ns: int | None, bag_ns: int) -> int:
+    """A message's time: its own stamp when it has one on the bag's clock (within :data:`STAMP_MAX_AGE` before
+    and :data:`STAMP_MAX_LEAD` after ``bag_ns``), else ``bag_ns``. The one rule of the recorder and the reader."""
+    if stamp_ns is not None and bag_ns - to_ns(STAMP_MAX_AGE) <= stamp_ns <= bag_ns + to_ns(STAMP_MAX_LEAD):
+        return stamp_ns
+    return bag_ns
 
 
 class BagError(RuntimeError):

@@ -11,6 +11,11 @@ Two ways in, both through maintained libraries:
 Either way the CDR payloads are decoded by rosbags' typestore. A file that yields nothing raises
 :class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
 
+Times: a message's time is its own header stamp where it has one on the bag's clock, else its bag time
+(:func:`bt_nav.media.bag.message_time_ns`, the recorder's rule too), and every series is sorted by it. So a bag
+that ``ros2 bag record`` (or an older ``bt-nav record``) wrote with receive times, seconds late when the recorder
+fell behind, still shows the robot where it was at each instant.
+
 A bag of several robots (``bt-nav lockstep --robots N --bag``; each robot's topics under its namespace,
 ``/robot1/ground_truth_odom``, ...) gives :attr:`MissionRecord.robots`: one record per namespace that has a
 ground truth, in name order. Its top-level fields are the first robot's (plus the shared /clock and
@@ -43,6 +48,8 @@ from bt_nav.media.bag import (
     TRUTH,
     WALKERS,
     BagError,
+    message_time_ns,
+    own_stamp_ns,
     split_namespace,
     typestore,
 )
@@ -286,7 +293,8 @@ class _Collector:
         elif topic == SCAN:
             self._scan(t, msg)
         elif topic == CMD:
-            self.cmd.append((t, msg.linear.x, msg.angular.z))
+            twist = getattr(msg, "twist", msg)  # geometry_msgs/Twist, or TwistStamped's twist
+            self.cmd.append((t, twist.linear.x, twist.angular.z))
         elif topic == TREE:
             self.trees.append((t, msg.data))
         elif topic == EVENTS:
@@ -326,7 +334,16 @@ class _Collector:
                 setattr(rec, name, getattr(first, name))
         return rec
 
+    def _sort(self) -> None:
+        """Every series in time order (stable): stamps at the source arrive out of the bag's order."""
+        for name in ("truth", "odom", "cmd", "trees", "events", "walkers"):
+            getattr(self, name).sort(key=lambda item: item[0])
+        order = sorted(range(len(self.scan_t)), key=self.scan_t.__getitem__)
+        self.scan_t = [self.scan_t[i] for i in order]
+        self.scan_rows = [self.scan_rows[i] for i in order]
+
     def _own_record(self, path: Path, truncated: bool) -> MissionRecord:
+        self._sort()
         n_beams = self.scan_rows[0].shape[0] if self.scan_rows else 0
         a0, da, rmax = self.scan_meta or (0.0, 0.0, 3.5)
         scans = Scans(np.asarray(self.scan_t), a0 + da * np.arange(n_beams),
@@ -364,7 +381,7 @@ def read_bag(path: str | Path) -> MissionRecord:
             except Exception:  # noqa: BLE001 - a corrupt payload or an unknown type: skip that message
                 status["skipped"] = status.get("skipped", 0) + 1
                 continue
-            rec.add(topic, t_ns * 1e-9, msg)
+            rec.add(topic, message_time_ns(own_stamp_ns(msgtype, data), t_ns) * 1e-9, msg)
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - whatever a damaged file makes a library raise

@@ -284,6 +284,8 @@ class Track:
         """What the frame at sim time ``t`` says about this robot (times counted from ``origin``)."""
         i, k = self.index(t), self.snapshot(t)
         travelled = float(self.distance[i]) if i >= 0 else 0.0
+        if not self.snaps:  # not bt_nav's executive: no tree; say what the robot does
+            return FrameText(t - origin, travelled, doing_text(self.rec, t), "", "", "", None, None)
         if k < 0:
             return FrameText(t - origin, travelled, "Stopped", "", "", "", None, None)
         snap, truth = self.snaps[k], self.rec.truth
@@ -312,6 +314,49 @@ def console_lines(events: list[tuple[float, str]], prefix: str = "") -> list[tup
     return [(t, prefix + text) for t, text in events if console_shows(text)]
 
 
+# ---------------------------------------------------------------------- a robot node that is not bt_nav's
+# Why: a student films their own node (``bt-nav demo --exe``, ``grade --exe --videos``); it publishes no tree. The
+# side panel then shows what the node says (its log lines, from /rosout) and does (its command), and the caption
+# says what the robot does, from the command and the ground truth's motion, never "Stopped" while it turns.
+
+#: Names of bt_nav's own nodes in a bag's events (``[INFO] sim: ...``, :func:`bt_nav.ros.graphtap.event_text`).
+BT_NAV_SPEAKERS = ("sim", "referee", "checkoff")
+_SPEAKER = re.compile(r"^\[[A-Z]+\] (?P<name>[\w/.-]+): ")
+#: Below these a speed is "no motion" (m/s, rad/s): the simulator's resolution, not a robot's creep.
+STILL_V, STILL_W = 0.005, 0.01
+
+
+def node_lines(events: list[tuple[float, str]]) -> list[tuple[float, str]]:
+    """The log lines of nodes other than bt_nav's own (the robot node's), as the console shows them."""
+    return [(t, text) for t, text in console_lines(events)
+            if (m := _SPEAKER.match(text)) is not None and m["name"] not in BT_NAV_SPEAKERS]
+
+
+def motion_text(v: float, w: float) -> str:
+    """A twist in words: ``turning left 0.50 rad/s``, ``driving 0.20 m/s``, ``driving 0.05 m/s, turning right
+    0.30 rad/s``, ``reversing 0.10 m/s``, ``stopped``."""
+    parts = []
+    if abs(v) >= STILL_V:
+        parts.append(f"{'driving' if v > 0 else 'reversing'} {abs(v):.2f} m/s")
+    if abs(w) >= STILL_W:
+        parts.append(f"turning {'left' if w > 0 else 'right'} {abs(w):.2f} rad/s")
+    return ", ".join(parts) or "stopped"
+
+
+def command_at(record: MissionRecord, t: float) -> tuple[float, float] | None:
+    """The latest command (linear, angular) at or before ``t``; None before the first."""
+    k = int(np.searchsorted(record.cmd[:, 0], t, side="right")) - 1 if len(record.cmd) else -1
+    return (float(record.cmd[k, 1]), float(record.cmd[k, 2])) if k >= 0 else None
+
+
+def doing_text(record: MissionRecord, t: float) -> str:
+    """What a robot without a tree does at ``t``: its command and its ground-truth motion, in words."""
+    cmd = command_at(record, t)
+    i = int(np.searchsorted(record.truth.t, t, side="right")) - 1
+    robot = motion_text(float(record.truth.v[i]), float(record.truth.w[i])) if i >= 0 else "not seen yet"
+    return f"robot {robot}; cmd_vel {motion_text(*cmd) if cmd else 'none yet'}"
+
+
 class VideoRenderer:
     """Frames of one recorded mission (see the module docstring); ``frame(t)`` must be called with rising t."""
 
@@ -330,6 +375,8 @@ class VideoRenderer:
         self.sample_branch = self.track.sample_labels()
         self.events = console_lines(record.events)
         self.event_t = [t for t, _ in self.events]
+        self._node_lines = node_lines(record.events)
+        self._node_t = [t for t, _ in self._node_lines]
         self.layer = self._background()
         self._tree_cache: tuple[Any, Any] = (None, None)
         self._panel_base: tuple[int | None, Any] = (None, None)
@@ -453,6 +500,8 @@ class VideoRenderer:
         Why two levels of cache: the snapshot's panel is drawn once; only rows whose feedback is live (a
         countdown, :func:`live_feedback`) are redrawn on a copy, and only when their text changed.
         """
+        if not self.track.snaps:
+            return self._node_panel(t)
         k = self.track.snapshot(t)
         rows = self.track.panel_rows(t)
         live = tuple((n, feedback) for n, (row, feedback, _) in enumerate(rows) if feedback != shown_feedback(row))
@@ -471,6 +520,31 @@ class VideoRenderer:
                 d.rectangle([2, y, WIDTH - MAP_W - 6, y + step - 2], fill=(255, 243, 190) if on_path else PANEL_BG)
                 self._panel_row(d, y, row, feedback)
         self._tree_cache = ((k, live), img)
+        return img
+
+    def _node_panel(self, t: float) -> Any:
+        """The side panel of a robot node without a tree: its command, the robot's motion and the node's recent
+        log lines (:func:`node_lines`), redrawn only when one of them changes."""
+        cmd = command_at(self.rec, t)
+        n_lines = int(np.searchsorted(self._node_t, t, side="right"))
+        key = (cmd, doing_text(self.rec, t), n_lines)
+        if self._tree_cache[0] == key:
+            return self._tree_cache[1]
+        img = self._Image.new("RGB", (WIDTH - MAP_W - 2, MAP_H), PANEL_BG)
+        d = self._Draw.Draw(img)
+        d.text((8, 6), "robot node (publishes no bt_nav tree)", font=self.font, fill=INK)
+        linear = f"linear {cmd[0]:+.2f} m/s, angular {cmd[1]:+.2f} rad/s" if cmd else "no command yet"
+        rows = [("cmd_vel", INK), (f"  {linear}", STATUS_COLOURS["RUNNING"]),
+                (f"  {motion_text(*cmd) if cmd else ''}", STATUS_COLOURS["RUNNING"]),
+                ("robot (ground truth)", INK), (f"  {key[1].split(';')[0].removeprefix('robot ')}", INK),
+                ("", INK), ("node's log lines", INK)]
+        width = (WIDTH - MAP_W - 20) // 8
+        for lt, text in self._node_lines[:n_lines][-24:]:
+            rows += [(line, CONSOLE_BG) for line in _wrap(f"[{lt - self.origin:6.2f}] {text}", width)]
+        room = (MAP_H - 30) // 15 - 7  # rows left for log lines under the seven of the command and motion
+        for n, (text, colour) in enumerate(rows[:7] + rows[7:][-room:]):
+            d.text((8, 30 + 15 * n), text, font=self.mono, fill=colour)
+        self._tree_cache = (key, img)
         return img
 
     @staticmethod
@@ -511,6 +585,11 @@ class VideoRenderer:
             d.text((10, 6 + 17 * n), f"[{t - self.origin:7.2f}] {text}"[:160], font=self.mono, fill=ink)
         self._console_cache = (n_events, img)
         return img
+
+
+def _wrap(text: str, width: int) -> list[str]:
+    """``text`` in lines of at most ``width`` characters (continuations indented)."""
+    return [text[:width]] + [f"  {text[k:k + width - 2]}" for k in range(width, len(text), width - 2)]
 
 
 def renderer_for(record: MissionRecord, world: Any = None) -> VideoRenderer:

@@ -8,10 +8,14 @@ bag's playback run one code path).
   topic that appears late (the referee's, the executive's tree) is subscribed when it shows up.
 - Each subscription takes the publishers' QoS (best effort if one offers only that, transient local if
   all keep history), and that offered QoS goes with each message, for the bag's metadata.
-- Time is sim time: the latest ``/clock`` (wall time until a clock runs), as ``ros2 bag record
-  --use-sim-time`` stamps messages.
-- ``/rosout`` lines of the bt_nav nodes become mission events (``[INFO] text``), the form lock-step
-  writes on ``/bt_nav/events``.
+- Time is sim time *at the source* (:meth:`GraphTap.source_ns`): a message's header stamp where its type has
+  one (ground truth, odometry, scans), else the sim time when it was sent (its DDS source timestamp mapped by
+  :class:`bt_nav.ros.simclock.SimClock` from ``/clock``: commands, the tree, strings), and for a ``/rosout``
+  line the sim time of its log call. Not the latest ``/clock`` on arrival, which ``ros2 bag record
+  --use-sim-time`` takes: a recorder that falls behind (2.8 s of sim time at 11x, measured) would draw a turn
+  late and then snap it. Without a ``/clock`` (``sim_time`` off) times are wall times.
+- ``/rosout`` lines of the graph's nodes (the robot node's too, whatever its name; not this recorder's own)
+  become mission events (``[INFO] text``), the form lock-step writes on ``/bt_nav/events``.
 """
 
 from __future__ import annotations
@@ -21,6 +25,8 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from bt_nav.ros.simclock import SimClock
 
 #: (topic, msgtype "pkg/msg/Name", sim time ns, CDR bytes, offered QoS as a rosbags Qos or None)
 Handler = Callable[[str, str, int, bytes, Any], None]
@@ -45,6 +51,10 @@ def get_message(msgtype: str) -> Any:
     return getattr(importlib.import_module(f"{package}.{kind}"), name)
 
 
+#: /rosout lines not turned into events: the recording and viewing nodes' own.
+OWN_NODES = ("bt_nav_recorder", "bt_nav_view", "bt_nav_demo")
+
+
 def event_text(name: str, level: int, msg: str) -> str:
     """A /rosout line as a mission event: ``[INFO] text`` for the executive, ``[INFO] referee: text`` else."""
     who = "" if name == EXECUTIVE_NODE else name.removeprefix("bt_nav_") + ": "
@@ -61,10 +71,14 @@ class GraphTap:
         events_topic: where /rosout lines of ``bt_nav*`` nodes go (as std_msgs/String CDR).
         sim_time: stamp messages before the first /clock with 0 (False: with wall time, for a graph
             without a simulator).
+        message_info: take each sample's DDS source timestamp (rclpy's MessageInfo). False for rclpy's
+            ``EventsExecutor``, which fails on such callbacks in Jazzy (``SystemError: null argument to internal
+            routine``, tried here): then /clock is mapped by its arrival (best effort, depth 1: the freshest
+            sample) and a message without a stamp of its own gets the newest /clock on arrival.
     """
 
     def __init__(self, node: Any, topics: Iterable[str], handler: Handler, events_topic: str = "/bt_nav/events",
-                 sim_time: bool = True) -> None:
+                 sim_time: bool = True, message_info: bool = True) -> None:
         from rclpy.serialization import serialize_message
         from std_msgs.msg import String
 
@@ -72,8 +86,10 @@ class GraphTap:
         self.wanted = {t if t.startswith("/") else "/" + t for t in topics}
         self.subscribed: dict[str, str] = {}
         self.clock_ns: int | None = None
+        self.clock = SimClock()
         self._serialize, self._String = serialize_message, String
         self.sim_time = sim_time
+        self.message_info = message_info
         self._clock_sub()
         if "/rosout" in self.wanted:
             self._rosout_sub()
@@ -86,26 +102,49 @@ class GraphTap:
             return self.clock_ns
         return 0 if self.sim_time else time.time_ns()
 
+    def source_ns(self, msgtype: str, data: bytes, info: Any = None) -> int:
+        """The sim time of a message at its source (see the module docstring): its own stamp when it is on the
+        graph's clock (:func:`bt_nav.media.bag.message_time_ns`), else the sim time at its DDS source timestamp,
+        else the newest /clock."""
+        from bt_nav.media.bag import message_time_ns, own_stamp_ns
+
+        sent = self.sent_ns(info.get("source_timestamp") if isinstance(info, dict) else None)
+        return message_time_ns(own_stamp_ns(msgtype, data), sent)
+
+    def sent_ns(self, wall_ns: int | None) -> int:
+        """Sim time at wall instant ``wall_ns`` (a DDS source timestamp, a log call's stamp); the newest /clock
+        when it cannot be mapped (no ``wall_ns``, or older than the map); wall time itself without a clock."""
+        if wall_ns:
+            if self.clock_ns is None and not self.sim_time:
+                return int(wall_ns)
+            sim = self.clock.sim_at(int(wall_ns))
+            if sim is not None:
+                return sim
+        return self.now_ns()
+
     def _clock_sub(self) -> None:
         from rosgraph_msgs.msg import Clock
 
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
-        def on_clock(msg: Any) -> None:
+        def on_clock(msg: Any, info: Any) -> None:  # two parameters: rclpy passes the MessageInfo
             self.clock_ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+            sent = info.get("source_timestamp") if isinstance(info, dict) else None
+            self.clock.add(sent or time.time_ns(), self.clock_ns)
 
-        self.node.create_subscription(Clock, "/clock", on_clock, qos)
+        self.node.create_subscription(Clock, "/clock", self._with_info(on_clock), qos)
 
     def _rosout_sub(self) -> None:
         from rcl_interfaces.msg import Log
 
-        def on_log(msg: Any) -> None:
-            if msg.name.startswith("bt_nav") and msg.level >= 20:
+        def on_log(msg: Any, info: Any) -> None:
+            if msg.level >= 20 and not msg.name.startswith(OWN_NODES):
                 data = self._serialize(self._String(data=event_text(msg.name, msg.level, msg.msg)))
-                self.handler(self.events_topic, "std_msgs/msg/String", self.now_ns(), data, None)
+                when = self.sent_ns(msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec)  # the log call's wall time
+                self.handler(self.events_topic, "std_msgs/msg/String", when, data, None)
 
         self.subscribed["/rosout"] = "rcl_interfaces/msg/Log"
-        self.node.create_subscription(Log, "/rosout", on_log, QoSProfile(depth=100))
+        self.node.create_subscription(Log, "/rosout", self._with_info(on_log), QoSProfile(depth=100))
 
     def _discover(self) -> None:
         for topic, types in self.node.get_topic_names_and_types():
@@ -123,7 +162,8 @@ class GraphTap:
                 self.node.get_logger().warning(f"cannot tap {topic} ({msgtype}): {exc}")
                 self.subscribed[topic] = msgtype
                 continue
-            self.node.create_subscription(cls, topic, self._callback(topic, msgtype, offered), qos, raw=True)
+            self.node.create_subscription(cls, topic, self._with_info(self._callback(topic, msgtype, offered)), qos,
+                                          raw=True)
             self.subscribed[topic] = msgtype
 
     @staticmethod
@@ -134,8 +174,14 @@ class GraphTap:
                           reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
-    def _callback(self, topic: str, msgtype: str, offered: Any) -> Callable[[bytes], None]:
-        def on_message(data: bytes) -> None:
-            self.handler(topic, msgtype, self.now_ns(), bytes(data), offered)
+    def _with_info(self, callback: Callable[[Any, Any], None]) -> Callable[..., None]:
+        """``callback(msg, info)`` as rclpy must call it: with the MessageInfo, or (``message_info`` off) without."""
+        if self.message_info:
+            return callback
+        return lambda msg: callback(msg, None)
+
+    def _callback(self, topic: str, msgtype: str, offered: Any) -> Callable[[bytes, Any], None]:
+        def on_message(data: bytes, info: Any) -> None:
+            self.handler(topic, msgtype, self.source_ns(msgtype, data, info), bytes(data), offered)
 
         return on_message

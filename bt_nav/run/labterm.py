@@ -11,10 +11,15 @@ prints the judge's report lines), and the terminal shows, stamped with sim time,
 - the executive's maneuver and emergency-brake lines (``Randomizer: ...``, ``AEB: ...``) as they happen;
   not tick statistics, not the scan checker's chatter.
 
+Each line is stamped with the sim time it happened at its source: a node's line with the sim time of its log
+call (the line's own wall stamp mapped by ``/clock``: :meth:`bt_nav.run.rundir.Logs.line_time`), a judge's call
+with the sim time the judge wrote into it; never the time this process read it, which at 22x real time lagged
+by seconds.
+
 With a bag (``--bag``/``--video``) every shown line and every report line is also published on
 ``/bt_nav/events`` (:data:`bt_nav.media.bag.EVENTS`, latched) by :class:`EventPublisher`; ``bt-nav record``
 records that topic instead of turning ``/rosout`` into events, so the bag's events, and the video's console
-strip, are exactly the terminal's lines, stamped with the sim time at which the recorder got them.
+strip, are exactly the terminal's lines, stamped with the sim time at which this process published them.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ from bt_nav_sim.plot import MANEUVER_TIPS
 
 from bt_nav.media.bag import EVENTS
 from bt_nav.ros.bringup import EXECUTIVE_NAME
-from bt_nav.run.rundir import Logs
+from bt_nav.run.rundir import Logs, split_stamp
 
 #: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
 SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
@@ -102,7 +107,7 @@ class LabTerminal:
 
     def show(self, text: str, t: float | None = None) -> None:
         """One terminal line at sim time ``t`` (default: the newest ground truth), published as an event."""
-        t = self.logs.sim_time() if t is None else t
+        t = self.logs.line_time() if t is None else t
         with self._lock:
             self.lines.append((t, text))
             self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
@@ -118,6 +123,8 @@ class LabTerminal:
     def sink(self, name: str, line: str) -> None:
         """Launcher sink: the log files, then what the lab's terminal shows of ``line``."""
         self.logs.sink(name, line)
+        wall_ns, line = split_stamp(line)
+        when = self.logs.line_time(wall_ns) if wall_ns is not None else None
         match = LOG_LINE.match(line)
         if name.endswith("checkoff"):
             if match is None:
@@ -127,19 +134,83 @@ class LabTerminal:
         elif name.endswith("executive") and match is not None:
             message = match["msg"]
             if message.startswith(f"{EXECUTIVE_NAME} up:"):
-                self.show(self.launch_line)
+                self.show(self.launch_line, when)
             elif message.split(":", 1)[0] in SHOWN_LABELS:
-                self.show(f"[{match['level']}] [{match['node']}]: {message}")
+                self.show(f"[{match['level']}] [{match['node']}]: {message}", when)
 
     def _judge_line(self, message: str) -> None:
         """The judge's toggle_navigation calls and replies, as ``ros2 service call`` shows them."""
-        call = CALL_LINE.match(message)
-        if call is None:
-            return
-        t = float(call["t"])
-        if call["ok"] is None:
-            for text in service_call_lines(f"/{call['call']}", call["data"] == "true"):
-                self.show(text, t)
-        else:
-            for text in service_reply_lines(call["ok"] == "success", call["message"]):
-                self.show(text, t)
+        call = judge_call(message)
+        for text in call[1] if call else ():
+            self.show(text, call[0])
+
+
+def judge_call(message: str) -> tuple[float, list[str]] | None:
+    """A judge's log message about its service call or the reply (:data:`CALL_LINE`): its sim time and the
+    terminal lines ``ros2 service call`` prints for it; None for any other message."""
+    call = CALL_LINE.match(message)
+    if call is None:
+        return None
+    if call["ok"] is None:
+        return float(call["t"]), service_call_lines(f"/{call['call']}", call["data"] == "true")
+    return float(call["t"]), service_reply_lines(call["ok"] == "success", call["message"])
+
+
+#: A line in rcutils' default console format, ``[INFO] [1712345678.123456789] [node]: text`` (a student's node
+#: logs so unless it sets ``RCUTILS_CONSOLE_OUTPUT_FORMAT``): the wall time of the log call is in it.
+DEFAULT_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
+
+
+#: Lines of a Python traceback (a process stopped while it starts): not a report line.
+PYTHON_ERROR = re.compile(r"^(?:Traceback |\s|\w+(?:Error|Interrupt|Exception)\b)")
+
+
+class NodeTerminal:
+    """The terminal of ``bt-nav demo --exe``: a student's own node in place of bt_nav's executive.
+
+    Shows, stamped with the sim time each happened (:class:`bt_nav.ros.simclock.SimClock`): every line the node
+    prints (its log lines at their log call; a plain ``print`` when it is read), the judge's service calls and
+    replies as ``ros2 service call`` prints them, and the judge's report lines as they are. Not the simulator's
+    or the recorder's lines (they are in the run's log files).
+
+    Args:
+        clock: the map from wall to sim time (the demo's recorder node's).
+        out: prints one terminal line (default ``print``).
+    """
+
+    def __init__(self, clock: Any, out: Callable[[str], Any] | None = None) -> None:
+        self.clock = clock
+        self.out = out or (lambda text: print(text, flush=True))
+        self.lines: list[tuple[float | None, str]] = []
+        self._lock = threading.Lock()
+
+    def show(self, text: str, t: float | None) -> None:
+        """One terminal line at sim time ``t`` (None: not known yet)."""
+        with self._lock:
+            self.lines.append((t, text))
+            self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
+
+    def _sim(self, wall_s: float | None = None) -> float | None:
+        import time
+
+        sim = self.clock.sim_at(time.time_ns() if wall_s is None else round(wall_s * 1e9))
+        return None if sim is None else sim * 1e-9
+
+    def sink(self, name: str, line: str) -> None:
+        """Launcher sink (after the run's log files)."""
+        if name == "node":
+            match = DEFAULT_LOG_LINE.match(line)
+            if match is None:
+                self.show(line, self._sim())
+            else:
+                self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
+        elif name in ("referee", "checkoff"):
+            log = DEFAULT_LOG_LINE.match(line)
+            if log is None:
+                if not PYTHON_ERROR.match(line):  # a judge stopped early says so in its log file, not here
+                    with self._lock:
+                        self.out(line)  # a report line: its times are the judge's own
+                return
+            call = judge_call(log["msg"])
+            for text in call[1] if call else ():
+                self.show(text, call[0])

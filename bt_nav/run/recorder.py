@@ -15,6 +15,7 @@ from typing import Any
 
 from bt_nav.media.treetext import tip_name
 from bt_nav.ros.bringup import EXECUTIVE_NAME
+from bt_nav.ros.simclock import SimClock
 
 
 def rec_ready(recorder: Recorder) -> bool:
@@ -68,6 +69,7 @@ class Recorder:
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
         from std_msgs.msg import String
 
         from bt_nav.ros.rosutil import ThreadedNode
@@ -83,7 +85,15 @@ class Recorder:
         self.node.create_subscription(Odometry, f"{ns}ground_truth_odom", self._on_truth, reliable)
         self.node.create_subscription(Twist, f"{ns}cmd_vel", self._on_cmd, reliable)
         self.node.create_subscription(String, f"{ns or '/'}{EXECUTIVE_NAME}/tree", self._on_tree, latched)
+        self.clock = SimClock()  # sim time at a wall instant: the times of the nodes' log lines (rundir.Logs)
+        self.node.create_subscription(Clock, "/clock", self._on_clock,
+                                      QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
         self.ros.start()
+
+    def _on_clock(self, msg: Any, info: Any) -> None:
+        """/clock with its source timestamp (two parameters: rclpy passes the MessageInfo)."""
+        if isinstance(info, dict) and info.get("source_timestamp"):
+            self.clock.add(info["source_timestamp"], msg.clock.sec * 1_000_000_000 + msg.clock.nanosec)
 
     def _on_truth(self, msg: Any, info: Any = None) -> None:
         from bt_nav.ros.rosutil import yaw_from_quaternion

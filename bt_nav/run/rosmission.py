@@ -67,7 +67,8 @@ class RosMission:
             if not robot:
                 parent(name, line)
             else:
-                parent(f"{robot}_{name}", line if line.startswith("[") else f"{robot}: {line}")
+                is_log = line.startswith(("[", "@"))  # "@<ns> [INFO] ...": a log line stamped (rundir.LOG_FORMAT)
+                parent(f"{robot}_{name}", line if is_log else f"{robot}: {line}")
 
         return self.launcher.start(spec, sink=sink)
 

@@ -1,21 +1,39 @@
 """Where a mission over DDS writes: its run directory and one log file per node, with one time base.
 
-Log lines carry ``sim <t> s [wall <t> s]``: the newest ground truth the recorder saw (sim time, the
-executive's and the simulator's clock) and wall seconds since the run started. The referee's report lines
-are its own: their times are seconds from the referee's t0 (its results say so under ``time_base``).
+Log lines carry ``sim <t> s [wall <t> s]``: the sim time at which the node logged the line and wall seconds
+since the run started. The nodes print each line with the wall time of its log call (:data:`LOG_FORMAT`'s
+``{time_as_nanoseconds}``; rcutils takes the system clock for it, whatever the node's clock) and the demo's
+recorder maps it to sim time with ``/clock`` (:class:`bt_nav.ros.simclock.SimClock`), so a line is stamped with
+when it happened, not with when this process read it: at 22x real time a busy demo process read the
+executive's lines up to 6.5 s of sim time late. A line without that stamp (a ``print``) gets the sim time now.
+The referee's report lines are its own: their times are seconds from the referee's t0 (its results say so
+under ``time_base``).
 """
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 from pathlib import Path
 from typing import IO, Any
 
 from bt_nav.ros.bringup import JUDGES
+from bt_nav.ros.simclock import SimClock
 
-#: rcutils' line format for the nodes: no epoch stamp (the run prefixes sim and wall time itself).
-LOG_FORMAT = "[{severity}] [{name}]: {message}"
+#: rcutils' line format for the nodes: the log call's wall time (ns since the epoch) in front, which
+#: :func:`split_stamp` takes off again (the run prefixes sim and wall time itself).
+LOG_FORMAT = "@{time_as_nanoseconds} [{severity}] [{name}]: {message}"
+_STAMPED = re.compile(r"^@(\d+) (?=\[)")
+
+
+def split_stamp(line: str) -> tuple[int | None, str]:
+    """``"@1712345678123456789 [INFO] [x]: hi"`` -> (1712345678123456789, ``"[INFO] [x]: hi"``); a line without
+    the stamp -> (None, line)."""
+    match = _STAMPED.match(line)
+    if match is None:
+        return None, line
+    return int(match[1]), line[match.end():]
 
 
 def make_run_dir(out: Path, name: str) -> Path:
@@ -70,29 +88,41 @@ class Logs(LogFiles):
     to the files only, so the verdict is the last thing the user reads.
     """
 
-    def __init__(self, directory: Path, echo_logs: bool, sim_time: Any = None) -> None:
+    def __init__(self, directory: Path, echo_logs: bool, sim_time: Any = None, clock: SimClock | None = None) -> None:
         super().__init__(directory)
         self.echo_logs = echo_logs
         self.sim_time = sim_time or (lambda: None)
+        self.clock = clock  # the demo's recorder's map of /clock (None: sim_time() alone)
         self.wall0 = time.monotonic()
         self.verdict: list[str] = []
         self.quiet_from_now = False
 
-    def stamp(self) -> str:
-        """``sim 37.65 s [wall 3.2 s]`` (sim ``-`` before the first ground truth)."""
-        t = self.sim_time()
+    def line_time(self, wall_ns: int | None = None) -> float | None:
+        """Sim seconds at wall instant ``wall_ns`` (a log line's stamp; None: now), from :attr:`clock`; else the
+        newest ground truth (:attr:`sim_time`); None before either."""
+        if self.clock is not None:
+            sim = self.clock.sim_at(time.time_ns() if wall_ns is None else wall_ns)
+            if sim is not None:
+                return sim * 1e-9
+        return self.sim_time()
+
+    def stamp(self, t: float | None = None) -> str:
+        """``sim 37.65 s [wall 3.2 s]`` at sim time ``t`` (None: now; sim ``-`` before the first clock)."""
+        t = self.line_time() if t is None else t
         sim = f"{t:7.2f} s" if t is not None else "      - s"
         return f"sim {sim} [wall {time.monotonic() - self.wall0:5.1f} s]"
 
     def sink(self, name: str, line: str) -> None:
         """Launcher sink: log file always; stdout for report lines (and warnings, unless quiet)."""
+        wall_ns, line = split_stamp(line)
+        stamp = self.stamp(self.line_time(wall_ns))
         with self._lock:
             stream = self._stream(name)
             is_log = line.startswith("[")
-            stream.write((f"{self.stamp()} {line}" if is_log else line) + "\n")
+            stream.write((f"{stamp} {line}" if is_log else line) + "\n")
             if name.rsplit("_", 1)[-1] in JUDGES and not is_log:
                 self.verdict.append(line)
                 print(line, flush=True)
             elif self.echo_logs and not self.quiet_from_now and (
                     name == "referee" or any(lvl in line for lvl in ("[WARN]", "[ERROR]", "[FATAL]"))):
-                print(f"  {self.stamp()} [{name}] {line}", flush=True)
+                print(f"  {stamp} [{name}] {line}", flush=True)
