@@ -95,7 +95,9 @@ class Recorder:
         if isinstance(info, dict) and info.get("source_timestamp"):
             self.clock.add(info["source_timestamp"], msg.clock.sec * 1_000_000_000 + msg.clock.nanosec)
 
-    def _on_truth(self, msg: Any, info: Any = None) -> None:
+    def _on_truth(self, msg: Any, info: Any) -> None:
+        """Ground truth with its MessageInfo (no default: rclpy passes the info only to a callback that cannot be
+        called with the message alone, and the publisher sequence number is what tells a second simulator)."""
         from bt_nav.ros.rosutil import yaw_from_quaternion
 
         q = msg.pose.pose.orientation

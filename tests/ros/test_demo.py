@@ -130,3 +130,17 @@ def test_lab_demo_checks_off_maneuver_c_and_bags_the_terminal(tmp_path: Path) ->
     assert events[:len(shown)] == shown, (events, shown)
     assert events[len(shown):] == [line for line in demo.stdout if not line.startswith(("[sim ", "bt-nav demo:", "$"))
                                    ] + [f"maneuvers fired: {out.split('maneuvers fired: ', 1)[1].splitlines()[0]}"]
+
+
+def test_the_recorder_is_handed_the_message_info() -> None:
+    """rclpy hands a callback the MessageInfo only when it cannot be called with the message alone (it tries
+    ``bind(msg)`` first): the recorder's ground-truth callback needs the publisher's sequence numbers to tell a
+    second simulator, so it must not take the message alone (a default ``info=None`` silently disabled that)."""
+    import inspect
+
+    from bt_nav.run.recorder import Recorder
+
+    bound = inspect.signature(Recorder._on_truth.__get__(object()))
+    with pytest.raises(TypeError):
+        bound.bind(object())
+    bound.bind(object(), object())
