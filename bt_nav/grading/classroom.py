@@ -18,7 +18,7 @@ import html
 import json
 import re
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -165,3 +165,31 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
     return (f"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{esc(title)}</title><style>{STYLE}</style>"
             f"</head><body><h1>{esc(title)}</h1><table><tr><th>student</th><th>passed</th>{head}"
             f"<th>bt_nav errors</th><th>failures and findings</th></tr>{''.join(body)}</table></body></html>\n")
+
+
+def run_class(students: Sequence[Student], settings_of: Callable[[Student], Any], jobs: Sequence[Any],
+              workers: int, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
+              resume: bool = False) -> dict[str, list[dict[str, Any]]]:
+    """Every student's grid, one after the other (each ``workers`` runs at a time), into ``out/<name>``; each grid's
+    report written as ``bt-nav grade --exe`` writes it. Returns the rows that ended, per student.
+
+    ``settings_of(student)`` gives the student's :class:`bt_nav.grading.node_run.ExeSettings` (its command, its
+    directory). Resuming keeps each student's finished runs (a student whose grid is complete runs nothing).
+    A stop request ends the class after the runs under way; the students not reached are left for ``--resume``.
+    """
+    from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
+    from bt_nav.grading.report import write_exe_report
+
+    out: dict[str, list[dict[str, Any]]] = {}
+    for student in students:
+        if stop is not None and stop.requested:
+            break
+        settings = settings_of(student)
+        done = prepare_out(settings, jobs, resume)
+        rows = run_exe_grid(jobs, settings, workers, stop,
+                            None if on_row is None else (lambda row, name=student.name: on_row(name, row)),
+                            done=done)
+        ended = [row for row in rows if row["outcome"] != STOPPED]
+        write_exe_report(ended, settings)
+        out[student.name] = ended
+    return out

@@ -70,9 +70,14 @@ def recorder_profile() -> Path:
     """:data:`RECORDER_PROFILE` as a file (written once into the temporary directory, atomically)."""
     path = Path(tempfile.gettempdir()) / "bt_nav_recorder_fastdds.xml"
     if not path.is_file() or path.read_text(encoding="utf-8") != RECORDER_PROFILE:
-        tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(RECORDER_PROFILE, encoding="utf-8")
-        tmp.replace(path)
+        # A temporary file of this call's own: the runs of a grid start in threads of one process, and a name made
+        # of the pid alone was shared by two of them (one moved it into place, the other's move then failed with
+        # FileNotFoundError: a run lost to "bt_nav failed to run it" on a fresh machine).
+        fd, tmp = tempfile.mkstemp(prefix=f"{path.name}.", suffix=".tmp", dir=path.parent)
+        with os.fdopen(fd, "w", encoding="utf-8") as stream:
+            stream.write(RECORDER_PROFILE)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
     return path
 
 
