@@ -110,7 +110,7 @@ def test_a_smart_pivot_to_the_wrong_side_fails() -> None:
     judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), _c_script(-math.pi / 2 / 1.6))
     line = _line(judge, "maneuver 1")
     assert line.endswith("FAILED") and "turned 90 deg right, rule 90 +- 10 deg left" in line
-    assert "failed: angle" in line and not judge.passed
+    assert "the Smart Pivot needs 90 +- 10 deg left" in line and not judge.passed
 
 
 def test_a_wrong_angle_fails() -> None:
@@ -119,7 +119,8 @@ def test_a_wrong_angle_fails() -> None:
     script[3] = (8.8, 0.05, 0.0)
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
     line = _line(judge, "maneuver 1")
-    assert "turned 57 deg left, rule 80-190 deg either side" in line and "failed: angle" in line
+    assert "turned 57 deg left, rule 80-190 deg either side" in line
+    assert "turned 57 deg left; the Randomizer needs 80-190 deg either side" in line
     assert judge.report_lines()[-1] == "overall: FAILED"
 
 
@@ -128,7 +129,8 @@ def test_forward_creep_during_a_turn_fails() -> None:
     script[2] = (2.0, 0.02, 1.0)  # still a rotation episode (|v| <= 0.03), but it drives
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
     line = _line(judge, "maneuver 1")
-    assert "forward command 0.020 m/s" in line and "failed: forward" in line and line.endswith("FAILED")
+    assert "forward command 0.020 m/s" in line and line.endswith("FAILED")
+    assert "drove forward during the turn (commanded up to 0.02 m/s, moved 0.03 m)" in line
     assert judge.results()["maneuvers"][0]["forward_motion"] > 0.01
 
 
@@ -136,7 +138,8 @@ def test_a_turn_without_its_trigger_fails() -> None:
     script = [(5.0, 0.0, 0.0), (2.0, 0.05, 0.0), (2.0, 0.0, 1.0), (16.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
     line = _line(judge, "maneuver 1")
-    assert "front 0.90 m < 0.55 m did not hold" in line and "failed: trigger" in line
+    assert "front 0.90 m < 0.55 m did not hold" in line
+    assert "turned although its trigger did not hold (front 0.90 m < 0.55 m is not true)" in line
     assert judge.results()["maneuvers"][0]["kind"] == "maneuver"
 
 
@@ -167,7 +170,8 @@ def test_no_maneuver_and_no_move_on_fail() -> None:
     stuck = A_SCRIPT[:3] + [(30.0, 0.0, 0.0)]  # turns, then stands still though armed for 8 more s
     judge = _run(CheckoffJudge(_cfg("A", armed_for=30.0), _world(WALL_AHEAD)), stuck, end=45.0)
     line = _line(judge, "maneuver 1")
-    assert "moved on: travelled 0.000 m in 10 s" in line and "failed: moved on" in line
+    assert "moved on: travelled 0.000 m in 10 s" in line
+    assert "did not move on after the turn (travelled 0.000 m in 10 s)" in line
 
 
 def test_an_emergency_stop_turn_is_a_recovery_not_a_maneuver() -> None:
@@ -230,11 +234,48 @@ def test_a_brake_turn_where_the_trigger_holds_only_within_the_margin_is_a_recove
 
 def test_a_maneuver_cut_short_by_the_disarm_is_not_judged_on_its_angle() -> None:
     """The disarm must stop a turn; the angle reached by then is no failure (its trigger still is judged)."""
-    # creep to front 0.49 m at 15.2 s, turn left at 0.5 rad/s until the disarm at 25 s (9.8 s, many turns)
-    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (9.8, 0.0, 0.5), (10.0, 0.0, 0.0)]  # 280 deg by then
+    # creep to front 0.49 m at 15.2 s, turn left at 0.3 rad/s until the disarm at 25 s (9.8 s: 168 deg by then)
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (9.8, 0.0, 0.3), (10.0, 0.0, 0.0)]
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
     (m,) = judge.results()["maneuvers"]
     assert m["interrupted"] and m["passed"] and "interrupted by the disarm" in _line(judge, "maneuver 1")
     early = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (0.5, 0.0, 0.25), (19.3, 0.0, 0.0)]
     (m,) = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), early).results()["maneuvers"]
     assert not m["interrupted"] and not m["angle_ok"]  # stopped on its own, 7 deg: judged, failed
+
+
+def test_a_turn_that_never_stops_fails_though_the_disarm_ends_it() -> None:
+    """A node that, once turning, never stops: the disarm ends a turn that is already past A's 180 deg (280 deg
+    by then), so its angle is judged, and the line says it was still turning."""
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (9.8, 0.0, 0.5), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["interrupted"] and not m["passed"] and not judge.passed
+    assert "and it was still turning at the disarm" in _line(judge, "maneuver 1")
+
+
+def test_a_trigger_acted_on_late_fails() -> None:
+    """A node that ignores its safety_distance (here 0.6 m; it turns at 0.5 m): it crept 0.1 m on with its
+    trigger holding, so the maneuver is late, and the line asks whether the parameter is read."""
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.pi / 2, 0.0, 1.0), (8.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A", safety_distance=0.6), _world(WALL_AHEAD)), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["late"] and m["crept_with_trigger"] >= 0.09 and not judge.passed
+    assert "turned late: it crept on 0.1" in _line(judge, "maneuver 1")
+    on_time = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)  # its 0.5 m is the judge's: on time
+    assert on_time.passed, on_time.report_lines()
+
+
+def test_forward_motion_while_turning_is_a_turn_judged_for_it() -> None:
+    """Driving at the creep speed while turning 90 deg is still a turn, failed for its forward motion with the
+    figures (it was once not found as a turn at all)."""
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.pi / 2 / 0.6, 0.05, 0.6), (8.0, 0.05, 0.0),
+              (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
+    (m,) = judge.results()["maneuvers"]
+    assert not m["forward_ok"] and abs(abs(m["angle_deg"]) - 90) < 5
+    assert "drove forward during the turn (commanded up to 0.05 m/s, moved 0.1" in _line(judge, "maneuver 1")
+    steer = [(5.0, 0.0, 0.0), (3.0, 0.05, 0.15), (10.0, 0.05, 0.0), (10.0, 0.0, 0.0)]  # 26 deg: a steer? no: a turn
+    gentle = [(5.0, 0.0, 0.0), (2.0, 0.05, 0.12), (10.0, 0.05, 0.0), (10.0, 0.0, 0.0)]  # 14 deg while driving
+    assert _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), gentle).results()["maneuvers"] == []
+    assert len(_run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), steer).results()["maneuvers"]) == 1

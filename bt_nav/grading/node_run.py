@@ -41,6 +41,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.referee_core import failure_reason
+
 from bt_nav.grading.grid import Job
 from bt_nav.grading.node_bag import PROFILE_VARIABLES, bag_row, recorder_profile, start_recorder
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
@@ -185,8 +187,7 @@ def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) ->
             reason = "the judge timed out: " + "; ".join(c["name"] for c in verdict.get("checks", [])
                                                         if not c.get("passed")) + " not met"
         else:
-            failed = [c["name"] for c in verdict.get("checks", []) if not c.get("passed")]
-            reason = "passed" if verdict.get("passed") else "failed: " + ", ".join(failed)
+            reason = "passed" if verdict.get("passed") else failure_reason(verdict.get("checks", []))
     passed = outcome == "verdict" and verdict is not None and bool(verdict.get("passed"))
     findings = list(verdict.get("findings") or []) if verdict is not None else []
     return _with_findings({"passed": passed, "outcome": outcome, "reason": reason, "verdict": verdict}, findings)

@@ -20,11 +20,12 @@ Schedule (seconds from ``t0``): static until ``activate_at``; ``toggle_navigatio
 until an answer says success; at ``activate_at + armed_for`` ``toggle_navigation(false)`` until success;
 ``grace`` to brake; static for ``static_after``; then the report.
 
-Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate`` and
-|v| <= ``turn_max_linear``. Trigger readings (front, left and right sector minima and the distance to the
-first obstacle in the robot's swept path) are cast noise-free from the true pose at every ground-truth
-sample while armed, so they reflect the world as it was at that moment (objects that appear later do not
-count). See :meth:`CheckoffJudge._judge_episode` for the rules.
+Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate``, whatever
+their forward speed (one that drives forward while turning is judged for that; a run that drives and turns the
+robot less than ``steer_max_deg`` is steering, not a turn). Trigger readings (front, left and right sector
+minima and the distance to the first obstacle in the robot's swept path) are cast noise-free from the true
+pose at every ground-truth sample while armed, so they reflect the world as it was at that moment (objects
+that appear later do not count). See :meth:`CheckoffJudge._judge_episode` for the rules.
 
 People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
 from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
@@ -76,7 +77,9 @@ class CheckoffConfig:
     front_half_angle_deg: float = 30.0  # front sector: 0 deg +- this
     side_half_angle_deg: float = 30.0  # left sector: 90 deg +- this; right: -90 deg +- this
     rotation_min_rate: float = 0.1  # rad/s: a command turning at least this fast ...
-    turn_max_linear: float = 0.03  # m/s: ... and driving at most this fast is part of a rotation episode
+    turn_max_linear: float = 0.03  # m/s: a turning command driving faster is forward motion during the turn ...
+    steer_max_deg: float = 20.0  # ... unless the robot turned less than this: then it was steering, not a turn
+    late_distance: float = 0.04  # m: crept this far with the trigger holding before the turn: a late trigger
     forward_epsilon: float = 1e-3  # m/s: "zero forward command"
     angle_tolerance_deg: float = 10.0
     settle_rate: float = 0.05  # rad/s: the rotation has settled once the true yaw rate stays below this ...
@@ -109,6 +112,13 @@ CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers p
           "recovery turns", "no collision", "static after deactivation")
 
 
+#: The readings of "left" and "right" a student may reasonably take for C's "higher distance reading": the
+#: minimum over sectors of half-width 30, 20 and 5 degrees around +-90 deg, and the mean over the widest.
+SIDE_READINGS = ("min 60-120 deg", "min 70-110 deg", "min 85-95 deg", "mean 60-120 deg")
+#: What a side's mean counts for a beam with nothing in range (the LDS-01's range).
+MEAN_CAP = 3.5
+
+
 @dataclass
 class _Reading:
     """Noise-free trigger readings at one ground-truth sample (m; inf: nothing there)."""
@@ -117,6 +127,7 @@ class _Reading:
     left: float
     right: float
     ahead: float  # distance to the first obstacle in the swept path (robot's width + margin)
+    sides: tuple[tuple[float, float], ...] = ()  # (left, right) per SIDE_READINGS
 
 
 class CheckoffJudge(Verdict):
@@ -133,6 +144,8 @@ class CheckoffJudge(Verdict):
         self._front = np.abs(angles) <= front + 1e-9
         self._left = np.abs(angles - math.pi / 2) <= side + 1e-9
         self._right = np.abs(angles + math.pi / 2) <= side + 1e-9
+        self._side_masks = [(np.abs(angles - math.pi / 2) <= math.radians(h) + 1e-9,
+                             np.abs(angles + math.pi / 2) <= math.radians(h) + 1e-9) for h in (30.0, 20.0, 5.0)]
         self._cos, self._sin = np.cos(angles), np.sin(angles)
         self.t0: float | None = None
         self._t: list[float] = []
@@ -253,9 +266,12 @@ class CheckoffJudge(Verdict):
         r = self.caster.true_ranges(float(x), float(y), float(yaw), walkers)
         along, across = r * self._cos, np.abs(r * self._sin)
         in_path = (along > 0.0) & (across <= self.config.half_width)
+        sides = [(float(r[lm].min()), float(r[rm].min())) for lm, rm in self._side_masks]
+        capped = np.minimum(r, MEAN_CAP)
+        sides.append((float(capped[self._left].mean()), float(capped[self._right].mean())))
         return _Reading(front=float(r[self._front].min()), left=float(r[self._left].min()),
                         right=float(r[self._right].min()),
-                        ahead=float(along[in_path].min()) if in_path.any() else math.inf)
+                        ahead=float(along[in_path].min()) if in_path.any() else math.inf, sides=tuple(sides))
 
     def _index_at(self, t: float) -> int:
         """The last sample at or before ``t`` (the first one if none is)."""
@@ -303,13 +319,14 @@ class CheckoffJudge(Verdict):
 
     # ------------------------------------------------------------------ episodes
     def episodes(self) -> list[tuple[int, int]]:
-        """Rotation episodes as (first, last) command indices: maximal runs of turning-in-place commands
-        given while armed."""
+        """Rotation episodes as (first, last) command indices: maximal runs of turning commands given while
+        armed, whatever their forward speed (a node that drives forward while it turns is judged for it, not
+        left unseen); a run that drove forward and turned less than ``steer_max_deg`` is steering, not a turn."""
         cfg = self.config
         runs: list[tuple[int, int]] = []
         first: int | None = None
-        for i, (t, v, w) in enumerate(self.commands):
-            turning = abs(w) >= cfg.rotation_min_rate and abs(v) <= cfg.turn_max_linear and self._armed_at(t)
+        for i, (t, _, w) in enumerate(self.commands):
+            turning = abs(w) >= cfg.rotation_min_rate and self._armed_at(t)
             if turning and first is None:
                 first = i
             elif not turning and first is not None:
@@ -317,20 +334,56 @@ class CheckoffJudge(Verdict):
                 first = None
         if first is not None:
             runs.append((first, len(self.commands) - 1))
-        return runs
+        return [(a, b) for a, b in runs if not self._steering(a, b)]
+
+    def _steering(self, a: int, b: int) -> bool:
+        """Commands ``a..b`` drove forward and turned the robot less than ``steer_max_deg``: a course correction."""
+        cfg = self.config
+        if max(abs(v) for _, v, _ in self.commands[a:b + 1]) <= cfg.turn_max_linear or not self._t:
+            return False
+        start, end = self.commands[a][0], self.commands[b][0] + cfg.settle_timeout
+        return abs(math.degrees(self._interp(self._uyaw, end) - self._interp(self._uyaw, start))) < cfg.steer_max_deg
 
     def _judge_all(self, now: float) -> list[dict[str, Any]]:
         """Every episode judged (see :meth:`_judge_episode`), with its settling time."""
         runs = self.episodes()
         starts = [self.commands[a][0] for a, _ in runs]
         out = []
+        since = self.activation_requested if self.activation_requested is not None else -math.inf
         for k, (a, b) in enumerate(runs):
             last = self.commands[b][0]
             nxt = starts[k + 1] if k + 1 < len(runs) else math.inf
             limit = min(nxt, last + self.config.settle_timeout, now)
             settle = min(nxt, self._settled_at(last, limit))
-            out.append(self._judge_episode(a, b, settle, nxt, now))
+            episode = self._judge_episode(a, b, settle, nxt, now)
+            if episode["kind"] == "maneuver":
+                self._judge_lateness(episode, since, self.commands[a][0])
+            out.append(episode)
+            since = settle
         return out
+
+    def _judge_lateness(self, episode: dict[str, Any], since: float, start: float) -> None:
+        """A maneuver whose trigger held (without the margin) while the robot crept on for ``late_distance`` or
+        more before it turned fired late: its node does not react to its trigger's distance (e.g. a
+        ``safety_distance`` parameter it declares but never reads). Only a trigger that began to hold while the
+        robot crept counts: not one that held already at ``since`` (the arming, or the end of the last turn)."""
+        cfg = self.config
+        if not self._t or episode["interrupted"]:
+            return
+        i = self._index_at(start)
+        k = i
+        while k > 0 and self._t[k - 1] > since:
+            reading = self._readings[k - 1]
+            if reading is None or not self._trigger(reading, margin=0.0)[0]:
+                break
+            k -= 1
+        if k == 0 or self._t[k - 1] <= since:
+            return  # it held already when the creeping began (at the arming, or as the last turn ended)
+        crept = self._path_length(self._t[k], start) if k < i else 0.0
+        episode["crept_with_trigger"] = round(crept, 3)
+        if crept >= cfg.late_distance:
+            episode["late"] = True
+            episode["passed"] = False
 
     def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float) -> dict[str, Any]:
         """One episode: trigger at its start, angle and side, no forward command or motion, moved on.
@@ -361,8 +414,11 @@ class CheckoffJudge(Verdict):
             if not angle_ok:
                 angle_ok, rule = self._angle_rule(angle, other)
         moved_on, moved_text = self._moved_on(settle, next_start, now)
-        if interrupted:  # the disarm stopped it: its angle is whatever it had reached
+        if interrupted and self._within_max(angle):  # the disarm stopped it: its angle is what it had reached
             angle_ok, rule = True, "interrupted by the disarm (angle not judged)"
+        elif interrupted:  # ... but it had turned past its rule's largest angle: it would never have stopped
+            angle_ok = False
+            rule += ", and it was still turning at the disarm"
         passed = forward_ok if recovery else trigger and angle_ok and forward_ok and moved_on
         return {"t": start - (self.t0 or 0.0), "t0": self.t0 or 0.0, "settled": settle - (self.t0 or 0.0), "kind":
                 "recovery" if recovery else "maneuver", "passed": passed, "trigger": trigger,
@@ -372,7 +428,7 @@ class CheckoffJudge(Verdict):
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
-                                                          for k, v in vars(reading).items()}}
+                                                          for k, v in vars(reading).items() if k != "sides"}}
 
     def _readings_at(self, start: float) -> list[_Reading | None]:
         """The trigger readings an episode starting at ``start`` may have been decided on: the sample at it;
@@ -425,12 +481,25 @@ class CheckoffJudge(Verdict):
             return 90 - tol <= size <= 180 + tol, f"{90 - tol:.0f}-{180 + tol:.0f} deg either side"
         if cfg.maneuver == "B":
             return abs(size - 180) <= tol, f"180 +- {tol:.0f} deg either side"
-        side = "either side"
-        if r is not None and abs(r.left - r.right) >= cfg.side_tie and \
-                not (r.left > cfg.open_space and r.right > cfg.open_space):
-            side = "left" if r.left > r.right else "right"
+        side = self._clearer_side(r)
         side_ok = side == "either side" or (side == "left") == (angle > 0)
         return abs(size - 90) <= tol and side_ok, f"90 +- {tol:.0f} deg {side}"
+
+    def _clearer_side(self, r: _Reading | None) -> str:
+        """C's side: "left" or "right" where every reasonable reading of the two sides (:data:`SIDE_READINGS`)
+        finds that side clearer by ``side_tie`` or more (and not both in open space); else "either side"."""
+        cfg = self.config
+        if r is None:
+            return "either side"
+        pairs = r.sides or ((r.left, r.right),)
+        verdicts = {("left" if left > right else "right") if abs(left - right) >= cfg.side_tie
+                    and not (left > cfg.open_space and right > cfg.open_space) else "tie" for left, right in pairs}
+        return verdicts.pop() if len(verdicts) == 1 and "tie" not in verdicts else "either side"
+
+    def _within_max(self, angle: float) -> bool:
+        """Whether ``angle`` (deg) is no larger than the maneuver's largest (A and B 180, C 90, plus the tolerance)."""
+        cfg = self.config
+        return abs(angle) <= (90.0 if cfg.maneuver == "C" else 180.0) + cfg.angle_tolerance_deg
 
     def _moved_on(self, settle: float, next_start: float, now: float) -> tuple[bool, str]:
         """Within ``move_on_within`` of settling: travelled ``move_on_distance`` or another episode began
@@ -516,14 +585,48 @@ class CheckoffJudge(Verdict):
         return lines
 
 
+#: The lab's names of the maneuvers.
+MANEUVER_NAMES = {"A": "the Randomizer", "B": "the Retreat", "C": "the Smart Pivot"}
+
+
+def _readings_text(e: dict[str, Any]) -> str:
+    """The judge's readings at a turn's start, as the failing line shows them."""
+    r = e.get("readings") or {}
+    parts = [f"{k} {r[k]:.2f} m" if r.get(k) is not None else f"{k} nothing" for k in ("front", "left", "right")
+             if k in r]
+    return "readings at the start: " + ", ".join(parts) if parts else "no readings at the start"
+
+
+def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
+    """What is wrong with one judged maneuver, one sentence each, in the check-off's words (empty: nothing)."""
+    name = MANEUVER_NAMES.get(maneuver, maneuver)
+    out = []
+    if not e["trigger"]:
+        out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
+    if e.get("late"):
+        out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m after its trigger held "
+                   "(does it read its distance parameter?)")
+    if not e["angle_ok"]:
+        out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}")
+    if not e["forward_ok"]:
+        out.append(f"drove forward during the turn (commanded up to {e['forward_command']:.2f} m/s, moved "
+                   f"{e['forward_motion']:.2f} m); the check-off allows no forward motion during a maneuver")
+    if not e["moved_on"]:
+        out.append(f"did not move on after the turn ({e['moved_on_detail']})")
+    return out
+
+
 def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:
-    """The report line of one maneuver episode: every rule it was held to, what failed first."""
-    failed = [name for name, ok in (("trigger", e["trigger"]), ("angle", e["angle_ok"]),
-                                    ("forward", e["forward_ok"]), ("moved on", e["moved_on"])) if not ok]
+    """The report line of one maneuver episode: every rule it was held to, what is wrong with it in words."""
     sim = f" (sim {e['t'] + e['t0']:.2f} s)" if e.get("t0") else ""  # the terminal's and the video's clock
+    problems = maneuver_problems(maneuver, e)
     detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
               f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
               f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
-              f"moved on: {e['moved_on_detail']}" + (f"; failed: {', '.join(failed)}" if failed else ""))
-    return {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
-            "detail": detail}
+              f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e)}; " + "; ".join(problems)
+                                                     if problems else ""))
+    check = {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
+             "detail": detail}
+    if problems:
+        check["reason"] = f"maneuver {number} " + "; ".join(problems) + f" ({_readings_text(e)})"
+    return check

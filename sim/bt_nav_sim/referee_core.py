@@ -379,3 +379,40 @@ def static_check(name: str, samples: tuple[list[float], list[float], list[float]
     passed = peak_v <= linear and peak_w <= angular
     detail = f"peak {peak_v:.3f} m/s, {peak_w:.3f} rad/s over {span}"
     return {"name": name, "passed": passed, "value": round(peak_v, 6), "required": required, "detail": detail}
+
+
+#: What a failed check means, in the words of the assignments (the check's detail adds the judge's figures).
+CHECK_WORDS = {
+    "static at the end": "still moving at the end (the robot must stop before it asks for the evaluation)",
+    "static before activation": "moved before it was activated",
+    "static after deactivation": "did not stop and stay still after the deactivation",
+    "minimum distance from start": "did not get far enough from the start",
+    "minimum travelled distance": "did not travel far enough",
+    "evaluation service called": "did not call the evaluation service in time",
+    "no collision": "hit an obstacle",
+    "toggle_navigation answered": "did not answer toggle_navigation",
+    "maneuvers performed": "performed no maneuver",
+    "recovery turns": "drove forward while turning away after an emergency stop",
+}
+
+
+def check_reason(check: dict[str, Any]) -> str:
+    """One failed check in a sentence a student can act on, with the judge's figures: the check's own ``reason``
+    when it gives one (a maneuver's), else the meaning of its name and its detail."""
+    if check.get("reason"):
+        return str(check["reason"])
+    words = CHECK_WORDS.get(check["name"], f"{check['name']} not met")
+    return f"{words} ({check['detail']})" if check.get("detail") else words
+
+
+def failure_reason(checks: list[dict[str, Any]]) -> str:
+    """Why a verdict failed, for a summary line: every failed check's reason, the maneuvers' first one only
+    (with how many more failed)."""
+    failed = [c for c in checks if not c.get("passed")]
+    maneuvers = [c for c in failed if c["name"].startswith("maneuver ") and c["name"] != "maneuvers performed"]
+    parts = [check_reason(c) for c in failed if c not in maneuvers]
+    if maneuvers:
+        more = len(maneuvers) - 1
+        parts.append(check_reason(maneuvers[0]) + (f" (and {more} more maneuver{'s' if more > 1 else ''} failed)"
+                                                   if more else ""))
+    return "failed: " + "; ".join(parts) if parts else "failed"

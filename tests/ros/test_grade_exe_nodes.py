@@ -62,7 +62,8 @@ def test_the_lab_template_node_gets_its_checkoff_verdict(tmp_path: Path) -> None
     assert maneuvers and not all(maneuvers.values()), row["verdict"]["report_lines"]
     assert all(ok for name, ok in checks.items() if name not in maneuvers), row["verdict"]["report_lines"]
     failed = [line for line in row["verdict"]["report_lines"] if line.startswith("maneuver ") and "FAILED" in line]
-    assert failed and all("failed: angle" in line for line in failed), failed
+    assert failed and all("the Randomizer needs 80-190 deg either side" in line for line in failed), failed
+    assert "maneuver 1 turned" in row["reason"] and "the Randomizer needs 80-190 deg" in row["reason"], row["reason"]
     assert row["wall_time"] < 0.6 * _sim_seconds(row), "not graded faster than real time"
 
 
