@@ -50,8 +50,6 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--timeout", type=float, default=120.0, help="wall-clock limit of the referee, s")
     parser.add_argument("--domain-id", type=int, help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID, else one no "
                         "other run on this machine holds, from $BT_NAV_DOMAIN_RANGE or 100-199)")
-    parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
-                        help="extra simulator parameter (repeatable), e.g. physics_rate_hz=50")
     parser.add_argument("--quiet", action="store_true", help="print only the verdict lines")
     parser.add_argument("--bag", metavar="DIR", help="also record the run as a rosbag2 (MCAP) bag (bt-nav record)")
     parser.add_argument("--video", metavar="MP4", help="also film the run (from its bag: --bag, else <MP4>_bag)")

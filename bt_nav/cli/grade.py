@@ -66,8 +66,6 @@ def _parser() -> argparse.ArgumentParser:
                         "default stage_4, or all for lab")
     parser.add_argument("--maneuvers", default=None, help="comma-separated: none, A, B, C (default none,A,B,C; "
                         "lab: A,B,C, each in the arenas that can check it off)")
-    parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
-                        help="simulator setting for every mission (repeatable), e.g. actuation_latency=0.15")
     parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")

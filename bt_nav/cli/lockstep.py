@@ -61,8 +61,10 @@ def _run(args: argparse.Namespace) -> tuple[RunResult, list[str | None]]:
     maneuver = profile_maneuver(args.profile, args.maneuver)
     traces = trace_paths(args.trace, names)
     options = {"robots": args.robots, "jitter": None if args.no_jitter else DEFAULT_JITTER,
-               "kinematics": args.kinematics, "noise": not args.no_noise}
+               "kinematics": args.kinematics, "noise": not args.no_noise,
+               "sim_params": parse_assignments(args.sim_param) or None}
     info = {"world": args.world, "maneuver": maneuver, "seed": args.seed, "profile": args.profile,
+            **({"sim_params": options["sim_params"]} if options["sim_params"] else {}),
             **({"robots": names} if len(names) > 1 else {})}
     bag = MissionBag(args.bag, mission=info) if args.bag else None
     with bag if bag is not None else nullcontext():

@@ -25,6 +25,9 @@ def add_mission_options(parser: argparse.ArgumentParser, *, grid: bool = False) 
                         help="params files and simulated robot (homework, lab, turtlebot3; default homework)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter override (repeatable), over the profile's params files")
+    parser.add_argument("--sim-param", action="append", default=[], metavar="NAME=VALUE",
+                        help="simulator setting (repeatable), e.g. actuation_latency=0.15, odom_rate_hz=20, or "
+                        "lidar=NAME for a real LiDAR (lds01, lds01_cw, lds02, rplidar, ust10)")
 
 
 def bag_for(bag: str | None, video: str | None) -> str | None:

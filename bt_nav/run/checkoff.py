@@ -23,13 +23,13 @@ ANNOUNCEMENT = re.compile(r"^(Randomizer|Retreat|SmartPivot): .*: turning (left|
 MATCH_WINDOW = 1.0
 
 
-def lab_judge(maneuver: str, world: World, config: CheckoffConfig | None = None
+def lab_judge(maneuver: str, world: World, config: CheckoffConfig | None = None, lidar: str = ""
               ) -> Callable[[int, str], CheckoffJudge]:
     """A referee factory (index, name) -> the check-off judge of ``maneuver`` on the simulated ``world``
-    (the simulator's own object, which reveals appearing objects itself)."""
+    (the simulator's own object, which reveals appearing objects itself), reading along the robot's ``lidar``."""
     if maneuver not in MANEUVERS:
         raise ValueError(f"the lab's check-off judges maneuver A, B or C, not {maneuver!r}")
-    cfg = config or CheckoffConfig(maneuver=maneuver)
+    cfg = config or CheckoffConfig(maneuver=maneuver, lidar=lidar)
 
     def make(_index: int, _name: str) -> CheckoffJudge:
         return CheckoffJudge(cfg, world, update_world=False)

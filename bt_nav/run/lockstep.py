@@ -165,8 +165,8 @@ class Robot:
                 sink.odom(t, sim.odom_x, sim.odom_y, sim.odom_yaw, s.v, s.w)
                 sink.ground_truth(t, s.x, s.y, s.yaw, s.v, s.w)
         if out.scan is not None:
-            m = sim.model
-            scan = Scan(m.angle_min, m.angle_max, m.angle_increment, m.range_min, m.range_max, out.scan)
+            layout, (range_min, range_max) = sim.layout, sim.model.message_range  # as the node publishes it
+            scan = Scan(layout.angle_min, layout.angle_max, layout.angle_increment, range_min, range_max, out.scan)
             self.core.feed_scan(scan, t)
             if sink is not None:
                 sink.scan(t, scan)
@@ -261,7 +261,7 @@ class Lockstep:
         self.clock = SimClock()
         self.sink = sink
         self.merge_steps = merge_steps
-        make_referee = referee or (lab_judge(self.maneuver, self.sim.world) if profile_name == "lab"
+        make_referee = referee or (lab_judge(self.maneuver, self.sim.world, lidar=config.lidar) if profile_name == "lab"
                                    else homework_referee(referee_config))
         self.robots: list[Robot] = []
         for i, (name, body) in enumerate(zip(self.sim.names, self.sim.cores, strict=True)):

@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav_sim.lidar import LDS01, RayCaster
+from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.referee_core import Activate, Verdict, static_check
 from bt_nav_sim.world import World
 
@@ -99,6 +99,9 @@ class CheckoffConfig:
     aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned)
     half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
     min_maneuvers: int = 1
+    # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
+    # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
+    lidar: str = ""
 
     def __post_init__(self) -> None:
         if self.maneuver not in MANEUVERS:
@@ -137,9 +140,10 @@ class CheckoffJudge(Verdict):
         self.config = config
         self.world = world
         self.update_world = update_world
-        self.caster = RayCaster(world, LDS01)
-        angles = np.remainder(LDS01.angle_min + LDS01.angle_increment * np.arange(LDS01.num_beams) + math.pi,
-                              2 * math.pi) - math.pi
+        name = config.lidar or world.lidar
+        self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
+        angles = np.remainder(self.caster.layout.angles() + math.pi, 2 * math.pi) - math.pi
+        self._mount = (self.caster.model.mount_x, self.caster.model.mount_y)
         front, side = math.radians(config.front_half_angle_deg), math.radians(config.side_half_angle_deg)
         self._front = np.abs(angles) <= front + 1e-9
         self._left = np.abs(angles - math.pi / 2) <= side + 1e-9
@@ -263,8 +267,9 @@ class CheckoffJudge(Verdict):
     def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None) -> _Reading:
         """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range), the
         people walking included."""
-        r = self.caster.true_ranges(float(x), float(y), float(yaw), walkers)
-        along, across = r * self._cos, np.abs(r * self._sin)
+        sx, sy = self.caster.sensor_pose(float(x), float(y), float(yaw))
+        r = self.caster.true_ranges(sx, sy, float(yaw), walkers)
+        along, across = r * self._cos + self._mount[0], np.abs(r * self._sin + self._mount[1])  # from the centre
         in_path = (along > 0.0) & (across <= self.config.half_width)
         sides = [(float(r[lm].min()), float(r[rm].min())) for lm, rm in self._side_masks]
         capped = np.minimum(r, MEAN_CAP)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster
+from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, ScanLayout, lidar_model
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState, step, target_twist, wrap_angle
 from bt_nav_sim.world import World, load_world
 
@@ -82,11 +82,21 @@ class SimConfig:
     # Sim s between a command and the wheels (a real base's serial link and motor controller; 0.1-0.15 s
     # on real TurtleBot3s): a command given at t drives the physics from t + latency on (see SimCore.move).
     actuation_latency: float = 0.0
+    # A real LiDAR of bt_nav_sim.lidar.LIDARS by name (lds01, lds02, rplidar, ...); empty: the world file's
+    # ``lidar``, else the profile's own.
+    lidar: str = ""
 
-    def lidar(self) -> LidarModel:
-        """The profile's LiDAR with this run's noise and dropout settings."""
-        model = profile(self.profile).lidar
-        return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0, dropout_prob=self.dropout_prob)
+    def lidar_model(self, world_lidar: str = "") -> LidarModel:
+        """The LiDAR of this run (this config's ``lidar``, else the world's, else the profile's) with this run's
+        noise setting; a named sensor keeps its own dropouts unless ``dropout_prob`` asks for more."""
+        name = self.lidar or world_lidar
+        if not name:
+            model = profile(self.profile).lidar
+            return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0,
+                           dropout_prob=self.dropout_prob)
+        model = lidar_model(name)
+        return replace(model, noise_sigma=model.noise_sigma if self.noise else 0.0,
+                       dropout_prob=max(self.dropout_prob, model.dropout_prob if self.noise else 0.0))
 
     def robot(self) -> RobotParams:
         """The robot's limits and kinematics for this run."""
@@ -107,7 +117,7 @@ class SimConfig:
             raise ValueError(f"actuation_latency must be in [0, {MAX_LATENCY}] s, got {self.actuation_latency}")
         if self.kinematics and self.kinematics not in KINEMATICS:
             raise ValueError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
-        self.lidar()
+        self.lidar_model()
 
 
 @dataclass
@@ -160,8 +170,9 @@ class SimCore:
         self.config = config
         seed = None if config.seed < 0 else int(config.seed)
         self.world = world if world is not None else load_world(config.world, seed=seed)
-        self.model = config.lidar()
+        self.model = config.lidar_model(self.world.lidar)
         self.caster = RayCaster(self.world, self.model)
+        self.layout: ScanLayout = self.model.layout  # the last scan's (a varying sensor's changes every scan)
         self.params = config.robot()
         # Two independent streams so that turning LiDAR noise off does not change the odometry drift.
         self.lidar_rng = np.random.default_rng(seed if index == 0 or seed is None else [seed, index, 0])
@@ -219,6 +230,9 @@ class SimCore:
         """A scan from the current true pose (noise and dropouts from the seeded stream)."""
         s = self.state
         rng = self.lidar_rng if (self.model.noise_sigma > 0 or self.model.dropout_prob > 0) else None
+        if self.model.speed_spread:  # its own layout every scan, from the same seeded stream
+            self.layout = self.model.next_layout(self.lidar_rng)
+            self.caster.use_layout(self.layout)
         return self.caster.cast(s.x, s.y, s.yaw, rng, self.crowd)
 
     def advance(self, cmd_v: float, cmd_w: float, steps: int = 1) -> StepOutput:

@@ -3,10 +3,12 @@
 A scan is one (obstacles x beams) broadcast: no Python loop over beams or obstacles, so a 360-beam scan of
 stage_4 costs about 0.1 ms and the simulator can run many times faster than real time.
 
-Reading conventions follow the TurtleBot3 LDS-01 driver as seen in sensor_msgs/LaserScan:
-beam i is at robot-frame angle ``angle_min + i * angle_increment`` (CCW positive, 0 = straight ahead);
-a hit beyond ``range_max`` (or no hit at all) reads +inf; a hit closer than ``range_min`` reads 0.0 (what
-the LDS-01 reports for too-close targets); dropped beams read NaN.
+Reading conventions as seen in sensor_msgs/LaserScan: beam i is at sensor-frame angle ``angle_min + i *
+angle_increment`` (CCW positive, 0 = straight ahead; a negative increment sweeps clockwise), cast from the
+sensor's mount on the robot. The profiles' own models read +inf beyond ``range_max``, 0.0 closer than
+``range_min`` and NaN for a dropped beam; the named real sensors of :data:`LIDARS` read what their drivers
+publish (the LDS-01's 0.0 for no return, the LDS-02's NaN and varying beam count, the RPLIDAR's -pi..pi and
++inf, a 270 deg Hokuyo mounted off-centre).
 """
 
 from __future__ import annotations
@@ -21,8 +23,31 @@ from bt_nav_sim.world import World
 
 
 @dataclass(frozen=True)
+class ScanLayout:
+    """Where one scan's beams point (the LaserScan fields that say so): beam i at ``angle_min + i *
+    angle_increment`` in the sensor frame."""
+
+    angle_min: float
+    angle_increment: float
+    num_beams: int
+
+    @property
+    def angle_max(self) -> float:
+        """Angle of the last beam, as in LaserScan.angle_max."""
+        return self.angle_min + (self.num_beams - 1) * self.angle_increment
+
+    def angles(self) -> np.ndarray:
+        """Every beam's angle (rad, sensor frame)."""
+        return self.angle_min + self.angle_increment * np.arange(self.num_beams, dtype=np.float64)
+
+
+@dataclass(frozen=True)
 class LidarModel:
-    """Beam geometry, range limits and error model of a planar LiDAR."""
+    """Beam geometry, range limits, mounting and error model of a planar LiDAR.
+
+    The defaults are the idealised LDS-01 the profiles have always used (+inf for nothing in range); the named
+    real sensors of :data:`LIDARS` say what their drivers publish instead.
+    """
 
     num_beams: int = 360
     angle_min: float = 0.0
@@ -31,7 +56,17 @@ class LidarModel:
     range_max: float = 3.5
     noise_sigma: float = 0.01  # Gaussian range noise, m (LDS-01: +-10 mm at short range)
     rate_hz: float = 5.0
-    dropout_prob: float = 0.0  # probability that a beam reads NaN (fault-injection tests)
+    dropout_prob: float = 0.0  # probability that a beam reads ``dropout_value`` (a lost return)
+    name: str = ""  # the registry's name (``lidar`` parameter); empty: a profile's own model
+    label: str = ""  # what a report calls it
+    frame_id: str = "base_scan"
+    mount_x: float = 0.0  # m: the sensor's position in the robot's frame (forward, left)
+    mount_y: float = 0.0
+    no_return: float = math.inf  # what a beam with nothing within range_max reads
+    too_close: float = 0.0  # what a beam closer than range_min reads
+    dropout_value: float = math.nan  # what a lost return reads
+    speed_spread: float = 0.0  # relative spread of the spin rate per scan: the beam count and start vary (LDS-02)
+    published_range: tuple[float, float] | None = None  # (range_min, range_max) the driver publishes, if not the above
 
     def __post_init__(self) -> None:
         if self.num_beams < 1:
@@ -40,18 +75,94 @@ class LidarModel:
             raise ValueError("need 0 <= range_min < range_max")
         if self.noise_sigma < 0 or not (0.0 <= self.dropout_prob <= 1.0) or self.rate_hz <= 0:
             raise ValueError("need noise_sigma >= 0, 0 <= dropout_prob <= 1 and rate_hz > 0")
+        if not 0.0 <= self.speed_spread < 0.5:
+            raise ValueError("need 0 <= speed_spread < 0.5")
 
     @property
     def angle_max(self) -> float:
         """Angle of the last beam, as in LaserScan.angle_max."""
         return self.angle_min + (self.num_beams - 1) * self.angle_increment
 
+    @property
+    def layout(self) -> ScanLayout:
+        """The nominal layout (every scan's, unless ``speed_spread`` varies it)."""
+        return ScanLayout(self.angle_min, self.angle_increment, self.num_beams)
+
+    @property
+    def message_range(self) -> tuple[float, float]:
+        """The (range_min, range_max) a LaserScan of this sensor carries."""
+        return self.published_range or (self.range_min, self.range_max)
+
+    def next_layout(self, rng: np.random.Generator | None) -> ScanLayout:
+        """The layout of the next scan: the nominal one, or for a sensor whose spin rate wanders (LDS-02) a beam
+        spacing of ``angle_increment * (1 + u * speed_spread)`` and a first beam somewhere in the first spacing,
+        so the beam count differs from scan to scan as the driver's does. Deterministic for the stream ``rng``."""
+        if not self.speed_spread or rng is None:
+            return self.layout
+        increment = self.angle_increment * (1.0 + self.speed_spread * float(rng.uniform(-1.0, 1.0)))
+        start = self.angle_min + abs(increment) * float(rng.uniform(0.0, 1.0))
+        span = 2 * math.pi - abs(increment)
+        count = int(math.floor((span - (start - self.angle_min)) / abs(increment))) + 1
+        return ScanLayout(start, increment, max(1, count))
+
+    def describe(self) -> dict[str, object]:
+        """What a run's files and bags record about the sensor."""
+        lo, hi = self.message_range
+        return {"name": self.name or "profile default", "label": self.label or "idealised LDS-01 layout",
+                "frame_id": self.frame_id, "mount": [self.mount_x, self.mount_y], "rate_hz": self.rate_hz,
+                "beams": self.num_beams, "angle_min": self.angle_min, "angle_increment": self.angle_increment,
+                "range": [lo, hi], "variable_beams": bool(self.speed_spread)}
+
 
 # Tolerance on the segment parameter s in [0, 1] (fraction of the segment length).
 _S_EPS = 1e-9
 
-LDS01 = LidarModel()  # TurtleBot3 LDS-01 (360 beams, 0.12-3.5 m, 5 Hz)
+LDS01 = LidarModel()  # TurtleBot3 LDS-01 (360 beams, 0.12-3.5 m, 5 Hz), idealised: +inf for nothing in range
 HOMEWORK_LIDAR = LidarModel(range_max=10.0, rate_hz=10.0)  # the course homework's simulated profile
+
+#: The real LiDARs a course robot carries, as their ROS 2 drivers publish them (``lidar`` parameter, ``--lidars``).
+#: A node that computes its indices from ``angle_min`` and ``angle_increment`` reads them all alike; one that
+#: hard-codes ``ranges[0]`` as the front or 360 beams does not.
+LIDARS: dict[str, LidarModel] = {
+    # ROBOTIS-GIT/hls_lfcd_lds_driver src/hlds_laser_publisher.cpp: angle_min 0, angle_increment 2pi/360, 360
+    # ranges of range/1000 (a raw 0, no return, reads 0.0), range 0.12-3.5 m; 300 rpm = 5 Hz. Mounted as
+    # turtlebot3_description's burger base_scan joint: x -0.032 m. Dark or glancing surfaces lose returns (0.0).
+    "lds01": LidarModel(name="lds01", label="TurtleBot3 LDS-01 (0..2pi, 0.0 = no return)", mount_x=-0.032,
+                        no_return=0.0, too_close=0.0, dropout_prob=0.005, dropout_value=0.0),
+    # The same driver with chronological_order true: angle_min 0, angle_increment -pi/180 (clockwise).
+    "lds01_cw": LidarModel(name="lds01_cw", label="TurtleBot3 LDS-01, chronological order (clockwise)",
+                           angle_increment=-2 * math.pi / 360, mount_x=-0.032, no_return=0.0, too_close=0.0,
+                           dropout_prob=0.005, dropout_value=0.0),
+    # ROBOTIS-GIT/ld08_driver src/lipkg.cpp ToLaserscan: angle_min/max are the first and last points' angles,
+    # angle_increment = spin speed / 2300 samples/s, beam_size = ceil((max - min) / increment): a different count
+    # every scan; every beam starts NaN and only returns are filled in; the message says range 0-100 m. The
+    # LD08 sees 0.16-8 m; ~1800 deg/s (5 Hz).
+    "lds02": LidarModel(name="lds02", label="TurtleBot3 LDS-02 (beam count varies, NaN = no return)",
+                        num_beams=460, angle_increment=math.radians(1800.0 / 2300.0), range_min=0.16,
+                        range_max=8.0, mount_x=-0.032, no_return=math.nan, too_close=math.nan,
+                        dropout_prob=0.005, speed_spread=0.02, published_range=(0.0, 100.0)),
+    # Slamtec/rplidar_ros src/rplidar_node.cpp publish_scan: with angle compensation the 0..360 deg of the device
+    # become angle_min = pi - 2pi = -pi, angle_increment = 2pi / (node_count - 1); a 0 reading is +inf; range
+    # 0.15 m to max_distance (A1: 12 m). TurtleBot4's A1M8 in boost mode: 720 beams at 10 Hz.
+    "rplidar": LidarModel(name="rplidar", label="TurtleBot4 RPLIDAR A1 (-pi..pi, inf = no return)", num_beams=720,
+                          angle_min=-math.pi, angle_increment=2 * math.pi / 719, range_min=0.15, range_max=12.0,
+                          rate_hz=10.0, frame_id="rplidar_link", no_return=math.inf, too_close=math.inf),
+    # ros-drivers/urg_node (urg_c_wrapper.cpp) on a Hokuyo UST-10LX: -135..+135 deg in 0.25 deg steps (1081
+    # beams), 0.06-10 m, 40 Hz; the device's readings pass through, a lost echo as an error code of a few mm
+    # (below range_min). Mounted on a bracket ahead of and beside the robot's centre.
+    "ust10": LidarModel(name="ust10", label="Hokuyo UST-10LX 270 deg, mounted off-centre (+0.08, +0.03 m)",
+                        num_beams=1081, angle_min=math.radians(-135.0), angle_increment=math.radians(0.25),
+                        range_min=0.06, range_max=10.0, rate_hz=40.0, frame_id="laser", mount_x=0.08, mount_y=0.03,
+                        no_return=0.001, too_close=0.001, dropout_prob=0.002, dropout_value=0.001),
+}
+
+
+def lidar_model(name: str) -> LidarModel:
+    """The registry's model called ``name`` (ValueError listing the names otherwise)."""
+    try:
+        return LIDARS[name]
+    except KeyError:
+        raise ValueError(f"unknown lidar {name!r}; choose one of {', '.join(LIDARS)}") from None
 
 
 class RayCaster:
@@ -67,17 +178,38 @@ class RayCaster:
     def __init__(self, world: World, model: LidarModel = LDS01) -> None:
         self.world = world
         self.model = model
-        nb = model.num_beams
-        ang = model.angle_min + model.angle_increment * np.arange(nb, dtype=np.float64)
-        # Beam directions in the robot frame; the scan rotates them by yaw (cheaper than nb trig calls).
+        self.layout = model.layout
+        self._set_angles(self.layout)
+        self._prepare()
+
+    def _set_angles(self, layout: ScanLayout) -> None:
+        """Beam directions in the sensor frame; the scan rotates them by yaw (cheaper than nb trig calls)."""
+        ang = layout.angles()
         self._cos = np.cos(ang)
         self._sin = np.sin(ang)
-        self._prepare()
+
+    def use_layout(self, layout: ScanLayout) -> None:
+        """Cast the next scans with ``layout`` (a sensor whose beam count varies: LDS-02)."""
+        if layout == self.layout:
+            return
+        resize = layout.num_beams != self.layout.num_beams
+        self.layout = layout
+        self._set_angles(layout)
+        if resize:
+            self._prepare()
+
+    def sensor_pose(self, x: float, y: float, yaw: float) -> tuple[float, float]:
+        """Where the sensor is when the robot's centre is at (x, y) heading ``yaw`` (its mount offset)."""
+        mx, my = self.model.mount_x, self.model.mount_y
+        if not (mx or my):
+            return x, y
+        c, s = math.cos(yaw), math.sin(yaw)
+        return x + mx * c - my * s, y + mx * s + my * c
 
     def _prepare(self) -> None:
         """Obstacle columns and work buffers of the world as it is now (again after an object appeared:
         ``World.version`` changed; a world without appearing objects is prepared once)."""
-        world, nb = self.world, self.model.num_beams
+        world, nb = self.world, self.layout.num_beams
         self._version = world.version
         # Obstacle data as (K, 1) columns: work arrays are (obstacles, beams) so the per-beam minimum is a
         # reduction over rows of contiguous memory (several times faster than reducing short rows).
@@ -188,17 +320,18 @@ class RayCaster:
         ``extra``: moving circles seen besides the world (see :meth:`true_ranges`).
         """
         model = self.model
-        true = self.true_ranges(float(x), float(y), float(yaw), extra)
+        sx, sy = self.sensor_pose(float(x), float(y), float(yaw))
+        true = self.true_ranges(sx, sy, float(yaw), extra)
         valid = true <= model.range_max
         near = true < model.range_min
         out = true.copy()
         if rng is not None and model.noise_sigma > 0.0:
             out += rng.normal(0.0, model.noise_sigma, size=out.shape)
             np.clip(out, model.range_min, model.range_max, out=out)
-        out[~valid] = np.inf
-        out[near] = 0.0
+        out[~valid] = model.no_return
+        out[near] = model.too_close
         if rng is not None and model.dropout_prob > 0.0:
-            out[rng.random(out.shape) < model.dropout_prob] = np.nan
+            out[rng.random(out.shape) < model.dropout_prob] = model.dropout_value
         return out.astype(np.float32)
 
 

@@ -16,6 +16,7 @@ World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
     walkers:                           # optional, people pacing a path there and back (bt_nav_sim.walkers)
       - {path: [[1, 0], [1, 4]], r: 0.2, speed: 1.0, pause: 1.0}   # phase: s into the walk (default: seeded)
     checkoff_maneuvers: [A, C]         # optional, lab arenas: the lab maneuvers this world can check off
+    lidar: lds02                       # optional: the real LiDAR of bt_nav_sim.lidar.LIDARS the robot carries
     bounds: [xmin, ymin, xmax, ymax]   # optional, plotting extent; default: obstacles + margin
     generator:                         # optional, random clutter drawn from a seed
       kind: cluttered                  # cluttered (below), forest or maze (see their sections)
@@ -142,6 +143,7 @@ class World:
     boxes: tuple = ()  # original boxes (cx, cy, length, thickness, yaw_rad), for filled drawing
     appearing: tuple[Appearing, ...] = ()  # hidden until a robot comes near (see the module docstring)
     checkoff_maneuvers: tuple[str, ...] = ()  # lab arenas: the maneuvers this world can check off
+    lidar: str = ""  # the real LiDAR this world's robot carries (bt_nav_sim.lidar.LIDARS); empty: the profile's
     walkers: tuple[WalkerSpec, ...] = ()  # people walking (their state is the run's: bt_nav_sim.walkers.Walkers)
     # Precomputed per-segment direction and squared length for clearance(); derived, not constructor args.
     _seg_d: np.ndarray = field(init=False, repr=False)
@@ -555,7 +557,7 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
     if not set(maneuvers) <= set(LAB_MANEUVERS):
         raise ValueError(f"{where}: checkoff_maneuvers must be among {', '.join(LAB_MANEUVERS)}, got {maneuvers}")
     world = World(name=name, segments=segments, circles=circles, spawn=spawn, bounds=bounds, boxes=tuple(boxes),
-                  appearing=tuple(appearing), checkoff_maneuvers=maneuvers, walkers=walkers)
+                  appearing=tuple(appearing), checkoff_maneuvers=maneuvers, walkers=walkers, lidar=_lidar_key(d, where))
     _check_walkers_clear(world)
     return world
 
@@ -635,3 +637,12 @@ def load_world(name_or_path: str, seed: int | None = None) -> World:
     if isinstance(data, dict) and "name" not in data:
         data["name"] = path.stem
     return world_from_dict(data, seed=seed)
+
+
+def _lidar_key(d: dict, where: str) -> str:
+    """A world file's ``lidar`` name (the simulator checks it against bt_nav_sim.lidar.LIDARS, which imports
+    this module); empty when absent."""
+    name = d.get("lidar") or ""
+    if not isinstance(name, str):
+        raise ValueError(f"{where}: lidar must be a LiDAR's name, got {name!r}")
+    return name

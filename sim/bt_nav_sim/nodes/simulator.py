@@ -88,6 +88,7 @@ from std_msgs.msg import String
 from bt_nav.ros.rosutil import declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
+from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.multi import MultiSimCore, parse_starts
 from bt_nav_sim.pacing import Followers
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
@@ -136,7 +137,7 @@ def _sim_config(p: dict[str, Any]) -> SimConfig:
         cmd_vel_timeout=float(p["cmd_vel_timeout"]), kinematics=str(p["kinematics"]),
         max_wheel_speed=float(p["max_wheel_speed"]), wheel_separation=float(p["wheel_separation"]),
         spawn_jitter_m=float(p["spawn_jitter_m"]), spawn_jitter_deg=float(p["spawn_jitter_deg"]),
-        actuation_latency=float(p["actuation_latency"]),
+        actuation_latency=float(p["actuation_latency"]), lidar=str(p["lidar"]),
     )
 
 
@@ -166,6 +167,8 @@ class SimulatorNode(Node):
         "cmd_vel_reliability": ("auto", "cmd_vel reader: best_effort (hears reliable and best-effort writers), "
                                         "reliable, or auto (best_effort without follow, reliable with it)"),
         "cmd_vel_timeout": (0.0, "sim s after which the last command expires (0: it persists)"),
+        "lidar": ("", "a real LiDAR by name (" + ", ".join(LIDARS) + "); empty: the world file's, else the "
+                  "profile's"),
         "actuation_latency": (0.0, "sim s between a command (as _live holds it, after cmd_vel_timeout) and the "
                                    "wheels, like a real base's serial and motor-controller delay (0.1-0.15 s)"),
         "follow": (True, "wait for the followers (cmd_vel publishers, sim_sync senders) to keep up"),
@@ -470,15 +473,19 @@ class _RobotIO:
     def _scan_template(self) -> LaserScan:
         m = self.core.model
         msg = LaserScan()
-        msg.header.frame_id = "base_scan"
-        msg.angle_min = float(m.angle_min)
-        msg.angle_max = float(m.angle_max)
-        msg.angle_increment = float(m.angle_increment)
+        msg.header.frame_id = m.frame_id
         msg.scan_time = 1.0 / m.rate_hz
-        msg.time_increment = msg.scan_time / m.num_beams
-        msg.range_min = float(m.range_min)
-        msg.range_max = float(m.range_max)
+        self._set_layout(msg, m.layout)
+        msg.range_min, msg.range_max = (float(v) for v in m.message_range)
         return msg
+
+    @staticmethod
+    def _set_layout(msg: LaserScan, layout: Any) -> None:
+        """The beam geometry fields of one scan (a sensor whose beam count varies changes them every scan)."""
+        msg.angle_min = float(layout.angle_min)
+        msg.angle_max = float(layout.angle_max)
+        msg.angle_increment = float(layout.angle_increment)
+        msg.time_increment = msg.scan_time / layout.num_beams if msg.scan_time else 0.0
 
     @staticmethod
     def _odom_template(frame: str) -> Odometry:
@@ -511,6 +518,8 @@ class _RobotIO:
         if out.scan is not None:
             msg = self._scan_msg
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            if self.core.model.speed_spread:
+                self._set_layout(msg, self.core.layout)
             ranges = array.array("f")
             ranges.frombytes(out.scan.astype(np.float32, copy=False).tobytes())
             msg.ranges = ranges
