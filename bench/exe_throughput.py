@@ -87,7 +87,8 @@ def grade_once(seeds: int, rtf: float | None = None, jobs: int = JOBS, world: st
     """One ``bt-nav grade --exe`` of bt_nav's executive over ``seeds`` seeds; its throughput and breakdown."""
     bt_nav = str(Path(sys.executable).with_name("bt-nav"))
     out = Path(tempfile.mkdtemp(prefix="bench-exe-")) / "grade"
-    argv = [bt_nav, "grade", "--exe", f"{bt_nav} executive", "--worlds", world, "--seeds", str(seeds), "--jobs",
+    argv = [bt_nav, "grade", "--exe", f"{bt_nav} executive", "--worlds", world, "--lidars", "profile", "--seeds",
+            str(seeds), "--jobs",
             str(jobs), "--out", str(out), "--progress", "off", *(["--rtf", f"{rtf:g}"] if rtf else [])]
     env = {**os.environ, "BT_NAV_DOMAIN_RANGE": f"{DOMAIN_RANGE[0]}-{DOMAIN_RANGE[1]}",
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}

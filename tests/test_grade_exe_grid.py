@@ -121,7 +121,7 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
         node_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
     fake = FakeRuns()
     kept = fake(JOBS[0], settings)
-    for job, outcome in ((JOBS[1], "stopped"), (JOBS[2], "error")):
+    for job, outcome in ((JOBS[1], "stopped"), (JOBS[2], node_grid.ERROR)):
         row = dict(fake(job, settings), outcome=outcome)
         (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row))
     stray = dict(kept, job="maze|none|0|homework|-|0.05m10deg")  # another grid's job
@@ -142,10 +142,17 @@ def test_local_runs_keep_done_rows_and_a_raising_run_is_a_failed_row(tmp_path: P
     seen: list[str] = []
     rows = node_grid.run_exe_grid(JOBS, settings, 2, on_row=lambda row: seen.append(row["job"]), done=done)
     assert [row["job"] for row in rows] == [job.key for job in JOBS]
-    assert sorted(fake.ran) == sorted(seen) == sorted(job.key for job in JOBS[1:]), "a done run ran again"
-    errors = [row for row in rows if row["outcome"] == "error"]
+    retried = [job.key for job in JOBS if job.seed == 1]  # the raising runs are tried twice, the others once
+    assert sorted(fake.ran) == sorted([*(job.key for job in JOBS[1:]), *retried]), "a done run ran again"
+    assert sorted(seen) == sorted(job.key for job in JOBS[1:])
+    errors = [row for row in rows if row["outcome"] == node_grid.ERROR]
     assert [row["seed"] for row in errors] == [1, 1] and "bt_nav broke" in errors[0]["reason"]
+    assert errors[0]["reason"].startswith("bt_nav error (not the node's)")
     assert not any(node_grid.finished(row) for row in errors)
+    for row in errors:  # tried twice, each traceback kept
+        kept = Path(row["traceback"])
+        assert kept.name.endswith("_attempt2.txt") and "bt_nav broke" in kept.read_text()
+        assert kept.with_name(kept.name.replace("attempt2", "attempt1")).is_file()
 
 
 def test_a_local_stop_stops_running_runs_and_starts_no_other(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -168,8 +175,9 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
         rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "a"), scheduler=cluster.scheduler_address)
         assert [row["job"] for row in rows] == [job.key for job in JOBS]
-        assert sorted(fake.ran) == sorted(job.key for job in JOBS), "a job ran twice"
-        assert [row["outcome"] for row in rows] == ["verdict", "error", "verdict", "error"]
+        retried = [job.key for job in JOBS if job.seed == 1]  # a raising run is tried once more, no other twice
+        assert sorted(fake.ran) == sorted([*(job.key for job in JOBS), *retried]), "a job ran twice"
+        assert [row["outcome"] for row in rows] == ["verdict", node_grid.ERROR, "verdict", node_grid.ERROR]
 
         fake.hold_for, fake.raise_for = (0, 1), ()
         fake.ran.clear()
@@ -187,7 +195,8 @@ def test_the_cli_shows_progress_and_resumes(tmp_path: Path, monkeypatch: pytest.
     fake = FakeRuns()
     monkeypatch.setattr(node_grid, "run_exe_job", fake)
     out = tmp_path / "g"
-    argv = ["--exe", f"{sys.executable} -c pass", "--worlds", "stage_4,corridor", "--seeds", "2", "--out", str(out)]
+    argv = ["--exe", f"{sys.executable} -c pass", "--worlds", "stage_4,corridor", "--seeds", "2", "--out", str(out),
+            "--lidars", "profile"]
     assert grade.main([*argv, "--progress", "on"]) == 1  # corridor fails
     captured = capsys.readouterr()
     assert "100%" in captured.err and "4/4" in captured.err and "2 passed" in captured.err

@@ -16,14 +16,23 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.physics import KINEMATICS
 from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.cli.options import add_mission_options
-from bt_nav.grading.grid import Job, make_jobs, run_grid, summarize
+from bt_nav.grading.grid import Job, format_lidars, make_jobs, parse_lidars, run_grid, summarize
 from bt_nav.grading.grid import overall as overall
+from bt_nav.grading.node_grid import declared_choice
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, tree_settings
+
+#: The LiDARs an ``--exe`` grid varies by default: the LDS-01 (0..2pi, 360 beams), the LDS-02 (a different beam
+#: count every scan) and the RPLIDAR (-pi..pi): fixed indices are right for at most the first.
+EXE_LIDARS = ("lds01", "lds02", "rplidar")
+#: The ``--exe`` grid's default worlds: one each for the homework, and the lab's two arenas that check off every
+#: maneuver between them (lab_object: A and C with nothing else near; lab_dead_end: all three).
+EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
 
 
 def format_overall(total: dict[str, Any]) -> str:
@@ -43,7 +52,10 @@ def _failed(s: dict[str, Any]) -> str:
 
 
 def format_table(summary: Sequence[dict[str, Any]]) -> str:
-    """The summary as a fixed-width text table (the lab's check-off columns for a lab grid)."""
+    """The summary as a fixed-width text table (the lab's check-off columns for a lab grid); with several LiDARs
+    the world column names the LiDAR too."""
+    if any(s.get("lidar") for s in summary):
+        summary = [{**s, "world": f"{s['world']} {s.get('lidar') or 'profile'}"} for s in summary]
     if summary and "turns" in summary[0]:
         head = (f"{'world':<15} {'man':<4} {'pass':>7} {'coll':>5} {'turns':>6} {'in rule':>7} {'miss max':>8} "
                 f"{'brakes':>6} {'wall/run':>8}  failed checks")
@@ -66,7 +78,11 @@ def _parser() -> argparse.ArgumentParser:
                         "default stage_4, or all for lab")
     parser.add_argument("--maneuvers", default=None, help="comma-separated: none, A, B, C (default none,A,B,C; "
                         "lab: A,B,C, each in the arenas that can check it off)")
-    parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1")
+    parser.add_argument("--seeds", type=int, default=None, help="seeds 0..N-1 (default 20; --exe: 2)")
+    parser.add_argument("--lidars", default=None, metavar="NAME,...",
+                        help="a grid axis of real LiDARs (" + ", ".join(("profile", *LIDARS)) + "; profile: the "
+                        "profile's own); default profile, --exe: " + ",".join(EXE_LIDARS) + " (a node reading the "
+                        "scan by fixed indices passes one and fails another)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -117,6 +133,26 @@ def _save(path: Path, settings: dict[str, Any], rows: Sequence[dict[str, Any]], 
     tmp.replace(path)
 
 
+def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
+    """The grid's maneuvers: ``--maneuvers``; else for a node of one's own (``--exe``) in the lab the one its file
+    declares as the lab's template asks (``# CHOICE: X``), else for the homework none; for bt_nav's tree all.
+
+    Raises:
+        ValueError: a lab ``--exe`` grid without ``--maneuvers`` whose command names no file with a choice.
+    """
+    if args.maneuvers:
+        return args.maneuvers
+    if args.exe is None:
+        return "A,B,C" if lab else "none,A,B,C"
+    if not lab:
+        return "none"  # a foreign homework node has no maneuvers of bt_nav's
+    choice = declared_choice(args.exe)
+    if choice is None:
+        raise ValueError("which maneuver does the node perform? give --maneuvers A, B or C (or write the lab "
+                         "template's '# CHOICE: X' comment in the node's file)")
+    return choice
+
+
 def checkoff_jobs(jobs: Sequence[Job]) -> list[Job]:
     """The jobs whose arena can check their maneuver off (its ``checkoff_maneuvers``: a lone object in the
     open cannot squeeze a robot for B); says on stderr which pairs it leaves out."""
@@ -135,17 +171,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     lab = args.profile == "lab"
-    worlds = [w.strip() for w in (args.worlds or ("all" if lab else "stage_4")).split(",") if w.strip()]
+    exe = args.exe is not None
+    default_worlds = EXE_WORLDS.get(args.profile, "stage_4") if exe else "all" if lab else "stage_4"
+    worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
     if worlds == ["all"]:
         worlds = list_worlds("lab" if lab else "homework")
-    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    seeds = list(range(args.first_seed, args.first_seed + (args.seeds if args.seeds is not None else
+                                                           2 if exe else 20)))
     try:
-        default = "A,B,C" if lab else "none" if args.exe else "none,A,B,C"  # a foreign node: no maneuvers
-        maneuvers = [normalise_maneuver(m.strip()) for m in (args.maneuvers or default).split(",") if m.strip()]
+        maneuvers = [normalise_maneuver(m.strip()) for m in grid_maneuvers(args, lab).split(",") if m.strip()]
+        lidars = parse_lidars(args.lidars if args.lidars is not None else ",".join(EXE_LIDARS) if exe else None)
         overrides = parse_assignments(args.overrides) or None
         sim_params = parse_assignments(args.sim_param) or None
+        if sim_params and "lidar" in sim_params and len(lidars) > 1:
+            raise ValueError("--sim-param lidar=... and --lidars with several LiDARs: choose one way")
         jobs = make_jobs(worlds, maneuvers, seeds, overrides, args.profile,
-                         None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params)
+                         None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params, lidars)
         if lab:
             jobs = checkoff_jobs(jobs)
         if args.exe is not None and args.profile not in ("homework", "lab"):
@@ -185,6 +226,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error in {r['world']} {r['maneuver']} seed {r['seed']}: {r['error']}", file=sys.stderr)
     total = overall(rows, summary)
     print(format_overall(total))
+    for line in format_lidars(rows):
+        print(line)
     where = f"on {args.scheduler}" if args.scheduler else f"with {args.jobs} local processes"
     print(f"{len(rows)} missions ({args.profile} profile, {args.kinematics or 'profile'} kinematics) in "
           f"{elapsed:.1f} s wall {where}")

@@ -29,8 +29,6 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
 
     if args.resume and not args.out:
         raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
-    if args.json:
-        raise ValueError("--exe writes grade.json into --out; --json is for lock-step grades")
     out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
     return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
@@ -75,13 +73,35 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     ended = [row for row in rows if row["outcome"] != STOPPED]
     print(format_exe_table(summarize_exe(ended)))
     json_path, md_path = write_exe_report(ended, settings)
-    passed = sum(1 for r in ended if r["passed"])
-    print(f"{passed}/{len(ended)} passed in {time.perf_counter() - started:.1f} s wall; wrote {json_path}, {md_path}, "
-          f"{settings.out / 'report.html'}")
-    if len(ended) < len(jobs):
-        print(f"bt-nav grade: {len(jobs) - len(ended)} of {len(jobs)} runs without a result (not in the report): "
+    if args.json:  # the grid's JSON results there too: --json means the same with and without --exe
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json_path.read_text(encoding="utf-8"), encoding="utf-8")
+    from bt_nav.grading.grid import format_lidars
+
+    for line in format_lidars(ended):
+        print(line)
+    return _verdict(args, ended, len(jobs), settings, time.perf_counter() - started, stop, (json_path, md_path))
+
+
+def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned: int, settings: Any,
+             wall: float, stop: Any, written: tuple[Path, Path]) -> int:
+    """The grid's last lines and exit code: 0 every run passed; 1 a run failed; 3 no run failed but some hit a
+    bt_nav error (not the node's: ``--resume`` reruns them); 128 + the signal after a stop."""
+    from bt_nav.grading.node_grid import ERROR
+
+    errors = [r for r in ended if r["outcome"] == ERROR]
+    judged = [r for r in ended if r["outcome"] != ERROR]
+    passed = sum(1 for r in judged if r["passed"])
+    extra = f", {len(errors)} bt_nav error(s) apart (not the node's; tracebacks in " \
+            f"{settings.out / 'bt_nav_errors'})" if errors else ""
+    print(f"{passed}/{len(judged)} passed{extra} in {wall:.1f} s wall; wrote {written[0]}, {written[1]}, "
+          f"{settings.out / 'report.html'}" + (f", {args.json}" if args.json else ""))
+    if len(ended) < planned or errors:
+        print(f"bt-nav grade: {planned - len(judged)} of {planned} runs without a verdict (not in the pass rate): "
               f"bt-nav grade ... --out {settings.out} --resume runs them", file=sys.stderr)
     if stop.requested:
         print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
         return 128 + int(stop.signum or 2)
-    return 0 if ended and passed == len(ended) == len(jobs) else 1
+    if passed < len(judged) or not judged:
+        return 1
+    return 3 if errors or len(judged) < planned else 0

@@ -53,6 +53,16 @@ class Job:
         sim = "".join(f"|{name}={value}" for name, value in self.sim_params)
         return f"{self.world}|{self.maneuver}|{self.seed}|{self.profile}|{self.kinematics or '-'}|{jitter}{sim}"
 
+    @property
+    def lidar(self) -> str:
+        """The real LiDAR of the run (``lidar`` among its simulator settings); empty: the profile's own."""
+        return str(dict(self.sim_params).get("lidar", ""))
+
+    @property
+    def cell(self) -> tuple[str, str, str]:
+        """The grid cell the job belongs to: world, maneuver, LiDAR (empty: the profile's)."""
+        return self.world, self.maneuver, self.lidar
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
         return asdict(self)
@@ -71,6 +81,7 @@ def run_job(job: Job) -> dict[str, Any]:
                        "kinematics": job.kinematics, "passed": False, "error": repr(exc), "travelled": 0.0,
                        "efficiency": 0.0, "collisions": 0, "failed_checks": ["error"], "wall_time": 0.0}
     summary["job"] = job.key
+    summary["lidar"] = job.lidar
     return summary
 
 
@@ -110,11 +121,32 @@ def seed_list(seeds: int | Iterable[int]) -> list[int]:
 def make_jobs(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iterable[int],
               overrides: dict[str, Any] | None = None, profile: str = "homework",
               jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "",
-              sim_params: dict[str, Any] | None = None) -> list[Job]:
-    """The grid in its canonical order: worlds, then maneuvers, then seeds."""
-    sim = tuple(sorted((sim_params or {}).items()))
+              sim_params: dict[str, Any] | None = None, lidars: Sequence[str] = ("",)) -> list[Job]:
+    """The grid in its canonical order: worlds, then maneuvers, then LiDARs (``""``: the profile's own, or
+    ``lidar`` of ``sim_params``), then seeds."""
+    base = dict(sim_params or {})
+    sims = [tuple(sorted({**base, **({"lidar": lidar} if lidar else {})}.items())) for lidar in lidars or ("",)]
     return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides, sim)
-            for w in worlds for m in maneuvers for s in seed_list(seeds)]
+            for w in worlds for m in maneuvers for sim in sims for s in seed_list(seeds)]
+
+
+def parse_lidars(text: str | None) -> list[str]:
+    """``--lidars``: comma-separated names of bt_nav_sim.lidar.LIDARS; ``profile`` (or nothing) is the profile's
+    own LiDAR (ValueError naming an unknown one)."""
+    from bt_nav_sim.lidar import LIDARS
+
+    names = [n.strip() for n in (text or "").split(",") if n.strip()] or ["profile"]
+    for name in names:
+        if name != "profile" and name not in LIDARS:
+            raise ValueError(f"unknown lidar {name!r}; choose among profile, {', '.join(LIDARS)}")
+    return ["" if n == "profile" else n for n in names]
+
+
+def lidar_label(name: str) -> str:
+    """What a report calls a LiDAR of the grid (the profile's own when ``name`` is empty)."""
+    from bt_nav_sim.lidar import LIDARS
+
+    return LIDARS[name].label if name in LIDARS else "the profile's LiDAR"
 
 
 def progress_bar(total: int, initial: int, enabled: bool, unit: str) -> tqdm:
@@ -156,17 +188,17 @@ def _median(values: list[float]) -> float:
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One line per (world, maneuver): pass rate, collisions, distances, efficiency, failures, time."""
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    """One line per (world, maneuver, LiDAR): pass rate, collisions, distances, efficiency, failures, time."""
+    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
     for row in rows:
-        groups.setdefault((row["world"], row["maneuver"]), []).append(row)
+        groups.setdefault((row["world"], row["maneuver"], row.get("lidar", "")), []).append(row)
     out = []
-    for (world, maneuver), runs in groups.items():
+    for (world, maneuver, lidar), runs in groups.items():
         travelled = [r["travelled"] for r in runs]
         efficiency = [r["efficiency"] for r in runs]
         failures = Counter(name for r in runs for name in r.get("failed_checks", ()))
         out.append({
-            "world": world, "maneuver": maneuver, "runs": len(runs),
+            "world": world, "maneuver": maneuver, "lidar": lidar, "runs": len(runs),
             "passed": sum(1 for r in runs if r["passed"]),
             "pass_rate": sum(1 for r in runs if r["passed"]) / len(runs),
             "collisions": sum(r["collisions"] for r in runs),
@@ -207,3 +239,41 @@ def overall(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -
                        if worst_cell else ""),
         **_checkoff_cell(rows),
     }
+
+
+def per_lidar(rows: Sequence[dict[str, Any]]) -> dict[str, tuple[int, int]]:
+    """Passed and judged runs per LiDAR of the grid (empty name: the profile's own); bt_nav's own errors are no
+    run of the student's and do not count."""
+    out: dict[str, list[int]] = {}
+    for row in rows:
+        if row.get("outcome") == "bt_nav error":
+            continue
+        cell = out.setdefault(row.get("lidar", ""), [0, 0])
+        cell[0] += bool(row.get("passed"))
+        cell[1] += 1
+    return {k: (v[0], v[1]) for k, v in out.items()}
+
+
+def lidar_findings(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """A node that passes with one LiDAR and fails with another most likely reads the scan by fixed indices:
+    one sentence naming both (nothing when the grid has one LiDAR, or when every LiDAR fares alike)."""
+    rates = {name: passed / runs for name, (passed, runs) in per_lidar(rows).items() if runs}
+    if len(rates) < 2:
+        return []
+    best = max(rates, key=lambda n: rates[n])
+    worst = [n for n in rates if rates[n] < rates[best] - 0.34]
+    if not worst or rates[best] < 0.5:
+        return []
+    failing = ", ".join(lidar_label(n) for n in sorted(worst, key=lambda n: rates[n]))
+    return [f"passes with {lidar_label(best)}, fails with {failing}: are the scan indices computed from "
+            "angle_min and angle_increment (not fixed, not assuming 360 beams from 0 rad), and are NaN, inf and "
+            "readings outside [range_min, range_max] filtered?"]
+
+
+def format_lidars(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """A line per LiDAR of the grid (pass rate), then the findings across them; nothing for a grid of one."""
+    rates = per_lidar(rows)
+    if len(rates) < 2:
+        return []
+    lines = [f"  {lidar_label(name)}: {p}/{n} passed" for name, (p, n) in rates.items()]
+    return ["per LiDAR:", *lines, *(f"finding: {f}" for f in lidar_findings(rows))]

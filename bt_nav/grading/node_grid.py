@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shlex
 import shutil
 import signal
@@ -45,7 +46,7 @@ GRID_FILE = "grid.json"
 #: The outcome of a run cut short by a stop: no result; left out of the report, run again by a resume.
 STOPPED = "stopped"
 #: The outcome of a run bt_nav itself failed to run (it raised): a failed row in the report, run again by a resume.
-ERROR = "error"
+ERROR = "bt_nav error"  # an exception inside bt_nav: never the node's failure, rerun on resume
 #: The settings a resumed grade must share with the grade it continues.
 SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter")
 #: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.
@@ -100,6 +101,21 @@ def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
     return {**shared, "jobs": [job.key for job in jobs]}
 
 
+def declared_choice(command: str) -> str | None:
+    """The lab choice (A, B or C) a ``# CHOICE: X`` comment declares in the first Python file ``command`` names
+    (the lab's template asks for it), else None."""
+    try:
+        words = shlex.split(command)
+    except ValueError:
+        return None
+    for word in words:
+        path = Path(word)
+        if path.suffix == ".py" and path.is_file():
+            found = re.search(r"^\s*#\s*CHOICE\s*:\s*([ABC])\b", path.read_text(errors="replace"), re.MULTILINE)
+            return found.group(1) if found else None
+    return None
+
+
 def prepare_out(settings: ExeSettings, jobs: Sequence[Job], resume: bool) -> dict[str, Row]:
     """Check the grid's directory, write its ``grid.json``; the finished runs to keep (job key -> row).
 
@@ -152,22 +168,43 @@ def finished_runs(out: Path, jobs: Sequence[Job]) -> dict[str, Row]:
 
 
 # ---------------------------------------------------------------------------------------------- running
-def error_row(job: Job, error: str) -> Row:
-    """The row of a run that raised inside bt_nav (not the node's fault): failed, never lost, rerun on resume."""
-    return {"passed": False, "outcome": ERROR, "reason": f"bt_nav failed to run it: {error}", "verdict": None,
-            "job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed, "profile": job.profile,
-            "run_dir": "", "wall_time": 0.0}
+def error_row(job: Job, error: str, traceback_file: str = "") -> Row:
+    """The row of a run that raised inside bt_nav (not the node's fault): not passed, not failed either (its
+    outcome is :data:`ERROR`, counted apart), never lost, rerun on resume."""
+    return {"passed": False, "outcome": ERROR, "reason": f"bt_nav error (not the node's): {error}", "verdict": None,
+            "job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
+            "profile": job.profile, "run_dir": "", "wall_time": 0.0, "traceback": traceback_file}
+
+
+#: How often a run that raised inside bt_nav is tried in all (a passing fault, e.g. a file raced for, goes away).
+ATTEMPTS = 2
 
 
 def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
-    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already; a run that
-    raises is an :func:`error_row` (here and on a cluster alike: retrying a bug would only repeat it)."""
-    if stop is not None and stop.requested:
-        return None
-    try:
-        return run_exe_job(job, settings, stop)
-    except Exception as exc:  # one broken run must not sink the grid
-        return error_row(job, repr(exc))
+    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already. A run that raises
+    inside bt_nav keeps its traceback in the grid's ``bt_nav_errors/`` and is tried once more; raising again it is
+    an :func:`error_row` (here and on a cluster alike)."""
+    error, where = "", ""
+    for attempt in range(1, ATTEMPTS + 1):
+        if stop is not None and stop.requested:
+            return None
+        try:
+            return run_exe_job(job, settings, stop)
+        except Exception as exc:  # one broken run must not sink the grid
+            error, where = repr(exc), str(_keep_traceback(job, settings, attempt))
+    return error_row(job, error, where)
+
+
+def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:
+    """The exception being handled, with its traceback, in ``<out>/bt_nav_errors/`` (one file per attempt)."""
+    import traceback
+
+    folder = Path(settings.out) / "bt_nav_errors"
+    folder.mkdir(parents=True, exist_ok=True)
+    lidar = f"_{job.lidar}" if job.lidar else ""
+    path = folder / f"{job.world}_{job.maneuver}{lidar}_seed{job.seed}_attempt{attempt}.txt"
+    path.write_text(f"job {job.key}\n{traceback.format_exc()}", encoding="utf-8")
+    return path
 
 
 def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:

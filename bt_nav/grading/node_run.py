@@ -137,10 +137,13 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
     sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
+    sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them
     timeout = max(1.0, settings.limit - JUDGE_MARGIN)
     judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False, "timeout": timeout,
              "start_wait": round(min(START_WAIT, timeout / 3.0), 1), "audit": True,
              "robot_clock_wait": ROBOT_CLOCK_WAIT}
+    if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
+        judge["lidar"] = job.lidar
     specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
     return [spec for spec in specs if spec.executable != "executive"]
@@ -222,7 +225,8 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     """
     low, high = launcher_domains()
     domain = claim_domain_id(low, high, start=hash(job.key))
-    run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}_seed{job.seed}")
+    lidar = f"_{job.lidar}" if job.lidar else ""
+    run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}{lidar}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
     logs = LogFiles(run_dir)
     tee = logs.sink if sink is None else (lambda name, line: (logs.sink(name, line), sink(name, line)))
@@ -255,7 +259,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         logs.close()
         release_domain_id(domain)
     _with_findings(row, _ending_findings(node))
-    row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
+    row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})
     row.update(bag_row(run_dir, recorder, (row.get("verdict") or {}).get("t0_sim")))

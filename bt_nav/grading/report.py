@@ -10,41 +10,55 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from bt_nav.grading.grid import lidar_findings, lidar_label, per_lidar
 from bt_nav.grading.html import report_html
 from bt_nav.grading.media import grid_figures, render_runs
+from bt_nav.grading.node_grid import ERROR
 from bt_nav.grading.node_run import ExeSettings, exe_ros_args
 
 
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per world and maneuver: runs, passes, mean wall time and the reasons of the failures (counted)."""
-    cells: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    """Per world, maneuver and LiDAR: runs judged, passes, bt_nav errors (apart: never the node's failure), mean
+    wall time and the reasons of the failures (counted)."""
+    cells: dict[tuple[str, str, str], list[dict[str, Any]]] = defaultdict(list)
     for row in rows:
-        cells[(row["world"], row["maneuver"])].append(row)
+        cells[(row["world"], row["maneuver"], row.get("lidar", ""))].append(row)
     out = []
-    for (world, maneuver), cell in sorted(cells.items()):
+    for (world, maneuver, lidar), cell in sorted(cells.items()):
+        judged = [r for r in cell if r.get("outcome") != ERROR]
         reasons: dict[str, int] = defaultdict(int)
-        for row in cell:
+        for row in judged:
             if not row["passed"]:
                 reasons[row["reason"]] += 1
-        out.append({"world": world, "maneuver": maneuver, "runs": len(cell),
-                    "passed": sum(1 for r in cell if r["passed"]),
+        out.append({"world": world, "maneuver": maneuver, "lidar": lidar, "runs": len(judged),
+                    "passed": sum(1 for r in judged if r["passed"]), "errors": len(cell) - len(judged),
                     "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons)})
     return out
 
 
 def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
-    """The summary as a fixed-width table, like ``bt-nav grade``'s."""
-    head = f"{'world':<15} {'man':<4} {'pass':>7} {'wall/run':>8}  reasons of the failures"
-    rows = [f"{s['world']:<15} {s['maneuver']:<4} {s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
-            + ("; ".join(f"{reason} x{n}" for reason, n in s["reasons"].items()) or "-") for s in summary]
+    """The summary as a fixed-width table, like ``bt-nav grade``'s (a LiDAR column when the grid varies it)."""
+    lidars = any(s.get("lidar") for s in summary)
+    head = (f"{'world':<15} {'man':<4} " + (f"{'lidar':<9} " if lidars else "")
+            + f"{'pass':>7} {'wall/run':>8}  reasons of the failures")
+    rows = [f"{s['world']:<15} {s['maneuver']:<4} " + (f"{s.get('lidar') or 'profile':<9} " if lidars else "")
+            + f"{s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
+            + ("; ".join([*(f"{reason} x{n}" for reason, n in s["reasons"].items()),
+                          *([f"bt_nav error x{s['errors']} (not the node's)"] if s.get("errors") else [])]) or "-")
+            for s in summary]
     return "\n".join([head, "-" * len(head), *rows])
 
 
-def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings) -> str:
+def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
+                     rows: Sequence[dict[str, Any]] = ()) -> str:
     """The grid's report: pass rate per world (rows) and maneuver (columns), then every failure reason."""
     maneuvers = sorted({s["maneuver"] for s in summary})
     worlds = sorted({s["world"] for s in summary})
-    cell = {(s["world"], s["maneuver"]): s for s in summary}
+    cell: dict[tuple[str, str], dict[str, int]] = {}
+    for s in summary:  # every LiDAR of a world and maneuver together (the LiDAR table follows)
+        c = cell.setdefault((s["world"], s["maneuver"]), {"passed": 0, "runs": 0})
+        c["passed"] += s["passed"]
+        c["runs"] += s["runs"]
     runs = sum(s["runs"] for s in summary)
     passed = sum(s["passed"] for s in summary)
     lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
@@ -55,6 +69,15 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings) -
         lines.append(f"| {world} | " + " | ".join(
             f"{cell[(world, m)]['passed']}/{cell[(world, m)]['runs']}" if (world, m) in cell else "-"
             for m in maneuvers) + " |")
+    rates = per_lidar(rows)
+    if len(rates) > 1:
+        lines += ["", "| LiDAR | passed |", "|---|---|"] + [f"| {lidar_label(n)} | {p}/{r} |"
+                                                          for n, (p, r) in rates.items()]
+    lines += [f"\n**Finding:** {f}" for f in lidar_findings(rows)]
+    errors = sum(1 for r in rows if r.get("outcome") == ERROR)
+    if errors:
+        lines += ["", f"{errors} run(s) hit a bt_nav error (not the node's failure; tracebacks in bt_nav_errors/, "
+                  "`--resume` reruns them)."]
     failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
     if failures:
         lines += ["", "## Failures", ""] + [f"- {w} {m}: {reason} (x{n})" for w, m, reason, n in failures]
@@ -79,9 +102,12 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings,
                         "rtf": settings.rtf, "appended": appended, "record": settings.record,
                         "videos": settings.videos},
            "summary": summary, "figures": figures,
+           "per_lidar": {name or "profile": {"label": lidar_label(name), "passed": p, "runs": n}
+                         for name, (p, n) in per_lidar(rows).items()},
+           "findings": lidar_findings(rows), "bt_nav_errors": sum(1 for r in rows if r.get("outcome") == ERROR),
            "runs": [{**row, "media": media.get(row["job"])} for row in rows]}
     json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    md_path.write_text(summary_markdown(summary, settings), encoding="utf-8")
+    md_path.write_text(summary_markdown(summary, settings, rows), encoding="utf-8")
     (settings.out / "report.html").write_text(report_html(rows, summary, settings, media, figures), encoding="utf-8")
     return json_path, md_path

@@ -43,7 +43,7 @@ def test_each_robot_sees_the_other_as_a_circle_of_its_radius() -> None:
     assert float(alone[0]) > 2.0, "without the other robot the beam reaches the wall"
     # the extra circles are cast exactly as the world's own cylinders
     world = load_world("empty_room")
-    caster = RayCaster(world, QUIET.lidar())
+    caster = RayCaster(world, QUIET.lidar_model())
     ranges = caster.cast(0.0, 0.0, 0.3, extra=np.array([[1.0, 0.2, 0.3], [-1.0, -1.0, 0.1]]))
     ux, uy = math.cos(0.3), math.sin(0.3)
     assert np.isfinite(ranges).all() and ranges.min() > 0.0
