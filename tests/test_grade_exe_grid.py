@@ -58,6 +58,17 @@ class FakeRuns:
 
 
 # ---------------------------------------------------------------------------------------------- the program
+def test_a_python_without_rclpy_is_refused_before_any_run(tmp_path: Path) -> None:
+    """``--exe "python3 node.py"`` that finds a Python without ROS 2 fails every run alike: refused up front,
+    naming this venv's python instead."""
+    bare = tmp_path / "python3"  # a Python that cannot import rclpy
+    bare.write_text("#!/bin/sh\nexit 1\n")
+    bare.chmod(0o755)
+    with pytest.raises(ValueError, match=r"cannot import rclpy .* run the node with .*python"):
+        node_grid.resolve_program(f"{bare} node.py")
+    assert node_grid.resolve_program(f"{sys.executable} -c pass").startswith(sys.executable)
+
+
 def test_a_bare_name_is_found_on_path_then_next_to_this_python(monkeypatch: pytest.MonkeyPatch) -> None:
     venv_bin = Path(sys.executable).parent
     monkeypatch.setenv("PATH", "/nonexistent")  # the venv not activated

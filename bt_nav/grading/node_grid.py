@@ -92,7 +92,24 @@ def resolve_program(command: str) -> str:
         if not found:
             raise ValueError(f"--exe: program {program!r} not found on PATH nor in {here}")
         found = str(Path(found).absolute())
+    _check_interpreter(found)
     return shlex.join([found, *argv[1:]])
+
+
+def _check_interpreter(program: str) -> None:
+    """A ``python...`` program must import rclpy: a system Python without ROS 2 fails every run alike (the node
+    exits at once with ``No module named 'rclpy'``), so the grid is refused before it starts, naming the fix."""
+    import subprocess
+
+    if not Path(program).name.startswith("python"):
+        return
+    try:
+        subprocess.run([program, "-c", "import rclpy"], check=True, capture_output=True, timeout=60)
+    except (subprocess.CalledProcessError, subprocess.TimeoutExpired, OSError):
+        ours = Path(sys.executable)
+        raise ValueError(f"--exe: {program} cannot import rclpy (no ROS 2 for that Python): run the node with "
+                         f"{ours.parent / 'python'} (this venv's, which has it), or source a ROS 2 install "
+                         "first") from None
 
 
 def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:

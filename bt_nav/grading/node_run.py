@@ -204,15 +204,36 @@ def _with_findings(row: dict[str, Any], findings: list[str]) -> dict[str, Any]:
     return row
 
 
-def _ending_findings(node: Child | None) -> list[str]:
-    """How the node ended, when the judge cannot see it: by itself before the run was over, or not on SIGINT."""
+#: Exit codes of a node that ended as asked by SIGINT: caught (0), or Python's own re-raised signal (-2, 130).
+SIGINT_EXITS = (0, -int(signal.SIGINT), 128 + int(signal.SIGINT))
+
+
+def _ending_findings(node: Child | None, log: Path | None = None) -> list[str]:
+    """How the node ended, when the judge cannot see it: by itself before the run was over, not on SIGINT, or
+    crashing on the way out; and an import its interpreter could not make (``log``: its output)."""
+    found = _import_findings(log)
     if node is None:
+        return found
+    code = node.poll()
+    if node.stopped_by is None and code == 0:
+        found.append("the node ended by itself (exit code 0) before the run was over (see node.log)")
+    elif node.stopped_by is not None and node.stopped_by != signal.SIGINT:
+        found.append(f"the node ignored SIGINT (stopped by {node.stopped_by.name} after {node.stop_seconds:.1f} s)")
+    elif node.stopped_by == signal.SIGINT and code not in SIGINT_EXITS:
+        found.append(f"the node crashed while shutting down (exit code {code} after SIGINT, see node.log): "
+                     "catch KeyboardInterrupt/ExternalShutdownException and call rclpy.try_shutdown()")
+    return found
+
+
+def _import_findings(log: Path | None) -> list[str]:
+    """``No module named X`` in the node's output: its interpreter is not the one with ROS 2 (or X is missing)."""
+    import re
+
+    if log is None or not log.is_file():
         return []
-    if node.stopped_by is None and node.poll() == 0:
-        return ["the node ended by itself (exit code 0) before the run was over (see node.log)"]
-    if node.stopped_by is not None and node.stopped_by != signal.SIGINT:
-        return [f"the node ignored SIGINT (stopped by {node.stopped_by.name} after {node.stop_seconds:.1f} s)"]
-    return []
+    missing = sorted(set(re.findall(r"No module named '([\w.]+)'", log.read_text(errors="replace"))))
+    return [f"the node could not import {name} (ModuleNotFoundError): run it with a Python that has ROS 2 and "
+            "its packages (the venv's python, or a sourced ROS install)" for name in missing]
 
 
 def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None,
@@ -258,7 +279,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
-    _with_findings(row, _ending_findings(node))
+    _with_findings(row, _ending_findings(node, run_dir / "node.log"))
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})

@@ -54,6 +54,7 @@ class CheckoffNode(JudgeNode):
         **_config_parameters(),
     }
     wants_commands = True
+    required_parameters = ("safety_distance",)  # the check-off's `ros2 param list` step
 
     def __init__(self, wall_start: float | None = None) -> None:
         super().__init__(NODE_NAME, wall_start)

@@ -115,6 +115,8 @@ class JudgeNode(Node):
 
     PARAMETERS: dict[str, tuple[Any, str]] = DRIVER_PARAMETERS
     wants_commands = False
+    #: Parameters the assignment asks the judged node to declare (a finding when none does).
+    required_parameters: tuple[str, ...] = ()
 
     def __init__(self, name: str, wall_start: float | None = None) -> None:
         super().__init__(name)
@@ -135,7 +137,8 @@ class JudgeNode(Node):
         self.wall_start = time.monotonic() if wall_start is None else wall_start
         self._init_state()
         self._create_interfaces(p)
-        self.audit = GraphAudit(self, self.activate_name) if bool(p["audit"]) else None
+        self.audit = GraphAudit(self, self.activate_name, parameters=self.required_parameters) \
+            if bool(p["audit"]) else None
         self.get_logger().info(f"waiting for {self.activate_name} and /clock; {self.schedule_text()}")
 
     # -------------------------------------------------------------- subclass hooks
@@ -513,6 +516,14 @@ class JudgeNode(Node):
         results = dict(self.judge.results())
         if self.not_started is not None:
             results["passed"] = False
+        missing = self.audit.parameter_findings() if self.audit is not None else []
+        if missing:  # the check-off's `ros2 param list` step failed
+            results["checks"] = [*results["checks"], {
+                "name": "parameters declared", "passed": False, "value": None,
+                "required": ", ".join(self.required_parameters), "detail": "; ".join(missing), "reason": missing[0]}]
+            results["passed"] = False
+            for line in missing:
+                print(f"parameters declared ({line}): FAILED")
         results.update({
             "findings": self.findings,
             "not_started": self.not_started,
