@@ -18,21 +18,13 @@ from typing import Any
 
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.physics import KINEMATICS
-from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.cli.options import add_mission_options
-from bt_nav.grading.grid import Job, format_lidars, make_jobs, parse_lidars, run_grid, summarize
+from bt_nav.grading.grid import Job, format_lidars, run_grid, summarize
 from bt_nav.grading.grid import overall as overall
-from bt_nav.grading.node_grid import declared_choice
-from bt_nav.mission.params import normalise_maneuver, parse_assignments
-from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, tree_settings
-
-#: The LiDARs an ``--exe`` grid varies by default: the LDS-01 (0..2pi, 360 beams), the LDS-02 (a different beam
-#: count every scan) and the RPLIDAR (-pi..pi): fixed indices are right for at most the first.
-EXE_LIDARS = ("lds01", "lds02", "rplidar")
-#: The ``--exe`` grid's default worlds: one each for the homework, and the lab's two arenas that check off every
-#: maneuver between them (lab_object: A and C with nothing else near; lab_dead_end: all three).
-EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
+from bt_nav.grading.plan import EXE_LIDARS, build_jobs, grid_axes
+from bt_nav.mission.params import parse_assignments
+from bt_nav.run.settings import effective_parameters, tree_settings
 
 
 def format_overall(total: dict[str, Any]) -> str:
@@ -83,7 +75,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="a grid axis of real LiDARs (" + ", ".join(("profile", *LIDARS)) + "; profile: the "
                         "profile's own); default profile, --exe: " + ",".join(EXE_LIDARS) + " (a node reading the "
                         "scan by fixed indices passes one and fails another)")
-    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
     parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
@@ -99,6 +91,9 @@ def _parser() -> argparse.ArgumentParser:
                         "--ros-args -p use_sim_time:=true, the profile's remaps -r arm:=<its arm service> (homework: "
                         "also -r evaluate_mission:=/reactive_control/evaluate_mission), and -p maneuver:=X with "
                         "--maneuvers or --profile lab)")
+    parser.add_argument("--class", dest="klass", default=None, metavar="MANIFEST.yaml",
+                        help="grade a class over DDS: every student of the manifest (YAML 'name: command') on the "
+                        "same grid, one grid each in --out/<name>, one class page (class.html); --resume continues")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "
@@ -133,62 +128,21 @@ def _save(path: Path, settings: dict[str, Any], rows: Sequence[dict[str, Any]], 
     tmp.replace(path)
 
 
-def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
-    """The grid's maneuvers: ``--maneuvers``; else for a node of one's own (``--exe``) in the lab the one its file
-    declares as the lab's template asks (``# CHOICE: X``), else for the homework none; for bt_nav's tree all.
-
-    Raises:
-        ValueError: a lab ``--exe`` grid without ``--maneuvers`` whose command names no file with a choice.
-    """
-    if args.maneuvers:
-        return args.maneuvers
-    if args.exe is None:
-        return "A,B,C" if lab else "none,A,B,C"
-    if not lab:
-        return "none"  # a foreign homework node has no maneuvers of bt_nav's
-    choice = declared_choice(args.exe)
-    if choice is None:
-        raise ValueError("which maneuver does the node perform? give --maneuvers A, B or C (or write the lab "
-                         "template's '# CHOICE: X' comment in the node's file)")
-    return choice
-
-
-def checkoff_jobs(jobs: Sequence[Job]) -> list[Job]:
-    """The jobs whose arena can check their maneuver off (its ``checkoff_maneuvers``: a lone object in the
-    open cannot squeeze a robot for B); says on stderr which pairs it leaves out."""
-    can = {world: load_world(world).checkoff_maneuvers for world in {job.world for job in jobs}}
-    kept = [job for job in jobs if not can[job.world] or job.maneuver in can[job.world]]
-    skipped = sorted({(job.world, job.maneuver) for job in jobs} - {(job.world, job.maneuver) for job in kept})
-    if skipped:
-        print("not checked off there: " + ", ".join(f"{w} {m}" for w, m in skipped), file=sys.stderr)
-    if not kept:
-        raise ValueError("no arena among the worlds can check these maneuvers off")
-    return kept
-
-
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav grade``: prints the table; exit 0 only if every mission passed."""
     parser = _parser()
     args = parser.parse_args(argv)
     lab = args.profile == "lab"
-    exe = args.exe is not None
-    default_worlds = EXE_WORLDS.get(args.profile, "stage_4") if exe else "all" if lab else "stage_4"
-    worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
-    if worlds == ["all"]:
-        worlds = list_worlds("lab" if lab else "homework")
-    seeds = list(range(args.first_seed, args.first_seed + (args.seeds if args.seeds is not None else
-                                                           2 if exe else 20)))
+    if args.klass is not None:
+        from bt_nav.cli.grade_exe import grade_class
+
+        return grade_class(args, parser)
+    worlds, seeds = grid_axes(args)
     try:
-        maneuvers = [normalise_maneuver(m.strip()) for m in grid_maneuvers(args, lab).split(",") if m.strip()]
-        lidars = parse_lidars(args.lidars if args.lidars is not None else ",".join(EXE_LIDARS) if exe else None)
+        jobs = build_jobs(args, worlds, seeds)
         overrides = parse_assignments(args.overrides) or None
         sim_params = parse_assignments(args.sim_param) or None
-        if sim_params and "lidar" in sim_params and len(lidars) > 1:
-            raise ValueError("--sim-param lidar=... and --lidars with several LiDARs: choose one way")
-        jobs = make_jobs(worlds, maneuvers, seeds, overrides, args.profile,
-                         None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params, lidars)
-        if lab:
-            jobs = checkoff_jobs(jobs)
+        maneuvers = list(dict.fromkeys(job.maneuver for job in jobs))
         if args.exe is not None and args.profile not in ("homework", "lab"):
             raise ValueError("--exe grades with --profile homework or lab")
         lockstep_resume = args.resume and args.exe is None

@@ -38,7 +38,8 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
 def _show(row: dict[str, Any]) -> None:
     """One line per run as it ends (above the progress bar, when there is one)."""
     label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
-    tqdm.write(f"  {row['world']} {row['maneuver']} seed {row['seed']}: {label} ({row['reason']}; "
+    lidar = f" {row['lidar']}" if row.get("lidar") else ""
+    tqdm.write(f"  {row['world']} {row['maneuver']}{lidar} seed {row['seed']}: {label} ({row['reason']}; "
                f"{row['wall_time']:.1f} s wall) {row['run_dir']}", file=sys.stdout)
     sys.stdout.flush()
 
@@ -105,3 +106,47 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     if passed < len(judged) or not judged:
         return 1
     return 3 if errors or len(judged) < planned else 0
+
+
+def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """``bt-nav grade --class MANIFEST``: every student's grid (:func:`bt_nav.grading.classroom.run_class`), each
+    written as ``--exe`` writes one, then the class page. Exit codes as for one grid, over the whole class."""
+    import copy
+
+    from bt_nav.grading.classroom import read_manifest, run_class, write_class_page
+    from bt_nav.grading.plan import build_jobs, grid_axes
+    from bt_nav.ros.supervise import StopRequest
+
+    if args.exe is not None:
+        parser.error("--class grades the manifest's commands: leave --exe out")
+    try:
+        students = read_manifest(Path(args.klass))
+        out = Path(args.out or f"runs/grade-class-{time.strftime('%Y%m%d-%H%M%S')}").absolute()
+        worlds, seeds = grid_axes(args)
+        plans = {}
+        for student in students:  # every plan checked before the first run (a bad command refuses the class)
+            own = copy.copy(args)
+            own.exe, own.out, own.json = student.command, str(out / student.name), None
+            jobs = build_jobs(own, worlds, seeds)
+            plans[student.name] = (_settings(own, own.profile == "lab" or own.maneuvers is not None), jobs)
+    except ValueError as exc:
+        parser.error(str(exc))
+    print(f"bt-nav grade: a class of {len(students)} in {out}/: " + ", ".join(
+        f"{name} ({len(jobs)} runs)" for name, (_, jobs) in plans.items()), flush=True)
+    stop = StopRequest().install()
+    started = time.perf_counter()
+    try:
+        done = run_class(students, lambda s: plans[s.name], args.jobs, stop,
+                         lambda name, row: _show({**row, "world": f"{name}: {row['world']}"}), args.resume)
+    except ValueError as exc:  # a student's directory holds another grade
+        parser.error(str(exc))
+    finally:
+        stop.closing = True
+        stop.restore()
+    paths = write_class_page(out, students, f"Class grade ({args.profile} profile)")
+    wall = time.perf_counter() - started
+    print(f"class of {len(students)} in {wall:.1f} s wall; wrote " + ", ".join(map(str, paths)))
+    if stop.requested:
+        return 128 + int(stop.signum or 2)
+    rows = [row for student_rows in done.values() for row in student_rows]
+    return 0 if len(done) == len(students) and rows and all(r["passed"] for r in rows) else 1

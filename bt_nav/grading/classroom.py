@@ -167,14 +167,15 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
             f"<th>bt_nav errors</th><th>failures and findings</th></tr>{''.join(body)}</table></body></html>\n")
 
 
-def run_class(students: Sequence[Student], settings_of: Callable[[Student], Any], jobs: Sequence[Any],
+def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, Sequence[Any]]],
               workers: int, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
               resume: bool = False) -> dict[str, list[dict[str, Any]]]:
     """Every student's grid, one after the other (each ``workers`` runs at a time), into ``out/<name>``; each grid's
     report written as ``bt-nav grade --exe`` writes it. Returns the rows that ended, per student.
 
-    ``settings_of(student)`` gives the student's :class:`bt_nav.grading.node_run.ExeSettings` (its command, its
-    directory). Resuming keeps each student's finished runs (a student whose grid is complete runs nothing).
+    ``plan(student)`` gives the student's :class:`bt_nav.grading.node_run.ExeSettings` (its command, its
+    directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
+    each student's finished runs (a student whose grid is complete runs nothing).
     A stop request ends the class after the runs under way; the students not reached are left for ``--resume``.
     """
     from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
@@ -184,7 +185,7 @@ def run_class(students: Sequence[Student], settings_of: Callable[[Student], Any]
     for student in students:
         if stop is not None and stop.requested:
             break
-        settings = settings_of(student)
+        settings, jobs = plan(student)
         done = prepare_out(settings, jobs, resume)
         rows = run_exe_grid(jobs, settings, workers, stop,
                             None if on_row is None else (lambda row, name=student.name: on_row(name, row)),

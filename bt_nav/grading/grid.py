@@ -277,3 +277,20 @@ def format_lidars(rows: Sequence[dict[str, Any]]) -> list[str]:
         return []
     lines = [f"  {lidar_label(name)}: {p}/{n} passed" for name, (p, n) in rates.items()]
     return ["per LiDAR:", *lines, *(f"finding: {f}" for f in lidar_findings(rows))]
+
+
+def checkoff_jobs(jobs: Sequence[Job]) -> tuple[list[Job], list[tuple[str, str]]]:
+    """The jobs whose arena can check their maneuver off (its ``checkoff_maneuvers``: a lone object in the open
+    cannot squeeze a robot for B), and the (world, maneuver) pairs left out.
+
+    Raises:
+        ValueError: no arena among the worlds can check these maneuvers off.
+    """
+    from bt_nav_sim.world import load_world
+
+    can = {world: load_world(world).checkoff_maneuvers for world in {job.world for job in jobs}}
+    kept = [job for job in jobs if not can[job.world] or job.maneuver in can[job.world]]
+    skipped = sorted({(job.world, job.maneuver) for job in jobs} - {(job.world, job.maneuver) for job in kept})
+    if not kept:
+        raise ValueError("no arena among the worlds can check these maneuvers off")
+    return kept, skipped

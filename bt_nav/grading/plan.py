@@ -1,0 +1,80 @@
+"""A grid's plan from the grading options: worlds, seeds, maneuvers and LiDARs, with the defaults each kind of
+grid gets (bt_nav's tree in lock-step; any node over DDS, one or a class of them).
+
+Why the defaults differ: a lock-step mission costs a fraction of a second, so bt_nav's own grids cover every world
+and 20 seeds; a node over DDS costs ~17 s of wall time, so its default grid is what a class can afford (the
+profile's representative worlds, the node's own maneuver, 2 seeds) and varies the LiDAR, which is what catches a
+node reading the scan by fixed indices.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from bt_nav_sim.world import list_worlds
+
+from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
+from bt_nav.grading.node_grid import declared_choice
+from bt_nav.mission.params import normalise_maneuver, parse_assignments
+from bt_nav.run.settings import DEFAULT_JITTER
+
+#: The LiDARs an ``--exe`` grid varies by default: the LDS-01 (0..2pi, 360 beams), the LDS-02 (a different beam
+#: count every scan) and the RPLIDAR (-pi..pi): fixed indices are right for at most the first.
+EXE_LIDARS = ("lds01", "lds02", "rplidar")
+#: The ``--exe`` grid's default worlds: one each for the homework, and the lab's two arenas that check off every
+#: maneuver between them (lab_object: A and C with nothing else near; lab_dead_end: all three).
+EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
+
+
+
+def grid_axes(args: argparse.Namespace) -> tuple[list[str], list[int]]:
+    """The grid's worlds and seeds (defaults: a lock-step grid all the profile's 20 seeds; a node over DDS, the
+    profile's representative worlds and 2 seeds, a size a class can afford)."""
+    lab, exe = args.profile == "lab", args.exe is not None or getattr(args, "klass", None) is not None
+    default_worlds = EXE_WORLDS.get(args.profile, "stage_4") if exe else "all" if lab else "stage_4"
+    worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
+    if worlds == ["all"]:
+        worlds = list_worlds("lab" if lab else "homework")
+    count = args.seeds if args.seeds is not None else 2 if exe else 20
+    return worlds, list(range(args.first_seed, args.first_seed + count))
+
+
+def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
+    """The grid's maneuvers: ``--maneuvers``; else for a node of one's own (``--exe``) in the lab the one its file
+    declares as the lab's template asks (``# CHOICE: X``), else for the homework none; for bt_nav's tree all.
+
+    Raises:
+        ValueError: a lab ``--exe`` grid without ``--maneuvers`` whose command names no file with a choice.
+    """
+    if args.maneuvers:
+        return args.maneuvers
+    if args.exe is None:
+        return "A,B,C" if lab else "none,A,B,C"
+    if not lab:
+        return "none"  # a foreign homework node has no maneuvers of bt_nav's
+    choice = declared_choice(args.exe)
+    if choice is None:
+        raise ValueError("which maneuver does the node perform? give --maneuvers A, B or C (or write the lab "
+                         "template's '# CHOICE: X' comment in the node's file)")
+    return choice
+
+
+def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int]) -> list[Job]:
+    """The grid of the options: worlds x maneuvers x LiDARs x seeds (the lab's arenas only where they can check
+    the maneuver off; says on stderr which pairs it leaves out). ValueError: options that do not fit."""
+    lab, exe = args.profile == "lab", args.exe is not None
+    maneuvers = [normalise_maneuver(m.strip()) for m in grid_maneuvers(args, lab).split(",") if m.strip()]
+    lidars = parse_lidars(args.lidars if args.lidars is not None else ",".join(EXE_LIDARS) if exe else None)
+    sim_params = parse_assignments(args.sim_param) or None
+    if sim_params and "lidar" in sim_params and len(lidars) > 1:
+        raise ValueError("--sim-param lidar=... and --lidars with several LiDARs: choose one way")
+    jobs = make_jobs(worlds, maneuvers, seeds, parse_assignments(args.overrides) or None, args.profile,
+                     None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params, lidars)
+    if not lab:
+        return jobs
+    kept, skipped = checkoff_jobs(jobs)
+    if skipped:
+        print("not checked off there: " + ", ".join(f"{w} {m}" for w, m in skipped), file=sys.stderr)
+    return kept
