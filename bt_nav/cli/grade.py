@@ -94,6 +94,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--class", dest="klass", default=None, metavar="MANIFEST.yaml",
                         help="grade a class over DDS: every student of the manifest (YAML 'name: command') on the "
                         "same grid, one grid each in --out/<name>, one class page (class.html); --resume continues")
+    parser.add_argument("--node-param", action="append", default=[], metavar="NAME=VALUE",
+                        help="--exe: a parameter for the node, as a TA's launch file sets it (repeatable), e.g. "
+                        "safety_distance=0.6 (the lab's judge then triggers at it too)")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "

@@ -30,9 +30,12 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
     if args.resume and not args.out:
         raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
     out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
+    from bt_nav.mission.params import parse_assignments
+
+    node_params = tuple(parse_assignments(args.node_param).items())
     return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
-                       args.videos, os.getcwd())
+                       args.videos, os.getcwd(), node_params)
 
 
 def _show(row: dict[str, Any]) -> None:

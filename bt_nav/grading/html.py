@@ -62,7 +62,7 @@ def _link(out: Path, path: Path, text: str) -> str:
 
 def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
     passed = sum(1 for r in rows if r.get("passed"))
-    appended = " ".join(exe_ros_args("X" if settings.maneuvers else None, settings.profile))
+    appended = " ".join(exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params))
     return [f"<h1>Grade of <code>{html.escape(settings.command)}</code></h1>",
             f'<p class="overall">overall: <b>{passed}/{len(rows)} passed '
             f"({100 * passed / max(1, len(rows)):.1f} %)</b></p>",

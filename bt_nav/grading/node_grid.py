@@ -48,7 +48,7 @@ STOPPED = "stopped"
 #: The outcome of a run bt_nav itself failed to run (it raised): a failed row in the report, run again by a resume.
 ERROR = "bt_nav error"  # an exception inside bt_nav: never the node's failure, rerun on resume
 #: The settings a resumed grade must share with the grade it continues.
-SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter")
+SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter", "node_params")
 #: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.
 CLUSTER_STOP_WAIT = 30.0
 
@@ -115,6 +115,7 @@ def _check_interpreter(program: str) -> None:
 def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
     shared = {name: getattr(settings, name) for name in SHARED}
     shared["jitter"] = list(settings.jitter) if settings.jitter else None
+    shared["node_params"] = [list(pair) for pair in settings.node_params]
     return {**shared, "jobs": [job.key for job in jobs]}
 
 

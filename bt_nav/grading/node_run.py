@@ -83,6 +83,8 @@ class ExeSettings:
     record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.node_bag.RECORD_MODES)
     videos: str = "failures"  # failures, all or off: which runs the report films from their bags
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
+    # Parameters given to the node as a TA's launch file would (-p NAME:=VALUE); safety_distance is the judge's too
+    node_params: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -105,14 +107,17 @@ PROFILE_REMAPS: dict[str, tuple[tuple[str, str], ...]] = {
 }
 
 
-def exe_ros_args(maneuver: str | None, profile: str = "homework") -> list[str]:
-    """What is appended to the user's command: sim time, the profile's remaps, and the maneuver when the grid
-    has maneuvers."""
+def exe_ros_args(maneuver: str | None, profile: str = "homework",
+                 node_params: tuple[tuple[str, Any], ...] = ()) -> list[str]:
+    """What is appended to the user's command: sim time, the profile's remaps, the maneuver when the grid
+    has maneuvers, and the ``--node-param`` parameters."""
     args = ["--ros-args", "-p", "use_sim_time:=true"]
     for name, target in PROFILE_REMAPS.get(profile, ()):
         args += ["-r", f"{name}:={target}"]
     if maneuver is not None:
         args += ["-p", param_arg("maneuver", maneuver)]
+    for name, value in node_params:
+        args += ["-p", param_arg(name, value)]
     return args
 
 
@@ -144,6 +149,9 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
              "robot_clock_wait": ROBOT_CLOCK_WAIT}
     if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
         judge["lidar"] = job.lidar
+    given = dict(settings.node_params)
+    if lab and "safety_distance" in given:  # the trigger the node was given is the one it is judged by
+        judge["safety_distance"] = float(given["safety_distance"])
     specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
     return [spec for spec in specs if spec.executable != "executive"]
@@ -253,7 +261,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     tee = logs.sink if sink is None else (lambda name, line: (logs.sink(name, line), sink(name, line)))
     launcher = Launcher(run_env(domain), sink=tee, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
-                                                                  settings.profile))
+                                                                  settings.profile, settings.node_params))
     started = time.monotonic()
     recorder = None
     node = None

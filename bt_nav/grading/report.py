@@ -97,7 +97,7 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings,
     settings.out.mkdir(parents=True, exist_ok=True)
     media = render_runs(rows, settings.videos, settings.record, workers) if rows else {}
     figures = grid_figures(rows, settings.out)
-    appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile)
+    appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params)
     doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
                         "rtf": settings.rtf, "appended": appended, "record": settings.record,
                         "videos": settings.videos},
