@@ -1,0 +1,144 @@
+"""The grader's mutation suite: a student's node done right passes every run, and each copy of it with one typical
+mistake is failed for that mistake, named in words a student can act on.
+
+The students are plain rclpy nodes importing nothing of bt_nav (``tests/fixtures/lab_student_node.py`` and, for the
+homework, ``tests/fixtures/timer_node.py``), each mistake switched on by ``--mistake``. Each class is graded the way
+an instructor grades one: ``bt-nav grade --class MANIFEST`` over real DDS, every student on the same worlds, LiDARs
+and seeds; the verdicts are read from each student's ``grade.json`` and the class page.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from bt_nav_sim.lidar import LIDARS
+
+from bt_nav.cli import grade
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+LAB = f"{sys.executable} {FIXTURES / 'lab_student_node.py'}"
+HOMEWORK = f"{sys.executable} {FIXTURES / 'timer_node.py'}"
+
+#: Lab mistakes (choice C) and what the failing runs must say (a regex on the row's reason). The LiDARs are the
+#: LDS-01 and the RPLIDAR: fixed indices are right for the first only.
+LAB_C = {
+    "hardcoded_indices": r"performed no maneuver|hit an obstacle",
+    "ignores_toggle_off": r"did not stop and stay still after the deactivation",
+    "no_stop_on_toggle_off": r"did not stop and stay still after the deactivation",
+    "moves_before_toggle": r"moved before it was activated",
+    "half_angle": r"turned 4\d deg \w+; the Smart Pivot needs 90 \+- 10 deg",
+    "wrong_side": r"the Smart Pivot needs 90 \+- 10 deg (left|right)",
+    "no_trigger": r"performed no maneuver.*hit an obstacle",
+    "forward_while_turning": r"drove forward during the turn \(commanded up to 0\.05 m/s",
+    "never_stops_turning": r"it was still turning at the disarm",
+    "wrong_topic": r"no node published on /cmd_vel \(it publishes .* on /cmd_vel_out\)",
+    "twist_stamped": r"publishes /cmd_vel as geometry_msgs/msg/TwistStamped",
+    "no_safety_param": r"no node declares the parameter safety_distance",
+    "zero_is_obstacle": r"turned although its trigger did not hold",
+}
+#: Mistakes only one of the LiDARs shows: (the LiDAR it passes with, the one it fails with). Fixed indices read the
+#: LDS-01 right and the RPLIDAR's rear as its front; a 0.0 is "no return" only on the LDS-01.
+BY_LIDAR = {"hardcoded_indices": ("lds01", "rplidar"), "zero_is_obstacle": ("rplidar", "lds01")}
+#: Homework mistakes and their reasons.
+HOMEWORK_MISTAKES = {
+    "moves_before_activation": r"moved before it was activated",
+    "ignores_deactivation": r"did not stop and stay still after the deactivation",
+    "no_evaluation": r"did not call the evaluation service in time \(never called\)",
+    "late_evaluation": r"did not call the evaluation service in time \(first call at t=",
+    "too_slow": r"did not travel far enough \(travelled [0-7]\.\d\d m, required 8\.0 m\)",
+    "no_avoidance": r"hit an obstacle",
+    "moving_at_evaluation": r"still moving at the end",
+}
+
+
+def _class(tmp_path: Path, students: dict[str, str], *options: str) -> dict[str, Any]:
+    """Grade the students as one class; each student's rows (from their own grade.json) and the class page."""
+    manifest = tmp_path / "class.yaml"
+    manifest.write_text("".join(f"{name}: {command}\n" for name, command in students.items()))
+    out = tmp_path / "class"
+    code = grade.main(["--class", str(manifest), "--seeds", "1", "--jobs", "2", "--record", "off",
+                       "--progress", "off", "--out", str(out), *options])
+    page = json.loads((out / "class.json").read_text())
+    rows = {name: json.loads((out / name / "grade.json").read_text()) for name in students}
+    return {"code": code, "page": page, "grades": rows}
+
+
+def _failed_for(doc: dict[str, Any], pattern: str) -> list[str]:
+    """Rows that failed for a reason other than ``pattern`` (empty: every failed row names it), and the runs
+    that passed although they should not have."""
+    wrong = []
+    for row in doc["runs"]:
+        assert row["outcome"] != "bt_nav error", row  # bt_nav's own failures never stand in for a verdict
+        if not re.search(pattern, row["reason"]):
+            wrong.append(f"{row['world']} {row.get('lidar')}: {'PASSED' if row['passed'] else row['reason']}")
+    return wrong
+
+
+@pytest.mark.slow
+def test_the_lab_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -> None:
+    students = {"correct": f"{LAB} --choice C",
+                **{name: f"{LAB} --choice C --mistake {name}" for name in LAB_C}}
+    result = _class(tmp_path, students, "--profile", "lab", "--maneuvers", "C", "--worlds", "lab_side",
+                    "--lidars", "lds01,rplidar")
+    correct = result["grades"]["correct"]
+    assert all(row["passed"] for row in correct["runs"]), [row["reason"] for row in correct["runs"]]
+    assert correct["findings"] == []
+    problems = {}
+    for name, pattern in LAB_C.items():
+        doc = result["grades"][name]
+        if name in BY_LIDAR:  # right with one LiDAR, wrong with the other: failed there, and the grid says so
+            by_lidar = {row["lidar"]: row for row in doc["runs"]}
+            good, bad = BY_LIDAR[name]
+            assert by_lidar[good]["passed"] and not by_lidar[bad]["passed"], doc["runs"]
+            assert re.search(pattern, by_lidar[bad]["reason"]), by_lidar[bad]["reason"]
+            assert any(f"fails with {LIDARS[bad].label}" in f and "angle_min and angle_increment" in f
+                       for f in doc["findings"]), doc["findings"]
+            continue
+        wrong = _failed_for(doc, pattern)
+        if wrong or any(row["passed"] for row in doc["runs"]):
+            problems[name] = wrong
+    assert not problems, json.dumps(problems, indent=1)
+    page = {s["name"]: s for s in result["page"]["students"]}
+    assert page["correct"]["passed"] == page["correct"]["runs"] == 2 and result["code"] == 1
+    assert (tmp_path / "class" / "class.html").read_text().count('href="') >= len(students)
+
+
+@pytest.mark.slow
+def test_a_node_ignoring_its_safety_distance_triggers_late(tmp_path: Path) -> None:
+    """The TA sets safety_distance 0.6 m (as the lab's launch file may): a node that declares the parameter but
+    triggers at its own 0.5 m turns late, and the line asks whether it reads the parameter."""
+    students = {"correct": f"{LAB} --choice A --seed 1",
+                "ignores": f"{LAB} --choice A --seed 1 --mistake ignores_safety_distance"}
+    result = _class(tmp_path, students, "--profile", "lab", "--maneuvers", "A", "--worlds", "lab_object",
+                    "--lidars", "lds01", "--node-param", "safety_distance=0.6")
+    [ok] = result["grades"]["correct"]["runs"]
+    [late] = result["grades"]["ignores"]["runs"]
+    assert ok["passed"], ok["reason"]
+    assert not late["passed"] and "turned late: it crept on" in late["reason"], late["reason"]
+    assert "does it read its distance parameter?" in late["reason"]
+
+
+@pytest.mark.slow
+def test_the_homework_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -> None:
+    students = {"correct": HOMEWORK, **{name: f"{HOMEWORK} --mistake {name}" for name in HOMEWORK_MISTAKES}}
+    result = _class(tmp_path, students, "--worlds", "stage_4", "--lidars", "profile")
+    correct = result["grades"]["correct"]
+    assert all(row["passed"] for row in correct["runs"]), [row["reason"] for row in correct["runs"]]
+    problems = {name: _failed_for(result["grades"][name], pattern) for name, pattern in HOMEWORK_MISTAKES.items()}
+    problems = {name: wrong for name, wrong in problems.items() if wrong}
+    assert not problems, json.dumps(problems, indent=1)
+
+
+@pytest.mark.slow
+def test_homework_indices_hard_coded_fail_on_the_rplidar(tmp_path: Path) -> None:
+    students = {"correct": HOMEWORK, "hardcoded": f"{HOMEWORK} --mistake hardcoded_indices"}
+    result = _class(tmp_path, students, "--worlds", "stage_4", "--lidars", "profile,rplidar")
+    assert all(row["passed"] for row in result["grades"]["correct"]["runs"])
+    by_lidar = {row["lidar"]: row for row in result["grades"]["hardcoded"]["runs"]}
+    assert by_lidar[""]["passed"] and not by_lidar["rplidar"]["passed"], result["grades"]["hardcoded"]["runs"]
+    assert any("fails with TurtleBot4 RPLIDAR" in f for f in result["grades"]["hardcoded"]["findings"])
