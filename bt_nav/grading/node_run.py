@@ -287,7 +287,8 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
         logs.close()
         release_domain_id(domain)
-    _with_findings(row, _ending_findings(node, run_dir / "node.log"))
+    if row["outcome"] != "stopped":  # a run bt_nav stopped says only that: how its node ended is not the node's
+        _with_findings(row, _ending_findings(node, run_dir / "node.log"))
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})

@@ -321,7 +321,7 @@ LAB_WORLDS = list_worlds("lab")
 
 def test_lab_arenas_are_listed_apart() -> None:
     assert set(LAB_WORLDS) == {"lab_object", "lab_dead_end", "lab_narrow_gap", "lab_cluttered", "lab_appearing",
-                               "lab_passerby"}
+                               "lab_passerby", "lab_side"}
     assert not set(LAB_WORLDS) & set(list_worlds())
     assert sorted(list_worlds() + LAB_WORLDS) == list_worlds("all")
 
