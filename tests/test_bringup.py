@@ -75,6 +75,18 @@ def test_stamped_commands_reach_the_simulator_and_referee() -> None:
     assert specs["referee"].parameters["cmd_vel_stamped"] is True
 
 
+def test_a_simulated_lidar_tells_the_executive_where_it_sits() -> None:
+    """As TF would on a robot: the off-centre scanner's mount reaches the executive, a centred one adds nothing,
+    and a parameter given for the executive wins."""
+    def executive(**kw: object) -> dict:
+        return next(s for s in nodes("eval", **kw) if s.executable == "executive").parameters
+
+    assert executive(sim={"lidar": "ust10"})["scan_mount_x"] == pytest.approx(0.08)
+    assert executive(sim={"lidar": "ust10"})["scan_mount_y"] == pytest.approx(0.03)
+    assert "scan_mount_x" not in executive(sim={"lidar": "rplidar"})
+    assert executive(sim={"lidar": "ust10"}, executive={"scan_mount_x": 0.1})["scan_mount_x"] == 0.1
+
+
 def test_bad_profiles() -> None:
     with pytest.raises(ValueError, match="unknown profile"):
         nodes("gazebo")

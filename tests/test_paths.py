@@ -105,3 +105,21 @@ def test_neighbour_min_is_the_edge_padded_window_minimum(values: list[float], ed
     v = np.asarray(values)
     window = np.lib.stride_tricks.sliding_window_view(np.pad(v, edge, mode="edge"), 2 * edge + 1).min(axis=1)
     assert np.array_equal(neighbour_min(v, edge), window)
+
+
+@pytest.mark.parametrize("mount", [(0.08, 0.03), (-0.032, 0.0), (0.2, -0.1)])
+def test_a_lidar_off_the_centre_gives_the_body_its_own_free_paths(mount: tuple[float, float]) -> None:
+    """A scanner mounted off the robot's centre sees the same world from elsewhere: told its mount, the free paths
+    are the body's, as from a scanner at the centre; not told, the body's corridor is misplaced by the offset."""
+    from bt_nav.mission.paths import free_paths_from_clean
+    from bt_nav.mission.scan import clean_ranges
+
+    world = {"segments": [[1.0, -3.0, 1.0, 3.0]], "circles": [{"x": 0.5, "y": 0.45, "r": 0.05}]}
+    centred = free_paths(scan_of(world), HALF, horizon=3.0)
+    # the same robot pose, the sensor at the mount (heading 0: the mount adds straight to the position)
+    mounted = scan_of(world, x=mount[0], y=mount[1])
+    told = free_paths_from_clean(mounted, clean_ranges(mounted), HALF, 3.0, mount=mount)
+    naive = free_paths_from_clean(mounted, clean_ranges(mounted), HALF, 3.0)
+    assert np.allclose(told.free, centred.free, atol=0.02), np.abs(told.free - centred.free).max()
+    assert told.ahead == pytest.approx(1.0 - HALF, abs=0.02)
+    assert naive.ahead == pytest.approx(1.0 - HALF - mount[0], abs=0.02)  # what a mount left out costs

@@ -149,6 +149,12 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("path_half_width", 0.18, "Half the width of the corridor the robot sweeps when it drives: the "
               "close / far / none decision and the steering look for obstacles inside it along each heading "
               "(robot radius plus a margin; Burger: 0.105 m circumradius).", "m", 0.05, 1.0),
+    ParamSpec("scan_mount_x", 0.0, "Where the LiDAR sits ahead of the robot's centre (the x of TF's base_link -> "
+              "scan frame; TurtleBot3: -0.032): the swept corridor (close / far / none, the emergency brake) is "
+              "the body's, so its points are moved by the mount. The sectors stay the LiDAR's own readings, as "
+              "the lab measures them.", "m", -1.0, 1.0),
+    ParamSpec("scan_mount_y", 0.0, "Where the LiDAR sits left of the robot's centre (TF's y; see scan_mount_x).",
+              "m", -1.0, 1.0),
     ParamSpec("front_half_angle_deg", 20.0, "Half-width of the lab's front sector (maneuvers A and C look "
               "there): at 30 deg, walls beside the path in narrow passages read as ahead and A fires ~3x as "
               "often (measured: A passes 92 % of the grid at 30 deg, 100 % at 20 deg).", "deg", 1.0, 180.0),

@@ -109,15 +109,21 @@ def free_paths(scan: Scan, half_width: float, horizon: float, headings: np.ndarr
 
 
 def free_paths_from_clean(scan: Scan, ranges: np.ndarray, half_width: float, horizon: float,
-                          headings: np.ndarray = HEADINGS) -> FreePaths:
+                          headings: np.ndarray = HEADINGS, mount: tuple[float, float] = (0.0, 0.0)) -> FreePaths:
     """:func:`free_paths` from the scan's cleaned ranges (:func:`~bt_nav.mission.scan.clean_validated`; the
     caller has validated the scan), so one cleaning serves the cones and the paths.
 
     The same arithmetic in the same order as the plain formula (so the same bits), in place where it
     can be: per scan only the beams near enough count, and their directions come from the per-layout
     cache (:func:`~bt_nav.mission.scan.beam_trig`).
+
+    ``mount`` is where the LiDAR sits in the robot's frame (forward, left; m): the corridor is the body's, so
+    a scanner mounted ahead of the centre sees its points that much further forward of the body's centre.
     """
     cos_b, sin_b = beam_trig(scan)
+    mount_x, mount_y = float(mount[0]), float(mount[1])
+    if mount_x or mount_y:
+        return _free_paths_mounted(ranges, cos_b, sin_b, mount_x, mount_y, half_width, horizon, headings)
     x_all = ranges * cos_b
     # Near enough (False for NaN and +inf; -inf is range_min after cleaning), and not behind the robot by
     # more than its half width: a point in a corridor of a heading within +-90 deg has x > -half_width,
@@ -125,7 +131,24 @@ def free_paths_from_clean(scan: Scan, ranges: np.ndarray, half_width: float, hor
     near = (ranges < horizon + half_width) & (x_all > -half_width - 1e-9)
     if not near.any():
         return FreePaths(headings, np.full(headings.shape, float(horizon)))
-    x, y = x_all[near], ranges[near] * sin_b[near]
+    return _corridor_free(x_all[near], ranges[near] * sin_b[near], half_width, horizon, headings)
+
+
+def _free_paths_mounted(ranges: np.ndarray, cos_b: np.ndarray, sin_b: np.ndarray, mount_x: float, mount_y: float,
+                        half_width: float, horizon: float, headings: np.ndarray) -> FreePaths:
+    """Free paths of a LiDAR mounted at (``mount_x``, ``mount_y``): its points moved into the body's frame."""
+    with np.errstate(invalid="ignore"):  # inf * 0 for a no-return beam along an axis: NaN, never near
+        x_all = ranges * cos_b + mount_x
+        y_all = ranges * sin_b + mount_y
+    near = (np.hypot(x_all, y_all) < horizon + half_width) & (x_all > -half_width - 1e-9)
+    if not near.any():
+        return FreePaths(headings, np.full(headings.shape, float(horizon)))
+    return _corridor_free(x_all[near], y_all[near], half_width, horizon, headings)
+
+
+def _corridor_free(x: np.ndarray, y: np.ndarray, half_width: float, horizon: float,
+                   headings: np.ndarray) -> FreePaths:
+    """The free path along each heading among the points (x, y) of the robot's frame (module docstring)."""
     cos_h, sin_h = _HEADINGS_TRIG if headings is HEADINGS else _trig(tuple(float(h) for h in headings))
     along = x * cos_h
     along += y * sin_h

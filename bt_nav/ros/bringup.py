@@ -41,6 +41,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.lidar import lidar_model
+
 from bt_nav.mission.params import parse_assignments  # noqa: F401 - re-exported (demo, sim-run)
 from bt_nav.mission.profiles import EXECUTIVE_NAME, config_file, file_parameters  # noqa: F401 - re-exported
 
@@ -206,6 +208,8 @@ def nodes(
         exe_params["maneuver"] = maneuver
     if seed is not None:
         exe_params["random_seed"] = int(seed)
+    if include_sim and (sim or {}).get("lidar"):  # where the simulated LiDAR sits, as a robot's TF would say
+        exe_params.update(lidar_model(str(sim["lidar"])).mount_params())
     exe_params.update(executive or {})
     activate, evaluate = (HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE) if namespace is None else \
         (HOMEWORK_ACTIVATE.lstrip("/"), HOMEWORK_EVALUATE.lstrip("/"))

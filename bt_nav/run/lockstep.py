@@ -267,7 +267,7 @@ class Lockstep:
         for i, (name, body) in enumerate(zip(self.sim.names, self.sim.cores, strict=True)):
             robot_sink = sink if sink is None or len(self.sim.names) == 1 else sink.robot(name)  # type: ignore[union-attr]
             settings = tree_settings(profile_name, self.maneuver, self.seed + i * ROBOT_SEED_STRIDE,
-                                     overrides)
+                                     {**body.model.mount_params(), **(overrides or {})})
             self.robots.append(Robot(name, body, settings, make_referee(i, name), self.clock, robot_sink))
         self.tick_ns = round(1e9 / float(self.robots[0].core.params["tick_rate_hz"]))
         self.referee_ns = round(1e9 / REFEREE_HZ)

@@ -105,6 +105,13 @@ class LidarModel:
         count = int(math.floor((span - (start - self.angle_min)) / abs(increment))) + 1
         return ScanLayout(start, increment, max(1, count))
 
+    def mount_params(self) -> dict[str, float]:
+        """The executive's parameters that tell it where this LiDAR sits (what TF's base_link -> scan frame says
+        on a robot); none for a sensor at the centre, so a profile's own LiDAR changes nothing."""
+        if not (self.mount_x or self.mount_y):
+            return {}
+        return {"scan_mount_x": self.mount_x, "scan_mount_y": self.mount_y}
+
     def describe(self) -> dict[str, object]:
         """What a run's files and bags record about the sensor."""
         lo, hi = self.message_range

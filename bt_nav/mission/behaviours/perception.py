@@ -61,6 +61,8 @@ class ProcessScan(Leaf):
         "min_valid_beams": port(int, default=3),
         "path_half_width": port(float, default=0.18),
         "far_distance": port(float, "free paths are measured up to HORIZON times this", default=0.7),
+        "scan_mount_x": port(float, "the LiDAR's place ahead of the robot's centre (m)", default=0.0),
+        "scan_mount_y": port(float, "the LiDAR's place left of the robot's centre (m)", default=0.0),
     }
     OUTPUT_PORTS = {
         **SECTORS_PORT,
@@ -75,7 +77,7 @@ class ProcessScan(Leaf):
         self._last_config: SectorConfig | None = None
         self._sectors: Sectors = UNKNOWN_SECTORS
         self._paths: FreePaths = BLOCKED_PATHS
-        self._path_inputs: tuple[float, float] = (0.0, 0.0)
+        self._path_inputs: tuple[float, ...] = ()
         self._error: str = ""
         self._status = "no scan yet"
         self._front_known: bool | None = None
@@ -99,14 +101,16 @@ class ProcessScan(Leaf):
         if scan is None:
             return self._publish(False, "no scan yet", UNKNOWN_SECTORS)
         config = self._config()
-        path_inputs = (float(self.get_input("path_half_width")), self.HORIZON * float(self.get_input("far_distance")))
+        path_inputs = (float(self.get_input("path_half_width")), self.HORIZON * float(self.get_input("far_distance")),
+                       float(self.get_input("scan_mount_x")), float(self.get_input("scan_mount_y")))
         if scan is not self._last_scan or config != self._last_config or path_inputs != self._path_inputs:
             self._last_scan, self._last_config, self._path_inputs = scan, config, path_inputs
             try:  # one validation and one REP 117 cleaning per scan, shared by the cones and the paths
                 validate_scan(scan)
                 clean = clean_validated(scan)
                 self._sectors, self._error = sectors_from_clean(scan, clean, config), ""
-                self._paths = free_paths_from_clean(scan, clean, *path_inputs)
+                self._paths = free_paths_from_clean(scan, clean, path_inputs[0], path_inputs[1],
+                                                    mount=path_inputs[2:])
             except ScanError as exc:
                 self._sectors, self._paths, self._error = UNKNOWN_SECTORS, BLOCKED_PATHS, f"malformed scan: {exc}"
         if self._error:
