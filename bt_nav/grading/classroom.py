@@ -17,7 +17,7 @@ from __future__ import annotations
 import html
 import json
 import re
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -170,27 +170,78 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
 def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, Sequence[Any]]],
               workers: int, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
               resume: bool = False) -> dict[str, list[dict[str, Any]]]:
-    """Every student's grid, one after the other (each ``workers`` runs at a time), into ``out/<name>``; each grid's
-    report written as ``bt-nav grade --exe`` writes it. Returns the rows that ended, per student.
+    """Every student's grid into ``out/<name>``, all their runs in one pool of ``workers`` (a student with fewer
+    runs than workers leaves no slot idle), each grid's report written as ``bt-nav grade --exe`` writes it as soon
+    as its last run ends. Returns the rows that ended, per student reached.
 
     ``plan(student)`` gives the student's :class:`bt_nav.grading.node_run.ExeSettings` (its command, its
     directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
-    each student's finished runs (a student whose grid is complete runs nothing).
-    A stop request ends the class after the runs under way; the students not reached are left for ``--resume``.
+    each student's finished runs (a student whose grid is complete runs nothing). Runs start student by student
+    in the manifest's order. A stop request ends the class after the runs under way; the runs not started are
+    left for ``--resume``.
     """
-    from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
-    from bt_nav.grading.report import write_exe_report
+    from bt_nav.grading.node_grid import prepare_out
 
-    out: dict[str, list[dict[str, Any]]] = {}
-    for student in students:
-        if stop is not None and stop.requested:
-            break
+    grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]] = {}
+    todo: list[tuple[str, Any, Any]] = []
+    for student in students:  # every directory checked before the first run
         settings, jobs = plan(student)
         done = prepare_out(settings, jobs, resume)
-        rows = run_exe_grid(jobs, settings, workers, stop,
-                            None if on_row is None else (lambda row, name=student.name: on_row(name, row)),
-                            done=done)
-        ended = [row for row in rows if row["outcome"] != STOPPED]
-        write_exe_report(ended, settings)
-        out[student.name] = ended
+        grids[student.name] = (settings, jobs, dict(done))
+        todo += [(student.name, settings, job) for job in jobs if job.key not in done]
+    for name, (settings, jobs, rows) in grids.items():
+        if not any(task[0] == name for task in todo):
+            _write_student_report(settings, jobs, rows)  # nothing to run: its report as it stands
+    _run_pooled(todo, grids, workers, stop, on_row)
+    out: dict[str, list[dict[str, Any]]] = {}
+    for name, (_settings, jobs, rows) in grids.items():
+        ended = _ended(jobs, rows)
+        if ended or not jobs:
+            out[name] = ended
     return out
+
+
+def _ended(jobs: Sequence[Any], rows: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
+    """A student's rows that ended (not stopped), in the jobs' order."""
+    from bt_nav.grading.node_grid import STOPPED
+
+    return [rows[job.key] for job in jobs if job.key in rows and rows[job.key]["outcome"] != STOPPED]
+
+
+def _write_student_report(settings: Any, jobs: Sequence[Any], rows: dict[str, dict[str, Any]]) -> None:
+    from bt_nav.grading.report import write_exe_report
+
+    write_exe_report(_ended(jobs, rows), settings)
+
+
+def _run_pooled(todo: list[tuple[str, Any, Any]], grids: dict[str, tuple[Any, Sequence[Any], dict[str, Any]]],
+                workers: int, stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
+    """Every (student, settings, job) of ``todo`` in one thread pool; a student's report when their last run ends,
+    and for every student with a run left when the class stops."""
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+    from bt_nav.grading.node_grid import run_unless_stopped
+
+    left = Counter(name for name, _, _ in todo)
+    with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="class-run") as pool:
+        futures = {pool.submit(run_unless_stopped, job, settings, stop): name for name, settings, job in todo}
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+            for future in finished:
+                name = futures[future]
+                row = None if future.cancelled() else future.result()
+                settings, jobs, rows = grids[name]
+                if row is not None:
+                    rows[row["job"]] = row
+                    if on_row is not None:
+                        on_row(name, row)
+                left[name] -= 1
+                if left[name] == 0:
+                    _write_student_report(settings, jobs, rows)
+            if stop is not None and stop.requested:
+                for future in pending:
+                    future.cancel()
+    for name, count in left.items():
+        if count > 0:  # stopped with runs of this student not started: the report of what ended
+            _write_student_report(*grids[name])

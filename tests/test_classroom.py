@@ -1,0 +1,83 @@
+"""A class's runs share one pool (bt_nav.grading.classroom.run_class): orchestration only, with the run and the
+report replaced by recorders (the real runs over DDS are tests/ros/test_mutants.py's)."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bt_nav.grading import classroom, node_grid, report
+from bt_nav.grading.classroom import Student, read_manifest, run_class
+
+
+@dataclass(frozen=True)
+class FakeJob:
+    key: str
+
+
+class Recorder:
+    """Stands in for one run: notes how many run at once, returns a row."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.running = 0
+        self.most = 0
+        self.started: list[str] = []
+        self.reports: dict[str, list[str]] = {}
+
+    def run(self, job: FakeJob, settings: Any, stop: Any) -> dict[str, Any]:
+        with self.lock:
+            self.running += 1
+            self.most = max(self.most, self.running)
+            self.started.append(job.key)
+        time.sleep(0.05)
+        with self.lock:
+            self.running -= 1
+        return {"job": job.key, "outcome": "verdict", "passed": job.key.endswith("ok")}
+
+    def report(self, rows: list[dict[str, Any]], settings: Any) -> None:
+        self.reports[settings] = [r["job"] for r in rows]
+
+
+@pytest.fixture
+def recorder(monkeypatch: pytest.MonkeyPatch) -> Recorder:
+    rec = Recorder()
+    monkeypatch.setattr(node_grid, "run_unless_stopped", rec.run)
+    monkeypatch.setattr(node_grid, "prepare_out", lambda settings, jobs, resume: {})
+    monkeypatch.setattr(report, "write_exe_report", rec.report)
+    return rec
+
+
+def test_students_with_one_run_each_still_fill_every_worker(recorder: Recorder) -> None:
+    students = [Student(f"s{i}", "cmd") for i in range(4)]
+    plan = {s.name: (s.name, [FakeJob(f"{s.name}-ok")]) for s in students}
+    out = run_class(students, lambda s: plan[s.name], workers=2)
+    assert recorder.most == 2  # two students' runs at once: one grid at a time would run one
+    assert recorder.started[0] == "s0-ok" and sorted(recorder.started) == [f"s{i}-ok" for i in range(4)]
+    assert {name: [r["job"] for r in rows] for name, rows in out.items()} == {f"s{i}": [f"s{i}-ok"] for i in range(4)}
+    assert recorder.reports == {f"s{i}": [f"s{i}-ok"] for i in range(4)}  # one report per student
+
+
+def test_a_students_rows_keep_their_jobs_order(recorder: Recorder) -> None:
+    jobs = [FakeJob(f"a{i}-{'ok' if i % 2 else 'bad'}") for i in range(5)]
+    out = run_class([Student("a", "cmd")], lambda s: ("a", jobs), workers=3)
+    assert [r["job"] for r in out["a"]] == [j.key for j in jobs]
+    assert [r["passed"] for r in out["a"]] == [False, True, False, True, False]
+
+
+def test_a_manifest_names_its_problem(tmp_path: Path) -> None:
+    path = tmp_path / "class.yaml"
+    path.write_text("alice: python3 a.py\nbob: python3 b.py\n")
+    assert [s.name for s in read_manifest(path)] == ["alice", "bob"]
+    path.write_text("al ice: python3 a.py\n")
+    with pytest.raises(ValueError, match="letters, digits"):
+        read_manifest(path)
+    path.write_text("[]\n")
+    with pytest.raises(ValueError):
+        read_manifest(path)
+    assert classroom.NAME.match("carol_1.x")
