@@ -155,3 +155,13 @@ def test_merged_physics_steps_match_single_steps() -> None:
     gap = np.hypot(merged.trajectory.x - single.trajectory.x, merged.trajectory.y - single.trajectory.y)
     assert gap.max() < 1e-6
     assert merged.branch_ticks == single.branch_ticks
+
+
+@pytest.mark.parametrize("lidar", sorted(__import__("bt_nav_sim.lidar", fromlist=["LIDARS"]).LIDARS))
+def test_every_real_lidar_flies_the_homework_and_the_checkoff(lidar: str, capsys: pytest.CaptureFixture) -> None:
+    """``bt-nav lockstep --sim-param lidar=X`` for each model: the homework passes, and the lab's Smart Pivot is
+    checked off in lab_object, with the executive told where the LiDAR sits (as the runner does)."""
+    assert main(["--world", "stage_4", "--maneuver", "none", "--sim-param", f"lidar={lidar}"]) == 0
+    assert "PASSED" in capsys.readouterr().out
+    lab = run_mission("lab_object", "C", 0, profile="lab", sim_params={"lidar": lidar})
+    assert lab.passed and lab.maneuvers >= 1 and lab.collisions == 0, lab.report_lines

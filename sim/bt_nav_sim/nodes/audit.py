@@ -276,8 +276,9 @@ class GraphAudit:
     @staticmethod
     def _elsewhere(endpoints: dict[str, set[str]], kinds: set[str], verb: str) -> str:
         """`` (it <verb> <type> on <topics>)`` for foreign endpoints of the wanted types on other topics."""
-        topics = sorted(topic for topic, types in endpoints.items() if types & kinds)
-        return f" (it {verb} {'/'.join(sorted(kinds))} on {', '.join(topics)})" if topics else ""
+        seen = [f"{', '.join(sorted(types & kinds))} on {topic}" for topic, types in sorted(endpoints.items())
+                if types & kinds]
+        return f" (it {verb} {'; '.join(seen)})" if seen else ""
 
     def _command_findings(self) -> list[str]:
         stats = self.commands

@@ -356,7 +356,7 @@ class SimulatorNode(Node):
                 commands = [(r.cmd, r.arrival_ns) for r in self.robots]
                 following = self.followers.any_active()
                 synced = self.followers.any_active(exclude=tuple(r.follower for r in self.robots))
-            if not self._keep_pace(self._rate(following, synced)):
+            if not self._keep_pace(self._rate(following, synced), following):
                 break
             self._publish_all(self.sim.advance([self._live(cmd, arrival) for cmd, arrival in commands]))
 
@@ -379,11 +379,15 @@ class SimulatorNode(Node):
                 rate = min(rate, self.solo_rtf) if rate > 0.0 else self.solo_rtf
         return rate
 
-    def _keep_pace(self, rate: float) -> bool:
+    def _keep_pace(self, rate: float, following: bool = True) -> bool:
         """Sleep until the next step is due at ``rate``; False when stopped meanwhile.
 
         The anchor (wall time, sim time) is where the current rate took effect; a new rate re-anchors,
-        and so does a backlog of more than ``_REANCHOR_S`` wall seconds (no burst to catch up).
+        and so does a backlog of more than ``_REANCHOR_S`` wall seconds (no burst to catch up). With nobody
+        followed (a foreign node graded at a fixed factor) any backlog of more than a step is written off: a
+        starved simulator that caught up would run sim time ahead in a burst while the node, as starved, could
+        not answer, and a busy CPU would change the verdict; losing pace instead keeps the node's delays short
+        in sim time.
         """
         core = self.core
         if rate != self._anchor_rate:
@@ -394,7 +398,7 @@ class SimulatorNode(Node):
             if delay > 0.0:
                 if self._stop.wait(delay):
                     return False
-            elif delay < -_REANCHOR_S:
+            elif delay < -_REANCHOR_S or (not following and delay < -core.step_ns * 1e-9 / rate):
                 self._anchor_wall, self._anchor_ns = time.monotonic(), core.t_ns
         return True
 
