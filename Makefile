@@ -11,7 +11,7 @@ STAMP := $(VENV)/.bt_nav-installed
 # (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean browser
+.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean browser docs
 
 all: test
 
@@ -38,6 +38,11 @@ test: $(STAMP) lint browser
 demo: $(STAMP)
 	$(BIN)/bt-nav demo
 
+# The documentation site (Sphinx + MyST; reference pages generated from the code): docs/_build/html/index.html.
+docs: $(STAMP)
+	$(BIN)/python -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
 bench: $(STAMP)
 	$(BIN)/python -m bench.run
 
@@ -45,4 +50,4 @@ faults: $(STAMP)
 	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults
 
 clean:
-	rm -rf build install log runs .pytest_cache
+	rm -rf build install log runs .pytest_cache docs/_build docs/reference

@@ -30,7 +30,7 @@ def test_text_formats_need_no_graphviz(fmt: str) -> None:
 
 @pytest.mark.parametrize("maneuver", ["none", "A", "B", "C"])
 def test_committed_tree_pictures_are_current(maneuver: str) -> None:
-    """docs/tree/*.dot and *.svg are what the dump command makes now (regenerate: see README)."""
+    """docs/tree/*.dot and *.svg are what the dump command makes now (regenerate: see docs/tree.md)."""
     dot = dump_tree.render(maneuver, "dot")
     assert (DOCS / f"mission_{maneuver}.dot").read_text() == dot
     if HAVE_DOT:

@@ -157,7 +157,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="bt-nav dump-tree", description=plain(__doc__),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--maneuver", default="none", help="none, A, B, C (or their names)")
-    parser.add_argument("--format", default="unicode", choices=FORMATS)
+    parser.add_argument("--format", default="unicode", choices=FORMATS,
+                        help="text (ascii, unicode), graphviz (dot, svg, png), the tree file (xml), json, or the "
+                             "Groot2 node model; default unicode")
     parser.add_argument("-o", "--output", help="write to this file instead of stdout")
     args = parser.parse_args(argv)
     try:

@@ -17,7 +17,7 @@ Why PIL and not matplotlib: a 55 s mission at 10 fps is 550 frames and the budge
 so ~35 ms a frame including the encoder. Frames are drawn with PIL on a pre-rendered background; the
 trajectory is drawn incrementally onto a persistent layer, and the tree panel and the console strip
 are re-rendered only when their text changes. The encoder is ``imageio-ffmpeg``'s bundled ffmpeg
-(libx264, no system ffmpeg). Measured numbers are in the README and ``make bench`` (bench/video.py).
+(libx264, no system ffmpeg). Measured numbers are in docs/benchmarks.md and ``make bench`` (bench/video.py).
 
 A bag of several robots (:attr:`MissionRecord.robots`) is filmed by :class:`TracksRenderer`: every robot,
 its scan, its 1.5 m circle and its path in its own colour (the picture's, :func:`bt_nav_sim.plot.robot_colour`),

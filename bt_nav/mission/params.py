@@ -2,8 +2,8 @@
 
 Every consumer reads this table instead of repeating names and defaults: the ROS executive declares
 its parameters (with descriptors and ranges) from it, the lock-step runner builds its configuration
-from it, the launch files and the pip bringup take their defaults from it, and the README's parameter
-table is checked against it. Tree leaves read the values from blackboard keys of the same names,
+from it, the launch files and the pip bringup take their defaults from it, and the docs' parameter
+reference is generated from it. Tree leaves read the values from blackboard keys of the same names,
 which is how a live parameter update reaches the tree on the next tick.
 """
 
@@ -128,7 +128,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
     ParamSpec("trigger_hysteresis", 0.1, "A maneuver fires on the rising edge of its condition; a clearing "
               "re-arms it only once its reading has risen above the trigger distance plus this (see the "
-              "README).", "m", 0.0, 5.0),
+              "tree guide).", "m", 0.0, 5.0),
     ParamSpec("trigger_at_arming", False, "true: a maneuver's condition that already holds when the robot "
               "is armed (or armed again) fires at once. false (default): the trigger waits until it has seen "
               "its condition clear, so a robot armed in a corridor does not spin on the spot (measured: "
@@ -334,7 +334,7 @@ def parse_assignments(items: Iterable[str]) -> dict[str, Any]:
 
 
 def markdown_table() -> str:
-    """The parameter table as README markdown (tests/test_readme.py checks the README holds it)."""
+    """The parameter table as Markdown (the docs' generated parameter reference)."""
     rows = ["| parameter | default | unit | range | live | description |", "|---|---|---|---|---|---|"]
     for spec in PARAMS:
         if spec.choices:

@@ -297,7 +297,9 @@ def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
     """Options of ``bt-nav sim-run``."""
     parser = argparse.ArgumentParser(prog=prog, description="Start the simulator and the executive (and the "
                                      "referee) as subprocesses over DDS on this machine; Ctrl-C stops them all.")
-    parser.add_argument("--profile", choices=PROFILES, default="homework")
+    parser.add_argument("--profile", choices=PROFILES, default="homework",
+                        help="which graph: homework (executive), lab, eval (+ the referee), checkoff (+ the lab's "
+                             "judge); default homework")
     parser.add_argument("--world", help="simulator world: name or YAML path (default stage_4)")
     parser.add_argument("--maneuver", help="evasive maneuver: none, A, B, C (or randomizer, retreat, smart_pivot)")
     parser.add_argument("--seed", type=int, help="one seed for sensor noise, generated worlds and maneuver A")
