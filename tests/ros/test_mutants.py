@@ -146,10 +146,12 @@ def test_homework_indices_hard_coded_fail_on_the_rplidar(tmp_path: Path) -> None
     assert any("fails with TurtleBot4 RPLIDAR" in f for f in result["grades"]["hardcoded"]["findings"])
 
 
-def _failed_checks(row: dict[str, Any]) -> list[str]:
-    """A row's verdict as names (passed, or which checks failed): the figures of a DDS run vary a little."""
+def _failed_checks(row: dict[str, Any]) -> list[Any]:
+    """A row's verdict as kinds of check (passed, or which kinds failed): the figures of a DDS run vary a little,
+    and so may how many turns fit before the disarm ("maneuver 3" and "maneuver 4" are one kind)."""
     checks = (row.get("verdict") or {}).get("checks", [])
-    return [row["outcome"], *sorted(c["name"] for c in checks if not c.get("passed"))]
+    kinds = {re.sub(r" \d+$", "", c["name"]) for c in checks if not c.get("passed")}
+    return [row["outcome"], row["passed"], *sorted(kinds)]
 
 
 @pytest.mark.slow
