@@ -17,7 +17,7 @@ from bt_nav_sim.world import list_worlds
 
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
 from bt_nav.grading.node_grid import declared_choice
-from bt_nav.mission.params import normalise_maneuver, parse_assignments
+from bt_nav.mission.params import LAB_MANEUVERS, MANEUVERS, normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER
 
 #: The LiDARs an ``--exe`` grid varies by default: the LDS-01 (0..2pi, 360 beams), the LDS-02 (a different beam
@@ -51,7 +51,7 @@ def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
     if args.maneuvers:
         return args.maneuvers
     if args.exe is None:
-        return "A,B,C" if lab else "none,A,B,C"
+        return ",".join(LAB_MANEUVERS if lab else MANEUVERS)
     if not lab:
         return "none"  # a foreign homework node has no maneuvers of bt_nav's
     choice = declared_choice(args.exe)

@@ -17,6 +17,11 @@ from typing import Any
 
 Value = bool | int | float | str
 
+#: The lab's evasive maneuvers, and with "none" every value of the ``maneuver`` parameter: the one home of the set
+#: (the worlds' ``checkoff_maneuvers``, the check-off judge, the grids and the benchmarks read it from here).
+LAB_MANEUVERS: tuple[str, ...] = ("A", "B", "C")
+MANEUVERS: tuple[str, ...] = ("none", *LAB_MANEUVERS)
+
 MANEUVER_ALIASES: dict[str, str] = {
     "none": "none",
     "a": "A",
@@ -108,7 +113,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     # --- the mission -------------------------------------------------------------------------------
     ParamSpec("maneuver", "none", "Evasive rotation maneuver: none, A (Randomizer), B (Retreat), "
               "C (Smart Pivot); the names are accepted too.", live=False,
-              choices=("none", "A", "B", "C")),
+              choices=MANEUVERS),
     ParamSpec("mode", "homework", "What the robot does when armed and no maneuver runs: homework (reactive "
               "close / far / none driving at speed) or lab (creep straight ahead at creep_speed, brake before "
               "contact; the lab's maneuvers do the avoiding).", choices=("homework", "lab")),

@@ -64,7 +64,7 @@ from bt_nav.ros.rosutil import (
     LATCHED,
     CommandPublisher,
     ConfigError,
-    EventLog,
+    RclpyEventLog,
     declare_parameters,
     route_py_trees_logging,
     unknown_overrides,
@@ -100,7 +100,7 @@ class Executive:
         for name in unknown_overrides(node):
             self.log.warning(f"ignoring parameter {name!r}: not a bt_nav parameter (typo?)")
         try:
-            self.core = MissionCore(declare_parameters(node), clock=self.now, node=node, events=EventLog(self.log),
+            self.core = MissionCore(declare_parameters(node), clock=self.now, node=node, events=RclpyEventLog(self.log),
                                     tree_path=tree_path)
             trace_path = str(self.core.params["trace_path"])
             self.trace = TraceRecorder(self.core, trace_path) if trace_path else None

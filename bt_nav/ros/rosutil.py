@@ -259,7 +259,7 @@ class CommandPublisher:
 
 
 # ---------------------------------------------------------------------------------------------- logging
-class EventLog:
+class RclpyEventLog:
     """An rclpy logger that may be called with any severity from any line.
 
     rclpy identifies a log call by its call site and raises ValueError ("Logger severity cannot be
@@ -309,7 +309,7 @@ def route_py_trees_logging(logger: Any) -> Callable[[], None]:
     """
     from rclpy.logging import LoggingSeverity
 
-    sink = logger if isinstance(logger, EventLog) else EventLog(logger)
+    sink = logger if isinstance(logger, RclpyEventLog) else RclpyEventLog(logger)
     module = py_trees.logging
     saved = {name: getattr(module.Logger, name) for name in _PY_TREES_METHODS}
     saved_level = module.level

@@ -52,7 +52,7 @@ from bt_nav.mission.trace import TraceRecorder
 from bt_nav.run.checkoff import lab_judge
 from bt_nav.run.result import MissionResult, RunResult
 from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, profile_maneuver, tree_settings
-from bt_nav.run.sinks import EventLog, MissionSink, RunSink
+from bt_nav.run.sinks import MissionSink, RunSink, SimEventLog
 
 REFEREE_HZ = 2.0
 HARD_STOP = 60.0  # s after t0: the run ends even if the referees have not reported (a referee may say
@@ -125,7 +125,7 @@ class Robot:
         self._on_command = getattr(referee, "on_command", None)
         self._on_walkers = getattr(referee, "on_walkers", None)
         self.sink = sink
-        self.events = EventLog(clock, sink)
+        self.events = SimEventLog(clock, sink)
         client = LocalTriggerClient(default=self._evaluate, clock=clock)
         self.core = MissionCore(settings, clock=clock, evaluation_client=client, events=self.events)
         self.samples = _Samples()

@@ -33,9 +33,10 @@ class RunSink(MissionSink, Protocol):
     def robot(self, name: str) -> MissionSink: ...  # noqa: D102
 
 
-class EventLog:
-    """The leaves' one-line messages of one robot, kept with their sim time (not printed), and passed on to
-    the robot's sink as ``[LEVEL] message``."""
+class SimEventLog:
+    """The leaves' one-line messages of one robot in a lock-step run, kept with their sim time (not printed), and
+    passed on to the robot's sink as ``[LEVEL] message``; over ROS the same :class:`EventLogger` is
+    :class:`bt_nav.ros.rosutil.RclpyEventLog`."""
 
     def __init__(self, clock: object | None = None, sink: MissionSink | None = None) -> None:
         self.lines: list[tuple[float, str, str]] = []

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.referee_core import Activate, Verdict, static_check
 from bt_nav_sim.world import World
@@ -54,9 +55,6 @@ from bt_nav_sim.world import World
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
 #: stopped by the disarm, as it must be: its angle is not judged.
 INTERRUPT_SLACK = 0.15
-
-#: The lab's maneuvers (what ``CheckoffConfig.maneuver`` may be).
-MANEUVERS = ("A", "B", "C")
 
 
 @dataclass(frozen=True)

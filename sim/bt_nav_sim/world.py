@@ -79,13 +79,12 @@ from typing import Any
 import numpy as np
 import yaml
 
+from bt_nav.mission.params import LAB_MANEUVERS  # the lab maneuvers a world may list in checkoff_maneuvers
 from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, walker_from_dict
 
 WORLDS_DIR = Path(__file__).parent / "worlds"
 #: Name prefix of the lab's check-off arenas among the bundled worlds.
 LAB_PREFIX = "lab_"
-#: The lab maneuvers a world may list in ``checkoff_maneuvers``.
-LAB_MANEUVERS = ("A", "B", "C")
 #: How much ``appear_within`` must exceed an appearing object's bounding radius (m), see the docstring.
 MIN_APPEAR_MARGIN = 0.2
 #: The robot a walker's path must keep clear of at the spawn (TurtleBot3 Burger's disk, m).

@@ -20,7 +20,7 @@ from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.executive import Executive
 from bt_nav.ros.rosutil import (
     ConfigError,
-    EventLog,
+    RclpyEventLog,
     claim_domain_id,
     domain_id_for,
     parameter_descriptor,
@@ -120,8 +120,8 @@ def test_event_log_allows_two_severities_from_one_call_site() -> None:
     raw = rclpy.logging.get_logger("bt_nav_test_events")
     _log_either(raw, True)
     with pytest.raises(ValueError, match="severity cannot be changed"):
-        _log_either(raw, False)  # why EventLog exists: a leaf doing this would raise inside the tick
-    events = EventLog(rclpy.logging.get_logger("bt_nav_test_events2"))
+        _log_either(raw, False)  # why RclpyEventLog exists: a leaf doing this would raise inside the tick
+    events = RclpyEventLog(rclpy.logging.get_logger("bt_nav_test_events2"))
     _log_either(events, True)
     _log_either(events, False)
 
