@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
 
 DT = 0.01  # physics step of the synthetic driver

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig, SimCore
 from bt_nav_sim.lidar import LDS01, RayCaster
 from bt_nav_sim.multi import MultiSimCore

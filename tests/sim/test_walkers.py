@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig
 from bt_nav_sim.multi import MultiSimCore
 from bt_nav_sim.walkers import GIVE_WAY, Walkers, WalkerSpec

@@ -347,7 +347,7 @@ def test_lab_arena_is_documented_closed_and_clear(name: str) -> None:
 def _creep(name: str) -> dict[str, float]:
     """Creep straight ahead from the spawn at 0.05 m/s (noise-free) and note, per maneuver, the distance
     crept when its trigger first holds on noise-free ground truth (the judge's readings)."""
-    from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
     from bt_nav_sim.core import SimConfig, SimCore
 
     core = SimCore(SimConfig(world=name, noise=False, profile="lab"))

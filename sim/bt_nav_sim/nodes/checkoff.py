@@ -1,4 +1,4 @@
-"""``bt_nav_checkoff``: the lab's check-off judge (:mod:`bt_nav_sim.checkoff`) over real DDS, in sim time.
+"""``bt_nav_checkoff``: the lab's check-off judge (:mod:`bt_nav_sim.checkoff_core`) over real DDS, in sim time.
 
 Run: ``bt-nav checkoff --maneuver C --world lab_object [--json PATH] [--timeout S] [--ros-args ...]`` or
 ``ros2 run bt_nav checkoff``; ``bt-nav demo --profile lab`` and ``launch/lab_checkoff.launch.py`` start it
@@ -16,7 +16,7 @@ judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), write
 
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
 7.30 s)``) is :class:`bt_nav_sim.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
-Every :class:`bt_nav_sim.checkoff.CheckoffConfig` field is a parameter of the same name (``armed_for``,
+Every :class:`bt_nav_sim.checkoff_core.CheckoffConfig` field is a parameter of the same name (``armed_for``,
 ``safety_distance``, ``pivot_distance``, ...): the trigger distances must be the robot's.
 """
 
@@ -29,7 +29,7 @@ from typing import Any
 
 from bt_nav.mission.params import normalise_maneuver
 from bt_nav.ros.runner import param_args, run_node
-from bt_nav_sim.checkoff import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.nodes.judging import DRIVER_PARAMETERS, JudgeNode
 from bt_nav_sim.world import load_world
 

@@ -1,7 +1,7 @@
 """The lab's check-off in a run: which judge a lab run gets, and how far each maneuver landed from its angle.
 
 Why here: a lock-step run of the ``lab`` profile is judged by the lab's check-off judge
-(:class:`bt_nav_sim.checkoff.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
+(:class:`bt_nav_sim.checkoff_core.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
 maneuver, the angle the executive chose (it announces it: ``Randomizer: front 0.49 m: turning right 143 deg``)
 against the angle the robot really turned (the judge measures it on ground truth, at rest). Both lock-step
 and grading use these, so they live once, in the run layer.
@@ -13,7 +13,7 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from bt_nav_sim.checkoff import MANEUVERS, CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import World
 
 #: A maneuver's announcement in the executive's log (:meth:`RotationManeuver.initialise`).
