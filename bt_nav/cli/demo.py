@@ -70,8 +70,8 @@ def effective_maneuver(requested: str | None) -> str:
 
 def _bag_topics(names: list[str]) -> list[str]:
     """What ``--bag`` records: the mission bag's topics, each robot's under its namespace when several."""
-    from bt_nav.cli.record import DEFAULT_TOPICS
     from bt_nav.media.bag import ROBOT_TOPICS
+    from bt_nav.run.bagrecorder import DEFAULT_TOPICS
 
     if len(names) == 1:
         return list(DEFAULT_TOPICS)
@@ -113,9 +113,9 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav demo``; returns 0 (every robot PASSED), 1 (one FAILED) or 2 (no verdict)."""
     from bt_nav.cli.options import bag_for, film
-    from bt_nav.cli.record import start_process, stop_process
     from bt_nav.ros.bringup import cmd_vel_stamped
     from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
+    from bt_nav.run.bagrecorder import start_process, stop_process
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
     if opts.exe:

@@ -75,9 +75,9 @@ def launch_line(run: dict[str, Any]) -> str:
 def run_lab(opts: argparse.Namespace) -> int:
     """The lab demo; 0 PASSED, 1 FAILED, 2 no verdict (or a bad option)."""
     from bt_nav.cli.options import bag_for
-    from bt_nav.cli.record import start_process, stop_process
     from bt_nav.ros.bringup import cmd_vel_stamped
     from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
+    from bt_nav.run.bagrecorder import start_process, stop_process
     from bt_nav.run.labterm import EventPublisher, LabTerminal
     from bt_nav.run.rosmission import GRACE, RosMission
     from bt_nav.run.rundir import LOG_FORMAT, Logs
@@ -131,8 +131,8 @@ def run_lab(opts: argparse.Namespace) -> int:
 
 def _bag_topics() -> list[str]:
     """The mission bag's topics, with the terminal's lines (/bt_nav/events) instead of /rosout's."""
-    from bt_nav.cli.record import DEFAULT_TOPICS
     from bt_nav.media.bag import EVENTS
+    from bt_nav.run.bagrecorder import DEFAULT_TOPICS
 
     return [t for t in DEFAULT_TOPICS if t != "/rosout"] + [EVENTS]
 

@@ -21,79 +21,9 @@ import signal
 import sys
 import threading
 import time
-from typing import Any
 
-from bt_nav.media.bag import EVENTS, MISSION, TOPICS, BagError, MissionBag
-
-#: What is recorded by default: the mission bag's topics, with /rosout turned into /bt_nav/events.
-DEFAULT_TOPICS = [t for t in TOPICS if t not in (EVENTS, MISSION)] + ["/rosout"]
-SIM_NODE = "/bt_nav_sim"
-
-
-def ask_simulator(node: Any, timeout: float = 3.0) -> dict[str, Any]:
-    """The simulator's world, seed and profile from its parameters ({} when no simulator answers)."""
-    from rclpy.parameter_client import AsyncParameterClient
-
-    client = AsyncParameterClient(node, SIM_NODE)
-    if not client.wait_for_services(timeout_sec=timeout):
-        return {}
-    future = client.get_parameters(["world", "seed", "profile"])
-    deadline = time.monotonic() + timeout
-    while not future.done() and time.monotonic() < deadline:
-        time.sleep(0.02)
-    if not future.done() or future.result() is None:
-        return {}
-    values = [v.string_value if v.type == 4 else v.integer_value for v in future.result().values]
-    return dict(zip(("world", "seed", "profile"), values, strict=False))
-
-
-class BagRecorder:
-    """The recording: a GraphTap feeding a MissionBag, on a private node spinning in a thread."""
-
-    def __init__(self, path: str, topics: list[str], mission: dict[str, Any], sim_time: bool = True,
-                 events: bool = False) -> None:
-        from bt_nav.ros.graphtap import GraphTap
-        from bt_nav.ros.rosutil import ThreadedNode
-
-        self.bag = MissionBag(path, flush_every=1.0)
-        self.lock = threading.Lock()
-        self.ros = ThreadedNode("bt_nav_recorder", events=events)
-        try:
-            self.tap = GraphTap(self.ros.node, topics, self._write, sim_time=sim_time, message_info=not events)
-        except BaseException:
-            self.ros.close()
-            self.bag.close()
-            raise
-        self.ros.node.create_timer(1.0, self._flush)
-        self.mission = mission
-
-    def start(self, ask_sim: bool) -> None:
-        """Start spinning, then write what the simulator says of the run on /bt_nav/mission."""
-        self.ros.start()
-        info = {**(ask_simulator(self.ros.node) if ask_sim else {}), **self.mission, "source": "dds"}
-        with self.lock:
-            self.bag.mission(self.tap.now_ns() * 1e-9, info)
-
-    def _write(self, topic: str, msgtype: str, t_ns: int, data: bytes, qos: Any) -> None:
-        first = False
-        with self.lock:
-            if not self.bag.closed:
-                first = topic not in self.bag.counts
-                self.bag.write_raw(topic, t_ns, data, msgtype, qos)
-        if first:  # a launcher waits for the line of the topic it needs (bt_nav.grading.node_bag)
-            print(f"first {topic} at sim {t_ns * 1e-9:.2f} s", flush=True)
-
-    def _flush(self) -> None:
-        with self.lock:
-            if not self.bag.closed:
-                self.bag.flush()
-
-    def close(self) -> dict[str, int]:
-        """Stop the node, close the bag; returns the message counts."""
-        self.ros.close()
-        with self.lock:
-            self.bag.close()
-        return dict(self.bag.counts)
+from bt_nav.media.bag import BagError
+from bt_nav.run.bagrecorder import DEFAULT_TOPICS, BagRecorder
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -132,27 +62,3 @@ def main(argv: list[str] | None = None) -> int:
         counts = recorder.close()
     print(f"bag {args.bag}: " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items())), flush=True)
     return 0
-
-
-def start_process(bag: str, env: dict[str, str] | None = None, *extra: str) -> Any:
-    """``bt-nav record BAG`` as a process of its own (for ``bt-nav demo --bag``): recording never runs in
-    the executive's process, nor in the demo's. Stop it with :func:`stop_process`."""
-    import subprocess
-
-    return subprocess.Popen([sys.executable, "-m", "bt_nav.cli", "record", str(bag), *extra], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-
-
-def stop_process(proc: Any, timeout: float = 10.0) -> str:
-    """SIGINT (the bag is closed properly), SIGKILL after ``timeout``; returns a one-line outcome."""
-    import subprocess
-
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=5.0)
-    err = (proc.stderr.read() if proc.stderr else "").strip()
-    return "bag closed" if proc.returncode == 0 else f"recorder exited with {proc.returncode}: {err[-300:]}"

@@ -62,10 +62,10 @@ def _world(name: str | None, seed: int) -> Any:
 
 def _live(args: argparse.Namespace, feeds: list[Any]) -> tuple[Any, Any]:
     """A LiveScene fed from the graph (and the Foxglove bridge); returns (scene, node to close)."""
-    from bt_nav.cli.record import DEFAULT_TOPICS, ask_simulator
     from bt_nav.media.view import LiveScene
     from bt_nav.ros.graphtap import GraphTap
     from bt_nav.ros.rosutil import ThreadedNode
+    from bt_nav.run.bagrecorder import DEFAULT_TOPICS, ask_simulator
 
     ros = ThreadedNode("bt_nav_viewer")
     scene = LiveScene()

@@ -1,6 +1,6 @@
 """A bag recorded over DDS at high speed by a recorder that falls behind still shows a turn turning.
 
-The recorder (``bt-nav record``'s :class:`bt_nav.cli.record.BagRecorder`, in this process) is slowed down by a
+The recorder (``bt-nav record``'s :class:`bt_nav.run.bagrecorder.BagRecorder`, in this process) is slowed down by a
 few milliseconds per message, as a loaded two-core machine slows it: its queue backs up by seconds of sim time
 at 20x. A small controller node spins the robot and writes into each command (``linear.y``, which the simulator
 ignores) the sim time of the ground truth it answered. The checks: every ground truth and scan is in the bag at its
@@ -85,7 +85,7 @@ def _raw_truth(bag: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def test_slow_recorder_keeps_source_stamps_and_the_video_turns(ros_context: Any, tmp_path: Path) -> None:
-    from bt_nav.cli.record import BagRecorder
+    from bt_nav.run.bagrecorder import BagRecorder
 
     bag = tmp_path / "bag"
     recorder = BagRecorder(str(bag), [TRUTH, SCAN, CMD], {"world": "stage_4", "seed": 0})

@@ -1,4 +1,4 @@
-"""``bt-nav replay BAG``: a recorded bag (rosbag2 directory or ``.mcap``) printed in time order.
+"""A recorded bag (rosbag2 directory or ``.mcap``) printed in time order: what ``bt-nav replay BAG`` shows.
 
 A bag keeps the executive's ``~/tree`` snapshots (as published: when a status or the tip changed), the
 commands and the mission's log lines; replay prints each snapshot with its sim time, the command in
