@@ -9,7 +9,7 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from bt_nav.cli.dump_tree import nodes_model
+from bt_nav.media.treedot import nodes_model
 from bt_nav.mission.behaviours import LEAF_CLASSES, REGISTRY
 from bt_nav.mission.resources import tree_file
 from bt_nav.mission.tree import load_tree

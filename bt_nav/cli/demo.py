@@ -223,7 +223,7 @@ def _pictures(run: dict[str, Any], opts: argparse.Namespace, runs: list[tuple[st
     except Exception as exc:  # a missing matplotlib must not hide the verdict
         print(f"bt-nav demo: no trajectory picture: {exc}", file=sys.stderr)
     try:
-        from bt_nav.cli.dump_tree import render
+        from bt_nav.media.treedot import render
 
         dot = render(run["maneuver"], "dot")
         (run["run_dir"] / "tree.dot").write_text(dot if isinstance(dot, str) else dot.decode(), encoding="utf-8")

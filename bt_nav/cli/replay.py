@@ -15,8 +15,8 @@ from typing import Any
 import py_trees
 
 from bt_nav.cli import plain
-from bt_nav.cli.dump_tree import GraphvizMissingError, graphviz, tree_to_dot
 from bt_nav.media.bagreplay import is_bag, replay_bag
+from bt_nav.media.treedot import GraphvizMissingError, graphviz, tree_to_dot
 from bt_nav.mission.core import strip_ansi
 from bt_nav.mission.trace import read_trace
 from bt_nav.mission.tree import load_tree
