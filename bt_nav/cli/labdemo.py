@@ -3,7 +3,7 @@
 It starts the ``checkoff`` graph of :mod:`bt_nav.ros.bringup` (what ``launch/lab_checkoff.launch.py`` starts):
 the simulator with the lab's LDS-01 LiDAR in a lab arena (default: the one for the maneuver, ``lab_object``
 for A and C, ``lab_dead_end`` for B), the executive with ``config/lab.yaml`` (and any ``--set``) armed through
-``toggle_navigation``, and the check-off judge (:mod:`bt_nav_sim.nodes.checkoff`), which calls
+``toggle_navigation``, and the check-off judge (:mod:`bt_nav.ros.nodes.checkoff`), which calls
 ``toggle_navigation`` and judges every maneuver from ground truth and the commands. The terminal shows the
 launch, the service calls and replies, the maneuver and emergency-brake lines, stamped with sim time
 (:class:`bt_nav.run.labterm.LabTerminal`), then the verdict and ``maneuvers fired: N`` (the judge's count).

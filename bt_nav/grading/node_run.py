@@ -16,7 +16,7 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   silent until armed), without ``sync`` (the simulator follows nobody), with ``robot_clock_wait`` (t0 once the
   node's /clock subscription has settled), with ``start_wait`` (a node that never offers its arm service gets a
   failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
-  (:mod:`bt_nav_sim.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
+  (:mod:`bt_nav.ros.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
   flood ...);
 - unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first (the simulator once it
   listens) and stopped first when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and

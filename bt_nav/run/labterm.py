@@ -39,7 +39,7 @@ from bt_nav.run.rundir import Logs, split_stamp
 SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
 #: An rcutils line in the run's format (:data:`bt_nav.run.rundir.LOG_FORMAT`).
 LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
-#: The judge's call and reply lines (:class:`bt_nav_sim.nodes.judging.JudgeNode`).
+#: The judge's call and reply lines (:class:`bt_nav.ros.nodes.judging.JudgeNode`).
 CALL_LINE = re.compile(r"^sim (?P<t>-?[\d.]+) s(?: \(t0 \+ [-\d.]+ s\))?: (?P<call>\w+)\((?P<data>true|false)\) "
                        r"(?:sent|-> (?P<ok>success|failure): (?P<message>.*))$")
 

@@ -1,7 +1,8 @@
 """Pure-numpy 2D TurtleBot3 simulator core: worlds, kinematics and LiDAR, with no ROS dependency.
 
-Kept free of rclpy so the executive's behaviours can be tested and benchmarked headless and fast; a ROS
-node wraps these functions to publish /scan and /odom and consume /cmd_vel.
+Kept free of rclpy so the executive's behaviours can be tested and benchmarked headless and fast; the ROS nodes
+that wrap it (the simulator publishing /scan and /odom and consuming /cmd_vel, the two judges) live in
+:mod:`bt_nav.ros.nodes`.
 """
 
 from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays

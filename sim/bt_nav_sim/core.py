@@ -1,7 +1,7 @@
 """The one simulation core: sim time, physics, sensor schedules, odometry and noise, with no ROS.
 
 Every driver of the simulator steps this class, so they cannot drift apart: the ROS simulator node
-(:mod:`bt_nav_sim.nodes.simulator`) publishes what :meth:`SimCore.advance` says is due, and the lock-step
+(:mod:`bt_nav.ros.nodes.simulator`) publishes what :meth:`SimCore.advance` says is due, and the lock-step
 runner (:mod:`bt_nav.run.lockstep`) hands the same scans and odometry to the mission tree in-process. The
 same world, profile, kinematics and seed therefore give the same trajectory on both paths (the only
 difference is when a command reaches the physics, which the ROS path leaves to DDS).

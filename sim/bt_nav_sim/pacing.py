@@ -1,6 +1,6 @@
 """Pacing bookkeeping of the simulator node: which followers sim time must wait for (pure: no ROS, no threads).
 
-The simulator node (:mod:`bt_nav_sim.nodes.simulator`, whose docstring explains following and pacing) keeps
+The simulator node (:mod:`bt_nav.ros.nodes.simulator`, whose docstring explains following and pacing) keeps
 one :class:`Followers` under its lock; keeping the bookkeeping here lets it be tested without rclpy.
 """
 

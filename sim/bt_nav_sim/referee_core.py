@@ -4,7 +4,7 @@ The course's evaluation script is a ROS node that calls the robot's activate ser
 serves ``evaluate_mission`` and checks ground truth. Keeping its logic here, free of ROS, lets one
 implementation serve two drivers that must not disagree:
 
-- the ROS referee node (:mod:`bt_nav_sim.nodes.referee`) drives it with sim time, real service calls and
+- the ROS referee node (:mod:`bt_nav.ros.nodes.referee`) drives it with sim time, real service calls and
   ground-truth odometry;
 - the lock-step runner (:mod:`bt_nav.run.lockstep`) drives it in-process with the simulator's state.
 

@@ -17,7 +17,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("simulator", ("bt_nav_sim",)),
     ("media", ("bt_nav.media",)),
     ("ros", ("bt_nav.ros",)),
-    ("simulator nodes", ("bt_nav_sim.nodes",)),
+    ("simulator nodes", ("bt_nav.ros.nodes",)),
     ("testing", ("bt_nav.testing",)),
     ("run", ("bt_nav.run",)),
     ("grading", ("bt_nav.grading",)),
@@ -138,4 +138,58 @@ def test_the_checker_sees_a_cycle_and_an_upward_import() -> None:
     """The checks can fail: a made-up cycle is found, and a made-up upward import is."""
     assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert layer_of("bt_nav.cli.demo") > layer_of("bt_nav.run.lockstep") > layer_of("bt_nav.mission.core")
-    assert layer_of("bt_nav_sim.nodes.simulator") > layer_of("bt_nav.ros.runner") > layer_of("bt_nav_sim.core")
+    assert layer_of("bt_nav.ros.nodes.simulator") > layer_of("bt_nav.ros.runner") > layer_of("bt_nav_sim.core")
+
+
+#: The folders the layers live in, each a top-level folder of a package (a sub-folder belongs to its parent's):
+#: a folder may import its own and the ones below it, so a reader finds the layers in the tree as well.
+FOLDERS: list[tuple[str, str]] = [
+    ("bt_nav/mission", "bt_nav.mission"),
+    ("sim/bt_nav_sim", "bt_nav_sim"),
+    ("bt_nav/media", "bt_nav.media"),
+    ("bt_nav/ros", "bt_nav.ros"),
+    ("bt_nav (testing)", "bt_nav.testing"),
+    ("bt_nav/run", "bt_nav.run"),
+    ("bt_nav/grading", "bt_nav.grading"),
+    ("bt_nav/cli", "bt_nav.cli"),
+    ("bench", "bench"),
+]
+
+
+def folder_of(name: str) -> int:
+    """Index of the module's folder in :data:`FOLDERS` (the longest matching package wins); -1 for none."""
+    best, best_len = -1, -1
+    for index, (_, package) in enumerate(FOLDERS):
+        if (name == package or name.startswith(package + ".")) and len(package) > best_len:
+            best, best_len = index, len(package)
+    return best
+
+
+def folder_graph() -> dict[str, set[str]]:
+    """Folder -> the other folders its modules import."""
+    edges: dict[str, set[str]] = {}
+    for name, deps in graph().items():
+        here = folder_of(name)
+        if here < 0:
+            continue
+        targets = {FOLDERS[folder_of(dep)][0] for dep in deps if folder_of(dep) >= 0 and folder_of(dep) != here}
+        edges.setdefault(FOLDERS[here][0], set()).update(targets)
+    return edges
+
+
+def test_every_module_lives_in_a_layer_folder() -> None:
+    unplaced = [name for name in graph() if folder_of(name) < 0 and name != "bt_nav"]
+    assert not unplaced, f"modules in no folder of FOLDERS: {unplaced}"
+
+
+def test_folders_follow_the_layers() -> None:
+    """No loop between folders (the simulator's nodes once sat in sim/ and imported bt_nav/ros, which imports sim/),
+    and no folder importing one above it."""
+    edges = folder_graph()
+    cycle = find_cycle(edges)
+    assert cycle is None, "folder loop: " + " -> ".join(cycle or [])
+    order = [folder for folder, _ in FOLDERS]
+    upward = [f"{a} imports {b}" for a, targets in sorted(edges.items()) for b in sorted(targets)
+              if order.index(b) > order.index(a)]
+    assert not upward, "folders importing upwards:\n" + "\n".join(upward)
+    assert find_cycle({"sim": {"ros"}, "ros": {"sim"}}) == ["ros", "sim", "ros"]  # the check can fail

@@ -40,7 +40,8 @@ def test_colcon_build_and_run_the_installed_executive(tmp_path: Path, start_exec
     for path in (executable, share / "package.xml", share / "trees" / "mission.xml", share / "config" / "lab.yaml",
                  prefix / "share" / "ament_index" / "resource_index" / "packages" / "bt_nav",
                  sim_package / "__init__.py", sim_package / "worlds" / "stage_4.yaml",
-                 sim_package / "nodes" / "simulator.py", site_packages / "bt_nav" / "ros" / "executive.py"):
+                 site_packages / "bt_nav" / "ros" / "nodes" / "simulator.py",
+                 site_packages / "bt_nav" / "ros" / "executive.py"):
         assert path.exists(), f"not installed: {path.relative_to(tmp_path)}"
     assert os.access(executable, os.X_OK)
     assert executable.read_text().startswith(f"#!{sys.executable}")  # the venv's python runs it

@@ -86,7 +86,7 @@ def test_a_second_simulator_in_the_domain_means_no_verdict() -> None:
     stops judging (no distance summed over two robots is ever reported)."""
     from types import SimpleNamespace
 
-    from bt_nav_sim.nodes.referee import RefereeNode
+    from bt_nav.ros.nodes.referee import RefereeNode
 
     info = SimpleNamespace(node_namespace="/", node_name="bt_nav_sim")
     referee = SimpleNamespace(foreign=None, _truth_seq=None, get_publishers_info_by_topic=lambda topic: [info, info])

@@ -11,7 +11,6 @@ from typing import Any
 
 import pytest
 import rclpy
-from bt_nav_sim.nodes.audit import FLOOD_RATE, GraphAudit, is_ours
 from geometry_msgs.msg import Twist, TwistStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
@@ -20,6 +19,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from simtools import wait_until
 from std_srvs.srv import SetBool
+
+from bt_nav.ros.nodes.audit import FLOOD_RATE, GraphAudit, is_ours
 
 BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
 

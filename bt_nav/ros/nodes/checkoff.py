@@ -15,7 +15,7 @@ judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), write
 (``json``) and exits 0 when the check-off passed, 1 when it failed, 2 without a verdict.
 
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
-7.30 s)``) is :class:`bt_nav_sim.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
+7.30 s)``) is :class:`bt_nav.ros.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
 Every :class:`bt_nav_sim.checkoff_core.CheckoffConfig` field is a parameter of the same name (``armed_for``,
 ``safety_distance``, ``pivot_distance``, ...): the trigger distances must be the robot's.
 """
@@ -27,11 +27,12 @@ import time
 from dataclasses import fields
 from typing import Any
 
-from bt_nav.mission.params import normalise_maneuver
-from bt_nav.ros.runner import param_args, run_node
 from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-from bt_nav_sim.nodes.judging import DRIVER_PARAMETERS, JudgeNode
 from bt_nav_sim.world import load_world
+
+from bt_nav.mission.params import normalise_maneuver
+from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode
+from bt_nav.ros.runner import param_args, run_node
 
 NODE_NAME = "bt_nav_checkoff"
 

@@ -1,7 +1,7 @@
 """What every judge node shares: the referee's driver protocol over real DDS, in sim time.
 
-The homework's referee (:mod:`bt_nav_sim.nodes.referee`) and the lab's check-off judge
-(:mod:`bt_nav_sim.nodes.checkoff`) drive pure judges with one protocol (``start``, ``step`` -> activate
+The homework's referee (:mod:`bt_nav.ros.nodes.referee`) and the lab's check-off judge
+(:mod:`bt_nav.ros.nodes.checkoff`) drive pure judges with one protocol (``start``, ``step`` -> activate
 calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``report_lines``, ``done``,
 ``passed``). Everything between that protocol and the wire lives here, once:
 
@@ -23,7 +23,7 @@ calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``rep
    one failed, 2 on timeout or when stopped first.
 
 What the robot node did wrong that no check can see (``audit``, on by default): a
-:class:`bt_nav_sim.nodes.audit.GraphAudit` samples the ROS graph about once per wall second and reads
+:class:`bt_nav.ros.nodes.audit.GraphAudit` samples the ROS graph about once per wall second and reads
 ``cmd_vel`` (no subscription to ``scan`` or ``/clock``, no publisher on ``cmd_vel``, the arm service never
 offered, a message type or QoS that cannot match ours, NaN/inf commands, a command flood). Its findings are
 logged as ``finding: ...`` warnings (stderr, not the report on stdout) and listed under ``findings`` in the
@@ -35,7 +35,7 @@ out its ``timeout``: it prints ``NOT JUDGED: <what> never appeared within <s> s 
 ``not_started`` in the JSON (``passed`` false) and exits 1, a failed verdict in seconds instead of a timeout.
 
 Sim-time faithfulness (``sync``): the node tells the simulator where its clock is on ``sim_sync`` and holds
-sim time while a call is in flight (see :mod:`bt_nav_sim.nodes.simulator`), so a busy CPU never makes the
+sim time while a call is in flight (see :mod:`bt_nav.ros.nodes.simulator`), so a busy CPU never makes the
 judge late. Without ``sync`` (``bt-nav grade --exe``: the simulator waits for nobody) a busy judge may fall
 behind the ground truth queued for it; its report is then judged again once the poses stamped before it are
 in (``catch_up``), never on missing poses. A wall-clock ``timeout`` bounds the whole run (``TIMEOUT`` line,
@@ -58,6 +58,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.walkers import read_walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.duration import Duration
@@ -67,9 +68,8 @@ from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.ros.nodes.audit import GraphAudit, is_ours
 from bt_nav.ros.rosutil import declare_node_parameters
-from bt_nav_sim.nodes.audit import GraphAudit, is_ours
-from bt_nav_sim.walkers import read_walkers_message
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.

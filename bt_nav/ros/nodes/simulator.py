@@ -77,6 +77,12 @@ from typing import Any
 
 import numpy as np
 import rclpy
+from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
+from bt_nav_sim.lidar import LIDARS
+from bt_nav_sim.multi import MultiSimCore, parse_starts
+from bt_nav_sim.pacing import Followers
+from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
+from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
@@ -87,12 +93,6 @@ from std_msgs.msg import String
 
 from bt_nav.ros.rosutil import declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
-from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
-from bt_nav_sim.lidar import LIDARS
-from bt_nav_sim.multi import MultiSimCore, parse_starts
-from bt_nav_sim.pacing import Followers
-from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
-from bt_nav_sim.walkers import walkers_message
 
 NODE_NAME = "bt_nav_sim"
 

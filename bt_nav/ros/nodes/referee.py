@@ -4,7 +4,7 @@ Run: ``bt-nav referee [--json PATH] [--timeout S] [--time-scale X] [--ros-args .
 ``ros2 run bt_nav referee``.
 
 The driver (t0, the sim-time step timer, activate calls with retries, ground truth, collisions, sim_sync,
-the report, the JSON, exit codes, time base of the log lines) is :class:`bt_nav_sim.nodes.judging.JudgeNode`,
+the report, the JSON, exit codes, time base of the log lines) is :class:`bt_nav.ros.nodes.judging.JudgeNode`,
 shared with the lab's check-off judge; this module adds the homework's schedule and rules
 (:class:`Referee`, parameters from :class:`RefereeConfig`) and the Trigger server
 ``/reactive_control/evaluate_mission``, answered by :meth:`Referee.on_evaluate`. ``use_sim_time`` is true
@@ -28,11 +28,11 @@ import time
 from dataclasses import fields
 from typing import Any
 
+from bt_nav_sim.referee_core import Referee, RefereeConfig, scaled
 from std_srvs.srv import Trigger
 
+from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode
 from bt_nav.ros.runner import param_args, run_node
-from bt_nav_sim.nodes.judging import DRIVER_PARAMETERS, JudgeNode
-from bt_nav_sim.referee_core import Referee, RefereeConfig, scaled
 
 NODE_NAME = "bt_nav_referee"
 
