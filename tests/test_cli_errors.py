@@ -95,5 +95,5 @@ def test_help_is_plain_text(command: str) -> None:
 
 
 def test_plain_reduces_rst_markup() -> None:
-    assert plain("``bt-nav demo`` uses :func:`bt_nav_sim.plot.plot_run` and :mod:`~x.y`") == \
-        "bt-nav demo uses bt_nav_sim.plot.plot_run and x.y"
+    assert plain("``bt-nav demo`` uses :func:`bt_nav.media.plot.plot_run` and :mod:`~x.y`") == \
+        "bt-nav demo uses bt_nav.media.plot.plot_run and x.y"

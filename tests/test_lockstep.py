@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 import pytest
-from bt_nav_sim.plot import BRANCHES, Trajectory, plot_run
 
 from bt_nav.cli.lockstep import main
+from bt_nav.media.plot import BRANCHES, Trajectory, plot_run
 from bt_nav.mission.trace import read_trace
 from bt_nav.run.lockstep import run_mission, run_robots
 from bt_nav.run.result import MissionResult

@@ -210,7 +210,8 @@ def _pictures(run: dict[str, Any], opts: argparse.Namespace, runs: list[tuple[st
               ) -> list[Path]:
     """trajectory.png (every robot's path) and the tree files; notes on stderr when they cannot be made."""
     from bt_nav_sim import load_world
-    from bt_nav_sim.plot import plot_robots, plot_run
+
+    from bt_nav.media.plot import plot_robots, plot_run
 
     written: list[Path] = []
     out = run["run_dir"] / "trajectory.png"

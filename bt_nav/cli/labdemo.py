@@ -164,7 +164,8 @@ def _finish(run: dict[str, Any], opts: argparse.Namespace, rec: Any, verdict: di
     written = [run_dir / "run.json", *[p for p in (Path(run["results"]), run_dir / "trajectory.json") if p.is_file()]]
     try:
         from bt_nav_sim import load_world
-        from bt_nav_sim.plot import plot_run, start_circle
+
+        from bt_nav.media.plot import plot_run, start_circle
 
         world = load_world(run["world"], seed=None if opts.seed < 0 else opts.seed)
         title = f"{world.name}, lab check-off of maneuver {run['maneuver']}, seed {opts.seed} (ROS, sim time)"

@@ -3,7 +3,7 @@
 The frame shows the world, robot, scan, trajectory, the 1.5 m circle, the active branch, sim time and
 distance, the tree coloured by status and the mission's log lines (:mod:`bt_nav.media.video`). The
 encoder is imageio-ffmpeg's bundled ffmpeg: no system ffmpeg needed. ``--still`` writes one frame as
-PNG and ``--plot`` the trajectory picture (:func:`bt_nav_sim.plot.plot_run`) from the same bag. Every time
+PNG and ``--plot`` the trajectory picture (:func:`bt_nav.media.plot.plot_run`) from the same bag. Every time
 shown, and ``--at``, counts sim seconds since the bag's first /clock (:data:`bt_nav.media.video.TIME_BASE`).
 """
 

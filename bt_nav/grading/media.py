@@ -4,7 +4,7 @@ Why after the grid and not at each run's end: drawing is CPU work (a trajectory 
 a 60 s mission ten or more), and during the grid the cores belong to the runs, whose simulators keep their real-time
 factor only while they get their share. Here they take every core (:func:`render_runs`, one process per core):
 
-- each run's **trajectory picture** ``trajectory.png`` in its run directory (:func:`bt_nav_sim.plot.plot_run`): the
+- each run's **trajectory picture** ``trajectory.png`` in its run directory (:func:`bt_nav.media.plot.plot_run`): the
   world, the path from the bag's ground truth, start and end, and the judge's verdict with its collisions;
 - a **video** ``video.mp4`` (:func:`bt_nav.media.video.write_video`) of every failed run (``videos``: ``failures``,
   ``all`` or ``off``);
@@ -110,8 +110,7 @@ def _from_t0(record: Any, row: dict[str, Any]) -> Any:
 
 def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[str, Any]:
     """The picture of a readable bag, and its video when ``film`` and it holds ground truth (what it cost)."""
-    from bt_nav_sim.plot import plot_run, start_circle
-
+    from bt_nav.media.plot import plot_run, start_circle
     from bt_nav.media.video import write_video
 
     started = time.perf_counter()
@@ -249,8 +248,9 @@ def distance_histogram(rows: Sequence[dict[str, Any]], path: Path) -> Path | Non
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from bt_nav_sim.plot import save_figure
     from matplotlib.ticker import MaxNLocator
+
+    from bt_nav.media.plot import save_figure
 
     judged = [r for r in rows if r.get("verdict") and "travelled" in r["verdict"]]
     if not judged:
@@ -286,8 +286,9 @@ def turns_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from bt_nav_sim.plot import save_figure
     from matplotlib.ticker import MaxNLocator
+
+    from bt_nav.media.plot import save_figure
 
     judged = [r for r in rows if r.get("verdict") and "maneuvers" in r["verdict"]]
     if not judged:

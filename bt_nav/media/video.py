@@ -20,7 +20,7 @@ are re-rendered only when their text changes. The encoder is ``imageio-ffmpeg``'
 (libx264, no system ffmpeg). Measured numbers are in docs/benchmarks.md and ``make bench`` (bench/video.py).
 
 A bag of several robots (:attr:`MissionRecord.robots`) is filmed by :class:`TracksRenderer`: every robot,
-its scan, its 1.5 m circle and its path in its own colour (the picture's, :func:`bt_nav_sim.plot.robot_colour`),
+its scan, its 1.5 m circle and its path in its own colour (the picture's, :func:`bt_nav.media.plot.robot_colour`),
 a legend with each robot's name, distance and branch, each robot's running path of the tree and one console
 of everyone's log lines. :func:`renderer_for` picks the renderer, so a one-robot bag is filmed as before.
 """
@@ -166,7 +166,7 @@ class Snapshot:
     rows: list[TreeRow]
     path: list[int]
     branch: str  # the tree's branch: the child of the first selector on the running path ("Lab", "Disarmed")
-    label: str  # the trajectory's colour label (:func:`bt_nav_sim.plot.branch_of_tip`)
+    label: str  # the trajectory's colour label (:func:`bt_nav.media.plot.branch_of_tip`)
     running_since: float  # since when the tip has been running without a break (``t`` when it is not running)
 
     @property
@@ -177,7 +177,7 @@ class Snapshot:
 
 def snapshots(record: MissionRecord) -> list[Snapshot]:
     """The bag's tree snapshots, parsed (see :class:`Snapshot`)."""
-    from bt_nav_sim.plot import branch_of_tip
+    from bt_nav.media.plot import branch_of_tip
 
     out: list[Snapshot] = []
     for t, text in record.trees:
@@ -407,7 +407,7 @@ class VideoRenderer:
         truth = self.rec.truth if truth is None else truth
         if len(truth):
             cx, cy = self.view.px(truth.x[0], truth.y[0])
-            from bt_nav_sim.plot import start_circle
+            from bt_nav.media.plot import start_circle
 
             radius = start_circle(self.rec.mission.get("profile"))
             if radius is not None:
@@ -433,7 +433,7 @@ class VideoRenderer:
     # ------------------------------------------------------------------ per frame
     def _extend_trail(self, upto: int) -> None:
         """Draw trajectory segments up to sample ``upto`` onto the persistent layer."""
-        from bt_nav_sim.plot import BRANCH_COLOURS
+        from bt_nav.media.plot import BRANCH_COLOURS
 
         drawn = self.track.drawn
         if upto <= drawn:
@@ -661,8 +661,8 @@ def world_of(record: MissionRecord) -> Any:
 
 
 def trajectory(record: MissionRecord) -> Any:
-    """The bag's ground truth as a :class:`bt_nav_sim.plot.Trajectory`, each sample labelled with its branch."""
-    from bt_nav_sim.plot import Trajectory
+    """The bag's ground truth as a :class:`bt_nav.media.plot.Trajectory`, each sample labelled with its branch."""
+    from bt_nav.media.plot import Trajectory
 
     tr = record.truth
     labels = Track("", record, (0, 0, 0)).sample_labels()
@@ -670,9 +670,10 @@ def trajectory(record: MissionRecord) -> Any:
 
 
 def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
-    """The trajectory picture (:func:`bt_nav_sim.plot.plot_run`) of a bag; the verdict from /bt_nav/mission."""
-    from bt_nav_sim.plot import plot_run, start_circle
+    """The trajectory picture (:func:`bt_nav.media.plot.plot_run`) of a bag; the verdict from /bt_nav/mission."""
     from bt_nav_sim.world import World
+
+    from bt_nav.media.plot import plot_run, start_circle
 
     world = world if world is not None else world_of(record)
     if world is None:
@@ -691,8 +692,8 @@ def plot_bag(record: MissionRecord, out: str | Path, world: Any = None) -> Path:
 
 
 def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path:
-    """The several-robot picture (:func:`bt_nav_sim.plot.plot_robots`) of a bag: one path per robot."""
-    from bt_nav_sim.plot import plot_robots
+    """The several-robot picture (:func:`bt_nav.media.plot.plot_robots`) of a bag: one path per robot."""
+    from bt_nav.media.plot import plot_robots
 
     runs = []
     for name, rec in record.robots.items():
@@ -705,14 +706,14 @@ def _plot_robots_bag(record: MissionRecord, out: str | Path, world: Any) -> Path
 # ---------------------------------------------------------------------- several robots: one track each
 # Why a renderer subclass: with one robot the path is coloured by the branch that drove it, but two
 # crossing paths coloured that way cannot be told apart. With several, as in the picture
-# (:func:`bt_nav_sim.plot.plot_robots`), each robot has one colour (:func:`bt_nav_sim.plot.robot_colour`, in
+# (:func:`bt_nav.media.plot.plot_robots`), each robot has one colour (:func:`bt_nav.media.plot.robot_colour`, in
 # the bag's robot order) for its path, footprint, scan, start and 1.5 m circle; the caption is the legend
 # (each robot's name in its colour with its distance and active branch), the side panel shows each robot's
 # running path of its tree, and the console interleaves every robot's log lines, prefixed with its name.
 
 def robot_colours(record: MissionRecord) -> dict[str, tuple[int, int, int]]:
-    """Robot name -> RGB, the picture's palette in the bag's robot order (one home: bt_nav_sim.plot)."""
-    from bt_nav_sim.plot import robot_colour
+    """Robot name -> RGB, the picture's palette in the bag's robot order (one home: bt_nav.media.plot)."""
+    from bt_nav.media.plot import robot_colour
 
     return {name: _hex(robot_colour(i)) for i, name in enumerate(record.robots)}
 

@@ -26,12 +26,12 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import numpy as np
-from bt_nav_sim.plot import start_circle
 from bt_nav_sim.walkers import read_walkers_message
 
 from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, WALKERS, typestore
 from bt_nav.media.bagread import MissionRecord
 from bt_nav.media.page import PAGE
+from bt_nav.media.plot import start_circle
 from bt_nav.media.treetext import active_path, parse_snapshot
 from bt_nav.mission.geometry import yaw_from_quaternion
 

@@ -29,9 +29,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from bt_nav_sim.plot import MANEUVER_TIPS
-
 from bt_nav.media.bag import EVENTS
+from bt_nav.media.plot import MANEUVER_TIPS
 from bt_nav.ros.bringup import EXECUTIVE_NAME
 from bt_nav.run.rundir import Logs, split_stamp
 

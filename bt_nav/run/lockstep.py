@@ -39,10 +39,10 @@ from typing import Any, Protocol
 import numpy as np
 from bt_nav_sim.core import SimConfig, profile
 from bt_nav_sim.multi import ROBOT_SEED_STRIDE, MultiSimCore
-from bt_nav_sim.plot import Trajectory, branch_of_tip
 from bt_nav_sim.referee_core import Referee, RefereeConfig
 from bt_nav_sim.world import World, load_world
 
+from bt_nav.media.plot import Trajectory, branch_of_tip
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.local_services import LocalTriggerClient, TriggerRequest, TriggerResponse

@@ -45,9 +45,9 @@ class Recording:
     truth_seq: int | None = None
 
     def mission_trajectory(self, verdict: dict[str, Any]) -> tuple[Any, dict[str, Any]]:
-        """The samples between the referee's t0 and its report as a :class:`bt_nav_sim.plot.Trajectory`
+        """The samples between the referee's t0 and its report as a :class:`bt_nav.media.plot.Trajectory`
         (each sample labelled with its branch), and as JSON with the commands and tips (sim time)."""
-        from bt_nav_sim.plot import Trajectory, branch_of_tip
+        from bt_nav.media.plot import Trajectory, branch_of_tip
 
         start, end = mission_slice(self, verdict)
         traj = Trajectory(self.t[start:end], self.x[start:end], self.y[start:end], self.yaw[start:end],
@@ -123,7 +123,7 @@ class Recorder:
             self.data.commands += 1
 
     def _on_tree(self, msg: Any) -> None:
-        from bt_nav_sim.plot import branch_of_tip
+        from bt_nav.media.plot import branch_of_tip
 
         tip = tip_name(msg.data)
         with self.lock:

@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.plot import Trajectory, plot_robots, plot_run, start_circle
 from bt_nav_sim.world import World
 
+from bt_nav.media.plot import Trajectory, plot_robots, plot_run, start_circle
 from bt_nav.run.labjudge import checkoff_summary
 
 

@@ -10,12 +10,12 @@ from typing import Any
 import imageio_ffmpeg
 import numpy as np
 import pytest
-from bt_nav_sim.plot import robot_colour
 from rosbags.rosbag2 import Reader
 
 from bt_nav.cli.lockstep import main
 from bt_nav.media.bag import ROBOT_TOPICS, TOPICS, split_namespace
 from bt_nav.media.bagread import MissionRecord, read_bag
+from bt_nav.media.plot import robot_colour
 from bt_nav.media.video import MAP_H, MAP_W, TracksRenderer, VideoRenderer, renderer_for, world_of
 
 DURATION, FPS = 12.0, 5.0  # past the first arming at 5 s, so every robot topic has messages

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, box_corners
 
