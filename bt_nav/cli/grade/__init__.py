@@ -137,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     lab = args.profile == "lab"
     if args.klass is not None:
-        from bt_nav.cli.grade_exe import grade_class
+        from bt_nav.cli.grade.exe import grade_class
 
         return grade_class(args, parser)
     worlds, seeds = grid_axes(args)
@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     if args.exe is not None:
-        from bt_nav.cli.grade_exe import grade_exe
+        from bt_nav.cli.grade.exe import grade_exe
 
         return grade_exe(args, jobs, lab or args.maneuvers is not None, parser)
     settings = {"profile": args.profile, "kinematics": args.kinematics, "seeds": seeds, "worlds": worlds,

@@ -1,6 +1,6 @@
 """``bt-nav demo`` (``make demo``): the whole homework mission over real DDS in sim time, judged and drawn.
 
-With ``--profile lab`` it is the lab's check-off instead: :mod:`bt_nav.cli.labdemo`.
+With ``--profile lab`` it is the lab's check-off instead: :mod:`bt_nav.cli.demo.lab`.
 
 It starts the ``eval`` graph of :mod:`bt_nav.ros.bringup` — simulator (stage_4, homework LiDAR),
 executive (``config/homework.yaml`` and any ``--set``) and referee; with ``--robots N`` one simulator
@@ -119,11 +119,11 @@ def main(argv: list[str] | None = None) -> int:
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
     if opts.exe:
-        from bt_nav.cli.exedemo import run_exe_demo
+        from bt_nav.cli.demo.exe import run_exe_demo
 
         return run_exe_demo(opts)
     if opts.profile == "lab":
-        from bt_nav.cli.labdemo import run_lab
+        from bt_nav.cli.demo.lab import run_lab
 
         return run_lab(opts)
     try:
