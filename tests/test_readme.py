@@ -49,3 +49,17 @@ def test_every_local_link_resolves() -> None:
                 continue
             generated = target.startswith(("reference/", "docs/reference/"))
             assert generated or (base / target).exists(), f"{name}: {target} does not exist"
+
+
+def test_every_repository_path_named_exists() -> None:
+    """A file or folder of the project named in backquotes (``bt_nav/ros/nodes/audit.py``) exists: a map that
+    names files that moved is worse than none."""
+    roots = ("bt_nav/", "sim/", "tests/", "bench/", "docs/", "config/", "launch/", "trees/")
+    missing = []
+    for name, text in {"README.md": README, **PAGES}.items():
+        for path in re.findall(r"`([\w./-]+\.(?:py|yaml|xml|md|json)|[\w./-]+/)`", text):
+            if not path.startswith(roots) or path.startswith(("docs/reference", "docs/_build")):
+                continue
+            if not (ROOT / path).exists():
+                missing.append(f"{name}: {path}")
+    assert not missing, "named but not in the repository:\n" + "\n".join(missing)
