@@ -47,3 +47,28 @@ def test_a_stamp_on_another_clock_is_not_taken() -> None:
     assert message_time_ns(10_000 * MS, 13_000 * MS) == 10_000 * MS  # 3 s behind the bag: a backlog
     assert message_time_ns(None, 13_000 * MS) == 13_000 * MS
     assert message_time_ns(1_700_000_000 * 1000 * MS, 13_000 * MS) == 13_000 * MS  # wall time in a sim graph
+
+
+def test_a_line_waits_for_the_clock_that_covers_it() -> None:
+    """A line stamped after the newest /clock read so far waits for its own sample (the reader lags), and does not
+    wait at all once the clock has stopped (nothing more will come)."""
+    import threading
+    import time
+
+    clock = SimClock()
+    now = time.time_ns()
+    clock.add(now, 10_000_000_000)
+    line = now + 50_000_000  # logged 50 ms after the newest sample read
+    assert clock.sim_at(line) == 10_000_000_000  # held at the newest: early by the lag
+
+    def later() -> None:
+        time.sleep(0.1)
+        clock.add(now + 60_000_000, 10_300_000_000)  # the sample that covers the line arrives late
+
+    threading.Thread(target=later).start()
+    assert clock.wait_cover(line, timeout=2.0)
+    assert clock.sim_at(line) == 10_250_000_000  # interpolated, not the stale newest
+    stopped = SimClock()
+    stopped.add(now - 3_000_000_000, 5)  # the last /clock 3 s ago: the simulator has ended
+    started = time.monotonic()
+    assert not stopped.wait_cover(now, timeout=2.0) and time.monotonic() - started < 0.1

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import bisect
 import threading
+import time
 from collections import deque
 
 
@@ -48,6 +49,30 @@ class SimClock:
                 return
             self._wall.append(int(wall_ns))
             self._sim.append(int(sim_ns))
+
+    def newest_wall(self) -> int | None:
+        """The source wall time of the newest sample (None before the first)."""
+        with self._lock:
+            return self._wall[-1] if self._wall else None
+
+    def covers(self, wall_ns: int) -> bool:
+        """Whether a sample at or after wall instant ``wall_ns`` has been seen: :meth:`sim_at` is then exact there
+        (before it, it holds at the newest sample, which a reader that lags behind the graph has not got yet)."""
+        with self._lock:
+            return bool(self._wall) and self._wall[-1] >= wall_ns
+
+    def wait_cover(self, wall_ns: int, timeout: float, alive: float = 1.0) -> bool:
+        """Wait (at most ``timeout`` wall seconds) until a sample covers ``wall_ns``; not at all when the newest
+        sample is more than ``alive`` s older than now (the simulator has stopped: none will come). Returns
+        :meth:`covers`. A line logged while this process's reader lags waits for its own /clock instead of taking
+        the newest one read so far, which is early by the lag (seconds of sim time on a loaded machine)."""
+        deadline = time.monotonic() + timeout
+        while not self.covers(wall_ns):
+            newest = self.newest_wall()
+            if newest is None or time.time_ns() - newest > alive * 1e9 or time.monotonic() >= deadline:
+                return False
+            time.sleep(0.005)
+        return True
 
     def latest(self) -> int | None:
         """The newest sim time seen (None before the first /clock)."""

@@ -25,6 +25,8 @@ from bt_nav.ros.simclock import SimClock
 #: :func:`split_stamp` takes off again (the run prefixes sim and wall time itself).
 LOG_FORMAT = "@{time_as_nanoseconds} [{severity}] [{name}]: {message}"
 _STAMPED = re.compile(r"^@(\d+) (?=\[)")
+#: Wall s a line may wait for the /clock sample that covers its stamp (the demo's recorder lags on a loaded machine).
+CLOCK_WAIT = 2.0
 
 
 def split_stamp(line: str) -> tuple[int | None, str]:
@@ -101,6 +103,8 @@ class Logs(LogFiles):
         """Sim seconds at wall instant ``wall_ns`` (a log line's stamp; None: now), from :attr:`clock`; else the
         newest ground truth (:attr:`sim_time`); None before either."""
         if self.clock is not None:
+            if wall_ns is not None:  # a line from another process: its /clock may not have been read yet
+                self.clock.wait_cover(wall_ns, CLOCK_WAIT)
             sim = self.clock.sim_at(time.time_ns() if wall_ns is None else wall_ns)
             if sim is not None:
                 return sim * 1e-9
