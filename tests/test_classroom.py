@@ -47,7 +47,7 @@ class Recorder:
 @pytest.fixture
 def recorder(monkeypatch: pytest.MonkeyPatch) -> Recorder:
     rec = Recorder()
-    monkeypatch.setattr(node_grid, "run_unless_stopped", rec.run)
+    monkeypatch.setattr(node_grid, "run_unless_stopped", rec.run)  # what run_pool calls
     monkeypatch.setattr(node_grid, "prepare_out", lambda settings, jobs, resume: {})
     monkeypatch.setattr(report, "write_exe_report", rec.report)
     return rec

@@ -218,30 +218,19 @@ def _run_pooled(todo: list[tuple[str, Any, Any]], grids: dict[str, tuple[Any, Se
                 workers: int, stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
     """Every (student, settings, job) of ``todo`` in one thread pool; a student's report when their last run ends,
     and for every student with a run left when the class stops."""
-    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
-
-    from bt_nav.grading.node_grid import run_unless_stopped
+    from bt_nav.grading.node_grid import run_pool
 
     left = Counter(name for name, _, _ in todo)
-    with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="class-run") as pool:
-        futures = {pool.submit(run_unless_stopped, job, settings, stop): name for name, settings, job in todo}
-        pending = set(futures)
-        while pending:
-            finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
-            for future in finished:
-                name = futures[future]
-                row = None if future.cancelled() else future.result()
-                settings, jobs, rows = grids[name]
-                if row is not None:
-                    rows[row["job"]] = row
-                    if on_row is not None:
-                        on_row(name, row)
-                left[name] -= 1
-                if left[name] == 0:
-                    _write_student_report(settings, jobs, rows)
-            if stop is not None and stop.requested:
-                for future in pending:
-                    future.cancel()
+    for i, row in run_pool([(job, settings) for _, settings, job in todo], workers, stop):
+        name = todo[i][0]
+        settings, jobs, rows = grids[name]
+        if row is not None:
+            rows[row["job"]] = row
+            if on_row is not None:
+                on_row(name, row)
+        left[name] -= 1
+        if left[name] == 0:
+            _write_student_report(settings, jobs, rows)
     for name, count in left.items():
         if count > 0:  # stopped with runs of this student not started: the report of what ended
             _write_student_report(*grids[name])

@@ -225,19 +225,29 @@ def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:
     return path
 
 
-def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:
-    """Every job, ``workers`` at a time in threads; rows as runs end. A stop cancels the runs not started."""
+def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
+             stop: StopRequest | None) -> Iterator[tuple[int, Row | None]]:
+    """Every (job, its grid's settings), ``workers`` at a time in threads (one grid's, or a whole class's); yields
+    (the task's index, its row) as each ends, None for a run that never started. A stop cancels the runs not
+    started."""
     with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
-        pending: set[Future] = {pool.submit(run_unless_stopped, job, settings, stop) for job in jobs}
+        index: dict[Future, int] = {pool.submit(run_unless_stopped, job, settings, stop): i
+                                    for i, (job, settings) in enumerate(tasks)}
+        pending = set(index)
         while pending:
             done, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
             for future in done:
-                row = None if future.cancelled() else future.result()
-                if row is not None:
-                    yield row
+                yield index[future], None if future.cancelled() else future.result()
             if stop is not None and stop.requested:
                 for future in pending:
                     future.cancel()
+
+
+def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:
+    """Every job of one grid (:func:`run_pool`); rows as runs end."""
+    for _, row in run_pool([(job, settings) for job in jobs], workers, stop):
+        if row is not None:
+            yield row
 
 
 class ClusterStop(StopRequest):
