@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -33,6 +34,10 @@ def ensure_local_dds() -> None:
 
 ensure_local_dds()
 
+#: A line of Fast DDS's own log ("2026-11-25 18:12:30.981 [RTPS_TRANSPORT_SHM Error] ..."), colours removed.
+FASTDDS_LOG = re.compile(r"^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d+ \[[A-Z_]+ (Error|Warning|Info)\]")
+ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
 
 class Proc:
     """A ``bt-nav <command>`` subprocess with its output collected (stdout and stderr separately)."""
@@ -43,19 +48,23 @@ class Proc:
                                      stderr=subprocess.PIPE, text=True, bufsize=1, start_new_session=True)
         self.stdout: list[str] = []
         self.stderr: list[str] = []
+        self.dds_log: list[str] = []
         self._threads = [threading.Thread(target=self._pump, args=(self.proc.stdout, self.stdout), daemon=True),
                          threading.Thread(target=self._pump, args=(self.proc.stderr, self.stderr), daemon=True)]
         for thread in self._threads:
             thread.start()
 
-    @staticmethod
-    def _pump(stream: Any, sink: list[str]) -> None:
+    def _pump(self, stream: Any, sink: list[str]) -> None:
         for line in stream:
-            sink.append(line.rstrip("\n"))
+            line = line.rstrip("\n")
+            # Fast DDS's own log (e.g. a shared-memory port another process holds) goes to stdout too; it is
+            # the transport's, not the command's output the tests read.
+            (self.dds_log if FASTDDS_LOG.match(ANSI.sub("", line)) else sink).append(line)
 
     def output(self) -> str:
         """Everything it printed so far (for failure messages)."""
-        return "--- stdout\n" + "\n".join(self.stdout) + "\n--- stderr\n" + "\n".join(self.stderr)
+        return ("--- stdout\n" + "\n".join(self.stdout) + "\n--- stderr\n" + "\n".join(self.stderr)
+                + ("\n--- Fast DDS\n" + "\n".join(self.dds_log) if self.dds_log else ""))
 
     def alive(self) -> bool:
         """Still running?"""

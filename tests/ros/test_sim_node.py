@@ -143,6 +143,25 @@ def test_sim_time_waits_for_a_holding_follower(sim: Callable[..., tuple[Proc, Pr
     probe.wait_sim_time(frozen + 1.0)
 
 
+def test_a_thinned_clock_ticks_with_every_message_and_where_it_waits(sim: Callable[..., tuple[Proc, Probe]]) -> None:
+    proc, probe = sim("--ros-args", "-p", "clock_rate_hz:=10.0")
+    probe.wait_sim_time(probe.now() + 1.0)
+    with probe.lock:
+        clock = [round(c, 6) for c in probe.clock]
+        stamps = [round(stamp_of(m), 6) for m in probe.odom[-20:] + probe.scans[-5:]]
+    assert set(stamps) <= set(clock), "a message's stamp must be an instant /clock said"
+    rate = (len(clock) - 1) / (clock[-1] - clock[0])
+    assert 30.0 <= rate <= 50.0, f"{rate:.1f} /clock samples per sim second (odometry's 30 Hz, the 10 Hz floor)"
+    import time
+
+    ahead = probe.now() + 0.3  # a follower that says its clock is there: sim time stops one max_lag later
+    probe.sync(who="test", t=ahead, hold=False)
+    wait_until(lambda: any("following test" in line for line in proc.stderr), 10.0, "the sim to follow", proc.output)
+    time.sleep(0.6)
+    assert probe.now() == pytest.approx(ahead + 0.05, abs=1e-6), "the instant it waits at must go out on /clock"
+    probe.sync(who="test", leave=True)
+
+
 def test_refuses_an_unknown_profile() -> None:
     proc = Proc("sim", "--ros-args", "-p", "profile:=gazebo")
     assert proc.wait(20.0) == 2  # a refused configuration (bt_nav.ros.runner), as the executive's

@@ -4,7 +4,8 @@ What it does, per physics step (``physics_rate_hz``, 100 Hz by default):
 
 - advances sim time by one step and moves the robot with the last ``cmd_vel`` received (it persists
   until the next one, like Gazebo's diff drive; ``cmd_vel_timeout`` can make it expire instead);
-- publishes ``/clock`` (every step), ``scan`` at the LiDAR's rate, ``odom`` and ``ground_truth_odom``
+- publishes ``/clock`` (every step, or with ``clock_rate_hz`` > 0 on that grid, with every message and wherever
+  sim time waits for a follower: see ``_clock_due``), ``scan`` at the LiDAR's rate, ``odom`` and ``ground_truth_odom``
   at ``odom_rate_hz``, and one ``collisions`` message per collision *event* (rising edge of the
   physics' collided flag), as a JSON string ``{"t", "x", "y", "yaw"}``; in a world with people walking
   (``walkers``, :mod:`bt_nav_sim.walkers`) also ``walkers`` with every ground-truth sample, JSON
@@ -29,7 +30,8 @@ namespace is ``/robot1/scan``), plus ``<name>/sim_sync`` for that robot's refere
 ``cmd_vel`` publisher is a follower of its own. Start poses: ``starts`` (``"x,y,yaw_deg; ..."``) or
 placed beside the world's spawn. One robot without names keeps the single-robot topic names.
 
-Threading, and why: the physics loop runs in its own thread and the node's executor spins in the
+Threading, and why: the physics loop runs in its own thread and the node's executor (rclpy's
+``EventsExecutor``, see :func:`bt_nav.ros.rosutil.make_executor`: this node has no sim-time timer) spins in the
 main thread, serving the ``cmd_vel`` subscription. Polling the executor from inside the loop instead
 (``spin_once(timeout_sec=0)`` per step) was measured at ~130 us per call even when nothing is ready,
 which alone would cap the loop near 7000 steps/s; a separate thread costs nothing while idle. The
@@ -155,7 +157,9 @@ class SimulatorNode(Node):
         "spawn_jitter_deg": (0.0, "per-seed spawn heading perturbation, +- deg"),
         "seed": (0, "seed of sensor noise, odometry slip and generated worlds; -1: random"),
         "real_time_factor": (1.0, "sim seconds per wall second; 0: as fast as the followers keep up"),
-        "physics_rate_hz": (100.0, "physics steps (and /clock messages) per sim second"),
+        "physics_rate_hz": (100.0, "physics steps per sim second"),
+        "clock_rate_hz": (0.0, "/clock samples per sim second besides those at every message and wherever sim "
+                               "time waits for a follower (0: one per physics step)"),
         "odom_rate_hz": (30.0, "odom and ground_truth_odom rate, Hz of sim time"),
         "radius": (0.12, "collision radius of the robot, m"),
         "noise": (True, "LiDAR range noise and odometry slip on/off"),
@@ -216,6 +220,9 @@ class SimulatorNode(Node):
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
         self.duration_ns = int(max(0.0, float(p["duration"])) * 1e9)
+        rate = float(p["clock_rate_hz"])
+        self.clock_period_ns = int(round(1e9 / rate)) if rate > 0.0 else 1
+        self._clock_sent_ns = -1
 
     def _create_publishers(self) -> None:
         # /clock as rclcpp's ClockQoS (best effort, depth 1), what every time source subscribes with: a
@@ -418,6 +425,8 @@ class SimulatorNode(Node):
                                            "for it until it speaks again")
                 if blocker is None:
                     return waited
+                if not waited:  # the follower's timer is due now: it must see this instant
+                    self._publish_clock(core.t_ns)
                 waited = True
                 if now - last_clock >= _CLOCK_REPEAT_S:
                     self.clock_pub.publish(self._clock_msg)  # in case the last sample was lost
@@ -427,13 +436,29 @@ class SimulatorNode(Node):
 
     # -------------------------------------------------------------- messages
     def _publish_all(self, outs: list[StepOutput]) -> None:
-        """Publish what this step made due: /clock always, then each robot's messages."""
-        sec, nanosec = divmod(outs[0].t_ns, 1_000_000_000)
-        clock = self._clock_msg
-        clock.clock.sec, clock.clock.nanosec = sec, nanosec
-        self.clock_pub.publish(clock)
+        """Publish what this step made due: /clock (see :meth:`_clock_due`), then each robot's messages."""
+        t_ns = outs[0].t_ns
+        if self._clock_due(t_ns, outs):
+            self._publish_clock(t_ns)
+        sec, nanosec = divmod(t_ns, 1_000_000_000)
         for robot, out in zip(self.robots, outs, strict=True):
             robot.publish(out, sec, nanosec)
+
+    def _clock_due(self, t_ns: int, outs: list[StepOutput]) -> bool:
+        """A /clock sample at every physics step (``clock_rate_hz`` 0), else on its grid and with every message,
+        so a node reading ``now()`` in a callback sees the message's own stamp. Where sim time waits for a
+        follower (:meth:`_wait_for_followers`) the instant goes out too: a follower's timer fires on time."""
+        period = self.clock_period_ns
+        if period == 1 or (t_ns // period) != (self._clock_sent_ns // period):
+            return True
+        return any(out.odom or out.collision or out.scan is not None for out in outs)
+
+    def _publish_clock(self, t_ns: int) -> None:
+        """One /clock sample (the message is reused; the repeat while waiting sends it again)."""
+        clock = self._clock_msg
+        clock.clock.sec, clock.clock.nanosec = divmod(t_ns, 1_000_000_000)
+        self.clock_pub.publish(clock)
+        self._clock_sent_ns = t_ns
 
 
 class _RobotIO:
