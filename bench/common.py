@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from bt_nav.ros.supervise import usable_cores
+
 REPO = Path(__file__).resolve().parents[1]
 #: Domains of the benchmarks' DDS traffic: above demo/sim-run (100-200), below the tests (215-232).
 DOMAIN_RANGE = (201, 214)
@@ -123,10 +125,7 @@ def _version(package: str) -> str:
 
 def machine() -> dict[str, Any]:
     """What the numbers were measured on: CPU, cores, OS, Python and the libraries that matter."""
-    try:
-        usable = len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        usable = os.cpu_count() or 0
+    usable = usable_cores()
     return {
         "cpu": cpu_model(),
         "cores": os.cpu_count(),

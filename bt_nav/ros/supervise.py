@@ -478,3 +478,11 @@ def publish_zero_twist(domain_id: int, *, topic: str = "/cmd_vel", stamped: bool
         return matched
     finally:
         rclpy.try_shutdown(context=context)
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity, as a container or ``taskset`` sets it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)

@@ -19,7 +19,7 @@ from typing import Any
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.physics import KINEMATICS
 
-from bt_nav.cli.options import add_mission_options
+from bt_nav.cli.options import add_mission_options, jobs_arg
 from bt_nav.grading.grid import Job, format_lidars, run_grid, summarize
 from bt_nav.grading.grid import overall as overall
 from bt_nav.grading.plan import EXE_LIDARS, build_jobs, grid_axes
@@ -76,7 +76,9 @@ def _parser() -> argparse.ArgumentParser:
                         "profile's own); default profile, --exe: " + ",".join(EXE_LIDARS) + " (a node reading the "
                         "scan by fixed indices passes one and fails another)")
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
-    parser.add_argument("--jobs", type=int, default=2, help="local worker processes (without --scheduler)")
+    parser.add_argument("--jobs", type=jobs_arg, default="auto", metavar="N|auto",
+                        help="runs at once on this machine (without --scheduler); auto: one per usable core "
+                        "(default auto)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
     add_mission_options(parser, grid=True)
