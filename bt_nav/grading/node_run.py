@@ -85,6 +85,8 @@ class ExeSettings:
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
     # Parameters given to the node as a TA's launch file would (-p NAME:=VALUE); safety_distance is the judge's too
     node_params: tuple[tuple[str, Any], ...] = ()
+    # A failure at rtf > 1 is checked at 1x before it stands (bt_nav.grading.realtime)
+    realtime_check: bool = True
 
 
 @dataclass(frozen=True)

@@ -127,7 +127,7 @@ def checks_page() -> str:
     out += ["", "## The lab's check-off judge, per maneuver", "",
             "Each turn the robot makes is judged by its rotation, whatever its forward command. An example of "
             "every sentence, for each maneuver:", ""]
-    example = {"trigger": False, "late": True, "crept_with_trigger": 0.09,
+    example = {"trigger": False, "late": True, "crept_with_trigger": 0.09, "trigger_held_for": 1.8,
                "angle_ok": False, "angle_deg": 45.0, "side": "left", "forward_ok": False, "forward_command": 0.05,
                "forward_motion": 0.14, "moved_on": False, "moved_on_detail": "still at the obstacle"}
     for maneuver, name in MANEUVER_NAMES.items():

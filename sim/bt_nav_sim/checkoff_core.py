@@ -77,7 +77,9 @@ class CheckoffConfig:
     rotation_min_rate: float = 0.1  # rad/s: a command turning at least this fast ...
     turn_max_linear: float = 0.03  # m/s: a turning command driving faster is forward motion during the turn ...
     steer_max_deg: float = 20.0  # ... unless the robot turned less than this: then it was steering, not a turn
-    late_distance: float = 0.04  # m: crept this far with the trigger holding before the turn: a late trigger
+    late_distance: float = 0.04  # m: crept this far with the trigger holding before the turn: a late trigger ...
+    late_time: float = 0.6  # s: ... over at least this long (a 5 Hz scan, a 10 Hz control loop and 0.15 s of
+    # actuation latency take up to 0.45 s, and a node creeping faster than the template's 0.05 m/s covers 4 cm in it)
     forward_epsilon: float = 1e-3  # m/s: "zero forward command"
     angle_tolerance_deg: float = 10.0
     settle_rate: float = 0.05  # rad/s: the rotation has settled once the true yaw rate stays below this ...
@@ -384,7 +386,8 @@ class CheckoffJudge(Verdict):
             return  # it held already when the creeping began (at the arming, or as the last turn ended)
         crept = self._path_length(self._t[k], start) if k < i else 0.0
         episode["crept_with_trigger"] = round(crept, 3)
-        if crept >= cfg.late_distance:
+        episode["trigger_held_for"] = round(start - self._t[k], 2)
+        if crept >= cfg.late_distance and start - self._t[k] >= cfg.late_time:
             episode["late"] = True
             episode["passed"] = False
 
@@ -607,8 +610,8 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
     if not e["trigger"]:
         out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
     if e.get("late"):
-        out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m after its trigger held "
-                   "(does it read its distance parameter?)")
+        out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
+                   "after its trigger held (does it read its distance parameter?)")
     if not e["angle_ok"]:
         out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}")
     if not e["forward_ok"]:

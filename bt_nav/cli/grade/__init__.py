@@ -101,6 +101,10 @@ def _parser() -> argparse.ArgumentParser:
                         "safety_distance=0.6 (the lab's judge then triggers at it too)")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
+    parser.add_argument("--realtime-check", choices=("on", "off"), default="on",
+                        help="--exe: before failures at --rtf > 1 stand, one failed run is run again at 1x; if it "
+                        "passes there (a node keeping time by the wall clock), every failed run is graded at 1x, "
+                        "with a finding (default on)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "
                         "(default runs/grade-exe-<time>); with --scheduler on a filesystem every worker shares")
     parser.add_argument("--record", choices=("on", "failures", "off"), default="on", help="--exe: each run's bag, "

@@ -35,7 +35,7 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
     node_params = tuple(parse_assignments(args.node_param).items())
     return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
-                       args.videos, os.getcwd(), node_params)
+                       args.videos, os.getcwd(), node_params, args.realtime_check == "on")
 
 
 def _show(row: dict[str, Any]) -> None:
@@ -71,6 +71,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     try:
         rows = run_exe_grid(jobs, settings, args.jobs, stop, _show, scheduler=args.scheduler, done=done,
                             progress=progress)
+        rows = _check_at_real_time(jobs, settings, rows, args.jobs, stop)
     finally:
         stop.closing = True
         stop.restore()
@@ -85,6 +86,23 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     for line in format_lidars(ended):
         print(line)
     return _verdict(args, ended, len(jobs), settings, time.perf_counter() - started, stop, (json_path, md_path))
+
+
+def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: int,
+                        stop: Any) -> list[dict[str, Any]]:
+    """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying so when it runs."""
+    from bt_nav.grading.realtime import confirm_at_real_time, failed_at_speed
+
+    if stop.requested or settings.rtf <= 1.0 or not settings.realtime_check or \
+            not any(failed_at_speed(row) for row in rows):
+        return rows
+    print(f"bt-nav grade: a failed run again at 1x real time before the failures stand (--realtime-check off "
+          f"skips it): into {settings.out / 'realtime'}/", flush=True)
+    by_key = {row["job"]: row for row in rows}
+    replaced = confirm_at_real_time(jobs, settings, by_key, workers, stop, _show)
+    if not replaced:
+        print("bt-nav grade: it failed at 1x too: the failures stand", flush=True)
+    return [by_key[job.key] for job in jobs if job.key in by_key]
 
 
 def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned: int, settings: Any,

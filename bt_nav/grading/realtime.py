@@ -1,0 +1,116 @@
+"""A failure at more than real time is checked at 1x before it stands: a node that keeps time by the wall clock is
+not failed for the grader's speed.
+
+Why: ``--exe`` runs the node's world faster than real time (``--rtf``, 5 by default) and gives the node sim time
+(``use_sim_time``). A node that times its turn or its 50 s with ``time.sleep`` or ``time.time`` is right on a robot
+at 1x and wrong in any faster simulation: at 5x its 90 deg pivot turns 450 deg, its evaluation comes at 250 sim s.
+The grader must never fail a right node, so before failures stand one failed run is run again at 1x (the probe).
+If it passes there, every failed run is run at 1x, graded there, and carries a finding that names the wall clock;
+a node that fails at 1x too keeps its verdicts (its mistake is not the speed), at the cost of one run at 1x.
+
+The 1x runs live in ``<out>/realtime/`` (the faster runs stay where they are, linked from the finding); resuming
+reuses the 1x runs that finished there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import Any
+
+from bt_nav.grading.grid import Job
+from bt_nav.grading.node_grid import ERROR, STOPPED, finished_runs, run_pool
+from bt_nav.grading.node_run import ExeSettings
+from bt_nav.ros.supervise import StopRequest
+
+Row = dict[str, Any]
+#: Where a grid's 1x runs go, below its ``--out``.
+REALTIME_DIR = "realtime"
+#: Wall seconds a 1x run may take at least (a lab mission is ~75 sim s, start-up and shutdown besides).
+REALTIME_LIMIT = 240.0
+
+
+def failed_at_speed(row: Row | None) -> bool:
+    """A run the node failed (not bt_nav's error, not stopped, not already a 1x run)."""
+    return bool(row) and not row["passed"] and row["outcome"] not in (ERROR, STOPPED) and "realtime" not in row
+
+
+def wall_clock_finding(rtf: float, reason: str) -> str:
+    """What a run that passed at 1x after failing faster tells its student."""
+    return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x: the node keeps time by the wall clock "
+            "(time.sleep, time.time) where ROS time (self.get_clock(), sim time under use_sim_time) would keep it "
+            "right in a simulation at any speed")
+
+
+def realtime_settings(settings: ExeSettings) -> ExeSettings:
+    """The grid's settings at 1x, into ``<out>/realtime``."""
+    return replace(settings, rtf=1.0, out=settings.out / REALTIME_DIR, limit=max(settings.limit, REALTIME_LIMIT))
+
+
+#: One grid to check: its jobs, settings and rows (job key -> row, replaced in place), and who sees a new row.
+Grid = tuple[Sequence[Job], ExeSettings, dict[str, Row], Callable[[Row], None] | None]
+
+
+def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row], workers: int,
+                         stop: StopRequest | None = None, on_row: Callable[[Row], None] | None = None) -> int:
+    """Check one grid's failures at 1x (see the module docstring), replacing ``rows`` (job key -> row) in place
+    where the node passes there; returns how many rows were replaced. Nothing runs at ``rtf <= 1``, with the check
+    off, or without a failure."""
+    return confirm_grids([(jobs, settings, rows, on_row)], workers, stop)[0]
+
+
+def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None = None) -> list[int]:
+    """:func:`confirm_at_real_time` for several grids (a class) in one pool: every grid's probe at once, then the
+    other failed runs of the grids whose probe passed; how many rows each grid had replaced."""
+    plans = []  # per grid: its failed jobs, its 1x settings, the 1x rows it has already
+    for jobs, settings, rows, _on_row in grids:
+        failed = [job for job in jobs if failed_at_speed(rows.get(job.key))] \
+            if settings.rtf > 1.0 and settings.realtime_check else []
+        slow = realtime_settings(settings)
+        plans.append((failed, slow, finished_runs(slow.out, failed) if failed and slow.out.is_dir() else {}))
+    probes = _run_missing([(failed[0], slow, done) for failed, slow, done in plans if failed], workers, stop)
+    rest = []
+    for (failed, slow, done), (_, _, rows, _) in zip(plans, grids, strict=True):
+        probe = probes.get((str(slow.out), failed[0].key)) if failed else None
+        if probe is not None and not probe["passed"]:
+            rows[failed[0].key]["realtime_probe"] = {"passed": False, "reason": probe["reason"],
+                                                     "run_dir": probe["run_dir"]}
+        elif probe is not None:
+            rest += [(job, slow, done) for job in failed[1:]]
+    results = {**probes, **_run_missing(rest, workers, stop)}
+    replaced = []
+    for (failed, slow, _), (_, settings, rows, on_row) in zip(plans, grids, strict=True):
+        probe = results.get((str(slow.out), failed[0].key)) if failed else None
+        count = 0
+        for job in failed if probe is not None and probe["passed"] else ():
+            slow_row = results.get((str(slow.out), job.key))
+            if slow_row is not None:
+                rows[job.key] = _graded_at_real_time(slow_row, rows[job.key], settings.rtf)
+                count += 1
+                if on_row is not None:
+                    on_row(rows[job.key])
+        replaced.append(count)
+    return replaced
+
+
+def _run_missing(tasks: Sequence[tuple[Job, ExeSettings, dict[str, Row]]], workers: int,
+                 stop: StopRequest | None) -> dict[tuple[str, str], Row]:
+    """Each (job, 1x settings, finished 1x rows): the finished row, else the job run now (all in one pool); by
+    (1x directory, job key), nothing for a run that never started."""
+    out = {(str(slow.out), job.key): done[job.key] for job, slow, done in tasks if job.key in done}
+    todo = [(job, slow) for job, slow, done in tasks if job.key not in done]
+    for index, row in run_pool(todo, workers, stop):
+        if row is not None:
+            out[(str(todo[index][1].out), todo[index][0].key)] = row
+    return out
+
+
+def _graded_at_real_time(slow: Row, fast: Row, rtf: float) -> Row:
+    """The 1x run's row, with what the faster run said: a finding when the 1x run passed."""
+    row = dict(slow)
+    row["realtime"] = {"rtf": rtf, "passed": fast["passed"], "reason": fast["reason"], "run_dir": fast["run_dir"]}
+    if row["passed"] and row["outcome"] not in (ERROR, STOPPED):
+        finding = wall_clock_finding(rtf, fast["reason"])
+        row["findings"] = [*row.get("findings", []), finding]
+        row["reason"] = f"{row['reason']}; {finding}"
+    return row

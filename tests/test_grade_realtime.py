@@ -1,0 +1,102 @@
+"""The real-time check's bookkeeping (:mod:`bt_nav.grading.realtime`) with the runs replaced by a table of
+verdicts: which runs are run again at 1x, when, and what replaces a row. Its DDS run is
+``tests/ros/test_grade_realtime_dds.py``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bt_nav.grading import realtime
+from bt_nav.grading.grid import Job
+from bt_nav.grading.node_run import ExeSettings
+
+
+def _job(seed: int) -> Job:
+    return Job("lab_object", "C", seed, "lab", sim_params=(("lidar", "lds01"),))
+
+
+def _row(job: Job, passed: bool, outcome: str = "verdict", where: str = "fast") -> dict[str, Any]:
+    return {"job": job.key, "passed": passed, "outcome": outcome, "reason": "passed" if passed else "failed: angle",
+            "findings": [], "run_dir": f"/{where}/{job.seed}"}
+
+
+@pytest.fixture
+def ran(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, float]]:
+    """Every run the check starts, as (seed, rtf); a 1x run passes unless its seed is odd."""
+    started: list[tuple[int, float]] = []
+
+    def fake_pool(tasks: list[tuple[Job, ExeSettings]], workers: int, stop: Any) -> Any:
+        for index, (job, settings) in enumerate(tasks):
+            started.append((job.seed, settings.rtf))
+            yield index, _row(job, job.seed % 2 == 0, where="slow")
+
+    monkeypatch.setattr(realtime, "run_pool", fake_pool)
+    return started
+
+
+def _settings(tmp_path: Path, **kw: Any) -> ExeSettings:
+    return ExeSettings("python3 node.py", "lab", tmp_path, **kw)
+
+
+def test_a_node_passing_at_1x_has_every_failed_run_graded_there(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(s) for s in (0, 2, 4, 6)]
+    rows = {j.key: _row(j, j.seed == 4) for j in jobs}
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 3
+    assert ran == [(0, 1.0), (2, 1.0), (6, 1.0)]  # the probe first, then the other failures; never a pass
+    for job in jobs:
+        row = rows[job.key]
+        assert row["passed"]
+        if job.seed == 4:
+            assert row["run_dir"] == "/fast/4" and "realtime" not in row
+        else:
+            assert row["run_dir"] == f"/slow/{job.seed}" and row["realtime"]["reason"] == "failed: angle"
+            assert "failed at 5x real time (failed: angle) and passed at 1x" in row["findings"][0]
+
+
+def test_a_node_failing_at_1x_too_keeps_its_verdicts_after_one_run(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(s) for s in (1, 3)]
+    rows = {j.key: _row(j, False) for j in jobs}
+    before = json.loads(json.dumps(rows))
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 0
+    assert ran == [(1, 1.0)]
+    assert rows[jobs[0].key].pop("realtime_probe")["passed"] is False
+    assert rows == before
+
+
+@pytest.mark.parametrize("kw", [{"rtf": 1.0}, {"realtime_check": False}])
+def test_nothing_runs_at_1x_or_with_the_check_off(tmp_path: Path, ran: list, kw: dict) -> None:
+    jobs = [_job(0)]
+    rows = {jobs[0].key: _row(jobs[0], False)}
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path, **kw), rows, 2) == 0
+    assert ran == []
+
+
+def test_bt_nav_errors_and_stopped_runs_are_not_the_nodes_failures(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(0), _job(2)]
+    rows = {jobs[0].key: _row(jobs[0], False, "bt_nav error"), jobs[1].key: _row(jobs[1], False, "stopped")}
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 0
+    assert ran == []
+
+
+def test_a_class_probes_every_student_in_one_pool(tmp_path: Path, ran: list) -> None:
+    a, b = [_job(0), _job(2)], [_job(1), _job(3)]
+    rows_a = {j.key: _row(j, False) for j in a}
+    rows_b = {j.key: _row(j, False) for j in b}
+    grids = [(a, _settings(tmp_path / "a"), rows_a, None), (b, _settings(tmp_path / "b"), rows_b, None)]
+    assert realtime.confirm_grids(grids, 2) == [2, 0]
+    assert ran == [(0, 1.0), (1, 1.0), (2, 1.0)]  # both probes, then only the passing student's other failure
+
+
+def test_a_resumed_check_reuses_the_finished_1x_runs(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(0), _job(2)]
+    done = tmp_path / realtime.REALTIME_DIR / "lab_object_C_lds01_seed0"
+    done.mkdir(parents=True)
+    (done / "result.json").write_text(json.dumps(_row(jobs[0], True, where="kept")))
+    rows = {j.key: _row(j, False) for j in jobs}
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 2
+    assert ran == [(2, 1.0)]
+    assert rows[jobs[0].key]["run_dir"] == "/kept/0"
