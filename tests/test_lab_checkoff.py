@@ -11,7 +11,7 @@ import pytest
 from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.grading.grid import Job, run_job
-from bt_nav.run.labjudge import angle_errors, announced_turns
+from bt_nav.run.lab import angle_errors, announced_turns
 from bt_nav.run.lockstep import run_mission
 from bt_nav.run.settings import DEFAULT_JITTER
 

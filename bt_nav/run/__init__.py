@@ -10,7 +10,10 @@ core, the ROS edge, the simulator): every command that runs a mission calls this
 - :mod:`bt_nav.run.result`: what a lock-step run produced, per robot and for the run.
 - :mod:`bt_nav.run.sinks`: the sink protocol a recorder of the run implements (the rosbag2 writer does).
 - :mod:`bt_nav.run.recorder`, :mod:`bt_nav.run.rosmission`, :mod:`bt_nav.run.rundir`: a mission over DDS
-  (start the graph, a recorder and a referee per robot, wait, collect) and where it writes its files.
+  (start the graph, a recorder and a referee per robot, wait, collect) and where it writes its files;
+  :mod:`bt_nav.run.bagrecorder`: ``bt-nav record`` in a process of its own, started and stopped by a run.
+- :mod:`bt_nav.run.lab`: which judge a lab run gets, each maneuver's announced against its measured angle;
+  :mod:`bt_nav.run.terminal`: the lab's terminal of a check-off over DDS (and a student's node's).
 
 Grading many missions (grids, the ``--exe`` grader, reports) is the layer above: :mod:`bt_nav.grading`.
 """

@@ -49,7 +49,7 @@ from bt_nav.mission.local_services import LocalTriggerClient, TriggerRequest, Tr
 from bt_nav.mission.params import coerce
 from bt_nav.mission.scan import Scan
 from bt_nav.mission.trace import TraceRecorder
-from bt_nav.run.labjudge import lab_judge
+from bt_nav.run.lab import lab_judge
 from bt_nav.run.result import MissionResult, RunResult
 from bt_nav.run.settings import DEFAULT_JITTER, effective_parameters, profile_maneuver, tree_settings
 from bt_nav.run.sinks import MissionSink, RunSink, SimEventLog

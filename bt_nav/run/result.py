@@ -13,7 +13,7 @@ from typing import Any
 from bt_nav_sim.world import World
 
 from bt_nav.media.plot import Trajectory, plot_robots, plot_run, start_circle
-from bt_nav.run.labjudge import checkoff_summary
+from bt_nav.run.lab import checkoff_summary
 
 
 @dataclass

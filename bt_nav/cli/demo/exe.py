@@ -3,7 +3,7 @@
 One run of ``bt-nav grade --exe``'s machinery (:func:`bt_nav.grading.node_run.run_exe_job`: the simulator, the
 profile's judge, the node with ``use_sim_time`` and the profile's remaps, the recorder) with a terminal: the node's
 log lines with the sim time each was logged at, the judge's service calls and replies and its report
-(:class:`bt_nav.run.labterm.NodeTerminal`), then the verdict. The bag is recorded into the run directory
+(:class:`bt_nav.run.terminal.NodeTerminal`), then the verdict. The bag is recorded into the run directory
 (``bag/``) and filmed (``--video``, default ``video.mp4`` there): the robot, its scan, the node's command and its
 log lines, which is what the lab's hand-in asks for (the terminal output and the robot reacting).
 
@@ -59,7 +59,7 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
     from bt_nav.grading.node_run import run_exe_job
     from bt_nav.ros.simclock import SimClock
     from bt_nav.ros.supervise import StopRequest, use_domain_here
-    from bt_nav.run.labterm import NodeTerminal
+    from bt_nav.run.terminal import NodeTerminal
 
     try:
         job, settings = _settings(opts)

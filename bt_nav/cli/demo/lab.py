@@ -6,7 +6,7 @@ for A and C, ``lab_dead_end`` for B), the executive with ``config/lab.yaml`` (an
 ``toggle_navigation``, and the check-off judge (:mod:`bt_nav.ros.nodes.checkoff`), which calls
 ``toggle_navigation`` and judges every maneuver from ground truth and the commands. The terminal shows the
 launch, the service calls and replies, the maneuver and emergency-brake lines, stamped with sim time
-(:class:`bt_nav.run.labterm.LabTerminal`), then the verdict and ``maneuvers fired: N`` (the judge's count).
+(:class:`bt_nav.run.terminal.LabTerminal`), then the verdict and ``maneuvers fired: N`` (the judge's count).
 ``--bag``/``--video`` record the run with exactly those lines as its events; ``--video`` films the bag.
 
 Run directory as the homework demo's: ``run.json``, the judge's ``results.json``, ``trajectory.json``,
@@ -78,9 +78,9 @@ def run_lab(opts: argparse.Namespace) -> int:
     from bt_nav.ros.bringup import cmd_vel_stamped
     from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
     from bt_nav.run.bagrecorder import start_process, stop_process
-    from bt_nav.run.labterm import EventPublisher, LabTerminal
     from bt_nav.run.rosmission import GRACE, RosMission
     from bt_nav.run.rundir import LOG_FORMAT, Logs
+    from bt_nav.run.terminal import EventPublisher, LabTerminal
 
     try:
         bag_dir = bag_for(opts.bag, opts.video)
