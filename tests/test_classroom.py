@@ -20,6 +20,13 @@ class FakeJob:
     key: str
 
 
+class FakeSettings(str):
+    """A student's settings, named as the student: their grid runs at 1x, so no failure is checked again."""
+
+    rtf = 1.0
+    realtime_check = True
+
+
 class Recorder:
     """Stands in for one run: notes how many run at once, returns a row."""
 
@@ -55,7 +62,7 @@ def recorder(monkeypatch: pytest.MonkeyPatch) -> Recorder:
 
 def test_students_with_one_run_each_still_fill_every_worker(recorder: Recorder) -> None:
     students = [Student(f"s{i}", "cmd") for i in range(4)]
-    plan = {s.name: (s.name, [FakeJob(f"{s.name}-ok")]) for s in students}
+    plan = {s.name: (FakeSettings(s.name), [FakeJob(f"{s.name}-ok")]) for s in students}
     out = run_class(students, lambda s: plan[s.name], workers=2)
     assert recorder.most == 2  # two students' runs at once: one grid at a time would run one
     assert recorder.started[0] == "s0-ok" and sorted(recorder.started) == [f"s{i}-ok" for i in range(4)]
@@ -65,7 +72,7 @@ def test_students_with_one_run_each_still_fill_every_worker(recorder: Recorder) 
 
 def test_a_students_rows_keep_their_jobs_order(recorder: Recorder) -> None:
     jobs = [FakeJob(f"a{i}-{'ok' if i % 2 else 'bad'}") for i in range(5)]
-    out = run_class([Student("a", "cmd")], lambda s: ("a", jobs), workers=3)
+    out = run_class([Student("a", "cmd")], lambda s: (FakeSettings("a"), jobs), workers=3)
     assert [r["job"] for r in out["a"]] == [j.key for j in jobs]
     assert [r["passed"] for r in out["a"]] == [False, True, False, True, False]
 

@@ -66,7 +66,7 @@ def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None 
     for jobs, settings, rows, _on_row in grids:
         failed = [job for job in jobs if failed_at_speed(rows.get(job.key))] \
             if settings.rtf > 1.0 and settings.realtime_check else []
-        slow = realtime_settings(settings)
+        slow = realtime_settings(settings) if failed else settings
         plans.append((failed, slow, finished_runs(slow.out, failed) if failed and slow.out.is_dir() else {}))
     probes = _run_missing([(failed[0], slow, done) for failed, slow, done in plans if failed], workers, stop)
     rest = []
