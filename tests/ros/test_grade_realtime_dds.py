@@ -2,12 +2,13 @@
 a failure at 1x before it stands, so such a node passes (with a finding), while a real mistake still fails.
 
 A class of two over real DDS, one run each at the default 5x: the lab's correct node with its turn timed by
-``time.monotonic`` (``--timing wall``: 450 deg at 5x) and the half-angle mistake (45 deg at any speed).
+``time.monotonic`` (``--timing wall``: 450 deg at the default 5x) and the half-angle mistake (45 deg at any speed).
 """
 
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -33,7 +34,8 @@ def test_a_wall_clock_node_passes_at_real_time_and_a_mistake_still_fails(tmp_pat
     assert len(wall) == 1 and wall[0]["passed"], wall
     assert "/realtime/" in wall[0]["run_dir"], wall[0]["run_dir"]
     assert wall[0]["realtime"]["rtf"] == 5.0 and not wall[0]["realtime"]["passed"]
-    assert "turned 4" in wall[0]["realtime"]["reason"], wall[0]["realtime"]  # 450 deg at 5x
+    turned = re.search(r"turned (\d+) deg", wall[0]["realtime"]["reason"])
+    assert turned and int(turned.group(1)) > 300, wall[0]["realtime"]  # 90 deg of wall time, many times over
     assert any("keeps time by the wall clock" in f for f in wall[0]["findings"]), wall[0]["findings"]
     assert len(half) == 1 and not half[0]["passed"] and "/realtime/" not in half[0]["run_dir"], half
     assert "turned 4" in half[0]["reason"] and "the Smart Pivot needs 90 +- 10 deg" in half[0]["reason"]
