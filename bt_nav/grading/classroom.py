@@ -205,18 +205,17 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
 def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]], workers: int,
                         stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
     """Every student's failures checked at 1x as ``--exe`` checks one node's (:mod:`bt_nav.grading.realtime`), in one
-    pool; a student's report rewritten where a 1x run replaced a row."""
-    from bt_nav.grading.realtime import confirm_grids
+    pool; the report of each student who had a failure to check written again (with its 1x rows or its probe)."""
+    from bt_nav.grading.realtime import confirm_grids, failed_jobs
 
     if stop is not None and stop.requested:
         return
-    names = list(grids)
+    names = [name for name, (settings, jobs, rows) in grids.items() if failed_jobs(jobs, settings, rows)]
     shown = [None if on_row is None else (lambda row, who=name: on_row(who, row)) for name in names]
-    checked = [(grids[n][1], grids[n][0], grids[n][2], show) for n, show in zip(names, shown, strict=True)]
-    replaced = confirm_grids(checked, workers, stop)
-    for name, count in zip(names, replaced, strict=True):
-        if count or any("realtime_probe" in row for row in grids[name][2].values()):
-            _write_student_report(*grids[name])
+    confirm_grids([(grids[n][1], grids[n][0], grids[n][2], show) for n, show in zip(names, shown, strict=True)],
+                  workers, stop)
+    for name in names:
+        _write_student_report(*grids[name])
 
 
 def _ended(jobs: Sequence[Any], rows: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:

@@ -35,6 +35,13 @@ def failed_at_speed(row: Row | None) -> bool:
     return bool(row) and not row["passed"] and row["outcome"] not in (ERROR, STOPPED) and "realtime" not in row
 
 
+def failed_jobs(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]) -> list[Job]:
+    """The jobs whose failure the grid checks at 1x: none at ``rtf <= 1`` or with the check off."""
+    if settings.rtf <= 1.0 or not settings.realtime_check:
+        return []
+    return [job for job in jobs if failed_at_speed(rows.get(job.key))]
+
+
 def wall_clock_finding(rtf: float, reason: str) -> str:
     """What a run that passed at 1x after failing faster tells its student."""
     return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x: the node keeps time by the wall clock "
@@ -64,25 +71,24 @@ def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None 
     other failed runs of the grids whose probe passed; how many rows each grid had replaced."""
     plans = []  # per grid: its failed jobs, its 1x settings, the 1x rows it has already
     for jobs, settings, rows, _on_row in grids:
-        failed = [job for job in jobs if failed_at_speed(rows.get(job.key))] \
-            if settings.rtf > 1.0 and settings.realtime_check else []
+        failed = failed_jobs(jobs, settings, rows)
         slow = realtime_settings(settings) if failed else settings
         plans.append((failed, slow, finished_runs(slow.out, failed) if failed and slow.out.is_dir() else {}))
     probes = _run_missing([(failed[0], slow, done) for failed, slow, done in plans if failed], workers, stop)
-    rest = []
+    rest, confirmed = [], []  # the other failed runs to run at 1x; per grid, whether its probe passed
     for (failed, slow, done), (_, _, rows, _) in zip(plans, grids, strict=True):
         probe = probes.get((str(slow.out), failed[0].key)) if failed else None
-        if probe is not None and not probe["passed"]:
+        confirmed.append(probe is not None and probe["passed"])
+        if confirmed[-1]:
+            rest += [(job, slow, done) for job in failed[1:]]
+        elif probe is not None:
             rows[failed[0].key]["realtime_probe"] = {"passed": False, "reason": probe["reason"],
                                                      "run_dir": probe["run_dir"]}
-        elif probe is not None:
-            rest += [(job, slow, done) for job in failed[1:]]
     results = {**probes, **_run_missing(rest, workers, stop)}
     replaced = []
-    for (failed, slow, _), (_, settings, rows, on_row) in zip(plans, grids, strict=True):
-        probe = results.get((str(slow.out), failed[0].key)) if failed else None
+    for (failed, slow, _), passed_at_1x, (_, settings, rows, on_row) in zip(plans, confirmed, grids, strict=True):
         count = 0
-        for job in failed if probe is not None and probe["passed"] else ():
+        for job in failed if passed_at_1x else ():
             slow_row = results.get((str(slow.out), job.key))
             if slow_row is not None:
                 rows[job.key] = _graded_at_real_time(slow_row, rows[job.key], settings.rtf)
@@ -109,7 +115,7 @@ def _graded_at_real_time(slow: Row, fast: Row, rtf: float) -> Row:
     """The 1x run's row, with what the faster run said: a finding when the 1x run passed."""
     row = dict(slow)
     row["realtime"] = {"rtf": rtf, "passed": fast["passed"], "reason": fast["reason"], "run_dir": fast["run_dir"]}
-    if row["passed"] and row["outcome"] not in (ERROR, STOPPED):
+    if row["passed"]:  # a passed row is a verdict (never a bt_nav error nor stopped)
         finding = wall_clock_finding(rtf, fast["reason"])
         row["findings"] = [*row.get("findings", []), finding]
         row["reason"] = f"{row['reason']}; {finding}"

@@ -386,8 +386,9 @@ class CheckoffJudge(Verdict):
             return  # it held already when the creeping began (at the arming, or as the last turn ended)
         crept = self._path_length(self._t[k], start) if k < i else 0.0
         episode["crept_with_trigger"] = round(crept, 3)
-        episode["trigger_held_for"] = round(start - self._t[k], 2)
-        if crept >= cfg.late_distance and start - self._t[k] >= cfg.late_time:
+        held = start - self._t[k]
+        episode["trigger_held_for"] = round(held, 2)
+        if crept >= cfg.late_distance and held >= cfg.late_time:
             episode["late"] = True
             episode["passed"] = False
 

@@ -91,14 +91,13 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
 def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: int,
                         stop: Any) -> list[dict[str, Any]]:
     """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying so when it runs."""
-    from bt_nav.grading.realtime import confirm_at_real_time, failed_at_speed
+    from bt_nav.grading.realtime import confirm_at_real_time, failed_jobs
 
-    if stop.requested or settings.rtf <= 1.0 or not settings.realtime_check or \
-            not any(failed_at_speed(row) for row in rows):
+    by_key = {row["job"]: row for row in rows}
+    if stop.requested or not failed_jobs(jobs, settings, by_key):
         return rows
     print(f"bt-nav grade: a failed run again at 1x real time before the failures stand (--realtime-check off "
           f"skips it): into {settings.out / 'realtime'}/", flush=True)
-    by_key = {row["job"]: row for row in rows}
     replaced = confirm_at_real_time(jobs, settings, by_key, workers, stop, _show)
     if not replaced:
         print("bt-nav grade: it failed at 1x too: the failures stand", flush=True)
