@@ -103,6 +103,20 @@ def test_the_cli_refuses_a_missing_program_before_any_run(tmp_path: Path, capsys
     assert not (tmp_path / "g").exists(), "nothing is written for a refused grade"
 
 
+@pytest.mark.parametrize("mode", [["--exe", "python3 node.py"], ["--class", "class.yaml"], []])
+def test_an_unknown_world_is_refused_before_any_run(mode: list[str], tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture) -> None:
+    """A typo in --worlds is one error naming the bundled worlds, not a grid of simulators refusing to start."""
+    (tmp_path / "class.yaml").write_text("ann: python3 node.py\n")
+    mode = [str(tmp_path / m) if m.endswith(".yaml") else m for m in mode]
+    with pytest.raises(SystemExit) as exc:
+        grade.main([*mode, "--worlds", "stage_4,stage_1", "--seeds", "1", "--out", str(tmp_path / "g")])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "unknown world 'stage_1'; bundled worlds: " in err and "stage_4" in err.split("bundled worlds:")[1]
+    assert not (tmp_path / "g").exists(), "nothing is written for a refused grade"
+
+
 # ---------------------------------------------------------------------------------------------- the directory
 def test_an_out_holding_anything_is_refused_without_resume(tmp_path: Path) -> None:
     out = tmp_path / "g"

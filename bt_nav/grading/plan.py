@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from bt_nav_sim.world import list_worlds
 
@@ -29,14 +30,26 @@ EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
 
 
 
+def _check_worlds(worlds: Sequence[str]) -> None:
+    """Refuse a world that is neither bundled nor a YAML file before any run starts: a typo would otherwise cost
+    every run of the grid a simulator that refuses to start. ValueError names the bundled worlds."""
+    bundled = set(list_worlds("all"))
+    unknown = [w for w in worlds
+               if w not in bundled and not (Path(w).suffix in (".yaml", ".yml") and Path(w).is_file())]
+    if unknown:
+        raise ValueError(f"unknown world{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))}; bundled "
+                         f"worlds: {', '.join(sorted(bundled))} (or a world YAML file's path)")
+
+
 def grid_axes(args: argparse.Namespace) -> tuple[list[str], list[int]]:
     """The grid's worlds and seeds (defaults: a lock-step grid all the profile's 20 seeds; a node over DDS, the
-    profile's representative worlds and 2 seeds, a size a class can afford)."""
+    profile's representative worlds and 2 seeds, a size a class can afford). ValueError: an unknown world."""
     lab, exe = args.profile == "lab", args.exe is not None or getattr(args, "klass", None) is not None
     default_worlds = EXE_WORLDS.get(args.profile, "stage_4") if exe else "all" if lab else "stage_4"
     worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
     if worlds == ["all"]:
         worlds = list_worlds("lab" if lab else "homework")
+    _check_worlds(worlds)
     count = args.seeds if args.seeds is not None else 2 if exe else 20
     return worlds, list(range(args.first_seed, args.first_seed + count))
 

@@ -146,8 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         from bt_nav.cli.grade.exe import grade_class
 
         return grade_class(args, parser)
-    worlds, seeds = grid_axes(args)
     try:
+        worlds, seeds = grid_axes(args)
         jobs = build_jobs(args, worlds, seeds)
         overrides = parse_assignments(args.overrides) or None
         sim_params = parse_assignments(args.sim_param) or None
