@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, ScanLayout, lidar_model
-from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState, step, target_twist, wrap_angle
+from bt_nav_sim.physics import KINEMATICS, ClearanceMemo, RobotParams, RobotState, step, target_twist, wrap_angle
 from bt_nav_sim.world import World, load_world
 
 
@@ -206,6 +206,7 @@ class SimCore:
         if self._appearing:
             self.world.update([self.spawn[:2]])
         self._was_colliding = self.world.clearance(self.spawn[0], self.spawn[1]) <= config.radius
+        self._clearance = ClearanceMemo()  # the physics' last exact clearance, step to step
 
     @property
     def t(self) -> float:
@@ -320,7 +321,7 @@ class SimCore:
         while steps > 0:
             settled = (self.state.v, self.state.w) == target
             n = steps if settled else 1
-            self.state, hit = step(self.state, cmd_v, cmd_w, n * dt, world, self.params)
+            self.state, hit = step(self.state, cmd_v, cmd_w, n * dt, world, self.params, self._clearance)
             collided = collided or hit
             steps -= n
         return collided

@@ -6,7 +6,7 @@ import math
 
 import pytest
 from bt_nav_sim import RobotParams, RobotState, load_world, step, world_from_dict
-from bt_nav_sim.physics import wheel_limited
+from bt_nav_sim.physics import ClearanceMemo, wheel_limited
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -214,6 +214,25 @@ def test_random_commands_never_penetrate(cmds: list[tuple[float, float, float]])
         assert world.clearance(s.x, s.y) >= P.radius - 1e-6
         assert abs(s.v) <= P.max_linear and abs(s.w) <= P.max_angular
         assert -math.pi <= s.yaw < math.pi
+
+
+@settings(max_examples=30, deadline=None)
+@given(cmds=st.lists(st.tuples(st.floats(-0.3, 0.3), st.floats(-3.0, 3.0), st.floats(0.001, 0.5)),
+                     min_size=1, max_size=80))
+def test_the_clearance_memo_changes_no_step(cmds: list[tuple[float, float, float]]) -> None:
+    """Steps that carry the last exact clearance over (the simulator's way) land exactly where steps that query
+    it afresh do, bumps into walls included; a world whose version changed is not answered from the memo."""
+    world = load_world("stage_4")
+    memo = ClearanceMemo()
+    fresh = kept = RobotState(*world.spawn)
+    for v, w, dt in cmds:
+        fresh, hit_fresh = step(fresh, v, w, dt, world)
+        kept, hit_kept = step(kept, v, w, dt, world, P, memo)
+        assert (kept, hit_kept) == (fresh, hit_fresh)
+    assert memo.recall(world) is not None
+    assert memo.recall(load_world("stage_4")) is None, "another world object"
+    object.__setattr__(world, "version", world.version + 1)
+    assert memo.recall(world) is None, "an object appeared"
 
 
 # ------------------------------------------------------------------------------------------ burger kinematics
