@@ -172,6 +172,24 @@ def lidar_model(name: str) -> LidarModel:
         raise ValueError(f"unknown lidar {name!r}; choose one of {', '.join(LIDARS)}") from None
 
 
+def closed_quads(segs: np.ndarray) -> np.ndarray:
+    """Row indices (Q, 4) of the runs of four consecutive segments that close a convex counter-clockwise
+    quadrilateral, each ending exactly where the next begins (the boxes of a world: ``box_segments``)."""
+    quads = []
+    i, n = 0, segs.shape[0]
+    while i + 4 <= n:
+        four = segs[i:i + 4]
+        closed = bool(np.array_equal(four[:, 2:4], np.roll(four[:, 0:2], -1, axis=0)))
+        d = four[:, 2:4] - four[:, 0:2]
+        turns = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
+        if closed and bool(np.all(turns > 0.0)):
+            quads.append(range(i, i + 4))
+            i += 4
+        else:
+            i += 1
+    return np.asarray(quads, dtype=np.intp).reshape(-1, 4)
+
+
 class RayCaster:
     """Casts scans of one LidarModel in one World, with everything pose-independent precomputed.
 
@@ -229,6 +247,7 @@ class RayCaster:
         self._cx = np.ascontiguousarray(circ[:, 0:1])
         self._cy = np.ascontiguousarray(circ[:, 1:2])
         self._r2 = np.ascontiguousarray(circ[:, 2:3] ** 2)
+        self._quads = closed_quads(segs)
         n, m = segs.shape[0], circ.shape[0]
         # Work buffers, reused by every scan (so one RayCaster must not be shared between threads).
         self._ux = np.empty(nb)
@@ -244,6 +263,23 @@ class RayCaster:
         self._cmask = np.empty((m, nb), dtype=bool)
         self._best = np.empty(nb)
         self._cbest = np.empty(nb)
+
+    def _facing(self, cwd: np.ndarray) -> np.ndarray | None:
+        """Indices of the segments a ray from the sensor can hit first (None: all of them).
+
+        The faces of a closed box (:func:`closed_quads`) whose inner side the sensor is on (``cwd`` > 0: the
+        interior is on each face's left) are hidden behind the box's front faces: a ray from outside a convex
+        polygon enters it through a face turned towards the ray, so leaving the far faces out changes no range
+        and halves the work a box costs. A sensor inside a box (every face turned away) keeps all four.
+        """
+        quads = self._quads
+        if not quads.shape[0]:
+            return None
+        back = cwd[quads, 0] > 0.0
+        back &= ~back.all(axis=1, keepdims=True)
+        keep = np.ones(cwd.shape[0], dtype=bool)
+        keep[quads[back]] = False
+        return np.flatnonzero(keep)
 
     def true_ranges(self, x: float, y: float, yaw: float, extra: np.ndarray | None = None) -> np.ndarray:
         """Exact distance to the first obstacle along every beam (float64, +inf if none).
@@ -266,12 +302,17 @@ class RayCaster:
         best.fill(np.inf)
 
         if self._ax.shape[0]:
-            wx = self._ax - x
-            wy = self._ay - y
-            cwd = wx * self._dy - wy * self._dx  # cross(w, d), beam independent
-            den, tmp, s, t = self._den, self._tmp, self._s, self._t
-            np.multiply(self._dy, ux, out=den)
-            np.multiply(self._dx, uy, out=tmp)
+            ax, ay, dx, dy = self._ax, self._ay, self._dx, self._dy
+            wx = ax - x
+            wy = ay - y
+            cwd = wx * dy - wy * dx  # cross(w, d), beam independent; > 0: the sensor is on the segment's left
+            front = self._facing(cwd)
+            if front is not None:
+                ax, ay, dx, dy, wx, wy, cwd = (a[front] for a in (ax, ay, dx, dy, wx, wy, cwd))
+            k = ax.shape[0]
+            den, tmp, s, t = self._den[:k], self._tmp[:k], self._s[:k], self._t[:k]
+            np.multiply(dy, ux, out=den)
+            np.multiply(dx, uy, out=tmp)
             den -= tmp  # cross(u, d)
             np.multiply(wx, uy, out=s)
             np.multiply(wy, ux, out=tmp)
@@ -280,7 +321,7 @@ class RayCaster:
             with np.errstate(divide="ignore", invalid="ignore"):
                 np.divide(s, den, out=s)
                 np.divide(cwd, den, out=t)
-            mask, mask2 = self._mask, self._mask2
+            mask, mask2 = self._mask[:k], self._mask2[:k]
             # A small tolerance on s so a ray through the shared corner of two walls cannot slip between
             # them on round-off (s = 1 + 1e-16 on one wall and -1e-16 on the next).
             np.greater_equal(s, -_S_EPS, out=mask)
@@ -291,7 +332,8 @@ class RayCaster:
             # Invert the mask in place and overwrite misses with inf, then take the nearest hit per beam.
             np.logical_not(mask, out=mask)
             np.copyto(t, np.inf, where=mask)
-            np.minimum.reduce(t, axis=0, out=best)
+            if k:
+                np.minimum.reduce(t, axis=0, out=best)
 
         if self._cx.shape[0]:
             wx = self._cx - x

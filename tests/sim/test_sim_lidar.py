@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from bt_nav_sim import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays, load_world, world_from_dict
+from bt_nav_sim.lidar import closed_quads
 
 NOISELESS = LidarModel(range_max=10.0, noise_sigma=0.0)
 
@@ -166,3 +167,29 @@ def test_closed_world_rays_through_corners_do_not_leak() -> None:
     r = cast_rays(world, 0.0, 0.0, 0.0, LidarModel(range_max=1e3, range_min=0.0))
     assert r[135] == pytest.approx(0.4 * math.sqrt(2), abs=1e-6)
     assert np.all(np.isfinite(r))
+
+
+@pytest.mark.parametrize("name", ["stage_4", "maze", "office", "lab_dead_end"])
+def test_the_far_faces_of_boxes_change_no_range(name: str) -> None:
+    """Leaving out the box faces turned away from the sensor gives the very ranges of casting every face, from
+    free poses and from inside a box (where every face is turned away and all four are kept)."""
+    world = load_world(name)
+    culled, every = RayCaster(world), RayCaster(world)
+    every._quads = np.zeros((0, 4), dtype=np.intp)
+    assert culled._quads.shape[0] == len(world.boxes) > 0
+    rng = np.random.default_rng(11)
+    x0, y0, x1, y1 = world.bounds
+    cx, cy = world.boxes[0][:2]
+    poses = [(cx, cy, 0.3)] + [(rng.uniform(x0, x1), rng.uniform(y0, y1), rng.uniform(-math.pi, math.pi))
+                               for _ in range(300)]
+    for x, y, yaw in poses:
+        np.testing.assert_array_equal(culled.true_ranges(x, y, yaw), every.true_ranges(x, y, yaw).copy())
+    assert np.isfinite(culled.true_ranges(cx, cy, 0.3)).all(), "inside a box every beam meets a wall"
+
+
+def test_only_closed_counter_clockwise_quads_are_boxes() -> None:
+    square = np.array([[0, 0, 1, 0], [1, 0, 1, 1], [1, 1, 0, 1], [0, 1, 0, 0]], dtype=float)
+    assert closed_quads(square).tolist() == [[0, 1, 2, 3]]
+    assert closed_quads(square[::-1, [2, 3, 0, 1]]).shape == (0, 4), "clockwise: the inside is on the right"
+    assert closed_quads(square[:3]).shape == (0, 4), "open: three walls of a room"
+    assert closed_quads(np.vstack([square[:1], square])).tolist() == [[1, 2, 3, 4]]
