@@ -11,7 +11,7 @@ import pytest
 
 from bt_nav.media.treedot import nodes_model
 from bt_nav.mission.behaviours import LEAF_CLASSES, REGISTRY
-from bt_nav.mission.resources import tree_file
+from bt_nav.mission.resources import read_yaml, tree_file
 from bt_nav.mission.tree import load_tree
 from bt_nav.testing import TickHarness
 
@@ -109,3 +109,28 @@ def test_golden_snapshots() -> None:
     h.clock.now = 60.0
     h.tick()
     golden("04_mission_over", h.core.snapshot())
+
+
+def test_cached_type_hints_answer_as_py_trees_does() -> None:
+    """The parser's type hints, asked once per class, are py_trees' own for every class of the registry, and each
+    answer is a dict of its own (the parser may fill it in)."""
+    from bt_nav.mission import tree
+
+    assert py_trees.ports_utils.collect_type_hints is tree._cached_type_hints
+    classes = set(REGISTRY.values())
+    assert len(classes) > 5
+    for cls in classes:
+        first = tree._cached_type_hints(cls)
+        assert first == tree._COLLECT_TYPE_HINTS(cls), cls
+        first["changed"] = int
+        assert "changed" not in tree._cached_type_hints(cls), "a shared dict would leak one call's changes"
+
+
+def test_read_yaml_parses_each_version_once_and_hands_out_copies(tmp_path: Path) -> None:
+    path = tmp_path / "w.yaml"
+    path.write_text("boxes: [[1, 2]]\n")
+    first = read_yaml(path)
+    first["boxes"][0].append(3)
+    assert read_yaml(path) == {"boxes": [[1, 2]]}, "a caller's change must not reach the next reader"
+    path.write_text("boxes: [[5, 6, 7]]\n")  # another size: another version of the file
+    assert read_yaml(path) == {"boxes": [[5, 6, 7]]}

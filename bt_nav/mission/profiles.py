@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from bt_nav.mission.resources import share_dir
+from bt_nav.mission.resources import read_yaml, share_dir
 
 #: The executive's node name, the section params files address.
 EXECUTIVE_NAME = "bt_nav_executive"
@@ -40,8 +40,7 @@ def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[s
     import yaml
 
     try:
-        with open(path, encoding="utf-8") as stream:
-            data = yaml.safe_load(stream) or {}
+        data = read_yaml(path) or {}
     except (OSError, yaml.YAMLError):
         return {}
     merged: dict[str, Any] = {}

@@ -7,10 +7,12 @@ the ament index (a colcon install, ``ros2 run``).
 
 from __future__ import annotations
 
+import copy
 import os
 import sys
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 
 @lru_cache(maxsize=1)
@@ -37,3 +39,22 @@ def share_dir() -> Path:
 def tree_file(name: str = "mission.xml") -> Path:
     """A tree file under ``trees/``."""
     return share_dir() / "trees" / name
+
+
+def read_yaml(path: str | os.PathLike[str]) -> Any:
+    """The parsed YAML document at ``path`` (a copy the caller may change): parsed once per version of the file.
+
+    Why: a grid's lock-step missions each load their world and profile files, and parsing YAML cost a mission
+    more than its LiDAR's scans of a second. The file's modification time and size key the cache, so an edited
+    file is read again. Raises what ``open`` and ``yaml.safe_load`` raise.
+    """
+    stat = os.stat(path)
+    return copy.deepcopy(_parsed(os.path.abspath(path), stat.st_mtime_ns, stat.st_size))
+
+
+@lru_cache(maxsize=64)
+def _parsed(path: str, _mtime_ns: int, _size: int) -> Any:
+    import yaml
+
+    with open(path, encoding="utf-8") as stream:
+        return yaml.safe_load(stream)

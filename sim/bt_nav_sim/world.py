@@ -77,9 +77,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from bt_nav.mission.params import LAB_MANEUVERS  # the lab maneuvers a world may list in checkoff_maneuvers
+from bt_nav.mission.resources import read_yaml  # parsed once per file version: a grid loads its worlds often
 from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, walker_from_dict
 
 WORLDS_DIR = Path(__file__).parent / "worlds"
@@ -631,8 +631,7 @@ def load_world(name_or_path: str, seed: int | None = None) -> World:
         path = WORLDS_DIR / f"{name_or_path}.yaml"
         if not path.is_file():
             raise FileNotFoundError(f"unknown world {name_or_path!r}; bundled worlds: {', '.join(list_worlds('all'))}")
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
+    data = read_yaml(path)
     if isinstance(data, dict) and "name" not in data:
         data["name"] = path.stem
     return world_from_dict(data, seed=seed)
