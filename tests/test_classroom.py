@@ -88,3 +88,29 @@ def test_a_manifest_names_its_problem(tmp_path: Path) -> None:
     with pytest.raises(ValueError):
         read_manifest(path)
     assert classroom.NAME.match("carol_1.x")
+
+
+def test_a_class_says_once_which_arenas_cannot_check_its_maneuver(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                  capsys: pytest.CaptureFixture) -> None:
+    """lab_object cannot check a Retreat off: a class of three hears it once, not once per student."""
+    import sys
+
+    from bt_nav.cli import grade
+
+    node = tmp_path / "node.py"
+    node.write_text("# CHOICE: B\n")
+    manifest = tmp_path / "class.yaml"
+    manifest.write_text("".join(f"{name}: {sys.executable} {node}\n" for name in ("ann", "bob", "cy")))
+    planned: dict[str, int] = {}
+
+    def no_runs(students: list[Student], plan: Any, *rest: Any) -> dict[str, Any]:
+        planned.update({s.name: len(plan(s)[1]) for s in students})
+        return {}
+
+    monkeypatch.setattr(classroom, "run_class", no_runs)
+    monkeypatch.setattr(classroom, "write_class_page", lambda *args: [])
+    grade.main(["--class", str(manifest), "--profile", "lab", "--worlds", "lab_object,lab_dead_end",
+                "--lidars", "lds01", "--seeds", "1", "--progress", "off", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert err.count("not checked off there: lab_object B") == 1, err
+    assert planned == {"ann": 1, "bob": 1, "cy": 1}, "each student's grid keeps lab_dead_end"

@@ -74,9 +74,11 @@ def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
     return choice
 
 
-def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int]) -> list[Job]:
+def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int],
+               left_out: set[str] | None = None) -> list[Job]:
     """The grid of the options: worlds x maneuvers x LiDARs x seeds (the lab's arenas only where they can check
-    the maneuver off; says on stderr which pairs it leaves out). ValueError: options that do not fit."""
+    the maneuver off; says on stderr which pairs it leaves out, or adds them to ``left_out``, for a class to say
+    once). ValueError: options that do not fit."""
     lab, exe = args.profile == "lab", args.exe is not None
     maneuvers = [normalise_maneuver(m.strip()) for m in grid_maneuvers(args, lab).split(",") if m.strip()]
     lidars = parse_lidars(args.lidars if args.lidars is not None else ",".join(EXE_LIDARS) if exe else None)
@@ -88,6 +90,8 @@ def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[
     if not lab:
         return jobs
     kept, skipped = checkoff_jobs(jobs)
-    if skipped:
+    if skipped and left_out is not None:
+        left_out.update(f"{w} {m}" for w, m in skipped)
+    elif skipped:
         print("not checked off there: " + ", ".join(f"{w} {m}" for w, m in skipped), file=sys.stderr)
     return kept

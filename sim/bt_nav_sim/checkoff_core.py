@@ -612,7 +612,8 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
         out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
     if e.get("late"):
         out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
-                   "after its trigger held (does it read its distance parameter?)")
+                   "after its trigger held (does it read its distance parameter, and its sectors at their angles "
+                   "from angle_min and angle_increment?)")
     if not e["angle_ok"]:
         out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}")
     if not e["forward_ok"]:

@@ -122,7 +122,7 @@ def test_a_node_ignoring_its_safety_distance_triggers_late(tmp_path: Path) -> No
     [late] = result["grades"]["ignores"]["runs"]
     assert ok["passed"], ok["reason"]
     assert not late["passed"] and "turned late: it crept on" in late["reason"], late["reason"]
-    assert "does it read its distance parameter?" in late["reason"]
+    assert "does it read its distance parameter, and its sectors at their angles" in late["reason"]
 
 
 @pytest.mark.slow

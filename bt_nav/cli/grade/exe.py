@@ -143,14 +143,16 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         students = read_manifest(Path(args.klass))
         out = Path(args.out or f"runs/grade-class-{time.strftime('%Y%m%d-%H%M%S')}").absolute()
         worlds, seeds = grid_axes(args)
-        plans = {}
+        plans, left_out = {}, set()
         for student in students:  # every plan checked before the first run (a bad command refuses the class)
             own = copy.copy(args)
             own.exe, own.out, own.json = student.command, str(out / student.name), None
-            jobs = build_jobs(own, worlds, seeds)
+            jobs = build_jobs(own, worlds, seeds, left_out)
             plans[student.name] = (_settings(own, own.profile == "lab" or own.maneuvers is not None), jobs)
     except ValueError as exc:
         parser.error(str(exc))
+    if left_out:
+        print("not checked off there: " + ", ".join(sorted(left_out)), file=sys.stderr)
     print(f"bt-nav grade: a class of {len(students)} in {out}/: " + ", ".join(
         f"{name} ({len(jobs)} runs)" for name, (_, jobs) in plans.items()), flush=True)
     stop = StopRequest().install()
