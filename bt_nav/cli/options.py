@@ -57,15 +57,19 @@ def film(bag_dir: str, out: str, fps: float) -> None:
 
 
 def jobs_arg(text: str) -> int:
-    """``--jobs``: a count >= 1, or ``auto``: one run per usable core.
+    """``--jobs``: a count >= 1, or ``auto``: one run per usable core, and for ``--exe`` runs more while the cores
+    stay idle (:mod:`bt_nav.grading.admission`).
 
-    Why one per core: a lock-step run is one busy process; a ``--exe`` run is four (simulator, node, judge,
-    recorder) that together keep about one core busy at the default ``--rtf 5`` (measured on 2 cores: 11 CPU s
-    per 12 s mission). More runs than cores starve a node of CPU, and a starved node answers late in sim
-    time: the verdicts change with the load (docs/grading.md, 204 runs at once).
+    Why one per core to begin with: a lock-step run is one busy process. A ``--exe`` run is three processes that
+    mostly wait for sim time (at the default ``--rtf 5`` about a third of a core: 6.1 CPU s per 14 s run on 2
+    cores), so more of them fit, but only as long as the cores stay idle: a starved node answers late in sim
+    time and the verdicts change with the load (docs/grading.md, 204 runs at once). A number is exactly that
+    many runs at once.
     """
     if text.strip().lower() == "auto":
-        return usable_cores()
+        from bt_nav.grading.admission import AutoJobs
+
+        return AutoJobs(usable_cores())
     try:
         value = int(text)
     except ValueError:

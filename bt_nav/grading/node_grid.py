@@ -37,6 +37,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from bt_nav.grading.admission import Admission
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.grading.node_run import ExeSettings, run_exe_job
 from bt_nav.ros.supervise import StopRequest
@@ -227,11 +228,14 @@ def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:
 
 def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
              stop: StopRequest | None) -> Iterator[tuple[int, Row | None]]:
-    """Every (job, its grid's settings), ``workers`` at a time in threads (one grid's, or a whole class's); yields
+    """Every (job, its grid's settings), ``workers`` at a time in threads (``--jobs auto``: as many as
+    :class:`~bt_nav.grading.admission.Admission` lets start; one grid's, or a whole class's); yields
     (the task's index, its row) as each ends, None for a run that never started. A stop cancels the runs not
     started."""
-    with ThreadPoolExecutor(max_workers=max(1, workers), thread_name_prefix="exe-run") as pool:
-        index: dict[Future, int] = {pool.submit(run_unless_stopped, job, settings, stop): i
+    admission = Admission.for_jobs(workers)
+    threads = admission.limit if admission is not None else max(1, workers)
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="exe-run") as pool:
+        index: dict[Future, int] = {pool.submit(_admitted, admission, job, settings, stop): i
                                     for i, (job, settings) in enumerate(tasks)}
         pending = set(index)
         while pending:
@@ -241,6 +245,18 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
             if stop is not None and stop.requested:
                 for future in pending:
                     future.cancel()
+
+
+def _admitted(admission: Admission | None, job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
+    """:func:`run_unless_stopped` once ``admission`` lets the run start (``--jobs auto``); None if stopped first."""
+    if admission is None:
+        return run_unless_stopped(job, settings, stop)
+    if not admission.enter(stop):
+        return None
+    try:
+        return run_unless_stopped(job, settings, stop)
+    finally:
+        admission.leave()
 
 
 def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:

@@ -77,8 +77,8 @@ def _parser() -> argparse.ArgumentParser:
                         "scan by fixed indices passes one and fails another)")
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
     parser.add_argument("--jobs", type=jobs_arg, default="auto", metavar="N|auto",
-                        help="runs at once on this machine (without --scheduler); auto: one per usable core "
-                        "(default auto)")
+                        help="runs at once on this machine (without --scheduler); auto: one per usable core, and "
+                        "for --exe up to two per core while the cores stay idle (default auto)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
     add_mission_options(parser, grid=True)

@@ -51,6 +51,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.grading.node_run`); exit 0 only if every run passed,
     2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
+    from bt_nav.grading.admission import describe
     from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
@@ -60,7 +61,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         done = prepare_out(settings, jobs, args.resume)
     except ValueError as exc:
         parser.error(str(exc))
-    where = f"on {args.scheduler}" if args.scheduler else f"{args.jobs} at a time"
+    where = f"on {args.scheduler}" if args.scheduler else describe(args.jobs)
     print(f"bt-nav grade: {len(jobs)} runs of {settings.command!r} ({args.profile} profile, {where}, "
           f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {settings.out}/", flush=True)
     if args.resume:
