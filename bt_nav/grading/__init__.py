@@ -8,7 +8,11 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
 - :mod:`bt_nav.grading.node_run`: one run of any robot node over DDS (``bt-nav grade --exe``): the simulator
   and the profile's judge around a foreign command, isolated in a ROS domain and a directory of its own.
 - :mod:`bt_nav.grading.node_bag`: that run's bag (``bt-nav record`` as one more child of the run).
-- :mod:`bt_nav.grading.node_grid`: a grid of such runs, here or on Dask, resumable.
+- :mod:`bt_nav.grading.node_grid`: a grid of such runs, here or on Dask, resumable;
+  :mod:`bt_nav.grading.admission`: how many of them run at once with ``--jobs auto``.
+- :mod:`bt_nav.grading.plan`: a grid's worlds, seeds, maneuvers and LiDARs from the options (defaults per kind).
+- :mod:`bt_nav.grading.classroom`: a class in one command (a manifest, one pool, the class page).
+- :mod:`bt_nav.grading.realtime`: a failure at ``--rtf`` > 1 checked at 1x before it stands.
 - :mod:`bt_nav.grading.report`, :mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`: the grid's report
   (``grade.json``, ``summary.md``, ``report.html``) with its pictures and videos.
 """
