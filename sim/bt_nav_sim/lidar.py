@@ -248,6 +248,8 @@ class RayCaster:
         self._cy = np.ascontiguousarray(circ[:, 1:2])
         self._r2 = np.ascontiguousarray(circ[:, 2:3] ** 2)
         self._quads = closed_quads(segs)
+        self._front: tuple[np.ndarray, tuple[np.ndarray, ...]] | None = None  # the last _facing choice
+        self._front_back = np.zeros(0, dtype=bool)
         n, m = segs.shape[0], circ.shape[0]
         # Work buffers, reused by every scan (so one RayCaster must not be shared between threads).
         self._ux = np.empty(nb)
@@ -264,22 +266,29 @@ class RayCaster:
         self._best = np.empty(nb)
         self._cbest = np.empty(nb)
 
-    def _facing(self, cwd: np.ndarray) -> np.ndarray | None:
-        """Indices of the segments a ray from the sensor can hit first (None: all of them).
+    def _facing(self, cwd: np.ndarray) -> tuple[np.ndarray, tuple[np.ndarray, ...]] | None:
+        """The segments a ray from the sensor can hit first, and their (a_x, a_y, d_x, d_y) columns (None: all).
 
         The faces of a closed box (:func:`closed_quads`) whose inner side the sensor is on (``cwd`` > 0: the
         interior is on each face's left) are hidden behind the box's front faces: a ray from outside a convex
         polygon enters it through a face turned towards the ray, so leaving the far faces out changes no range
-        and halves the work a box costs. A sensor inside a box (every face turned away) keeps all four.
+        and halves the work a box costs. A sensor inside a box (every face turned away) keeps all four. The
+        choice changes only when the sensor crosses a face's line, so it is kept until the pattern changes.
         """
         quads = self._quads
         if not quads.shape[0]:
             return None
-        back = cwd[quads, 0] > 0.0
-        back &= ~back.all(axis=1, keepdims=True)
+        back = cwd[:, 0] > 0.0
+        if self._front is not None and np.array_equal(back, self._front_back):
+            return self._front
+        hidden = back[quads]
+        hidden &= ~hidden.all(axis=1, keepdims=True)
         keep = np.ones(cwd.shape[0], dtype=bool)
-        keep[quads[back]] = False
-        return np.flatnonzero(keep)
+        keep[quads[hidden]] = False
+        front = np.flatnonzero(keep)
+        self._front_back = back
+        self._front = (front, tuple(a[front] for a in (self._ax, self._ay, self._dx, self._dy)))
+        return self._front
 
     def true_ranges(self, x: float, y: float, yaw: float, extra: np.ndarray | None = None) -> np.ndarray:
         """Exact distance to the first obstacle along every beam (float64, +inf if none).
@@ -306,9 +315,10 @@ class RayCaster:
             wx = ax - x
             wy = ay - y
             cwd = wx * dy - wy * dx  # cross(w, d), beam independent; > 0: the sensor is on the segment's left
-            front = self._facing(cwd)
-            if front is not None:
-                ax, ay, dx, dy, wx, wy, cwd = (a[front] for a in (ax, ay, dx, dy, wx, wy, cwd))
+            facing = self._facing(cwd)
+            if facing is not None:
+                front, (ax, ay, dx, dy) = facing
+                wx, wy, cwd = wx[front], wy[front], cwd[front]
             k = ax.shape[0]
             den, tmp, s, t = self._den[:k], self._tmp[:k], self._s[:k], self._t[:k]
             np.multiply(dy, ux, out=den)

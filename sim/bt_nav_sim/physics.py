@@ -140,6 +140,8 @@ def _velocity_pieces(
     change exact (e.g. a straight ramp covers exactly v*T - v^2/(2a)); only the path shape inside a ramp
     piece is approximated by an arc, and ramps last <= 0.3 s.
     """
+    if v0 == v1 and w0 == w1:  # settled: what the general case below gives, exactly (0.5 * (b + b) == b)
+        return [(v1, w1, dt)]
     tv = abs(v1 - v0) / params.max_linear_accel if params.max_linear_accel > 0 else 0.0
     tw = abs(w1 - w0) / params.max_angular_accel if params.max_angular_accel > 0 else 0.0
     cuts = sorted({0.0, min(tv, dt), min(tw, dt), dt})
