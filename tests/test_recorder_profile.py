@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.node_bag import RECORDER_PROFILE, recorder_profile
+from bt_nav.ros.supervise import DISCOVERY_PROFILE, discovery_profile
 
 
 def test_runs_starting_at_once_all_get_the_profile(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -22,7 +22,7 @@ def test_runs_starting_at_once_all_get_the_profile(tmp_path: Path, monkeypatch: 
 
     def start() -> None:
         try:
-            assert recorder_profile().read_text(encoding="utf-8") == RECORDER_PROFILE
+            assert discovery_profile().read_text(encoding="utf-8") == DISCOVERY_PROFILE
         except BaseException as exc:  # noqa: BLE001 - every failure of a thread is the finding
             errors.append(exc)
 
@@ -35,3 +35,17 @@ def test_runs_starting_at_once_all_get_the_profile(tmp_path: Path, monkeypatch: 
             t.join()
     assert not errors, f"{len(errors)} failed, first: {errors[0]!r}"
     assert [p.name for p in tmp_path.iterdir()] == ["bt_nav_recorder_fastdds.xml"], "temporary files left behind"
+
+
+def test_every_child_gets_the_profile_unless_the_user_named_one(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The demo's and the grader's processes alike announce themselves every 0.25 s; a user's own profile stays."""
+    from bt_nav.ros.supervise import PROFILE_VARIABLES, child_env
+
+    for name in PROFILE_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    env = child_env(7)
+    assert all(env[name] == str(discovery_profile()) for name in PROFILE_VARIABLES)
+    assert env["ROS_DOMAIN_ID"] == "7" and env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    monkeypatch.setenv("FASTDDS_DEFAULT_PROFILES_FILE", "/etc/mine.xml")
+    env = child_env(7)
+    assert env["FASTDDS_DEFAULT_PROFILES_FILE"] == "/etc/mine.xml" and "FASTRTPS_DEFAULT_PROFILES_FILE" not in env

@@ -12,7 +12,8 @@ so the recorder must have found the simulator by then. It is started first and t
 ``recording ...`` (at most :data:`READY_TIMEOUT` s); the node and the judge start with the simulator, as without a
 bag, so a run waits only for the recorder's own start. With Fast DDS's default profile two participants that miss
 each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
-of sim time) later: the recorder announces itself every 0.25 s instead (:data:`RECORDER_PROFILE`). The recorder's
+of sim time) later: the recorder announces itself every 0.25 s instead
+(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process of a run gets). The recorder's
 ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag
 that still started late says so. Waiting for that line before starting the judge instead would hold every bag from
 t0 on, but put the judge's start (seconds on a loaded machine) after the recorder's in every run.
@@ -27,7 +28,6 @@ from __future__ import annotations
 import os
 import signal
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
+from bt_nav.ros.supervise import PROFILE_VARIABLES, discovery_profile
 
 #: The bag's directory name inside the run directory.
 BAG = "bag"
@@ -49,36 +50,6 @@ RUN_TOPICS = (SCAN, TRUTH, CMD, COLLISIONS, ROSOUT, TREE, WALKERS)
 #: What ``--record`` accepts: every run's bag kept, only the failed runs' (the passed runs' deleted once their
 #: trajectory picture is drawn), or no bag at all (a benchmark; no pictures, no videos).
 RECORD_MODES = ("on", "failures", "off")
-
-
-#: The recorder's Fast DDS profile: it announces itself every 0.25 s instead of every 3 s (as the tests' nodes do,
-#: tests/ros/fastdds_tests.xml). Why: when the simulator misses the recorder's start-up announcements on a loaded
-#: machine, the two find each other only at the next periodic one, 3 s later (15 s of sim time at 5x). Every
-#: process of a graded run gets it (:func:`bt_nav.grading.node_run.run_env`); the recorder also when started alone.
-RECORDER_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
-<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
- <participant profile_name="bt_nav_recorder" is_default_profile="true"><rtps><builtin><discovery_config>
-  <leaseAnnouncement><sec>0</sec><nanosec>250000000</nanosec></leaseAnnouncement>
-  <leaseDuration><sec>5</sec></leaseDuration>
- </discovery_config></builtin></rtps></participant>
-</profiles></dds>
-"""
-PROFILE_VARIABLES = ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE")
-
-
-def recorder_profile() -> Path:
-    """:data:`RECORDER_PROFILE` as a file (written once into the temporary directory, atomically)."""
-    path = Path(tempfile.gettempdir()) / "bt_nav_recorder_fastdds.xml"
-    if not path.is_file() or path.read_text(encoding="utf-8") != RECORDER_PROFILE:
-        # A temporary file of this call's own: the runs of a grid start in threads of one process, and a name made
-        # of the pid alone was shared by two of them (one moved it into place, the other's move then failed with
-        # FileNotFoundError: a run lost to "bt_nav failed to run it" on a fresh machine).
-        fd, tmp = tempfile.mkstemp(prefix=f"{path.name}.", suffix=".tmp", dir=path.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
-            stream.write(RECORDER_PROFILE)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    return path
 
 
 @dataclass(frozen=True)
@@ -97,9 +68,10 @@ class RecordSpec:
 
     def command(self, python: str | None = None) -> list[str]:
         """``python -m bt_nav.cli record BAG --world W --seed S --no-ask --events-executor --topics ...``
-        (:data:`RUN_TOPICS`), through ``env`` with :data:`RECORDER_PROFILE` unless the user set a profile."""
+        (:data:`RUN_TOPICS`), through ``env`` with the discovery profile
+        (:func:`~bt_nav.ros.supervise.discovery_profile`) unless the user set a profile."""
         own = [] if any(os.environ.get(v) for v in PROFILE_VARIABLES) else [  # the user's profile stays
-            f"{v}={recorder_profile()}" for v in PROFILE_VARIABLES]
+            f"{v}={discovery_profile()}" for v in PROFILE_VARIABLES]
         return [*(["env", *own] if own else []), python or sys.executable, "-m", "bt_nav.cli", "record",
                 str(self.bag), "--world", self.world, "--seed", str(self.seed), "--profile", self.profile, "--no-ask",
                 "--events-executor",

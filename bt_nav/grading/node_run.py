@@ -44,7 +44,7 @@ from typing import Any
 from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.grid import Job
-from bt_nav.grading.node_bag import PROFILE_VARIABLES, bag_row, recorder_profile, start_recorder
+from bt_nav.grading.node_bag import bag_row, start_recorder
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
@@ -121,21 +121,6 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
     for name, value in node_params:
         args += ["-p", param_arg(name, value)]
     return args
-
-
-def run_env(domain: int) -> dict[str, str]:
-    """The environment of a run's processes: its own domain, and (unless the user set a Fast DDS profile) the
-    profile that announces each participant every 0.25 s instead of every 3 s.
-
-    Why everyone, the graded node too: under load, start-up announcements get missed and two processes meet only
-    at the next periodic one, 3 s (15 sim s at 5x) later. Measured: bt_nav's executive refused the first arm
-    requests for 6.5 sim s because no /clock had reached it, although its subscription was on the graph; the run
-    failed its evaluation window. The profile changes nothing but how often a participant says it exists.
-    """
-    env = child_env(domain)
-    if not any(env.get(name) for name in PROFILE_VARIABLES):
-        env.update({name: str(recorder_profile()) for name in PROFILE_VARIABLES})
-    return env
 
 
 def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeSpec]:
@@ -261,7 +246,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     results_json = run_dir / "verdict.json"
     logs = LogFiles(run_dir)
     tee = logs.sink if sink is None else (lambda name, line: (logs.sink(name, line), sink(name, line)))
-    launcher = Launcher(run_env(domain), sink=tee, stop=stop, driver="node")
+    launcher = Launcher(child_env(domain), sink=tee, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                                   settings.profile, settings.node_params))
     started = time.monotonic()
