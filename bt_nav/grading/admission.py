@@ -81,12 +81,19 @@ class IdleMeter:
         return self._share
 
 
+def auto_bounds(jobs: int) -> tuple[int, int] | None:
+    """(runs started at once, most runs at once) of ``--jobs auto``; None for a plain number (exactly that many)."""
+    if not isinstance(jobs, AutoJobs):
+        return None
+    return int(jobs), PER_CORE * max(int(jobs), usable_cores())
+
+
 def describe(jobs: int) -> str:
     """What ``--jobs`` means for a grid's first line: ``2 at a time`` or ``2 at a time, up to 4 while idle``."""
-    admission = Admission.for_jobs(jobs)
-    if admission is None or admission.limit == admission.base:
+    bounds = auto_bounds(jobs)
+    if bounds is None or bounds[0] == bounds[1]:
         return f"{int(jobs)} at a time"
-    return f"{admission.base} at a time, up to {admission.limit} while the cores stay idle"
+    return f"{bounds[0]} at a time, up to {bounds[1]} while the cores stay idle"
 
 
 class Admission:
@@ -100,16 +107,14 @@ class Admission:
         self.meter = meter or IdleMeter()
         self.clock = clock
         self.running = 0
-        self.most = 0  # the most runs that ran at once
         self._last_start = -float("inf")
         self._cond = threading.Condition()
 
     @classmethod
     def for_jobs(cls, jobs: int) -> Admission | None:
         """The admission of ``--jobs`` (None for a plain number: that many run, no more)."""
-        if not isinstance(jobs, AutoJobs):
-            return None
-        return cls(int(jobs), PER_CORE * max(int(jobs), usable_cores()))
+        bounds = auto_bounds(jobs)
+        return None if bounds is None else cls(*bounds)
 
     def _may_start(self) -> bool:
         if self.running < self.base:
@@ -127,7 +132,6 @@ class Admission:
                     return False
                 self._cond.wait(self.poll)
             self.running += 1
-            self.most = max(self.most, self.running)
             self._last_start = self.clock()
             return True
 

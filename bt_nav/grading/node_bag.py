@@ -13,7 +13,7 @@ so the recorder must have found the simulator by then. It is started first and t
 bag, so a run waits only for the recorder's own start. With Fast DDS's default profile two participants that miss
 each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
 of sim time) later: the recorder announces itself every 0.25 s instead
-(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process of a run gets). The recorder's
+(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process bt_nav starts gets). The recorder's
 ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag
 that still started late says so. Waiting for that line before starting the judge instead would hold every bag from
 t0 on, but put the judge's start (seconds on a loaded machine) after the recorder's in every run.
@@ -25,7 +25,6 @@ The recorder spins rclpy's events executor (half the CPU of the default one) and
 
 from __future__ import annotations
 
-import os
 import signal
 import sys
 import threading
@@ -36,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
-from bt_nav.ros.supervise import PROFILE_VARIABLES, discovery_profile
 
 #: The bag's directory name inside the run directory.
 BAG = "bag"
@@ -68,11 +66,9 @@ class RecordSpec:
 
     def command(self, python: str | None = None) -> list[str]:
         """``python -m bt_nav.cli record BAG --world W --seed S --no-ask --events-executor --topics ...``
-        (:data:`RUN_TOPICS`), through ``env`` with the discovery profile
-        (:func:`~bt_nav.ros.supervise.discovery_profile`) unless the user set a profile."""
-        own = [] if any(os.environ.get(v) for v in PROFILE_VARIABLES) else [  # the user's profile stays
-            f"{v}={discovery_profile()}" for v in PROFILE_VARIABLES]
-        return [*(["env", *own] if own else []), python or sys.executable, "-m", "bt_nav.cli", "record",
+        (:data:`RUN_TOPICS`); the discovery profile comes with the run launcher's environment
+        (:func:`bt_nav.ros.supervise.child_env`), as for every process of the run."""
+        return [python or sys.executable, "-m", "bt_nav.cli", "record",
                 str(self.bag), "--world", self.world, "--seed", str(self.seed), "--profile", self.profile, "--no-ask",
                 "--events-executor",
                 "--topics", *RUN_TOPICS]

@@ -12,9 +12,8 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 
-from bt_nav_sim.world import list_worlds
+from bt_nav_sim.world import list_worlds, world_file
 
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
 from bt_nav.grading.node_grid import declared_choice
@@ -31,14 +30,13 @@ EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
 
 
 def _check_worlds(worlds: Sequence[str]) -> None:
-    """Refuse a world that is neither bundled nor a YAML file before any run starts: a typo would otherwise cost
+    """Refuse a world that is neither bundled nor a world file before any run starts: a typo would otherwise cost
     every run of the grid a simulator that refuses to start. ValueError names the bundled worlds."""
-    bundled = set(list_worlds("all"))
-    unknown = [w for w in worlds
-               if w not in bundled and not (Path(w).suffix in (".yaml", ".yml") and Path(w).is_file())]
-    if unknown:
-        raise ValueError(f"unknown world{'s' if len(unknown) > 1 else ''} {', '.join(map(repr, unknown))}; bundled "
-                         f"worlds: {', '.join(sorted(bundled))} (or a world YAML file's path)")
+    for world in worlds:
+        try:
+            world_file(world)
+        except FileNotFoundError as exc:
+            raise ValueError(str(exc)) from None
 
 
 def grid_axes(args: argparse.Namespace) -> tuple[list[str], list[int]]:

@@ -618,19 +618,29 @@ def list_worlds(kind: str = "homework") -> list[str]:
     return [n for n in names if n.startswith(LAB_PREFIX) == (kind == "lab")]
 
 
-def load_world(name_or_path: str, seed: int | None = None) -> World:
-    """Load a bundled world by name (``stage_4``) or any world YAML by path.
+def world_file(name_or_path: str) -> Path:
+    """The YAML file of a bundled world's name (``stage_4``) or of a world's path.
 
     A string counts as a path when it names an existing file or ends in .yaml/.yml, so a typo in a name
     gives a helpful list of bundled worlds instead of a bare file-not-found.
+
+    Raises:
+        FileNotFoundError: a name that is no bundled world (the message lists them), a path that is no file.
     """
     p = Path(name_or_path)
     if p.is_file() or p.suffix in (".yaml", ".yml"):
-        path = p
-    else:
-        path = WORLDS_DIR / f"{name_or_path}.yaml"
-        if not path.is_file():
-            raise FileNotFoundError(f"unknown world {name_or_path!r}; bundled worlds: {', '.join(list_worlds('all'))}")
+        if not p.is_file():
+            raise FileNotFoundError(f"no world file {name_or_path!r}")
+        return p
+    path = WORLDS_DIR / f"{name_or_path}.yaml"
+    if not path.is_file():
+        raise FileNotFoundError(f"unknown world {name_or_path!r}; bundled worlds: {', '.join(list_worlds('all'))}")
+    return path
+
+
+def load_world(name_or_path: str, seed: int | None = None) -> World:
+    """Load a bundled world by name (``stage_4``) or any world YAML by path (:func:`world_file`)."""
+    path = world_file(name_or_path)
     data = read_yaml(path)
     if isinstance(data, dict) and "name" not in data:
         data["name"] = path.stem
