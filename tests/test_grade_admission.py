@@ -1,5 +1,6 @@
-"""``--jobs auto`` for ``--exe`` grids (bt_nav.grading.admission): one run per core at once, more only while the
-cores stay idle, one extra start per gap; a plain number is exactly that many. The meter and the clock are stand-ins
+"""``--jobs auto`` for ``--exe`` grids (bt_nav.grading.admission): every place at once on idle cores, else one run
+per core; a place more only while the cores stay idle (one per gap), a place less when they are saturated; a plain
+number is exactly that many. The meter and the clock are stand-ins
 (the real grids run in tests/ros and in the bench)."""
 
 from __future__ import annotations
@@ -15,13 +16,17 @@ from bt_nav.grading.admission import Admission, AutoJobs, IdleMeter, cpu_times, 
 
 
 class Meter:
-    """An idle share the test sets."""
+    """An idle share the test sets (the opening look sees ``opening``, by default a busy machine)."""
 
-    def __init__(self, share: float | None) -> None:
+    def __init__(self, share: float | None, opening: float | None = 0.5) -> None:
         self.share = share
+        self.opening = opening
 
     def idle_share(self) -> float | None:
         return self.share
+
+    def share_over(self, seconds: float) -> float | None:
+        return self.opening
 
 
 class Clock:
@@ -51,10 +56,36 @@ def test_base_runs_start_at_once_then_extra_ones_wait_for_idle_cores_and_the_gap
     clock.now = 9.0
     assert not gate._may_start(), "the limit: two per core"
     gate.leave()
-    assert gate._may_start()
+    assert gate._may_start() and gate.places == 4, "an earned place is taken again at once"
 
 
-def test_an_unknown_idle_share_starts_no_extra_run() -> None:
+def test_idle_cores_at_the_start_open_every_place_and_saturated_ones_take_places_away() -> None:
+    meter, clock = Meter(0.3, opening=0.95), Clock()
+    gate = _admission(meter, clock)
+    assert all(gate.enter() for _ in range(4)) and gate.places == 4, "a quiet machine: four runs at once"
+    meter.share = 0.05
+    clock.now = 2.0
+    gate.leave()
+    assert gate._may_start() and gate.places == 4, "a run started 2 s ago: its start-up, not the runs, fills the cores"
+    clock.now = 3.0
+    assert not gate._may_start() and gate.places == 3, "the runs in flight leave the cores 95 % busy: a place less"
+    clock.now = 4.0
+    gate.leave()
+    assert gate._may_start() and gate.places == 3, "one place less per gap"
+    clock.now = 6.0
+    gate.leave()
+    assert gate.places == 3 and gate._may_start() and gate.places == 2, "and down to one per core, no further"
+    clock.now = 20.0
+    assert gate._may_start() and gate.places == 2
+
+
+def test_a_busy_machine_at_the_start_opens_one_place_per_core() -> None:
+    gate = _admission(Meter(0.9, opening=0.5), Clock())
+    assert gate.enter() and gate.enter() and gate.places == 2 and not gate._may_start()
+    assert _admission(Meter(0.9, opening=None), Clock())._may_start(), "an unknown share: one per core"
+
+
+def test_an_unknown_idle_share_gives_no_extra_place() -> None:
     gate = _admission(Meter(None), Clock())
     gate.enter()
     gate.enter()
@@ -101,3 +132,8 @@ def test_the_idle_share_is_read_from_proc_stat(tmp_path: Path) -> None:
     clock.now = 1.0
     assert meter.idle_share() == pytest.approx(0.3)
     assert cpu_times() is not None, "this machine's /proc/stat reads"
+    looks = iter([(0.0, 100.0), (50.0, 100.0), (50.0, 100.0)])
+    assert IdleMeter(read=lambda: next(looks), clock=clock).share_over(0.0) is None, "no time between the two looks"
+    looks = iter([(10.0, 100.0), (10.0, 100.0), (90.0, 200.0)])
+    meter = IdleMeter(read=lambda: next(looks), clock=clock)
+    assert meter.share_over(0.0) == pytest.approx(0.8)

@@ -10,6 +10,7 @@ import stat
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +39,8 @@ class FakeRuns:
         self.ran: list[str] = []
         self.lock = threading.Lock()
 
-    def __call__(self, job: Job, settings: ExeSettings, stop: StopRequest | None = None) -> dict[str, Any]:
+    def __call__(self, job: Job, settings: ExeSettings, stop: StopRequest | None = None,
+                 on_verdict: Callable[[], None] | None = None) -> dict[str, Any]:
         with self.lock:
             self.ran.append(job.key)
         if job.seed in self.raise_for:
@@ -53,6 +55,8 @@ class FakeRuns:
         row = {"passed": outcome == "verdict" and job.world == "stage_4", "outcome": outcome, "reason": outcome,
                "verdict": None, "job": job.key, "world": job.world, "maneuver": job.maneuver, "seed": job.seed,
                "profile": settings.profile, "run_dir": str(run_dir), "wall_time": 0.1}
+        if on_verdict is not None:
+            on_verdict()
         (run_dir / "result.json").write_text(json.dumps(row))
         return row
 

@@ -5,12 +5,23 @@ time, so at the default ``--rtf 5`` one run keeps about a third of a core busy (
 machine: 6.1 CPU s per 14 s run, the cores 39 % busy with two runs at once). Why not a fixed larger number: a run
 whose processes lack CPU answers late in sim time, so its verdict would change with the load (docs/grading.md).
 
-So :class:`Admission` starts ``base`` runs (one per core) at once, and a further one, up to ``limit``, only when
-the cores this process may use were at least ``idle_needed`` idle since the last look and the last start was
-``gap`` wall seconds ago (a run's start-up is its busiest part, and the next look should see it running). A
-machine busy with something else (another grade, a build) sees no extra run; one whose runs use more CPU
-than bt_nav's own nodes gets fewer. The idle share comes from ``/proc/stat`` (Linux: what ROS 2 Jazzy runs on);
-where it cannot be read, no run beyond ``base`` starts.
+So :class:`Admission` keeps a number of *places* and lets a run start whenever one is free:
+
+- at the grid's start it looks at the cores for :data:`OPENING` wall seconds: nearly idle (``burst_idle``) they
+  get every place up to ``limit`` at once (eight runs in two waves of four, not a ramp whose last wave starts
+  late), otherwise ``base`` places (one per core);
+- a place is added, up to ``limit``, when the cores this process may use were at least ``idle_needed`` idle
+  since the last look and the last start was ``gap`` wall seconds ago (a run's start-up is its busiest part, and
+  the next look should see it running);
+- a place is taken away, down to ``base``, when the cores were less than ``idle_floor`` idle while no run was
+  starting up (no start for ``gap`` s): the runs in flight use more CPU than their places assumed, and a run
+  whose processes lack CPU answers late. Runs in flight go on; the next ones wait.
+
+A machine busy with something else (another grade, a build) sees no extra place; one whose runs use more CPU
+than bt_nav's own nodes loses them. The idle share comes from ``/proc/stat`` (Linux: what ROS 2 Jazzy runs on);
+where it cannot be read, no place beyond ``base`` is given. And a run that fails at ``--rtf`` above 1 is run
+again at 1x before its failure stands (:mod:`bt_nav.grading.realtime`), so a load that slipped through costs
+time, not a verdict.
 """
 
 from __future__ import annotations
@@ -26,6 +37,12 @@ from bt_nav.ros.supervise import StopRequest, usable_cores
 PER_CORE = 2
 #: The idle share of the cores an extra run needs: a run at the default rtf takes about a third of a core.
 IDLE_NEEDED = 0.4
+#: Below this idle share, with no run starting up, a place is taken away.
+IDLE_FLOOR = 0.1
+#: The idle share at the grid's start that opens every place at once.
+BURST_IDLE = 0.8
+#: Wall seconds of the opening look at the cores.
+OPENING = 0.5
 #: Wall seconds between a start and the next extra one (a run's start-up, imports and discovery, takes ~2 s).
 GAP = 3.0
 
@@ -80,6 +97,15 @@ class IdleMeter:
             self._share = (now[0] - last[0]) / (now[1] - last[1])
         return self._share
 
+    def share_over(self, seconds: float) -> float | None:
+        """The idle share over the next ``seconds`` (blocks that long; None: unknown)."""
+        first = self._read()
+        time.sleep(seconds)
+        last = self._read()
+        if first is None or last is None or last[1] <= first[1]:
+            return None
+        return (last[0] - first[0]) / (last[1] - first[1])
+
 
 def auto_bounds(jobs: int) -> tuple[int, int] | None:
     """(runs started at once, most runs at once) of ``--jobs auto``; None for a plain number (exactly that many)."""
@@ -97,17 +123,20 @@ def describe(jobs: int) -> str:
 
 
 class Admission:
-    """Lets runs start: ``base`` at once, more up to ``limit`` while the cores stay idle (module docstring)."""
+    """Lets runs start while a place is free: ``base`` to ``limit`` places, by how idle the cores are (module
+    docstring)."""
 
-    def __init__(self, base: int, limit: int, *, idle_needed: float = IDLE_NEEDED, gap: float = GAP,
-                 meter: IdleMeter | None = None, clock: Callable[[], float] = time.monotonic,
-                 poll: float = 0.5) -> None:
+    def __init__(self, base: int, limit: int, *, idle_needed: float = IDLE_NEEDED, idle_floor: float = IDLE_FLOOR,
+                 burst_idle: float = BURST_IDLE, gap: float = GAP, meter: IdleMeter | None = None,
+                 clock: Callable[[], float] = time.monotonic, poll: float = 0.5, opening: float = OPENING) -> None:
         self.base, self.limit = max(1, base), max(1, base, limit)
-        self.idle_needed, self.gap, self.poll = idle_needed, gap, poll
+        self.idle_needed, self.idle_floor, self.burst_idle = idle_needed, idle_floor, burst_idle
+        self.gap, self.poll, self.opening = gap, poll, opening
         self.meter = meter or IdleMeter()
         self.clock = clock
         self.running = 0
-        self._last_start = -float("inf")
+        self.places: int | None = None  # decided by the opening look, at the first start
+        self._last_start = self._last_change = -float("inf")
         self._cond = threading.Condition()
 
     @classmethod
@@ -116,13 +145,35 @@ class Admission:
         bounds = auto_bounds(jobs)
         return None if bounds is None else cls(*bounds)
 
+    def _open(self) -> int:
+        """The places at the start: all of them when the cores are nearly idle, else ``base``."""
+        if self.limit == self.base:
+            return self.base
+        idle = self.meter.share_over(self.opening)
+        return self.limit if idle is not None and idle >= self.burst_idle else self.base
+
+    def _settled(self, now: float) -> bool:
+        """No start and no change of places for ``gap`` s: the idle share now says what the runs in flight use."""
+        return now - max(self._last_start, self._last_change) >= self.gap
+
     def _may_start(self) -> bool:
-        if self.running < self.base:
+        if self.places is None:
+            self.places = self._open()
+        now = self.clock()
+        if self.places > self.base and self._settled(now):
+            idle = self.meter.idle_share()
+            if idle is not None and idle < self.idle_floor:
+                self.places -= 1
+                self._last_change = now
+        if self.running < self.places:
             return True
-        if self.running >= self.limit or self.clock() - self._last_start < self.gap:
+        if self.running >= self.limit or not self._settled(now):
             return False
         idle = self.meter.idle_share()
-        return idle is not None and idle >= self.idle_needed
+        if idle is None or idle < self.idle_needed:
+            return False
+        self.places = self.running + 1
+        return True
 
     def enter(self, stop: StopRequest | None = None) -> bool:
         """Wait until a run may start (True), or until ``stop`` is requested (False: start nothing)."""

@@ -8,9 +8,9 @@ leaves a readable ``.mcap`` up to its last second.
 
 Why it listens before the simulator starts: the judge's schedule begins at t0 (the node's service found,
 ``/clock`` running) and activates the robot seconds of sim time later (the homework: 5 s, one wall second at 5x),
-so the recorder must have found the simulator by then. It is started first and the simulator only once it prints
-``recording ...`` (at most :data:`READY_TIMEOUT` s); the node and the judge start with the simulator, as without a
-bag, so a run waits only for the recorder's own start. With Fast DDS's default profile two participants that miss
+so the recorder must have found the simulator by then. It is started first, the node and the judge right after it,
+and the simulator only once it prints ``recording ...`` (at most :data:`READY_TIMEOUT` s): the node's and the judge's
+start-up (imports, discovery) overlaps the recorder's, so a run waits for none of them twice. With Fast DDS's default profile two participants that miss
 each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
 of sim time) later: the recorder announces itself every 0.25 s instead
 (:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process bt_nav starts gets). The recorder's
@@ -115,11 +115,10 @@ class RecorderWatch:
 
 def start_recorder(launcher: Any, sink: Callable[[str, str], None], run_dir: Path, world: str,
                    seed: int, profile: str = "homework") -> RecorderWatch:
-    """Start the run's recorder (``run_dir/bag``) on ``launcher`` and wait until it listens (see the module
-    docstring); start the simulator after this."""
+    """Start the run's recorder (``run_dir/bag``) on ``launcher``; start the simulator once
+    :meth:`RecorderWatch.wait_listening` returns (see the module docstring)."""
     watch = RecorderWatch(sink)
     watch.child = launcher.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
-    watch.wait_listening()
     return watch
 
 

@@ -199,16 +199,17 @@ def error_row(job: Job, error: str, traceback_file: str = "") -> Row:
 ATTEMPTS = 2
 
 
-def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
+def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None,
+                       on_verdict: Callable[[], None] | None = None) -> Row | None:
     """:func:`run_exe_job`, or None without starting anything when the grid is stopping already. A run that raises
     inside bt_nav keeps its traceback in the grid's ``bt_nav_errors/`` and is tried once more; raising again it is
-    an :func:`error_row` (here and on a cluster alike)."""
+    an :func:`error_row` (here and on a cluster alike). ``on_verdict``: :func:`run_exe_job`'s."""
     error, where = "", ""
     for attempt in range(1, ATTEMPTS + 1):
         if stop is not None and stop.requested:
             return None
         try:
-            return run_exe_job(job, settings, stop)
+            return run_exe_job(job, settings, stop, on_verdict=on_verdict)
         except Exception as exc:  # one broken run must not sink the grid
             error, where = repr(exc), str(_keep_traceback(job, settings, attempt))
     return error_row(job, error, where)
@@ -233,7 +234,8 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
     (the task's index, its row) as each ends, None for a run that never started. A stop cancels the runs not
     started."""
     admission = Admission.for_jobs(workers)
-    threads = admission.limit if admission is not None else max(1, workers)
+    # With an admission a run's place is free at its verdict, while its thread still stops its processes.
+    threads = 2 * admission.limit if admission is not None else max(1, workers)
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="exe-run") as pool:
         index: dict[Future, int] = {pool.submit(_admitted, admission, job, settings, stop): i
                                     for i, (job, settings) in enumerate(tasks)}
@@ -248,15 +250,23 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
 
 
 def _admitted(admission: Admission | None, job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
-    """:func:`run_unless_stopped` once ``admission`` lets the run start (``--jobs auto``); None if stopped first."""
+    """:func:`run_unless_stopped` once ``admission`` lets the run start (``--jobs auto``); None if stopped first. Its
+    place is given back at the verdict (a retry after that runs on its old place's account)."""
     if admission is None:
         return run_unless_stopped(job, settings, stop)
     if not admission.enter(stop):
         return None
+    held = [True]
+
+    def release() -> None:
+        if held[0]:
+            held[0] = False
+            admission.leave()
+
     try:
-        return run_unless_stopped(job, settings, stop)
+        return run_unless_stopped(job, settings, stop, on_verdict=release)
     finally:
-        admission.leave()
+        release()
 
 
 def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:

@@ -233,11 +233,14 @@ def _import_findings(log: Path | None) -> list[str]:
 
 def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None,
                 sink: Callable[[str, str], None] | None = None,
-                on_start: Callable[[int, Path], None] | None = None) -> dict[str, Any]:
+                on_start: Callable[[int, Path], None] | None = None,
+                on_verdict: Callable[[], None] | None = None) -> dict[str, Any]:
     """One run of the grid (see the module docstring); its row, also written to ``result.json``.
 
     ``sink`` also gets every line of every process (after its log file: ``bt-nav demo --exe`` shows them);
-    ``on_start`` is called with the run's domain and directory before any process starts (the demo's clock node).
+    ``on_start`` is called with the run's domain and directory before any process starts (the demo's clock node);
+    ``on_verdict`` once the run's outcome is known, before its processes are stopped (the grid's next run may start
+    while this one shuts down: stopping is waiting, not work).
     """
     low, high = launcher_domains()
     domain = claim_domain_id(low, high, start=hash(job.key))
@@ -256,9 +259,8 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         if on_start is not None:
             on_start(domain, run_dir)
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
-        if settings.record != "off":  # first and listening before the simulator starts
+        if settings.record != "off":  # first, and listening before the simulator starts
             recorder = start_recorder(launcher, tee, run_dir, job.world, job.seed, settings.profile)
-        launcher.start(sim_spec)
         try:
             node = launcher.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
@@ -266,8 +268,13 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
                    "verdict": None}
         else:
             judge = launcher.start(judge_spec)
+            if recorder is not None:
+                recorder.wait_listening()
+            launcher.start(sim_spec)
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)
+        if on_verdict is not None:
+            on_verdict()
     finally:
         if recorder is not None:
             recorder.stop()  # closes its bag while the others stop

@@ -16,7 +16,7 @@ stops a blind robot, and a few dropped beams must not make a clear corridor look
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -43,10 +43,15 @@ def neighbour_min(values: np.ndarray, edge: int) -> np.ndarray:
 
 @dataclass(frozen=True, slots=True, eq=False)
 class FreePaths:
-    """Free travel (m) along each of ``headings`` (rad), capped at the horizon it was computed with."""
+    """Free travel (m) along each of ``headings`` (rad), capped at the horizon it was computed with.
+
+    Its arrays are not changed after it is made (one per scan), so :meth:`steer` keeps its answers: the tree ticks
+    twice or more per scan, and the motion leaves ask the same questions on every tick.
+    """
 
     headings: np.ndarray
     free: np.ndarray
+    _answers: dict[tuple[float, int, float, int], float | None] = field(default_factory=dict, repr=False)
 
     @property
     def ahead(self) -> float:
@@ -67,15 +72,22 @@ class FreePaths:
         metres per radian of turn wins; ties go to the smaller turn, then left. ``side`` +1 / -1 keeps
         to left / right turns (straight ahead included). None when no heading is clear for ``need``.
         """
+        key = (need, side, turn_cost, edge)
+        if key in self._answers:
+            return self._answers[key]
         h = self.headings
         safe = neighbour_min(self.free, edge)
         usable = safe >= need
         if side:
             usable &= side * h >= 0.0
-        if not usable.any():
-            return None
-        score = np.where(usable, safe - turn_cost * np.abs(h) - 1e-9 * np.abs(h) + 1e-12 * h, -np.inf)
-        return float(h[int(np.argmax(score))])
+        answer = None
+        if usable.any():
+            score = np.where(usable, safe - turn_cost * np.abs(h) - 1e-9 * np.abs(h) + 1e-12 * h, -np.inf)
+            answer = float(h[int(np.argmax(score))])
+        if len(self._answers) >= 64:  # the needs are parameters: a few; a constant FreePaths must not grow forever
+            self._answers.clear()
+        self._answers[key] = answer
+        return answer
 
     def roomiest(self, side: int) -> float:
         """The heading with the most free path on one side (+1 left, -1 right; never straight ahead: the
