@@ -6,17 +6,17 @@ when the run ends (:meth:`RecorderWatch.stop`), so it closes its bag while the l
 one by one, not after them; a recorder that SIGINT closes writes ``metadata.yaml``, one that had to be killed still
 leaves a readable ``.mcap`` up to its last second.
 
-Why it listens before the simulator starts: the judge's schedule begins at t0 (the node's service found,
-``/clock`` running) and activates the robot seconds of sim time later (the homework: 5 s, one wall second at 5x),
-so the recorder must have found the simulator by then. It is started first, the node and the judge right after it,
-and the simulator only once it prints ``recording ...`` (at most :data:`READY_TIMEOUT` s): the node's and the judge's
-start-up (imports, discovery) overlaps the recorder's, so a run waits for none of them twice. With Fast DDS's default profile two participants that miss
-each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
-of sim time) later: the recorder announces itself every 0.25 s instead
-(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process bt_nav starts gets). The recorder's
-``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag
-that still started late says so. Waiting for that line before starting the judge instead would hold every bag from
-t0 on, but put the judge's start (seconds on a loaded machine) after the recorder's in every run.
+Why it listens before the simulator starts: the judge's schedule begins at t0 (the node's service found, ``/clock``
+running) and activates the robot seconds of sim time later (the homework: 5 s, one wall second at 5x), so the
+recorder must have found the simulator by then. It is started first, the node and the judge right after it, and the
+simulator only once it prints ``recording ...`` (at most :data:`READY_TIMEOUT` s): the node's and the judge's start-
+up (imports, discovery) overlaps the recorder's, so a run waits for none of them twice. With Fast DDS's default
+profile two participants that miss each other's start-up announcements (seen on a loaded 2-core machine) meet only
+at the next periodic one, 3 s (15 s of sim time) later: the recorder announces itself every 0.25 s instead
+(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process bt_nav starts gets). The recorder's ``first
+/ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag that still
+started late says so. Waiting for that line before starting the judge instead would hold every bag from t0 on, but
+put the judge's start (seconds on a loaded machine) after the recorder's in every run.
 
 The recorder spins rclpy's events executor (half the CPU of the default one) and records only what the report draws
 (:data:`RUN_TOPICS`). The pictures and videos are drawn from the bags after the grid, in the report step

@@ -28,12 +28,13 @@ change gets the reason in its SetParametersResult and one ``parameter change ref
 invalid start-up value makes the node log ``refusing to start: <reason>`` and exit with status 2 — a
 robot must not drive on a configuration nobody meant.
 
-Timing: the tree ticks on a timer of the node clock, so with ``use_sim_time`` the ticks, the deadline,
-the scan timeout and the maneuvers all follow ``/clock`` (on sim time the timer is driven by ``/clock`` samples
-itself, :mod:`bt_nav.ros.clocktimer`, so the node spins rclpy's EventsExecutor). Tick statistics (:mod:`bt_nav.ros.tick_stats`)
-are logged every ``stats_period`` and at exit; ``clock_watchdog`` (:mod:`bt_nav.ros.safety`) publishes
-one zero twist when ``/clock`` stalls while the robot moves. With ``trace_path`` set, every tick is
-written there as the lock-step runner writes it (:mod:`bt_nav.mission.trace`), for ``bt-nav replay``.
+Timing: the tree ticks on a timer of the node clock, so with ``use_sim_time`` the ticks, the deadline, the
+scan timeout and the maneuvers all follow ``/clock`` (on sim time the timer is driven by ``/clock`` samples
+itself, :mod:`bt_nav.ros.clocktimer`, so the node spins rclpy's EventsExecutor). Tick statistics
+(:mod:`bt_nav.ros.tick_stats`) are logged every ``stats_period`` and at exit; ``clock_watchdog``
+(:mod:`bt_nav.ros.safety`) publishes one zero twist when ``/clock`` stalls while the robot moves. With
+``trace_path`` set, every tick is written there as the lock-step runner writes it
+(:mod:`bt_nav.mission.trace`), for ``bt-nav replay``.
 
 Safety: no motion before the first arming, a stop after a disarm and at the deadline (the tree); every
 command is vetted once more before it is published; SIGINT/SIGTERM publish a zero twist before the ROS
