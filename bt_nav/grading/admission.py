@@ -42,7 +42,7 @@ IDLE_FLOOR = 0.1
 #: The idle share at the grid's start that opens every place at once.
 BURST_IDLE = 0.8
 #: Wall seconds of the opening look at the cores.
-OPENING = 0.5
+OPENING = 0.25
 #: Wall seconds between a start and the next extra one (a run's start-up, imports and discovery, takes ~2 s).
 GAP = 3.0
 

@@ -6,17 +6,18 @@ when the run ends (:meth:`RecorderWatch.stop`), so it closes its bag while the l
 one by one, not after them; a recorder that SIGINT closes writes ``metadata.yaml``, one that had to be killed still
 leaves a readable ``.mcap`` up to its last second.
 
-Why it listens before the simulator starts: the judge's schedule begins at t0 (the node's service found, ``/clock``
-running) and activates the robot seconds of sim time later (the homework: 5 s, one wall second at 5x), so the
-recorder must have found the simulator by then. It is started first, the node and the judge right after it, and the
-simulator only once it prints ``recording ...`` (at most :data:`READY_TIMEOUT` s): the node's and the judge's start-
-up (imports, discovery) overlaps the recorder's, so a run waits for none of them twice. With Fast DDS's default
-profile two participants that miss each other's start-up announcements (seen on a loaded 2-core machine) meet only
-at the next periodic one, 3 s (15 s of sim time) later: the recorder announces itself every 0.25 s instead
-(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`, which every process bt_nav starts gets). The recorder's ``first
-/ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag that still
-started late says so. Waiting for that line before starting the judge instead would hold every bag from t0 on, but
-put the judge's start (seconds on a loaded machine) after the recorder's in every run.
+Why it starts with the others, not before the simulator: the judge's schedule begins at t0 (the node's service
+found, ``/clock`` running) and activates the robot seconds of sim time later (the homework: 5 s, one wall second at
+5x), so the recorder must have found the simulator by then, and it looks for its topics every half second. Holding
+the simulator until the recorder printed ``recording ...`` made every run's start-up the recorder's plus the
+simulator's, and in a grid the runs start in bursts of two per core, where a Python process takes a wall second or
+two to come up. Started together (measured: four runs at once on two cores, twice), the bags of 4 runs in 16 began
+0.4-1.4 sim s after t0, still seconds before the first activation, and the grid went from 14.0 to 14.6 runs a
+minute. The recorder's ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``,
+``bag_after_t0_s``), so a bag that started late says so. With Fast DDS's default profile two participants that miss
+each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
+of sim time) later: every process bt_nav starts announces itself every 0.25 s instead
+(:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`).
 
 The recorder spins rclpy's events executor (half the CPU of the default one) and records only what the report draws
 (:data:`RUN_TOPICS`). The pictures and videos are drawn from the bags after the grid, in the report step
@@ -27,8 +28,6 @@ from __future__ import annotations
 
 import signal
 import sys
-import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,8 +37,6 @@ from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
 
 #: The bag's directory name inside the run directory.
 BAG = "bag"
-#: Wall seconds the run waits for the recorder's ``recording ...`` line before starting the simulator anyway.
-READY_TIMEOUT = 10.0
 #: What a run's bag records: what the pictures and videos draw (ground truth, scans, commands, collisions, the judge's
 #: log lines as events, a bt_nav executive's tree). Not ``/clock`` (every message is stamped with its sim time
 #: anyway, and at 5x real time it is the busiest topic) nor ``/odom`` (what the node sees; the pictures use ground
@@ -75,37 +72,22 @@ class RecordSpec:
 
 
 class RecorderWatch:
-    """The recorder's line sink: every line to the run's log sink; an event once it listens (``recording ...``) and
-    the sim time of its first ground truth (``first /ground_truth_odom at sim T s``)."""
+    """The recorder's line sink: every line to the run's log sink, and the sim time of its first ground truth
+    (``first /ground_truth_odom at sim T s``)."""
 
     def __init__(self, sink: Callable[[str, str], None]) -> None:
         self.forward = sink
-        self.listening = threading.Event()
         self.truth_from: float | None = None
         self.child: Any = None  # the recorder's Child, once started
 
     def sink(self, name: str, line: str) -> None:
         """Launcher sink of the recorder process."""
-        if line.startswith("recording "):
-            self.listening.set()
-        elif line.startswith(f"first {TRUTH} at sim "):
+        if line.startswith(f"first {TRUTH} at sim "):
             try:
                 self.truth_from = float(line.split()[4])
             except (IndexError, ValueError):
                 pass
         self.forward(name, line)
-
-    def wait_listening(self, timeout: float = READY_TIMEOUT) -> bool:
-        """Wait for the ``recording`` line (False: not within ``timeout``, or the recorder exited first: the run goes
-        on, with a bag that may miss its first seconds or with none, rather than fail for it)."""
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if self.listening.wait(0.05):
-                return True
-            if self.child is not None and self.child.poll() is not None:
-                break
-        return self.listening.is_set()
-
 
     def stop(self) -> None:
         """SIGINT the recorder now (it closes its bag), so that it does so while the launcher stops the others."""
@@ -115,8 +97,8 @@ class RecorderWatch:
 
 def start_recorder(launcher: Any, sink: Callable[[str, str], None], run_dir: Path, world: str,
                    seed: int, profile: str = "homework") -> RecorderWatch:
-    """Start the run's recorder (``run_dir/bag``) on ``launcher``; start the simulator once
-    :meth:`RecorderWatch.wait_listening` returns (see the module docstring)."""
+    """Start the run's recorder (``run_dir/bag``) on ``launcher`` (with the run's other processes: see the module
+    docstring)."""
     watch = RecorderWatch(sink)
     watch.child = launcher.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
     return watch

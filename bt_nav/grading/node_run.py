@@ -18,8 +18,8 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
   (:mod:`bt_nav.ros.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
   flood ...);
-- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started first (the simulator once it
-  listens) and stopped first when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and
+- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started with them and stopped first
+  when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and
   films the failed runs from it.
 
 The run ends when the judge exits (its JSON is the verdict), when the node exits first with an error (the
@@ -259,7 +259,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         if on_start is not None:
             on_start(domain, run_dir)
         sim_spec, judge_spec = exe_graph(job, settings, results_json)
-        if settings.record != "off":  # first, and listening before the simulator starts
+        if settings.record != "off":  # with the others (bt_nav.grading.node_bag says why)
             recorder = start_recorder(launcher, tee, run_dir, job.world, job.seed, settings.profile)
         try:
             node = launcher.start(ExeSpec(argv), cwd=settings.cwd)
@@ -268,8 +268,6 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
                    "verdict": None}
         else:
             judge = launcher.start(judge_spec)
-            if recorder is not None:
-                recorder.wait_listening()
             launcher.start(sim_spec)
             outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
             row = _verdict_row(outcome, reason, judge, results_json)

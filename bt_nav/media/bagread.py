@@ -28,7 +28,7 @@ import bisect
 import contextlib
 import json
 import math
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -365,8 +365,9 @@ def _json_or_text(text: str) -> dict[str, Any]:
     return value if isinstance(value, dict) else {"value": value}
 
 
-def read_bag(path: str | Path) -> MissionRecord:
-    """Decode a mission bag (a rosbag2 directory or its ``.mcap`` file) into a :class:`MissionRecord`.
+def read_bag(path: str | Path, skip: Collection[str] = ()) -> MissionRecord:
+    """Decode a mission bag (a rosbag2 directory or its ``.mcap`` file) into a :class:`MissionRecord`; the messages of
+    the topics in ``skip`` are not decoded at all (a trajectory picture needs no scans: they are most of the bytes).
 
     Raises:
         BagError: no such bag, not MCAP, or not one message could be read (the message names the file).
@@ -376,6 +377,8 @@ def read_bag(path: str | Path) -> MissionRecord:
     rec = _Collector()
     try:
         for topic, msgtype, t_ns, data in iter_messages(path, status):
+            if topic in skip:
+                continue
             try:
                 msg = ts.deserialize_cdr(data, msgtype)
             except Exception:  # noqa: BLE001 - a corrupt payload or an unknown type: skip that message
