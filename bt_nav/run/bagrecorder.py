@@ -38,6 +38,10 @@ def ask_simulator(node: Any, timeout: float = 3.0) -> dict[str, Any]:
     return dict(zip(("world", "seed", "profile"), values, strict=False))
 
 
+#: Wall seconds :meth:`BagRecorder.close` waits for the node's teardown once the bag is closed.
+ROS_CLOSE_WAIT = 1.0
+
+
 class BagRecorder:
     """The recording: a GraphTap feeding a MissionBag, on a private node spinning in a thread."""
 
@@ -79,12 +83,20 @@ class BagRecorder:
             if not self.bag.closed:
                 self.bag.flush()
 
-    def close(self) -> dict[str, int]:
-        """Stop the node, close the bag; returns the message counts."""
-        self.ros.close()
+    def close(self, ros_wait: float = ROS_CLOSE_WAIT) -> tuple[dict[str, int], bool]:
+        """Close the bag (messages still arriving are dropped), then stop the node; the message counts, and whether
+        the node's teardown ended within ``ros_wait`` wall s.
+
+        The bag first: it is complete whatever the teardown does. rclpy's EventsExecutor was seen to hang there
+        (once in about sixteen graded runs on a loaded machine: the recorder then ignored SIGINT until the grader
+        killed it, 5 s later, before writing its bag's metadata); a caller told False may exit without it.
+        """
         with self.lock:
             self.bag.close()
-        return dict(self.bag.counts)
+        closer = threading.Thread(target=self.ros.close, name="recorder-teardown", daemon=True)
+        closer.start()
+        closer.join(ros_wait)
+        return dict(self.bag.counts), not closer.is_alive()
 
 
 def start_process(bag: str, env: dict[str, str] | None = None, *extra: str) -> Any:

@@ -1,0 +1,52 @@
+"""When a judge's t0 may come for a robot on sim time (``robot_clock_wait``): its ``/clock`` subscription must have
+existed ``robot_clock_settle`` wall s, counted from the later of the subscription and the first ``/clock`` (a node
+started before the simulator subscribed before there was anything to match). The judge's method on a stand-in."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from bt_nav.ros.nodes import judging
+from bt_nav.ros.nodes.judging import JudgeNode
+
+
+class Wall:
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def _judge(subscribers: list[str]) -> SimpleNamespace:
+    return SimpleNamespace(robot_clock_wait=20.0, robot_clock_settle=0.5, wall_start=100.0, _robot_clock_since=None,
+                           _clock_wall=None, get_subscriptions_info_by_topic=lambda topic: [
+                               SimpleNamespace(node_name=name) for name in subscribers])
+
+
+def test_the_settling_counts_from_the_later_of_the_subscription_and_the_first_clock(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    wall = Wall()
+    monkeypatch.setattr(judging.time, "monotonic", wall)
+    judge = _judge(["reactive_control", "bt_nav_referee"])
+    assert not JudgeNode._robot_clock_ready(judge), "subscribed just now"
+    wall.now = 101.0
+    assert not JudgeNode._robot_clock_ready(judge), "subscribed a second ago, but no /clock yet: nothing to match"
+    judge._clock_wall = 101.0
+    wall.now = 101.4
+    assert not JudgeNode._robot_clock_ready(judge), "0.4 s since the first /clock"
+    wall.now = 101.5
+    assert JudgeNode._robot_clock_ready(judge)
+
+
+def test_only_a_foreign_subscription_counts_and_the_wait_ends(monkeypatch: pytest.MonkeyPatch) -> None:
+    wall = Wall()
+    monkeypatch.setattr(judging.time, "monotonic", wall)
+    judge = _judge(["bt_nav_referee", "bt_nav_recorder"])
+    judge._clock_wall = 100.0
+    wall.now = 110.0
+    assert not JudgeNode._robot_clock_ready(judge), "bt_nav's own readers are not the robot's"
+    wall.now = 120.0
+    assert JudgeNode._robot_clock_ready(judge), "after robot_clock_wait t0 comes anyway (the audit names it)"
