@@ -21,12 +21,16 @@ class Meter:
     def __init__(self, share: float | None, opening: float | None = 0.5) -> None:
         self.share = share
         self.opening = opening
+        self.fresh = True  # the share's window began after the runs started up
 
     def idle_share(self) -> float | None:
         return self.share
 
     def share_over(self, seconds: float) -> float | None:
         return self.opening
+
+    def fresh_since(self, when: float) -> bool:
+        return self.fresh
 
 
 class Clock:
@@ -68,6 +72,9 @@ def test_idle_cores_at_the_start_open_every_place_and_saturated_ones_take_places
     gate.leave()
     assert gate._may_start() and gate.places == 4, "a run started 2 s ago: its start-up, not the runs, fills the cores"
     clock.now = 3.0
+    meter.fresh = False
+    assert gate._may_start() and gate.places == 4, "a share whose window began during the start-ups says nothing"
+    meter.fresh = True
     assert not gate._may_start() and gate.places == 3, "the runs in flight leave the cores 95 % busy: a place less"
     clock.now = 4.0
     gate.leave()
@@ -131,6 +138,7 @@ def test_the_idle_share_is_read_from_proc_stat(tmp_path: Path) -> None:
     assert meter.idle_share() is None, "no reading a window apart yet"
     clock.now = 1.0
     assert meter.idle_share() == pytest.approx(0.3)
+    assert meter.fresh_since(0.0) and not meter.fresh_since(0.5), "the share's window began at 0"
     assert cpu_times() is not None, "this machine's /proc/stat reads"
     looks = iter([(0.0, 100.0), (50.0, 100.0), (50.0, 100.0)])
     assert IdleMeter(read=lambda: next(looks), clock=clock).share_over(0.0) is None, "no time between the two looks"

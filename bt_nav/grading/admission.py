@@ -83,6 +83,7 @@ class IdleMeter:
         self.window, self.clock = window, clock
         self._last, self._at = self._read(), clock()
         self._share: float | None = None
+        self._share_from = -float("inf")  # when the window of the current share began
 
     def idle_share(self) -> float | None:
         """Idle share between the last two readings at least ``window`` apart (a reading is taken when the last is
@@ -90,12 +91,17 @@ class IdleMeter:
         if self.clock() - self._at < self.window:
             return self._share
         now = self._read()
-        last, self._last, self._at = self._last, now, self.clock()
+        last, self._last = self._last, now
+        self._share_from, self._at = self._at, self.clock()
         if now is None or last is None or now[1] <= last[1]:
             self._share = None
         else:
             self._share = (now[0] - last[0]) / (now[1] - last[1])
         return self._share
+
+    def fresh_since(self, when: float) -> bool:
+        """Whether the window of the last :meth:`idle_share` began at or after ``when`` (it says nothing of before)."""
+        return self._share_from >= when
 
     def share_over(self, seconds: float) -> float | None:
         """The idle share over the next ``seconds`` (blocks that long; None: unknown)."""
@@ -162,7 +168,10 @@ class Admission:
         now = self.clock()
         if self.places > self.base and self._settled(now):
             idle = self.meter.idle_share()
-            if idle is not None and idle < self.idle_floor:
+            # The window must begin after the runs started up: four runs starting at once on two cores keep them
+            # busy for ~3 s, longer than the gap.
+            quiet_from = max(self._last_start, self._last_change) + self.gap
+            if idle is not None and idle < self.idle_floor and self.meter.fresh_since(quiet_from):
                 self.places -= 1
                 self._last_change = now
         if self.running < self.places:
