@@ -28,13 +28,11 @@ change gets the reason in its SetParametersResult and one ``parameter change ref
 invalid start-up value makes the node log ``refusing to start: <reason>`` and exit with status 2 — a
 robot must not drive on a configuration nobody meant.
 
-Timing: the tree ticks on a timer of the node clock, so with ``use_sim_time`` the ticks, the deadline, the
-scan timeout and the maneuvers all follow ``/clock`` (on sim time the timer is driven by ``/clock`` samples
-itself, :mod:`bt_nav.ros.clocktimer`, so the node spins rclpy's EventsExecutor). Tick statistics
-(:mod:`bt_nav.ros.tick_stats`) are logged every ``stats_period`` and at exit; ``clock_watchdog``
-(:mod:`bt_nav.ros.safety`) publishes one zero twist when ``/clock`` stalls while the robot moves. With
-``trace_path`` set, every tick is written there as the lock-step runner writes it
-(:mod:`bt_nav.mission.trace`), for ``bt-nav replay``.
+Timing: the tree ticks on a timer of the node clock, so with ``use_sim_time`` the ticks, the deadline,
+the scan timeout and the maneuvers all follow ``/clock``. Tick statistics (:mod:`bt_nav.ros.tick_stats`)
+are logged every ``stats_period`` and at exit; ``clock_watchdog`` (:mod:`bt_nav.ros.safety`) publishes
+one zero twist when ``/clock`` stalls while the robot moves. With ``trace_path`` set, every tick is
+written there as the lock-step runner writes it (:mod:`bt_nav.mission.trace`), for ``bt-nav replay``.
 
 Safety: no motion before the first arming, a stop after a disarm and at the deadline (the tree); every
 command is vetted once more before it is published; SIGINT/SIGTERM publish a zero twist before the ROS
@@ -61,7 +59,6 @@ from bt_nav.mission.profiles import params_files_note
 from bt_nav.mission.resources import tree_file
 from bt_nav.mission.scan import Scan, ScanError
 from bt_nav.mission.trace import TraceRecorder
-from bt_nav.ros.clocktimer import ClockTimers
 from bt_nav.ros.param_gate import ParameterGate
 from bt_nav.ros.rosutil import (
     LATCHED,
@@ -72,7 +69,7 @@ from bt_nav.ros.rosutil import (
     route_py_trees_logging,
     unknown_overrides,
 )
-from bt_nav.ros.runner import run_node, uses_sim_time
+from bt_nav.ros.runner import run_node
 from bt_nav.ros.safety import ClockWatchdog, veto_reason
 from bt_nav.ros.tick_stats import TickStats
 
@@ -95,15 +92,10 @@ class Executive:
             cannot be opened.
     """
 
-    #: Every periodic callback on the node clock is a :class:`~bt_nav.ros.clocktimer.ClockTimers` timer, so the runner
-    #: may spin rclpy's EventsExecutor on sim time too.
-    events_ready = True
-
     def __init__(self, node: Node, *, tree_path: str | None = None) -> None:
         self.node = node
         self.log = node.get_logger()
         self._clock = node.get_clock()
-        self.timers: ClockTimers | None = None  # the node's periodic callbacks, once wired
         self._closed = False
         for name in unknown_overrides(node):
             self.log.warning(f"ignoring parameter {name!r}: not a bt_nav parameter (typo?)")
@@ -136,17 +128,13 @@ class Executive:
         self.scan_subscription = node.create_subscription(LaserScan, "scan", self._on_scan, qos_profile_sensor_data)
         self.odom_subscription = node.create_subscription(Odometry, "odom", self._on_odom, qos_profile_sensor_data)
         self.parameters = ParameterGate(node, self.core, self.log)
-        self.timers = ClockTimers(node, sim=uses_sim_time(node))
-        self.timer = self.timers.every(self.period, self._on_tick)
+        self.timer = node.create_timer(self.period, self._on_tick)
         self.watchdog_timer = node.create_timer(WATCHDOG_CHECK_PERIOD, self._on_watchdog,
                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     # ------------------------------------------------------------------ info
     def now(self) -> float:
-        """Mission-clock seconds: the node clock, so ``/clock`` under ``use_sim_time`` (the sample the tick
-        timer took: see :mod:`bt_nav.ros.clocktimer`)."""
-        if self.timers is not None:
-            return self.timers.now_s()
+        """Mission-clock seconds: the node clock, so ``/clock`` under ``use_sim_time``."""
         return self._clock.now().nanoseconds * 1e-9
 
     def describe(self, tree_path: str | None) -> str:

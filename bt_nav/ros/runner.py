@@ -85,8 +85,7 @@ def init_ros(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
 
 
 def uses_sim_time(node: Node) -> bool:
-    """Does ``node`` run on ``/clock``? Such a node spins the ``SingleThreadedExecutor`` unless its wiring says
-    ``events_ready`` (its periodic work runs on :class:`bt_nav.ros.clocktimer.ClockTimers`): Jazzy's
+    """Does ``node`` run on ``/clock``? Such a node spins the ``SingleThreadedExecutor``: Jazzy's
     ``EventsExecutor`` lets a sim-time timer stall for up to a second when ``/clock`` stops at the timer's
     deadline, which is exactly where the simulator waits for its followers (measured: a 20 Hz timer behind a
     follower-paced clock ran at 1.6x real time with 12 one-second stalls in 20 sim s, against 250x)."""
@@ -141,8 +140,7 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
             node = make_node(name) if make_node is not None else Node(name)
             undo = prepare(node) if prepare is not None else None
             wiring = build(node, options)
-            executor = make_executor(events=None if getattr(wiring, "events_ready", False) or not uses_sim_time(node)
-                                     else False)
+            executor = make_executor(events=False if uses_sim_time(node) else None)
         except (ConfigError, ValueError, FileNotFoundError) as exc:
             message = f"refusing to start: {exc}".replace("\n", " ")
             if node is not None:
