@@ -27,14 +27,14 @@ def test_runs_starting_at_once_all_get_the_profile(tmp_path: Path, monkeypatch: 
             errors.append(exc)
 
     for _ in range(150):  # each round from a missing file, 6 runs starting together
-        (tmp_path / "bt_nav_recorder_fastdds.xml").unlink(missing_ok=True)
+        (tmp_path / "bt_nav_discovery_fastdds.xml").unlink(missing_ok=True)
         threads = [threading.Thread(target=start) for _ in range(6)]
         for t in threads:
             t.start()
         for t in threads:
             t.join()
     assert not errors, f"{len(errors)} failed, first: {errors[0]!r}"
-    assert [p.name for p in tmp_path.iterdir()] == ["bt_nav_recorder_fastdds.xml"], "temporary files left behind"
+    assert [p.name for p in tmp_path.iterdir()] == ["bt_nav_discovery_fastdds.xml"], "temporary files left behind"
 
 
 def test_every_child_gets_the_profile_unless_the_user_named_one(monkeypatch: pytest.MonkeyPatch) -> None:

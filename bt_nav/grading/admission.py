@@ -158,9 +158,13 @@ class Admission:
         idle = self.meter.share_over(self.opening)
         return self.limit if idle is not None and idle >= self.burst_idle else self.base
 
+    def _quiet_from(self) -> float:
+        """When the runs in flight were last settled: ``gap`` s after the last start or change of places."""
+        return max(self._last_start, self._last_change) + self.gap
+
     def _settled(self, now: float) -> bool:
         """No start and no change of places for ``gap`` s: the idle share now says what the runs in flight use."""
-        return now - max(self._last_start, self._last_change) >= self.gap
+        return now >= self._quiet_from()
 
     def _may_start(self) -> bool:
         if self.places is None:
@@ -170,8 +174,7 @@ class Admission:
             idle = self.meter.idle_share()
             # The window must begin after the runs started up: four runs starting at once on two cores keep them
             # busy for ~3 s, longer than the gap.
-            quiet_from = max(self._last_start, self._last_change) + self.gap
-            if idle is not None and idle < self.idle_floor and self.meter.fresh_since(quiet_from):
+            if idle is not None and idle < self.idle_floor and self.meter.fresh_since(self._quiet_from()):
                 self.places -= 1
                 self._last_change = now
         if self.running < self.places:

@@ -11,9 +11,9 @@ found, ``/clock`` running) and activates the robot seconds of sim time later (th
 5x), so the recorder must have found the simulator by then, and it looks for its topics every half second. Holding
 the simulator until the recorder printed ``recording ...`` made every run's start-up the recorder's plus the
 simulator's, and in a grid the runs start in bursts of two per core, where a Python process takes a wall second or
-two to come up. Started together (measured: four runs at once on two cores, twice), the bags of 4 runs in 16 began
-0.4-1.4 sim s after t0, still seconds before the first activation, and the grid went from 14.0 to 14.6 runs a
-minute. The recorder's ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``,
+two to come up. Started together (measured over 48 runs, four at once on two cores), the bags began 0-2.1 sim s
+after t0, always seconds before the first activation, and an 8-run grid went from 14.0 to 14.6 runs a minute,
+back to back. The recorder's ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``,
 ``bag_after_t0_s``), so a bag that started late says so. With Fast DDS's default profile two participants that miss
 each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
 of sim time) later: every process bt_nav starts announces itself every 0.25 s instead

@@ -154,7 +154,7 @@ def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, 
 #: /clock with the simulator already running). It changes nothing but how often a participant says it exists.
 DISCOVERY_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
- <participant profile_name="bt_nav_recorder" is_default_profile="true"><rtps><builtin><discovery_config>
+ <participant profile_name="bt_nav_discovery" is_default_profile="true"><rtps><builtin><discovery_config>
   <leaseAnnouncement><sec>0</sec><nanosec>250000000</nanosec></leaseAnnouncement>
   <leaseDuration><sec>5</sec></leaseDuration>
  </discovery_config></builtin></rtps></participant>
@@ -166,7 +166,7 @@ PROFILE_VARIABLES = ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES
 
 def discovery_profile() -> Path:
     """:data:`DISCOVERY_PROFILE` as a file (written once into the temporary directory, atomically)."""
-    path = Path(tempfile.gettempdir()) / "bt_nav_recorder_fastdds.xml"
+    path = Path(tempfile.gettempdir()) / "bt_nav_discovery_fastdds.xml"
     if not path.is_file() or path.read_text(encoding="utf-8") != DISCOVERY_PROFILE:
         # A temporary file of this call's own: the runs of a grid start in threads of one process, and a name made
         # of the pid alone was shared by two of them (one moved it into place, the other's move then failed with

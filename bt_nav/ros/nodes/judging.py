@@ -285,13 +285,13 @@ class JudgeNode(Node):
         ``robot_clock_settle`` wall s ago, or the wait is over.
 
         The settling counts from the later of the subscription and the first ``/clock`` (a node started before the
-        simulator has subscribed before there was anything to match). A node on sim time refuses or mistimes what
-        happens before its first /clock message (an arm request
-        at sim 5 s reached a node whose clock had not started: measured under load at 5x real time, where
-        discovery takes a wall second, i.e. 5 sim s). A node on wall time never subscribes; it is started
-        anyway after the wait (and the graph audit says so). Half a wall second: every process bt_nav starts announces
-        itself every 0.25 s (:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`), so the simulator has matched the
-        subscription by then, and the first request (5 sim s after t0: one wall second at 5x) comes 1.5 s after it."""
+        simulator has subscribed before there was anything to match). Half a wall second: every process bt_nav starts
+        announces itself every 0.25 s (:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`), so the simulator has matched
+        the subscription by then, and the first request (5 sim s after t0: one wall second at 5x) comes 1.5 s after
+        it. Why wait at all: a node on sim time refuses or mistimes what happens before its first /clock message (an
+        arm request at sim 5 s reached a node whose clock had not started: measured under load at 5x real time,
+        where discovery takes a wall second, i.e. 5 sim s). A node on wall time never subscribes; it is started
+        anyway after the wait (and the graph audit says so)."""
         if self.robot_clock_wait <= 0.0:
             return True
         now = time.monotonic()
