@@ -45,6 +45,7 @@ from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.grid import Job
 from bt_nav.grading.node_bag import bag_row, start_recorder
+from bt_nav.grading.node_log import import_findings, rclpy_shutdown_race
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
@@ -203,32 +204,27 @@ def _with_findings(row: dict[str, Any], findings: list[str]) -> dict[str, Any]:
 SIGINT_EXITS = (0, -int(signal.SIGINT), 128 + int(signal.SIGINT))
 
 
-def _ending_findings(node: Child | None, log: Path | None = None) -> list[str]:
+def _ending_findings(node: Child | None, log: Path | None = None) -> tuple[list[str], list[str]]:
     """How the node ended, when the judge cannot see it: by itself before the run was over, not on SIGINT, or
-    crashing on the way out; and an import its interpreter could not make (``log``: its output)."""
-    found = _import_findings(log)
+    crashing on the way out; and an import its interpreter could not make (``log``: its output). Second, the
+    notes: what the log shows but is not the node's to fix (rclpy's own shutdown race, :mod:`.node_log`)."""
+    text = log.read_text(errors="replace") if log is not None and log.is_file() else ""
+    found = import_findings(text)
     if node is None:
-        return found
+        return found, []
     code = node.poll()
     if node.stopped_by is None and code == 0:
         found.append("the node ended by itself (exit code 0) before the run was over (see node.log)")
     elif node.stopped_by is not None and node.stopped_by != signal.SIGINT:
         found.append(f"the node ignored SIGINT (stopped by {node.stopped_by.name} after {node.stop_seconds:.1f} s)")
     elif node.stopped_by == signal.SIGINT and code not in SIGINT_EXITS:
+        race = rclpy_shutdown_race(text)
+        if race is not None:
+            return found, [f"the node exited with code {code} after SIGINT from inside rclpy's executor ({race}): "
+                           "rclpy's shutdown race, not the node's code; not held against it"]
         found.append(f"the node crashed while shutting down (exit code {code} after SIGINT, see node.log): "
                      "catch KeyboardInterrupt/ExternalShutdownException and call rclpy.try_shutdown()")
-    return found
-
-
-def _import_findings(log: Path | None) -> list[str]:
-    """``No module named X`` in the node's output: its interpreter is not the one with ROS 2 (or X is missing)."""
-    import re
-
-    if log is None or not log.is_file():
-        return []
-    missing = sorted(set(re.findall(r"No module named '([\w.]+)'", log.read_text(errors="replace"))))
-    return [f"the node could not import {name} (ModuleNotFoundError): run it with a Python that has ROS 2 and "
-            "its packages (the venv's python, or a sourced ROS install)" for name in missing]
+    return found, []
 
 
 def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None,
@@ -276,11 +272,15 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     finally:
         if recorder is not None:
             recorder.stop()  # closes its bag while the others stop
-        launcher.shutdown(grace=STOP_GRACE, together=True)  # the verdict is in (or never will be): no order
+        # the verdict is in (or never will be): the node first, while its world runs on; then the rest at once
+        launcher.shutdown(grace=STOP_GRACE, together=True, first=node)
         logs.close()
         release_domain_id(domain)
     if row["outcome"] != "stopped":  # a run bt_nav stopped says only that: how its node ended is not the node's
-        _with_findings(row, _ending_findings(node, run_dir / "node.log"))
+        findings, notes = _ending_findings(node, run_dir / "node.log")
+        _with_findings(row, findings)
+        if notes:
+            row["notes"] = notes
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})

@@ -442,18 +442,24 @@ class Launcher:
             time.sleep(poll)
         return None
 
-    def shutdown(self, grace: float = 5.0, *, together: bool = False) -> None:
+    def shutdown(self, grace: float = 5.0, *, together: bool = False, first: Child | None = None) -> None:
         """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group).
 
         ``together``: every child at once, each step to every live group and then one wait for them all, for
         children whose order no longer matters (a grade's run after its verdict): the stop then takes the
         slowest child's time instead of the sum of all of theirs.
 
+        ``first``: that child alone before the others, while they still run. A graded node is stopped as a
+        robot's node is: its world goes on. Stopped together with the simulator, a node whose wait wakes only on
+        messages or sim-time timers (one that turned rclpy's signal handler off to send a last zero twist, as
+        many do) would sleep through its SIGINT once ``/clock`` stopped, and be blamed for ignoring it.
+
         Which signal ended each running child is kept (:attr:`Child.stopped_by`): a graded node that ignores
         SIGINT cannot be stopped with Ctrl-C, and its grader says so.
         """
-        live = list(reversed(self.children))
-        for group in [live] if together else [[child] for child in live]:
+        live = [child for child in reversed(self.children) if child is not first]
+        groups = [live] if together else [[child] for child in live]
+        for group in [[first], *groups] if first is not None else groups:
             first = time.monotonic()
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
                 running = [child for child in group if child.poll() is None]

@@ -124,15 +124,15 @@ class _Ended:
 
 
 def test_how_the_node_ended() -> None:
-    assert _ending_findings(_Ended(-2, signal.SIGINT, 0.4)) == []  # stopped as asked
-    assert _ending_findings(_Ended(1, None)) == []  # a crash: the reason already says so
-    assert _ending_findings(_Ended(0, None)) == ["the node ended by itself (exit code 0) before the run was over "
-                                                 "(see node.log)"]
-    assert _ending_findings(_Ended(-15, signal.SIGTERM, 3.04)) == ["the node ignored SIGINT (stopped by SIGTERM "
-                                                                   "after 3.0 s)"]
-    assert _ending_findings(_Ended(0, signal.SIGINT, 0.1)) == []  # caught KeyboardInterrupt: fine
-    crashed = _ending_findings(_Ended(1, signal.SIGINT, 0.2))  # e.g. "rcl_shutdown already called" on the way out
-    assert crashed and crashed[0].startswith("the node crashed while shutting down (exit code 1 after SIGINT")
+    assert _ending_findings(_Ended(-2, signal.SIGINT, 0.4)) == ([], [])  # stopped as asked
+    assert _ending_findings(_Ended(1, None)) == ([], [])  # a crash: the reason already says so
+    assert _ending_findings(_Ended(0, None)) == (["the node ended by itself (exit code 0) before the run was over "
+                                                  "(see node.log)"], [])
+    assert _ending_findings(_Ended(-15, signal.SIGTERM, 3.04)) == (["the node ignored SIGINT (stopped by SIGTERM "
+                                                                    "after 3.0 s)"], [])
+    assert _ending_findings(_Ended(0, signal.SIGINT, 0.1)) == ([], [])  # caught KeyboardInterrupt: fine
+    crashed, notes = _ending_findings(_Ended(1, signal.SIGINT, 0.2))  # e.g. "rcl_shutdown already called"
+    assert crashed[0].startswith("the node crashed while shutting down (exit code 1 after SIGINT") and not notes
     row = _with_findings({"reason": "passed"}, ["a", "b"])
     assert row == {"reason": "passed; a; b", "findings": ["a", "b"]}
     assert _with_findings({"reason": "passed", "findings": ["a"]}, []) == {"reason": "passed", "findings": ["a"]}
@@ -143,7 +143,7 @@ def test_a_missing_module_in_the_node_log_is_named(tmp_path: Path) -> None:
     log = tmp_path / "node.log"
     log.write_text("Traceback (most recent call last):\n  File \"node.py\", line 1\n"
                    "ModuleNotFoundError: No module named 'rclpy'\n")
-    [found] = _ending_findings(None, log)
+    [found], _ = _ending_findings(None, log)
     assert found.startswith("the node could not import rclpy (ModuleNotFoundError)")
     log.write_text("all fine\n")
-    assert _ending_findings(None, log) == []
+    assert _ending_findings(None, log) == ([], [])

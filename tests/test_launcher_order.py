@@ -1,0 +1,70 @@
+"""Launcher.shutdown's ``first``: that child is stopped while the others still run (a graded node's world goes on
+until it has stopped), then the rest together. Plain Python children, no ROS."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from bt_nav.ros.supervise import Launcher
+
+#: A child that, on SIGINT, notes the wall time it got it and ``delay`` s later exits (its stop takes that long).
+SCRIPT = """
+import signal, sys, time
+out, delay = sys.argv[1], float(sys.argv[2])
+def stop(*_):
+    with open(out, "w") as f:
+        f.write(repr(time.time()))
+    time.sleep(delay)
+    sys.exit(0)
+signal.signal(signal.SIGINT, stop)
+print("up", flush=True)
+while True:
+    time.sleep(0.01)
+"""
+
+
+@dataclass
+class _Spec:
+    """A named child running SCRIPT."""
+
+    executable: str
+    script: Path
+    out: Path
+    delay: float
+
+    def command(self, python: str | None = None) -> list[str]:
+        return [python or sys.executable, str(self.script), str(self.out), str(self.delay)]
+
+
+def _started(tmp_path: Path) -> tuple[Launcher, dict[str, Path]]:
+    script = tmp_path / "child.py"
+    script.write_text(SCRIPT)
+    launcher = Launcher(dict(os.environ), sink=lambda name, line: None, driver="node")
+    outs = {}
+    for name, delay in (("world", 0.0), ("node", 0.4), ("judge", 0.0)):
+        outs[name] = tmp_path / f"{name}.sigint"
+        launcher.start(_Spec(name, script, outs[name], delay))
+    time.sleep(1.0)  # every child has its handler
+    return launcher, outs
+
+
+def test_the_first_child_stops_before_the_others_get_sigint(tmp_path: Path) -> None:
+    launcher, outs = _started(tmp_path)
+    node = next(c for c in launcher.children if c.name == "node")
+    launcher.shutdown(grace=3.0, together=True, first=node)
+    got = {name: float(path.read_text()) for name, path in outs.items()}
+    assert got["world"] - got["node"] >= 0.35 and got["judge"] - got["node"] >= 0.35, got  # after its 0.4 s stop
+    assert abs(got["world"] - got["judge"]) < 0.3, got  # the rest together
+    assert all(c.poll() == 0 and c.stopped_by == signal.SIGINT for c in launcher.children)
+
+
+def test_without_first_they_stop_together(tmp_path: Path) -> None:
+    launcher, outs = _started(tmp_path)
+    launcher.shutdown(grace=3.0, together=True)
+    got = [float(path.read_text()) for path in outs.values()]
+    assert max(got) - min(got) < 0.3, got
