@@ -66,6 +66,7 @@ from bt_nav.ros.rosutil import (
     ConfigError,
     RclpyEventLog,
     declare_parameters,
+    drop_qos_event_handlers,
     route_py_trees_logging,
     unknown_overrides,
 )
@@ -131,6 +132,10 @@ class Executive:
         self.timer = node.create_timer(self.period, self._on_tick)
         self.watchdog_timer = node.create_timer(WATCHDOG_CHECK_PERIOD, self._on_watchdog,
                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
+        # the QoS warnings where a robot's driver may differ; not on /clock, /parameter_events and ~/tree
+        user_facing = (self.cmd.publisher, self.scan_subscription, self.odom_subscription)
+        drop_qos_event_handlers(node, [e for e in (*node.publishers, *node.subscriptions)
+                                       if all(e is not kept for kept in user_facing)])
 
     # ------------------------------------------------------------------ info
     def now(self) -> float:

@@ -204,6 +204,48 @@ def make_executor(context: Any = None, events: bool | None = None) -> Any:
     return SingleThreadedExecutor(context=context)
 
 
+def drop_qos_event_handlers(node: Node, entities: Iterable[Any] | None = None) -> int:
+    """Take the QoS event handlers of ``entities`` (default: every publisher and subscription of ``node`` now) out
+    of the node's wait set; returns how many.
+
+    rclpy gives each publisher and subscription two handlers that only log a warning (incompatible QoS, incompatible
+    type), and the ``SingleThreadedExecutor`` adds every one to its wait set at each wake-up, in Python: measured
+    ~5 us per handler per wake-up, a third of the wake-up of a node with eight publishers and subscriptions. A node
+    on sim time wakes ~100 times per sim second. Dropped where nobody reads the warning: the judges (their graph
+    audit names every mismatch as a finding) and the executive's own plumbing (``/clock``, ``/parameter_events``,
+    ``~/tree``); the executive keeps them on ``scan``, ``odom`` and ``cmd_vel``, where a robot's driver may differ.
+    """
+    chosen = list(node.publishers) + list(node.subscriptions) if entities is None else list(entities)
+    dropped = 0
+    for entity in chosen:
+        handlers = list(getattr(entity, "event_handlers", None) or [])
+        for handler in handlers:
+            node.remove_waitable(handler)
+            handler.destroy()
+        entity.event_handlers = []  # destroy_publisher/destroy_subscription remove what is listed here
+        dropped += len(handlers)
+    return dropped
+
+
+class QuietQosEvents:
+    """A ``Node`` mixin (before ``Node`` in the bases) whose publishers and subscriptions get no QoS event handlers
+    unless the call passes ``event_callbacks``: every one of them, ``/clock`` (rclpy's time source) and
+    ``/parameter_events`` included, as they are created. For nodes nobody reads the warnings of (the judges; see
+    :func:`drop_qos_event_handlers` for the cost)."""
+
+    def create_publisher(self, *args: Any, **kwargs: Any) -> Any:  # noqa: D102 - Node's
+        from rclpy.event_handler import PublisherEventCallbacks
+
+        kwargs.setdefault("event_callbacks", PublisherEventCallbacks(use_default_callbacks=False))
+        return super().create_publisher(*args, **kwargs)  # type: ignore[misc]
+
+    def create_subscription(self, *args: Any, **kwargs: Any) -> Any:  # noqa: D102 - Node's
+        from rclpy.event_handler import SubscriptionEventCallbacks
+
+        kwargs.setdefault("event_callbacks", SubscriptionEventCallbacks(use_default_callbacks=False))
+        return super().create_subscription(*args, **kwargs)  # type: ignore[misc]
+
+
 # ---------------------------------------------------------------------------------------------- messages
 class ThreadedNode:
     """A node in a private rclpy context whose executor spins in a daemon thread.

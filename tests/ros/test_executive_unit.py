@@ -245,3 +245,49 @@ def test_an_exception_in_a_leaf_stops_the_robot_and_the_node_lives_on(executive:
     monkeypatch.undo()
     executive._on_tick()
     assert executive.core.last_command.linear > 0.0  # the next tick starts afresh
+
+
+# ---------------------------------------------------------------------------------------------- QoS event handlers
+def _handlers(node: Node) -> dict[str, int]:
+    """Topic -> how many QoS event handlers its publisher or subscription still has in the node's wait set."""
+    from rclpy.event_handler import EventHandler
+
+    listed = [w for w in node.waitables if isinstance(w, EventHandler)]
+    out = {}
+    for entity in (*node.publishers, *node.subscriptions):
+        out[entity.topic_name] = sum(1 for h in entity.event_handlers if h in listed)
+    return out
+
+
+def test_the_executive_keeps_qos_warnings_only_where_a_robot_may_differ(executive: Executive) -> None:
+    handlers = _handlers(executive.node)
+    kept = {topic for topic, n in handlers.items() if n}
+    assert kept == {"/cmd_vel", "/scan", "/odom"}, handlers
+    assert all(handlers[topic] == 2 for topic in kept)  # incompatible QoS and incompatible type
+    assert executive.node.destroy_publisher(executive.tree_publisher)  # no handler of it left to remove
+
+
+def test_a_quiet_node_has_no_qos_event_handlers(ros_context: Any) -> None:
+    """The judges' mixin: none on any publisher or subscription, rclpy's own /clock and /parameter_events too."""
+    from std_msgs.msg import String
+
+    from bt_nav.ros.nodes.judging import JudgeNode
+    from bt_nav.ros.rosutil import QuietQosEvents
+
+    class Quiet(QuietQosEvents, Node):
+        pass
+
+    node = Quiet("bt_nav_quiet_unit", context=ros_context, start_parameter_services=False,
+                 parameter_overrides=[Parameter("use_sim_time", value=True)])
+    try:
+        node.create_subscription(String, "collisions", lambda msg: None, 10)
+        node.create_publisher(String, "sim_sync", 10)
+        handlers = _handlers(node)
+        assert {"/clock", "/parameter_events", "/collisions", "/sim_sync"} <= set(handlers), handlers
+        assert not any(handlers.values()), handlers
+        plain = Node("bt_nav_plain_unit", context=ros_context, start_parameter_services=False)
+        assert _handlers(plain)["/parameter_events"] == 2  # what the mixin leaves out
+        plain.destroy_node()
+    finally:
+        node.destroy_node()
+    assert issubclass(JudgeNode, QuietQosEvents)

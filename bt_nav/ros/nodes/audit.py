@@ -105,6 +105,7 @@ class GraphAudit:
         self.parameters = parameters  # parameters the assignment asks the node to declare (the lab: safety_distance)
         self.declared: dict[str, set[str] | None] = {}  # foreign node -> its parameter names (None: not answered)
         self._asked: dict[str, Any] = {}  # foreign node -> the pending ListParameters future
+        self._clients: dict[str, Any] = {}  # foreign node -> its list_parameters client (one, kept until answered)
         self.service = node.resolve_service_name(service)
         self.inputs = tuple((node.resolve_topic_name(topic), kind) for topic, kind in inputs)
         self.command = node.resolve_topic_name(command)
@@ -150,7 +151,11 @@ class GraphAudit:
 
         future = self._asked.get(full)
         if future is None:
-            client = self.node.create_client(ListParameters, f"{full}/list_parameters")
+            # One client per node, kept until it is ready: one made at every sample while the node's service was
+            # not up yet would stay in the judge's wait set (each wake-up of its executor walks them all)
+            client = self._clients.get(full)
+            if client is None:
+                client = self._clients[full] = self.node.create_client(ListParameters, f"{full}/list_parameters")
             if client.service_is_ready():
                 self._asked[full] = client.call_async(ListParameters.Request())
                 self.declared[full] = None

@@ -69,7 +69,7 @@ from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.ros.nodes.audit import GraphAudit, is_ours
-from bt_nav.ros.rosutil import declare_node_parameters
+from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
@@ -102,7 +102,7 @@ DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
 }
 
 
-class JudgeNode(Node):
+class JudgeNode(QuietQosEvents, Node):
     """A judge over DDS (see the module docstring); subclasses make the judge and add their interfaces.
 
     Subclass duties: ``PARAMETERS`` (``DRIVER_PARAMETERS`` plus their own), :meth:`make_judge` (returns the
