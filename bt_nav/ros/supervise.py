@@ -460,7 +460,7 @@ class Launcher:
         live = [child for child in reversed(self.children) if child is not first]
         groups = [live] if together else [[child] for child in live]
         for group in [[first], *groups] if first is not None else groups:
-            first = time.monotonic()
+            began = time.monotonic()
             for signum, wait in ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):
                 running = [child for child in group if child.poll() is None]
                 if not running:
@@ -473,7 +473,7 @@ class Launcher:
                         child.popen.wait(timeout=max(0.0, end - time.monotonic()))
                     except subprocess.TimeoutExpired:
                         continue
-                    child.stopped_by, child.stop_seconds = signum, time.monotonic() - first
+                    child.stopped_by, child.stop_seconds = signum, time.monotonic() - began
             for child in group:
                 child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
