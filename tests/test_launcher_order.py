@@ -15,8 +15,12 @@ from bt_nav.ros.supervise import Launcher
 #: A child that, on SIGINT, notes the wall time it got it and ``delay`` s later exits (its stop takes that long).
 SCRIPT = """
 import signal, sys, time
-out, delay = sys.argv[1], float(sys.argv[2])
+out, delay, lose = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
 def stop(*_):
+    global lose
+    if lose:  # this SIGINT is lost, as one can be inside rclpy
+        lose -= 1
+        return
     with open(out, "w") as f:
         f.write(repr(time.time()))
     time.sleep(delay)
@@ -36,19 +40,20 @@ class _Spec:
     script: Path
     out: Path
     delay: float
+    lose: int = 0
 
     def command(self, python: str | None = None) -> list[str]:
-        return [python or sys.executable, str(self.script), str(self.out), str(self.delay)]
+        return [python or sys.executable, str(self.script), str(self.out), str(self.delay), str(self.lose)]
 
 
-def _started(tmp_path: Path) -> tuple[Launcher, dict[str, Path]]:
+def _started(tmp_path: Path, lose: int = 0) -> tuple[Launcher, dict[str, Path]]:
     script = tmp_path / "child.py"
     script.write_text(SCRIPT)
     launcher = Launcher(dict(os.environ), sink=lambda name, line: None, driver="node")
     outs = {}
     for name, delay in (("world", 0.0), ("node", 0.4), ("judge", 0.0)):
         outs[name] = tmp_path / f"{name}.sigint"
-        launcher.start(_Spec(name, script, outs[name], delay))
+        launcher.start(_Spec(name, script, outs[name], delay, lose if name == "node" else 0))
     time.sleep(1.0)  # every child has its handler
     return launcher, outs
 
@@ -68,3 +73,14 @@ def test_without_first_they_stop_together(tmp_path: Path) -> None:
     launcher.shutdown(grace=3.0, together=True)
     got = [float(path.read_text()) for path in outs.values()]
     assert max(got) - min(got) < 0.3, got
+
+
+def test_the_first_child_gets_a_second_sigint_when_the_first_is_lost(tmp_path: Path) -> None:
+    launcher, outs = _started(tmp_path, lose=1)
+    node = next(c for c in launcher.children if c.name == "node")
+    launcher.shutdown(grace=3.0, together=True, first=node)
+    assert node.stopped_by == signal.SIGINT and node.sigints == 2 and 1.5 <= node.stop_seconds < 3.0
+    got = {name: float(path.read_text()) for name, path in outs.items()}
+    assert got["world"] > got["node"]  # the others after it, still
+    others = [c for c in launcher.children if c is not node]
+    assert all(c.sigints == 1 and c.stopped_by == signal.SIGINT for c in others)

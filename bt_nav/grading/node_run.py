@@ -207,24 +207,28 @@ SIGINT_EXITS = (0, -int(signal.SIGINT), 128 + int(signal.SIGINT))
 def _ending_findings(node: Child | None, log: Path | None = None) -> tuple[list[str], list[str]]:
     """How the node ended, when the judge cannot see it: by itself before the run was over, not on SIGINT, or
     crashing on the way out; and an import its interpreter could not make (``log``: its output). Second, the
-    notes: what the log shows but is not the node's to fix (rclpy's own shutdown race, :mod:`.node_log`)."""
+    notes: what is not the node's to fix (rclpy's own shutdown race, :mod:`.node_log`; a first SIGINT lost)."""
     text = log.read_text(errors="replace") if log is not None and log.is_file() else ""
     found = import_findings(text)
     if node is None:
         return found, []
-    code = node.poll()
+    code, notes = node.poll(), []
+    if node.stopped_by == signal.SIGINT and node.sigints > 1:
+        notes.append(f"the node stopped at the second SIGINT ({node.stop_seconds:.1f} s): its first was lost, as "
+                     "one can be inside rclpy's executor; not held against it")
     if node.stopped_by is None and code == 0:
         found.append("the node ended by itself (exit code 0) before the run was over (see node.log)")
     elif node.stopped_by is not None and node.stopped_by != signal.SIGINT:
         found.append(f"the node ignored SIGINT (stopped by {node.stopped_by.name} after {node.stop_seconds:.1f} s)")
     elif node.stopped_by == signal.SIGINT and code not in SIGINT_EXITS:
         race = rclpy_shutdown_race(text)
-        if race is not None:
-            return found, [f"the node exited with code {code} after SIGINT from inside rclpy's executor ({race}): "
-                           "rclpy's shutdown race, not the node's code; not held against it"]
-        found.append(f"the node crashed while shutting down (exit code {code} after SIGINT, see node.log): "
-                     "catch KeyboardInterrupt/ExternalShutdownException and call rclpy.try_shutdown()")
-    return found, []
+        if race is None:
+            found.append(f"the node crashed while shutting down (exit code {code} after SIGINT, see node.log): "
+                         "catch KeyboardInterrupt/ExternalShutdownException and call rclpy.try_shutdown()")
+        else:
+            notes.append(f"the node exited with code {code} after SIGINT from inside rclpy's executor ({race}): "
+                         "rclpy's own, not the node's code; not held against it")
+    return found, notes
 
 
 def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None,
