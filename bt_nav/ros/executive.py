@@ -48,6 +48,7 @@ from time import monotonic, perf_counter
 from typing import Any
 
 from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 
@@ -64,9 +65,9 @@ from bt_nav.ros.rosutil import (
     LATCHED,
     CommandPublisher,
     ConfigError,
+    QuietNode,
     RclpyEventLog,
     declare_parameters,
-    drop_qos_event_handlers,
     route_py_trees_logging,
     unknown_overrides,
 )
@@ -126,16 +127,15 @@ class Executive:
         self.cmd = CommandPublisher(node, "cmd_vel", stamped=bool(params["cmd_vel_stamped"]),
                                     frame_id=str(params["frame_id"]))
         self.tree_publisher = node.create_publisher(String, "~/tree", LATCHED)
-        self.scan_subscription = node.create_subscription(LaserScan, "scan", self._on_scan, qos_profile_sensor_data)
-        self.odom_subscription = node.create_subscription(Odometry, "odom", self._on_odom, qos_profile_sensor_data)
+        # rclpy's QoS warnings on the inputs a robot's driver may offer otherwise, on a QuietNode too (QuietQosEvents)
+        self.scan_subscription = node.create_subscription(LaserScan, "scan", self._on_scan, qos_profile_sensor_data,
+                                                          event_callbacks=SubscriptionEventCallbacks())
+        self.odom_subscription = node.create_subscription(Odometry, "odom", self._on_odom, qos_profile_sensor_data,
+                                                          event_callbacks=SubscriptionEventCallbacks())
         self.parameters = ParameterGate(node, self.core, self.log)
         self.timer = node.create_timer(self.period, self._on_tick)
         self.watchdog_timer = node.create_timer(WATCHDOG_CHECK_PERIOD, self._on_watchdog,
                                                 clock=Clock(clock_type=ClockType.STEADY_TIME))
-        # the QoS warnings where a robot's driver may differ; not on /clock, /parameter_events and ~/tree
-        user_facing = (self.cmd.publisher, self.scan_subscription, self.odom_subscription)
-        drop_qos_event_handlers(node, [e for e in (*node.publishers, *node.subscriptions)
-                                       if all(e is not kept for kept in user_facing)])
 
     # ------------------------------------------------------------------ info
     def now(self) -> float:
@@ -296,7 +296,7 @@ def main(argv: list[str] | None = None) -> int:
         0 after a clean shutdown (signals included), 2 when the configuration is refused, 1 after an
         unexpected error (the robot is stopped in every case that still has a ROS context).
     """
-    return run_node(NODE_NAME, argv, parse_args,
+    return run_node(NODE_NAME, argv, parse_args, make_node=QuietNode,
                     build=lambda node, options: Executive(node, tree_path=options.tree),
                     prepare=lambda node: route_py_trees_logging(node.get_logger().get_child("py_trees")))
 

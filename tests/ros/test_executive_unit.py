@@ -259,12 +259,22 @@ def _handlers(node: Node) -> dict[str, int]:
     return out
 
 
-def test_the_executive_keeps_qos_warnings_only_where_a_robot_may_differ(executive: Executive) -> None:
-    handlers = _handlers(executive.node)
-    kept = {topic for topic, n in handlers.items() if n}
-    assert kept == {"/cmd_vel", "/scan", "/odom"}, handlers
-    assert all(handlers[topic] == 2 for topic in kept)  # incompatible QoS and incompatible type
-    assert executive.node.destroy_publisher(executive.tree_publisher)  # no handler of it left to remove
+def test_the_executive_keeps_qos_warnings_only_where_a_robot_may_differ(ros_context: Any) -> None:
+    """On its own QuietNode (as ``bt-nav executive`` runs it): rclpy's warnings on scan, odom and cmd_vel only."""
+    from bt_nav.ros.rosutil import QuietNode
+
+    node = QuietNode("bt_nav_executive_quiet_unit", context=ros_context, start_parameter_services=False,
+                     parameter_overrides=[Parameter("use_sim_time", value=True)])
+    try:
+        executive = Executive(node)
+        handlers = _handlers(node)
+        kept = {topic for topic, n in handlers.items() if n}
+        assert "/clock" in handlers and "/parameter_events" in handlers
+        assert kept == {"/cmd_vel", "/scan", "/odom"}, handlers
+        assert all(handlers[topic] == 2 for topic in kept)  # incompatible QoS and incompatible type
+        assert node.destroy_publisher(executive.tree_publisher)
+    finally:
+        node.destroy_node()
 
 
 def test_a_quiet_node_has_no_qos_event_handlers(ros_context: Any) -> None:
