@@ -237,3 +237,18 @@ def test_late_poses_stamped_before_the_report_are_judged_on_catch_up() -> None:
     ref.catch_up()
     assert "static at the end" not in failed(ref)
     assert ref.results()["max_distance_from_start"] == 0.0
+
+
+def test_a_step_on_a_schedule_time_acts_whatever_the_float_error_of_t0() -> None:
+    """Over DDS t0 and t are node-clock ns x 1e-9: 19.5 - 14.500000000000002 is a hair under 5 s."""
+    t0, t = 14_500_000_000 * 1e-9, 19_500_000_000 * 1e-9
+    assert t - t0 < 5.0  # the float error the schedule must not see
+    ref = Referee()
+    ref.start(t0)
+    assert ref.step(t) == [Activate(True)]  # static_before 5 s
+    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav_sim.world import world_from_dict
+
+    judge = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
+    judge.start(t0)
+    assert judge.step(t) == [Activate(True)]  # activate_at 5 s

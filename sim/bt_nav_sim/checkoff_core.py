@@ -49,7 +49,7 @@ import numpy as np
 
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
-from bt_nav_sim.referee_core import Activate, Verdict, static_check
+from bt_nav_sim.referee_core import Activate, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
@@ -182,7 +182,7 @@ class CheckoffJudge(Verdict):
         if self.t0 is None or self.done:
             return []
         cfg = self.config
-        rel = t - self.t0
+        rel = since_t0(t, self.t0)
         if rel >= cfg.activate_at + cfg.armed_for:
             if self.deactivation_requested is None:
                 self.deactivation_requested = float(t)
