@@ -33,7 +33,8 @@ JOBS = "auto"
 #: Log stamps of rcutils' default format: ``[INFO] [1795468726.310777631] [name]: ...``.
 _STAMP = re.compile(r"^\[\w+\] \[(\d+\.\d+)\]")
 _SIM_END = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s wall \(([\d.]+)x real time\)")
-KINDS = (("referee", "referee"), ("checkoff", "judge"), (" sim ", "sim"), ("executive", "node"))
+#: Process kinds by their command line, first match wins: the simulator hosting its judge (``--judge``) is one.
+KINDS = ((" sim ", "sim+judge"), ("referee", "referee"), ("checkoff", "judge"), ("executive", "node"))
 
 
 def _kind(cmdline: list[str]) -> str:
@@ -59,7 +60,7 @@ def _phases(row: dict[str, Any]) -> dict[str, Any]:
     except OSError:
         return {"wall_s": row.get("wall_time")}
     start = end - float(row["wall_time"])
-    t0 = _stamps(run_dir / "referee.log", "t0 = sim")
+    t0 = _stamps(run_dir / "sim.log", "t0 = sim") or _stamps(run_dir / "referee.log", "t0 = sim")
     sim_end = _SIM_END.search((run_dir / "sim.log").read_text(errors="replace")) if (run_dir / "sim.log").exists() \
         else None
     return {"wall_s": row["wall_time"], "startup_s": None if not t0 else round(t0[0] - start, 2),

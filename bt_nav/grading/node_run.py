@@ -4,7 +4,8 @@ around a command that is not bt_nav's, once per world x maneuver x seed, each ru
 Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (handed back at its end), a run
 directory of its own, and three process groups started by one :class:`bt_nav.ros.supervise.Launcher`:
 
-- the simulator node with ``follow`` off: it never waits on the node's command timing, so a node that
+- the simulator node, hosting the judge in its process (:mod:`bt_nav.ros.nodes.hosting`: fed by the loop, no
+  ``/clock`` or ground truth of its own to read over DDS, one process fewer per run), with ``follow`` off: it never waits on the node's command timing, so a node that
   publishes from its scan callback, from a timer or only on change runs at the same pace, ``rtf`` sim
   seconds per wall second (the node's sim-time timers tick that much faster too);
 - the user's command, with :func:`exe_ros_args` appended (``--ros-args -p use_sim_time:=true``, the
@@ -12,7 +13,7 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   ``-p maneuver:="X"`` when the grid has maneuvers): a foreign node serves the homework's
   ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` under those names itself, or
   serves the lab's ``toggle_navigation``;
-- the judge (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
+- the judge it hosts (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
   silent until armed), without ``sync`` (the simulator follows nobody), with ``robot_clock_wait`` (t0 once the
   node's /clock subscription has settled), with ``start_wait`` (a node that never offers its arm service gets a
   failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
@@ -22,7 +23,7 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and
   films the failed runs from it.
 
-The run ends when the judge exits (its JSON is the verdict), when the node exits first with an error (the
+The run ends when the judge's JSON (the verdict) appears, when the node exits first with an error (the
 reason names its exit code; a node that ends by itself with 0 still gets its verdict), at the wall-time
 limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the
 audit's plus how the node ended (it ignored SIGINT, it ended before the verdict), each also appended to its
@@ -46,7 +47,7 @@ from bt_nav_sim.referee_core import failure_reason
 from bt_nav.grading.grid import Job
 from bt_nav.grading.node_bag import bag_row, start_recorder
 from bt_nav.grading.node_log import import_findings, rclpy_shutdown_race
-from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, nodes, param_arg
+from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, host_judge, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
     Launcher,
@@ -124,8 +125,8 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
     return args
 
 
-def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeSpec]:
-    """The simulator and the judge of ``job`` (the profile's graph without bt_nav's executive)."""
+def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
+    """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
     lab = settings.profile == "lab"
     sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
     if settings.jitter:
@@ -142,34 +143,35 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> list[NodeS
         judge["safety_distance"] = float(given["safety_distance"])
     specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
-    return [spec for spec in specs if spec.executable != "executive"]
+    return host_judge([spec for spec in specs if spec.executable != "executive"])[0]
 
 
-def _wait(launcher: Launcher, judge: Child, node: Child, limit: float, stop: StopRequest | None,
-          started: float) -> tuple[str, str]:
-    """Wait for the judge's exit (``("verdict", "")``), or why there is none: ``(outcome, reason line)``.
+def _wait(sim: Child, node: Child, limit: float, stop: StopRequest | None, started: float,
+          results_json: Path) -> tuple[str, str]:
+    """Wait for the judge's verdict file (``("verdict", "")``), or why there is none: ``(outcome, reason line)``.
 
     A node that exits with 0 ended by itself (some call ``rclpy.shutdown()`` after their mission): the judge
     still judges what the robot did; any other exit code is a crash and ends the run now.
     """
     end = started + limit
     while time.monotonic() < end:
-        if judge.poll() is not None:
+        if results_json.is_file():
             return "verdict", ""
         code = node.poll()
         if code is not None and code != 0:
             return "node exited", (f"the node exited with code {code} after {time.monotonic() - started:.1f} s "
                                    "wall, before the verdict (see node.log)")
-        sim = next(c for c in launcher.children if c.spec.executable == "sim")
         if sim.poll() is not None:
-            return "sim exited", f"the simulator exited with code {sim.poll()} (see sim.log)"
+            if results_json.is_file():
+                return "verdict", ""
+            return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)"
         if stop is not None and stop.requested:
             return "stopped", f"stopped by {stop.name or 'a stop request'}"
         time.sleep(0.05)
     return "timeout", f"no verdict within {limit:g} s wall"
 
 
-def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) -> dict[str, Any]:
+def _verdict_row(outcome: str, reason: str, sim: Child, results_json: Path) -> dict[str, Any]:
     """``passed``, ``reason`` and the judge's JSON (when it wrote one) of a finished run."""
     verdict = None
     if results_json.is_file():
@@ -179,7 +181,7 @@ def _verdict_row(outcome: str, reason: str, judge: Child, results_json: Path) ->
             verdict = None
     if outcome == "verdict":
         if verdict is None:
-            reason = f"the judge exited with code {judge.poll()} without a verdict (see {judge.name}.log)"
+            reason = f"the judge's verdict could not be read (see {results_json.name} and {sim.name}.log)"
         elif verdict.get("not_started"):
             reason = f"not judged: {verdict['not_started']}"
         elif verdict.get("timed_out"):
@@ -258,7 +260,7 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     try:
         if on_start is not None:
             on_start(domain, run_dir)
-        sim_spec, judge_spec = exe_graph(job, settings, results_json)
+        sim_spec = exe_graph(job, settings, results_json)
         if settings.record != "off":  # with the others (bt_nav.grading.node_bag says why)
             recorder = start_recorder(launcher, tee, run_dir, job.world, job.seed, settings.profile)
         try:
@@ -267,10 +269,9 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
         else:
-            judge = launcher.start(judge_spec)
-            launcher.start(sim_spec)
-            outcome, reason = _wait(launcher, judge, node, settings.limit, stop, started)
-            row = _verdict_row(outcome, reason, judge, results_json)
+            sim = launcher.start(sim_spec)
+            outcome, reason = _wait(sim, node, settings.limit, stop, started, results_json)
+            row = _verdict_row(outcome, reason, sim, results_json)
         if on_verdict is not None:
             on_verdict()
     finally:

@@ -261,6 +261,21 @@ def _judge_spec(homework: bool, include_sim: bool, services: tuple[str, str] | N
     return NodeSpec("referee", REFEREE_NAME, params) if homework else NodeSpec("checkoff", CHECKOFF_NAME, params)
 
 
+def host_judge(specs: list[NodeSpec]) -> list[NodeSpec]:
+    """``specs`` with the judge hosted by the simulator (:mod:`bt_nav.ros.nodes.hosting`): the simulator's spec gets
+    ``--judge KIND --judge-args JSON`` (the judge's own ROS arguments, off sim time: its clock is the loop's), the
+    judge's spec is dropped. ValueError without exactly one simulator and one judge."""
+    sims = [s for s in specs if s.executable == "sim"]
+    judges = [s for s in specs if s.executable in JUDGES]
+    if len(sims) != 1 or len(judges) != 1:
+        raise ValueError("a hosted judge needs one simulator and one judge in the graph")
+    judge = judges[0]
+    own = NodeSpec(judge.executable, judge.name, {**judge.parameters, "use_sim_time": False}, judge.remappings,
+                   parameter_files=judge.parameter_files, namespace=judge.namespace)
+    sims[0].arguments += ["--judge", judge.executable, "--judge-args", json.dumps(own.ros_args())]
+    return [s for s in specs if s is not judge]
+
+
 def _checkoff_choices(maneuver: str | None, world: str | None) -> tuple[str, str]:
     """The check-off's maneuver (given, else ``config/lab.yaml``'s) and world (given, else the maneuver's arena)."""
     from bt_nav.mission.params import normalise_maneuver

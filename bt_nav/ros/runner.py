@@ -7,7 +7,8 @@ publishes its stops while the ROS context is still up, and only after that is th
 
 A node that ends by itself (the simulator after ``duration``, a judge after its verdict) offers
 :class:`Finishing`: ``poll()`` runs after every spin and ends the loop when it returns True, and its
-``exit_code`` (read after ``close()``) is the process's exit status.
+``exit_code`` (read after ``close()``) is the process's exit status. Wiring with more nodes of the process
+(``extra_nodes``: the judge hosted by the simulator) gets them spun by the same executor and destroyed with it.
 """
 
 from __future__ import annotations
@@ -140,7 +141,9 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
             node = make_node(name) if make_node is not None else Node(name)
             undo = prepare(node) if prepare is not None else None
             wiring = build(node, options)
-            executor = make_executor(events=False if uses_sim_time(node) else None)
+            extra = tuple(getattr(wiring, "extra_nodes", ()))
+            # A hosted judge's audit reads each command's MessageInfo, which Jazzy's EventsExecutor fails on.
+            executor = make_executor(events=False if uses_sim_time(node) or extra else None)
         except (ConfigError, ValueError, FileNotFoundError) as exc:
             message = f"refusing to start: {exc}".replace("\n", " ")
             if node is not None:
@@ -149,6 +152,8 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
                 print(f"{name}: {message}", file=sys.stderr)
             return EXIT_CONFIG
         executor.add_node(node)
+        for other in extra:
+            executor.add_node(other)
         spin_until_stopped(node, executor, shutdown, getattr(wiring, "poll", None))
     except (KeyboardInterrupt, ExternalShutdownException):
         if node is not None:
@@ -176,9 +181,10 @@ def _tear_down(wiring: Closable | None, executor: Executor | None, node: Node | 
     if executor is not None:
         with suppress(Exception):
             executor.shutdown(timeout_sec=0.5)
-    if node is not None:
-        with suppress(Exception):
-            node.destroy_node()
+    for other in (*getattr(wiring, "extra_nodes", ()), node):
+        if other is not None:
+            with suppress(Exception):
+                other.destroy_node()
     if undo is not None:
         undo()
     rclpy.try_shutdown()

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -100,8 +101,11 @@ class GraphAudit:
 
     def __init__(self, node: Node, service: str, inputs: tuple[tuple[str, str], ...] = (
             ("scan", "sensor_msgs/msg/LaserScan"), ("/clock", "rosgraph_msgs/msg/Clock")),
-            command: str = "cmd_vel", parameters: tuple[str, ...] = ()) -> None:
+            command: str = "cmd_vel", parameters: tuple[str, ...] = (),
+            now: Callable[[], float] | None = None) -> None:
         self.node = node
+        # sim seconds of a heard command (the command rate is per sim second): the node clock, or the judge's own
+        self.now = now if now is not None else (lambda: node.get_clock().now().nanoseconds * 1e-9)
         self.parameters = parameters  # parameters the assignment asks the node to declare (the lab: safety_distance)
         self.declared: dict[str, set[str] | None] = {}  # foreign node -> its parameter names (None: not answered)
         self._asked: dict[str, Any] = {}  # foreign node -> the pending ListParameters future
@@ -231,7 +235,7 @@ class GraphAudit:
     def _on_command(self, twist: Any, info: Any) -> None:
         values = (twist.linear.x, twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y, twist.angular.z)
         seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
-        self.commands.add(values, seq, self.node.get_clock().now().nanoseconds * 1e-9, time.monotonic())
+        self.commands.add(values, seq, self.now(), time.monotonic())
 
     # -------------------------------------------------------------- findings
     def service_hint(self) -> str:

@@ -57,8 +57,8 @@ class CheckoffNode(JudgeNode):
     wants_commands = True
     required_parameters = ("safety_distance",)  # the check-off's `ros2 param list` step
 
-    def __init__(self, wall_start: float | None = None) -> None:
-        super().__init__(NODE_NAME, wall_start)
+    def __init__(self, wall_start: float | None = None, **hosting: Any) -> None:
+        super().__init__(NODE_NAME, wall_start, **hosting)  # hosting: fed, cli_args (a hosted judge: JudgeNode)
 
     def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
         """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""

@@ -47,13 +47,25 @@ from t0, as the judges make them; the JSON says so (``time_base``) and gives t0'
 
 Another run in the same ROS domain (a second simulator publishing ground truth) ends the run without a
 verdict: a judgement over two robots' poses would report distances nobody drove.
+
+Hosted (``fed``, what ``bt-nav grade --exe`` runs: :mod:`bt_nav.ros.nodes.hosting`): the judge lives in the
+simulator's process and the simulator's loop feeds it what it would read over DDS, at the instant it happens: its
+clock (each physics step), ground truth, collisions and the people walking, and the schedule's steps on the same
+grid as the timer's (t0 + k / ``rate_hz``). No ``/clock``, ``ground_truth_odom`` or ``sim_sync`` subscription, no
+process of its own to start, no judge starved of CPU behind a queue of poses; the heartbeats and holds go straight
+to the simulator's follower table. What concerns the robot (the arm service, ``cmd_vel``, the graph audit) stays
+on DDS, as the robot sees it. Two threads then call the judge (the loop, the executor): one lock serialises them.
 """
 
 from __future__ import annotations
 
+import functools
 import json
+import os
 import sys
+import threading
 import time
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -102,6 +114,20 @@ DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
 }
 
 
+#: A hosted judge's line to the simulator's follower table: (who, its clock in ns, hold, leave).
+SyncSink = Callable[[str, int, bool, bool], None]
+
+
+def locked(method: Callable[..., Any]) -> Callable[..., Any]:
+    """Run ``method`` under the node's lock (a hosted judge is called from the simulator's loop and the executor)."""
+    @functools.wraps(method)
+    def wrapper(self: JudgeNode, *args: Any, **kwargs: Any) -> Any:
+        with self.lock:
+            return method(self, *args, **kwargs)
+
+    return wrapper
+
+
 class JudgeNode(QuietQosEvents, Node):
     """A judge over DDS (see the module docstring); subclasses make the judge and add their interfaces.
 
@@ -111,6 +137,8 @@ class JudgeNode(QuietQosEvents, Node):
 
     Args:
         name: the node name. ``wall_start``: monotonic wall time the ``timeout`` counts from (default: now).
+        fed: hosted in the simulator's process, which feeds it (see the module docstring; :meth:`feed`).
+        cli_args: the node's own ROS arguments (a hosted judge: the process's belong to the simulator).
     """
 
     PARAMETERS: dict[str, tuple[Any, str]] = DRIVER_PARAMETERS
@@ -118,8 +146,13 @@ class JudgeNode(QuietQosEvents, Node):
     #: Parameters the assignment asks the judged node to declare (a finding when none does).
     required_parameters: tuple[str, ...] = ()
 
-    def __init__(self, name: str, wall_start: float | None = None) -> None:
-        super().__init__(name)
+    def __init__(self, name: str, wall_start: float | None = None, *, fed: bool = False,
+                 cli_args: list[str] | None = None) -> None:
+        super().__init__(name, cli_args=cli_args, use_global_arguments=cli_args is None)
+        self.lock = threading.RLock()
+        self.fed = fed
+        self._fed_ns = 0  # a hosted judge's clock: the simulator's, at its latest step
+        self.sync_sink: SyncSink | None = None  # a hosted judge's heartbeats (set by the host)
         p = declare_node_parameters(self, self.PARAMETERS)
         self.judge, self.config = self.make_judge(p)
         self.json_path = str(p["json"])
@@ -137,7 +170,7 @@ class JudgeNode(QuietQosEvents, Node):
         self.wall_start = time.monotonic() if wall_start is None else wall_start
         self._init_state()
         self._create_interfaces(p)
-        self.audit = GraphAudit(self, self.activate_name, parameters=self.required_parameters) \
+        self.audit = GraphAudit(self, self.activate_name, parameters=self.required_parameters, now=self.now) \
             if bool(p["audit"]) else None
         self.get_logger().info(f"waiting for {self.activate_name} and /clock; {self.schedule_text()}")
 
@@ -159,6 +192,7 @@ class JudgeNode(QuietQosEvents, Node):
         self._clock_wall: float | None = None  # wall time of the first /clock (the simulator may start last)
         self._waiting_line_at = 0.0  # wall time the next "waiting for" line may be logged
         self._step_timer: Any = None
+        self._next_step_ns: int | None = None  # a hosted judge's next step (the timer's grid)
         self._pending: dict[bool, tuple[Any, float, int]] = {}  # data -> (future, sent at: wall s, attempt)
         self._finish_by: float | None = None  # wall deadline for the final call, once done
         self.finished = False
@@ -173,14 +207,9 @@ class JudgeNode(QuietQosEvents, Node):
         self._cmd_sub: Any = None
 
     def _create_interfaces(self, p: dict[str, Any]) -> None:
-        """The activate client, the inputs, and the sim_sync heartbeat if ``sync``."""
+        """The activate client, the inputs, and the sim_sync heartbeat if ``sync`` (hosted: the world's inputs and
+        the heartbeat come from the host)."""
         self.activate_client = self.create_client(SetBool, self.activate_name)
-        self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,  # (msg, info): see _own_truth
-                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
-        self.create_subscription(String, "collisions", self._on_collision, QoSProfile(depth=50))
-        if hasattr(self.judge, "on_walkers"):  # the people walking, for a judge that casts the robot's view
-            self.create_subscription(String, "walkers", self._on_walkers,
-                                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self._cmd_vel_seen = not bool(p["wait_for_cmd_vel"])
         self._cmd_type = "TwistStamped" if bool(p["cmd_vel_stamped"]) else str(p["cmd_vel_type"])
         if self._cmd_type not in (*CMD_TYPES, "auto"):
@@ -188,7 +217,17 @@ class JudgeNode(QuietQosEvents, Node):
         self._subscribe_cmd_vel()
         # Its name on sim_sync: several robots' judges (one per namespace) must not be one follower.
         self.who = self.get_name() if self.get_namespace() == "/" else self.get_fully_qualified_name()
-        self.sync_pub = self.create_publisher(String, "sim_sync", QoSProfile(depth=50)) if bool(p["sync"]) else None
+        self.synced = bool(p["sync"])
+        self.sync_pub = None
+        if self.fed:
+            return
+        self.create_subscription(Odometry, "ground_truth_odom", self._on_truth,  # (msg, info): see _own_truth
+                                 QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.create_subscription(String, "collisions", self._on_collision, QoSProfile(depth=50))
+        if hasattr(self.judge, "on_walkers"):  # the people walking, for a judge that casts the robot's view
+            self.create_subscription(String, "walkers", self._on_walkers,
+                                     QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.sync_pub = self.create_publisher(String, "sim_sync", QoSProfile(depth=50)) if self.synced else None
         if self.sync_pub is not None:
             self.create_timer(1.0 / max(1e-3, float(p["sync_rate_hz"])), self._heartbeat)
 
@@ -207,6 +246,7 @@ class JudgeNode(QuietQosEvents, Node):
         self._cmd_sub = self.create_subscription(CMD_TYPES[kind], "cmd_vel",
                                                  lambda m: self._on_cmd(m.twist if stamped else m), 10)
 
+    @locked
     def _on_cmd(self, twist: Any) -> None:
         self._cmd_vel_seen = True
         if self.wants_commands and self.started:
@@ -214,7 +254,9 @@ class JudgeNode(QuietQosEvents, Node):
 
     # -------------------------------------------------------------- time
     def now(self) -> float:
-        """Node clock seconds (sim time with use_sim_time)."""
+        """Node clock seconds (sim time with use_sim_time); a hosted judge's: the simulator's latest step."""
+        if self.fed:
+            return self._fed_ns * 1e-9
         return self.get_clock().now().nanoseconds * 1e-9
 
     def stamp(self, now: float | None = None) -> str:
@@ -224,6 +266,7 @@ class JudgeNode(QuietQosEvents, Node):
         return f"sim {now:.2f} s" + (f" (t0 + {now - t0:.2f} s)" if t0 is not None else "")
 
     # -------------------------------------------------------------- main-loop duties (runner: Finishing)
+    @locked
     def poll(self) -> bool:
         """Called between executor spins: start, wall timeout, finishing; True once finished."""
         if self.finished:
@@ -330,8 +373,15 @@ class JudgeNode(QuietQosEvents, Node):
             self.destroy_subscription(self._cmd_sub)
             self._cmd_sub = None
         self.get_logger().info(f"t0 = sim {now:.2f} s: {self.activate_name} is available")
-        self._step_timer = self.create_timer(1.0 / self.config.rate_hz, self._on_step)
+        if self.fed:  # the timer's grid, stepped by the host (feed)
+            self._next_step_ns = self._fed_ns + self._step_period_ns()
+        else:
+            self._step_timer = self.create_timer(1.0 / self.config.rate_hz, self._on_step)
 
+    def _step_period_ns(self) -> int:
+        return int(round(1e9 / self.config.rate_hz))
+
+    @locked
     def _on_step(self) -> None:
         if self.finished or self._finish_by is not None:
             return
@@ -364,6 +414,7 @@ class JudgeNode(QuietQosEvents, Node):
         self._pending[data] = (future, time.monotonic(), attempt)
         future.add_done_callback(lambda f, d=data: self._on_activate_done(f, d))
 
+    @locked
     def _on_activate_done(self, future: Any, data: bool) -> None:
         entry = self._pending.get(data)
         if entry is None or entry[0] is not future:
@@ -406,13 +457,21 @@ class JudgeNode(QuietQosEvents, Node):
 
     def _heartbeat(self) -> None:
         """Tell the simulator where this node's clock is and whether a call is in flight."""
-        if self.sync_pub is None or self.finished:
+        if self.finished:
+            return
+        if self.fed:
+            if self.synced and self.sync_sink is not None:
+                self.sync_sink(self.who, self._fed_ns, bool(self._pending), False)
+            return
+        if self.sync_pub is None:
             return
         payload = {"who": self.who, "t": round(self.now(), 9), "hold": bool(self._pending)}
         self.sync_pub.publish(String(data=json.dumps(payload)))
 
     def leave(self) -> None:
         """Tell the simulator to stop waiting for this node (after the verdict, or when stopping)."""
+        if self.fed and self.synced and self.sync_sink is not None:
+            self.sync_sink(self.who, self._fed_ns, False, True)
         if self.sync_pub is None:
             return
         self.sync_pub.publish(String(data=json.dumps({"who": self.who, "leave": True})))
@@ -438,20 +497,26 @@ class JudgeNode(QuietQosEvents, Node):
         self._truth_seq = seq
         return True
 
+    @locked
     def _on_truth(self, msg: Any, info: Any = None) -> None:
         if not self._own_truth(info):
             return
+        pose = msg.pose.pose
+        q = pose.orientation
+        self._take_truth(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, pose.position.x, pose.position.y,
+                         yaw_from_quaternion(q.x, q.y, q.z, q.w))
+
+    def _take_truth(self, t: float, x: float, y: float, yaw: float) -> None:
+        """One ground-truth pose (before t0 it only says that ground truth runs)."""
         if not self.started:
             self._truth_seen = True
             return
-        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         self._truth_t = t
         if self.judge.t0 is not None and t < self.judge.t0:
             return
-        pose = msg.pose.pose
-        q = pose.orientation
-        self.judge.observe(t, pose.position.x, pose.position.y, yaw_from_quaternion(q.x, q.y, q.z, q.w))
+        self.judge.observe(t, x, y, yaw)
 
+    @locked
     def _on_collision(self, msg: Any) -> None:
         if not self.started:
             return
@@ -463,6 +528,7 @@ class JudgeNode(QuietQosEvents, Node):
             return
         self.judge.on_collision(t, x, y)
 
+    @locked
     def _on_walkers(self, msg: Any) -> None:
         try:
             t, circles = read_walkers_message(msg.data)
@@ -470,6 +536,29 @@ class JudgeNode(QuietQosEvents, Node):
             self.get_logger().warning(f"unreadable walkers sample: {exc}")
             return
         self.judge.on_walkers(t, circles)
+
+    # -------------------------------------------------------------- hosted: fed by the simulator's loop
+    @locked
+    def feed(self, t_ns: int, truth: tuple[float, float, float] | None = None,
+             collision: tuple[float, float] | None = None, walkers: Any = None) -> None:
+        """One physics step of the host at sim time ``t_ns``: what it published then, in the order it publishes it
+        (a collision, the people walking, the ground-truth pose ``(x, y, yaw)``), then the schedule's step when the
+        timer's grid is due. Called from the simulator's loop thread."""
+        self._fed_ns = t_ns
+        t = t_ns * 1e-9
+        if collision is not None and self.started:
+            self.judge.on_collision(t, *collision)
+        if walkers is not None and hasattr(self.judge, "on_walkers"):
+            self.judge.on_walkers(t, walkers)
+        if truth is not None:
+            self._take_truth(t, *truth)
+        if self._next_step_ns is not None and t_ns >= self._next_step_ns:
+            self._next_step_ns += self._step_period_ns()
+            self._on_step()
+            if self._finish_by is not None:
+                self._next_step_ns = None
+        if self.synced and self.started:  # its clock is the host's: it never lags, it only holds for its calls
+            self._heartbeat()
 
     # -------------------------------------------------------------- the end
     def _conclude(self) -> None:
@@ -549,6 +638,8 @@ class JudgeNode(QuietQosEvents, Node):
         path = Path(self.json_path)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+            partial = path.with_name(path.name + ".partial")  # whole or absent: a host's reader polls for it
+            partial.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+            os.replace(partial, path)
         except OSError as exc:
             self.get_logger().error(f"could not write {path}: {exc}")

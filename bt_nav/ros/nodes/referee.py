@@ -31,7 +31,7 @@ from typing import Any
 from bt_nav_sim.referee_core import Referee, RefereeConfig, scaled
 from std_srvs.srv import Trigger
 
-from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode
+from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode, locked
 from bt_nav.ros.runner import param_args, run_node
 
 NODE_NAME = "bt_nav_referee"
@@ -54,8 +54,8 @@ class RefereeNode(JudgeNode):
         **{f.name: (float(getattr(_DEFAULTS, f.name)), f"RefereeConfig.{f.name}") for f in fields(_DEFAULTS)},
     }
 
-    def __init__(self, wall_start: float | None = None) -> None:
-        super().__init__(NODE_NAME, wall_start)
+    def __init__(self, wall_start: float | None = None, **hosting: Any) -> None:
+        super().__init__(NODE_NAME, wall_start, **hosting)  # hosting: fed, cli_args (a hosted judge: JudgeNode)
         self.referee: Referee = self.judge
         self.create_service(Trigger, str(self.get_parameter("evaluate_service").value), self._on_evaluate)
 
@@ -70,6 +70,7 @@ class RefereeNode(JudgeNode):
         return (f"schedule: activate at {c.static_before:g} s, deactivate at {c.deactivate_at:g} s, reactivate at "
                 f"{c.reactivate_at:g} s, evaluation by {c.evaluation_deadline:g} s (sim time from t0)")
 
+    @locked
     def _on_evaluate(self, request: Any, response: Any) -> Any:
         now = self.now()
         response.success, response.message = self.referee.on_evaluate(now)

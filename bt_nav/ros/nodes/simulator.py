@@ -75,6 +75,7 @@ import math
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -241,6 +242,8 @@ class SimulatorNode(Node):
         self._wall_start = time.monotonic()
         self.failed: BaseException | None = None
         self._thread = threading.Thread(target=self._loop_guarded, name="sim-loop", daemon=True)
+        #: Called from the loop thread with each step's outputs once published (a hosted judge: hosting.py).
+        self.observers: list[Callable[[list[StepOutput]], None]] = []
 
     def _describe(self) -> str:
         """The start-up log line: world, spawn, profile, kinematics, physics rate and pacing."""
@@ -326,13 +329,18 @@ class SimulatorNode(Node):
             self._bad_sync += 1
             self.get_logger().warning(f"ignoring sim_sync message {msg.data!r}: {exc}", throttle_duration_sec=5.0)
             return
+        self.follow_report(who, int(round(t * 1e9)), hold, leave)
+
+    def follow_report(self, who: str, t_ns: int, hold: bool, leave: bool) -> None:
+        """A follower's heartbeat (its clock ``t_ns``, whether it holds) or goodbye: from ``sim_sync``, or straight
+        from a judge hosted in this process (any thread)."""
         if not self.follow:
             return
         with self._cond:
             if leave:
                 if self.followers.leave(who):
                     self.get_logger().info(f"{who} stopped following (t={self.core.t:.2f} s)")
-            elif self.followers.report(who, int(round(t * 1e9)), hold, time.monotonic()):
+            elif self.followers.report(who, t_ns, hold, time.monotonic()):
                 self.get_logger().info(f"following {who} (t={self.core.t:.2f} s)")
             self._cond.notify_all()
 
@@ -443,6 +451,8 @@ class SimulatorNode(Node):
         sec, nanosec = divmod(t_ns, 1_000_000_000)
         for robot, out in zip(self.robots, outs, strict=True):
             robot.publish(out, sec, nanosec)
+        for observe in self.observers:
+            observe(outs)
 
     def _clock_due(self, t_ns: int, outs: list[StepOutput]) -> bool:
         """A /clock sample at every physics step (``clock_rate_hz`` 0), else on its grid and with every message,
@@ -588,6 +598,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--seed", type=int, help="noise / world seed (parameter seed)")
     parser.add_argument("--rtf", type=float, help="real-time factor, 0 = as fast as possible")
     parser.add_argument("--duration", type=float, help="stop after this many sim seconds")
+    parser.add_argument("--judge", choices=("referee", "checkoff"),
+                        help="host this judge in the process, fed by the loop (bt_nav.ros.nodes.hosting)")
+    parser.add_argument("--judge-args", default="[]", metavar="JSON",
+                        help="the hosted judge's own ROS arguments, a JSON list (e.g. [\"--ros-args\", \"-p\", "
+                             "\"json:=v.json\"])")
     return parser.parse_args(argv)
 
 
@@ -596,10 +611,16 @@ def _as_parameters(opts: argparse.Namespace) -> list[str]:
                        "real_time_factor": opts.rtf, "duration": opts.duration})
 
 
-def _started(node: Node, opts: argparse.Namespace) -> SimulatorNode:
+def _started(node: Node, opts: argparse.Namespace) -> Any:
+    """The simulator running, or with ``--judge`` its :class:`~bt_nav.ros.nodes.hosting.HostedJudge` wiring."""
     assert isinstance(node, SimulatorNode)
+    wiring: Any = node
+    if opts.judge:
+        from bt_nav.ros.nodes.hosting import HostedJudge, make_hosted_judge, parse_judge_args
+
+        wiring = HostedJudge(node, make_hosted_judge(opts.judge, parse_judge_args(opts.judge_args), time.monotonic()))
     node.start()
-    return node
+    return wiring
 
 
 def _make(name: str) -> SimulatorNode:
