@@ -34,7 +34,8 @@ JOBS = "auto"
 _STAMP = re.compile(r"^\[\w+\] \[(\d+\.\d+)\]")
 _SIM_END = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s wall \(([\d.]+)x real time\)")
 #: Process kinds by their command line, first match wins: the simulator hosting its judge (``--judge``) is one.
-KINDS = ((" sim ", "sim+judge"), ("referee", "referee"), ("checkoff", "judge"), ("executive", "node"))
+KINDS = ((" --judge ", "sim+judge"), (" sim ", "sim"), ("referee", "referee"), ("checkoff", "judge"),
+         ("executive", "node"))
 
 
 def _kind(cmdline: list[str]) -> str:

@@ -35,6 +35,7 @@ def test_a_runs_wall_time_splits_into_its_phases(tmp_path: Path) -> None:
 
 def test_processes_are_told_apart_by_their_command_line() -> None:
     assert _kind(["/v/bin/python", "-m", "bt_nav.cli", "sim", "--ros-args"]) == "sim"
+    assert _kind(["/v/bin/python", "-m", "bt_nav.cli", "sim", "--judge", "referee", "--ros-args"]) == "sim+judge"
     assert _kind(["/v/bin/python", "-m", "bt_nav.cli", "referee", "--ros-args"]) == "referee"
     assert _kind(["/v/bin/bt-nav", "executive", "--ros-args"]) == "node"
     assert _kind(["/v/bin/python", "/v/bin/bt-nav", "grade", "--exe", "x"]) == "grade"

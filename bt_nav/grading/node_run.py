@@ -4,10 +4,10 @@ around a command that is not bt_nav's, once per world x maneuver x seed, each ru
 Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (handed back at its end), a run
 directory of its own, and three process groups started by one :class:`bt_nav.ros.supervise.Launcher`:
 
-- the simulator node, hosting the judge in its process (:mod:`bt_nav.ros.nodes.hosting`: fed by the loop, no
-  ``/clock`` or ground truth of its own to read over DDS, one process fewer per run), with ``follow`` off: it never waits on the node's command timing, so a node that
-  publishes from its scan callback, from a timer or only on change runs at the same pace, ``rtf`` sim
-  seconds per wall second (the node's sim-time timers tick that much faster too);
+- the simulator node with ``follow`` off, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop,
+  no ``/clock`` or ground truth to read over DDS, no process of its own): it never waits on the node's command
+  timing, so a node that publishes from its scan callback, from a timer or only on change runs at the same pace,
+  ``rtf`` sim seconds per wall second (the node's sim-time timers tick that much faster too);
 - the user's command, with :func:`exe_ros_args` appended (``--ros-args -p use_sim_time:=true``, the
   profile's remaps of bt_nav's own names ``arm`` and ``evaluate_mission`` onto the assignment's, plus
   ``-p maneuver:="X"`` when the grid has maneuvers): a foreign node serves the homework's

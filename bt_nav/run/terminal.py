@@ -31,7 +31,7 @@ from typing import Any
 
 from bt_nav.media.bag import EVENTS
 from bt_nav.media.plot import MANEUVER_TIPS
-from bt_nav.ros.bringup import EXECUTIVE_NAME
+from bt_nav.ros.bringup import CHECKOFF_NAME, EXECUTIVE_NAME, REFEREE_NAME
 from bt_nav.run.rundir import Logs, split_stamp
 
 #: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
@@ -157,6 +157,8 @@ def judge_call(message: str) -> tuple[float, list[str]] | None:
 
 #: A line in rcutils' default console format, ``[INFO] [1712345678.123456789] [node]: text`` (a student's node
 #: logs so unless it sets ``RCUTILS_CONSOLE_OUTPUT_FORMAT``): the wall time of the log call is in it.
+#: The judges' node names (their lines are shown; the simulator's, in the same process when hosting one, are not).
+JUDGE_NODE_NAMES = (REFEREE_NAME, CHECKOFF_NAME)
 DEFAULT_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
 
 
@@ -203,8 +205,10 @@ class NodeTerminal:
                 self.show(line, self._sim())
             else:
                 self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
-        elif name in ("referee", "checkoff"):
+        elif name in ("referee", "checkoff", "sim"):  # a judge of its own process, or hosted by the simulator's
             log = DEFAULT_LOG_LINE.match(line)
+            if log is not None and log["node"].rsplit(".", 1)[-1] not in JUDGE_NODE_NAMES:
+                return  # the simulator's own lines stay in its log file
             if log is None:
                 if not PYTHON_ERROR.match(line):  # a judge stopped early says so in its log file, not here
                     with self._lock:

@@ -59,8 +59,7 @@ def test_a_failed_run_is_recorded_pictured_and_filmed(tmp_path: Path) -> None:
     text = page.read_text()
     assert "0/1 passed (0.0 %)" in text and 'src="stage_4_none_seed0/video.mp4"' in text
     assert (out / "distance.png").is_file() and doc["figures"] == ["distance.png"]
-    assert {"record.log", "sim.log", "referee.log", "result.json", "verdict.json"} <= {p.name for p in
-                                                                                     run_dir.iterdir()}
+    assert {"record.log", "sim.log", "result.json", "verdict.json"} <= {p.name for p in run_dir.iterdir()}
     _no_children_left()
 
 

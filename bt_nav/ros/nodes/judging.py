@@ -139,6 +139,7 @@ class JudgeNode(QuietQosEvents, Node):
         name: the node name. ``wall_start``: monotonic wall time the ``timeout`` counts from (default: now).
         fed: hosted in the simulator's process, which feeds it (see the module docstring; :meth:`feed`).
         cli_args: the node's own ROS arguments (a hosted judge: the process's belong to the simulator).
+        context: the rclpy context (None: the default one).
     """
 
     PARAMETERS: dict[str, tuple[Any, str]] = DRIVER_PARAMETERS
@@ -147,8 +148,8 @@ class JudgeNode(QuietQosEvents, Node):
     required_parameters: tuple[str, ...] = ()
 
     def __init__(self, name: str, wall_start: float | None = None, *, fed: bool = False,
-                 cli_args: list[str] | None = None) -> None:
-        super().__init__(name, cli_args=cli_args, use_global_arguments=cli_args is None)
+                 cli_args: list[str] | None = None, context: Any = None) -> None:
+        super().__init__(name, context=context, cli_args=cli_args, use_global_arguments=cli_args is None)
         self.lock = threading.RLock()
         self.fed = fed
         self._fed_ns = 0  # a hosted judge's clock: the simulator's, at its latest step
@@ -233,7 +234,7 @@ class JudgeNode(QuietQosEvents, Node):
 
     def _subscribe_cmd_vel(self) -> None:
         """Subscribe ``cmd_vel`` once its type is known (auto: from the robot's publisher on the graph)."""
-        if self._cmd_sub is not None or (self._cmd_vel_seen and not self.wants_commands):
+        if self._cmd_sub is not None or (self._cmd_vel_seen and not self.wants_commands) or self._cmd_type == "none":
             return
         kind = self._cmd_type
         if kind == "auto":
@@ -243,8 +244,14 @@ class JudgeNode(QuietQosEvents, Node):
             if not kind:
                 return  # no publisher yet: asked again at the next poll
         stamped = kind == "TwistStamped"
-        self._cmd_sub = self.create_subscription(CMD_TYPES[kind], "cmd_vel",
-                                                 lambda m: self._on_cmd(m.twist if stamped else m), 10)
+        try:
+            self._cmd_sub = self.create_subscription(CMD_TYPES[kind], "cmd_vel",
+                                                     lambda m: self._on_cmd(m.twist if stamped else m), 10)
+        except Exception as exc:  # hosted: the simulator reads cmd_vel as the other type, and DDS refuses a second
+            self._cmd_type = "none"  # the robot hears none of these commands either; the audit names the type
+            self._cmd_vel_seen = True
+            self.get_logger().warning(f"cannot read cmd_vel as {kind} beside the simulator's reader ({exc}): "
+                                      "judging without the robot's commands, which its base does not hear either")
 
     @locked
     def _on_cmd(self, twist: Any) -> None:
