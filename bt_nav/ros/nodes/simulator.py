@@ -88,13 +88,14 @@ from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from bt_nav.ros.rosutil import declare_node_parameters
+from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
 
 NODE_NAME = "bt_nav_sim"
@@ -144,8 +145,13 @@ def _sim_config(p: dict[str, Any]) -> SimConfig:
     )
 
 
-class SimulatorNode(Node):
-    """The simulator node (see the module docstring for topics, threading and pacing); rclpy must be initialised."""
+class SimulatorNode(QuietQosEvents, Node):
+    """The simulator node (see the module docstring for topics, threading and pacing); rclpy must be initialised.
+
+    QoS event handlers (rclpy's incompatible-QoS warnings) only on ``cmd_vel``, where the robot's node may differ: on
+    its own topics a mismatched subscriber warns in its own node, and hosting a judge this node spins the
+    ``SingleThreadedExecutor``, which walks every handler in Python at each wake-up (:class:`QuietQosEvents`).
+    """
 
     PARAMETERS: dict[str, tuple[Any, str]] = {
         "world": ("stage_4", "world name (sim/bt_nav_sim/worlds/<name>.yaml) or path to a world YAML"),
@@ -496,12 +502,15 @@ class _RobotIO:
         self.walkers = node.sim.walkers if len(node.sim.walkers) else None
         self.walkers_pub = None if self.walkers is None else node.create_publisher(
             String, f"{prefix}walkers", QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        warn = SubscriptionEventCallbacks()  # rclpy's warnings where a robot's node may not match
         if stamped:
             node.create_subscription(TwistStamped, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), cmd_qos)
+                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), cmd_qos,
+                                     event_callbacks=warn)
         else:
             node.create_subscription(Twist, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), cmd_qos)
+                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), cmd_qos,
+                                     event_callbacks=warn)
         if prefix:  # this robot's referee speaks on its own namespace's sim_sync
             node.create_subscription(String, f"{prefix}sim_sync", node._on_sync, QoSProfile(depth=50))
         # Messages are reused: publish() serialises synchronously, so only the fields change.
