@@ -156,7 +156,7 @@ def sim_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
                   f"- Inclusive time of its parts (share, and that share of the median {wall} s mission): {parts}."]
         lines += _profile_lines(prof, "Mission")
     ros = result.get("ros", {})
-    lines += ["", "ROS path (sim + executive + referee over DDS, rtf 0, as `bt-nav demo`):", ""]
+    lines += ["", "ROS path (the sim hosting the referee + the executive over DDS, rtf 0, as `bt-nav demo`):", ""]
     if "skipped" in ros:
         lines.append(f"skipped: {ros['skipped']}")
         return lines
@@ -165,14 +165,14 @@ def sim_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
         cpu = m.get("cpu_s") or {}
         rows.append([m.get("seed"), "PASSED" if m.get("passed") else "FAILED", m.get("mission_sim_s"),
                      m.get("mission_wall_s"), m.get("rtf"), m.get("startup_wall_s"), m.get("total_wall_s"),
-                     m.get("cpu_span_wall_s"), cpu.get("executive"), cpu.get("sim"), cpu.get("referee"),
+                     m.get("cpu_span_wall_s"), cpu.get("executive"), cpu.get("sim"),
                      cpu.get("recorder"), m.get("executive_tick_stats"), m.get("error", "")])
     lines += _table(["seed", "verdict", "mission sim s", "mission wall s", "real-time factor", "start-up wall s",
-                     "total wall s", "referee span wall s", "CPU s executive", "CPU s sim", "CPU s referee",
+                     "total wall s", "measured span wall s", "CPU s executive", "CPU s sim + referee",
                      "CPU s recorder", "executive's own tick stats", "error"], rows)
     lines += ["", f"Median real-time factor: {_fmt(ros['rtf_median'])}x (min {_fmt(ros['rtf_min'])}, "
-              f"max {_fmt(ros['rtf_max'])}). CPU s: user + system from the referee's start to its verdict "
-              "(the referee: its whole life, start-up included; the recorder: this process)."]
+              f"max {_fmt(ros['rtf_max'])}). CPU s: user + system from the robot seen by the recorder to the "
+              "referee's verdict (the recorder: this process)."]
     prof = ros.get("executive_profile")
     if prof and "error" not in prof:
         parts = ", ".join(f"`{name}` {seconds:.2f} s" for name, seconds in prof["inclusive_s"].items() if seconds)

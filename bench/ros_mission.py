@@ -1,23 +1,21 @@
 """One whole homework mission over DDS, as ``bt-nav demo`` runs it: its speed and its processes' memory.
 
-The ``eval`` graph of :func:`bt_nav.ros.bringup.nodes` (simulator with ``real_time_factor`` 0, the
-executive with ``config/homework.yaml``, the referee) runs as subprocesses in a domain of its own;
-it runs through :class:`~bt_nav.run.rosmission.RosMission` (as ``bt-nav demo`` does), whose recorder
-node in this process records ground truth with its wall arrival time, which gives the real-time factor
-over exactly the referee's mission (from its t0 to
-its report): simulated seconds / wall seconds. Start-up (Python imports, DDS discovery) is reported
-apart, because it is a fixed cost, not a speed.
+The ``eval`` graph of :func:`bt_nav.run.rosmission.mission_graph` (the simulator with ``real_time_factor`` 0
+hosting the referee in its process, the executive with ``config/homework.yaml``) runs as subprocesses in a domain
+of its own, through :class:`~bt_nav.run.rosmission.RosMission` (as ``bt-nav demo`` does), whose recorder node in
+this process records ground truth with its wall arrival time, which gives the real-time factor over exactly the
+referee's mission (from its t0 to its report): simulated seconds / wall seconds. Start-up (Python imports, DDS
+discovery) is reported apart, because it is a fixed cost, not a speed.
 
 Memory: ``VmHWM`` (peak resident set) and ``VmRSS`` of the executive and the simulator are read from
 ``/proc/<pid>/status`` once the referee has given its verdict, while both still run, so the peak
 covers the whole mission. The executive's own tick statistics (its exit log line) come along.
 
-CPU: what each process spent (user + system, ``/proc/<pid>/stat``) from the referee's start to its
-verdict, next to the wall time of that span: on a small machine the real-time factor is bounded by
-the CPU the processes need per simulated second, and this says which process needs it. The
-referee's whole life is counted (it exits with its verdict; its last reading is taken while it
-still runs); "recorder" is this process (the demo's recorder node). With ``profile_to``, the
-executive runs under ``python -m cProfile`` (its one thread is the whole node) and writes its
+CPU: what each process spent (user + system, ``/proc/<pid>/stat``) from the moment this process's recorder sees
+the robot to the referee's verdict file, next to the wall time of that span: on a small machine the real-time factor
+is bounded by the CPU the processes need per simulated second, and this says which process needs it. "sim" is the
+simulator with the referee it hosts; "recorder" is this process (the demo's recorder node). With ``profile_to``,
+the executive runs under ``python -m cProfile`` (its one thread is the whole node) and writes its
 profile there; such a run is slower and only says where the executive's time goes.
 """
 
@@ -40,7 +38,7 @@ from bt_nav.ros.rosutil import dds_env
 #: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
 REFEREE_TIMEOUT = 120.0
 GRACE = 15.0
-#: Wall seconds to wait for ground truth and the executive's first commands before starting the referee.
+#: Wall seconds to wait for ground truth and the executive's first commands before measuring.
 STARTUP = 45.0
 _FINAL_STATS = re.compile(r"final stats: (?P<stats>tick ms [^;]*)")
 
@@ -99,37 +97,34 @@ def _mission_window(t: list[float], wall: list[float], results: dict[str, Any]) 
     return t[last] - t[first], wall[last] - wall[first]
 
 
-def _wait_verdict(launcher: Launcher, referee: Any) -> tuple[Any, float | None]:
-    """Wait for the first child to exit (the referee, normally); also returns the referee's last CPU reading."""
+def _wait_verdict(launcher: Launcher, verdict: Path) -> Any:
+    """Wait for the hosted judge's verdict file (True), or the first child to exit (that child; None: timeout)."""
     deadline = time.monotonic() + REFEREE_TIMEOUT + GRACE
-    referee_cpu: float | None = None
     while time.monotonic() < deadline:
+        if verdict.is_file():
+            return True
         for child in launcher.children:
             if child.poll() is not None:
-                return child, referee_cpu
-        referee_cpu = proc_cpu(referee.popen.pid) or referee_cpu
-        time.sleep(0.05)
-    return None, referee_cpu
+                return child
+        time.sleep(0.02)
+    return None
 
 
-def _measure_verdict(launcher: Launcher, referee: Any, out: dict[str, Any]) -> tuple[Any, dict[str, dict[str, int]]]:
+def _measure_verdict(launcher: Launcher, verdict: Path, out: dict[str, Any]) -> tuple[Any, dict[str, dict[str, int]]]:
     """Wait for the verdict (:func:`_wait_verdict`), measuring each process's CPU over that span into ``out``.
 
-    Returns the child that ended first (None: none in time) and the memory of those still running.
+    Returns what :func:`_wait_verdict` returned and the memory of the processes still running.
     """
     span_start = time.monotonic()
-    cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children if c is not referee}
+    cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children}
     self_start = _self_cpu()
-    ended, referee_cpu = _wait_verdict(launcher, referee)
+    ended = _wait_verdict(launcher, verdict)
     span = time.monotonic() - span_start
     memory = {c.name: proc_status(c.popen.pid) for c in launcher.children if c.poll() is None}
     cpu: dict[str, float | None] = {}
     for c in launcher.children:
-        if c is referee:
-            cpu[c.name] = referee_cpu
-        else:
-            now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
-            cpu[c.name] = None if now is None or before is None else round(now - before, 3)
+        now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
+        cpu[c.name] = None if now is None or before is None else round(now - before, 3)
     cpu["recorder"] = round(_self_cpu() - self_start, 3)
     out["cpu_s"] = cpu
     out["cpu_span_wall_s"] = round(span, 3)
@@ -181,7 +176,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
         out: dict[str, Any] = {"world": world, "maneuver": profile_maneuver("homework"), "seed": seed,
                                "domain": domain}
         wall0 = time.monotonic()
-        mission = RosMission(specs, ["robot1"], env, sink=sink)
+        mission = RosMission(specs, ["robot1"], env, sink=sink, verdicts=[str(results_path)])
         launcher = mission.launcher
         referee_code: int | None = None
         memory: dict[str, dict[str, int]] = {}
@@ -189,10 +184,9 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
             mission.start_graph()
             mission.wait_ready(STARTUP)
             out["startup_wall_s"] = round(time.monotonic() - wall0, 3)
-            (referee,) = mission.start_referees()
-            ended, memory = _measure_verdict(launcher, referee, out)
-            if ended is referee:
-                referee_code = referee.poll()
+            ended, memory = _measure_verdict(launcher, results_path, out)
+            if ended is True:
+                referee_code = mission.referee_code()
             elif ended is not None:
                 out["error"] = f"{ended.name} exited with {ended.poll()} before the verdict"
             else:

@@ -82,6 +82,8 @@ CLOCK_RATE_HZ = 10.0
 SIM_NAME = "bt_nav_sim"
 REFEREE_NAME = "bt_nav_referee"
 CHECKOFF_NAME = "bt_nav_checkoff"
+#: The judges' node names (a judge hosted by the simulator logs under its own name in the simulator's output).
+JUDGE_NODE_NAMES = (REFEREE_NAME, CHECKOFF_NAME)
 
 
 @dataclass

@@ -233,7 +233,7 @@ class QuietQosEvents:
 
 
 class QuietNode(QuietQosEvents, Node):
-    """A plain ``Node`` with :class:`QuietQosEvents` (the executive's)."""
+    """A plain ``Node`` with :class:`QuietQosEvents` (the executive's, and every :class:`ThreadedNode`'s)."""
 
 
 # ---------------------------------------------------------------------------------------------- messages
@@ -254,7 +254,7 @@ class ThreadedNode:
 
         self.context = rclpy.Context()
         rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node(name, context=self.context)
+        self.node = QuietNode(name, context=self.context)  # observers: no QoS warnings walked at every wake-up
         self.executor = make_executor(self.context, events)
         self.executor.add_node(self.node)
         self._stop = threading.Event()

@@ -142,8 +142,10 @@ def run_node(name: str, argv: list[str] | None, parse_args: Callable[[list[str]]
             undo = prepare(node) if prepare is not None else None
             wiring = build(node, options)
             extra = tuple(getattr(wiring, "extra_nodes", ()))
-            # A hosted judge's audit reads each command's MessageInfo, which Jazzy's EventsExecutor fails on.
-            executor = make_executor(events=False if uses_sim_time(node) or extra else None)
+            # A callback that takes MessageInfo (a hosted judge's audit, reading each command's sequence number) fails
+            # under Jazzy's EventsExecutor.
+            info = any(getattr(other, "needs_message_info", True) for other in extra)
+            executor = make_executor(events=False if uses_sim_time(node) or info else None)
         except (ConfigError, ValueError, FileNotFoundError) as exc:
             message = f"refusing to start: {exc}".replace("\n", " ")
             if node is not None:

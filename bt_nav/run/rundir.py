@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 from typing import IO, Any
 
-from bt_nav.ros.bringup import JUDGES
+from bt_nav.ros.bringup import JUDGE_NODE_NAMES, JUDGES
 from bt_nav.ros.simclock import SimClock
 
 #: rcutils' line format for the nodes: the log call's wall time (ns since the epoch) in front, which
@@ -27,6 +27,24 @@ LOG_FORMAT = "@{time_as_nanoseconds} [{severity}] [{name}]: {message}"
 _STAMPED = re.compile(r"^@(\d+) (?=\[)")
 #: Wall s a line may wait for the /clock sample that covers its stamp (the demo's recorder lags on a loaded machine).
 CLOCK_WAIT = 2.0
+
+
+#: The node of an rcutils log line, in our format (its stamp taken off) or the default one: ``[INFO] [name]: ...``.
+_LOG_NODE = re.compile(r"^\[[A-Z]+\] (?:\[\d+\.\d+\] )?\[([^\]]+)\]: ")
+
+
+def judge_line(name: str, line: str) -> str | None:
+    """Whose ``line`` of process ``name`` is, if a judge's: ``"report"`` (its plain lines: the report, the verdict),
+    ``"log"`` (its log lines) or None. A judge runs as a process of its own (``referee``, ``checkoff``, in a robot's
+    namespace ``robot1_referee``) or hosted by the simulator (``sim``: only the log lines of the judge's node, named in
+    :data:`bt_nav.ros.bringup.JUDGE_NODE_NAMES`, and the plain lines, which the simulator itself never prints)."""
+    kind = name.rsplit("_", 1)[-1]
+    if kind not in (*JUDGES, "sim"):
+        return None
+    match = _LOG_NODE.match(line)
+    if match is None:
+        return None if line.startswith("[") else "report"
+    return "log" if kind in JUDGES or match[1].rsplit(".", 1)[-1] in JUDGE_NODE_NAMES else None
 
 
 def split_stamp(line: str) -> tuple[int | None, str]:
@@ -124,9 +142,10 @@ class Logs(LogFiles):
             stream = self._stream(name)
             is_log = line.startswith("[")
             stream.write((f"{stamp} {line}" if is_log else line) + "\n")
-            if name.rsplit("_", 1)[-1] in JUDGES and not is_log:
+            judge = judge_line(name, line)
+            if judge == "report":
                 self.verdict.append(line)
                 print(line, flush=True)
             elif self.echo_logs and not self.quiet_from_now and (
-                    name == "referee" or any(lvl in line for lvl in ("[WARN]", "[ERROR]", "[FATAL]"))):
+                    judge == "log" or any(lvl in line for lvl in ("[WARN]", "[ERROR]", "[FATAL]"))):
                 print(f"  {stamp} [{name}] {line}", flush=True)

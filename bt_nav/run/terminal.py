@@ -31,8 +31,8 @@ from typing import Any
 
 from bt_nav.media.bag import EVENTS
 from bt_nav.media.plot import MANEUVER_TIPS
-from bt_nav.ros.bringup import CHECKOFF_NAME, EXECUTIVE_NAME, REFEREE_NAME
-from bt_nav.run.rundir import Logs, split_stamp
+from bt_nav.ros.bringup import EXECUTIVE_NAME
+from bt_nav.run.rundir import Logs, judge_line, split_stamp
 
 #: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
 SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
@@ -125,10 +125,11 @@ class LabTerminal:
         wall_ns, line = split_stamp(line)
         when = self.logs.line_time(wall_ns) if wall_ns is not None else None
         match = LOG_LINE.match(line)
-        if name.endswith("checkoff"):
-            if match is None:
+        judge = judge_line(name, line)
+        if judge is not None:
+            if judge == "report":
                 self.event(line)  # a report line (Logs printed it)
-            else:
+            elif match is not None:
                 self._judge_line(match["msg"])
         elif name.endswith("executive") and match is not None:
             message = match["msg"]
@@ -157,8 +158,6 @@ def judge_call(message: str) -> tuple[float, list[str]] | None:
 
 #: A line in rcutils' default console format, ``[INFO] [1712345678.123456789] [node]: text`` (a student's node
 #: logs so unless it sets ``RCUTILS_CONSOLE_OUTPUT_FORMAT``): the wall time of the log call is in it.
-#: The judges' node names (their lines are shown; the simulator's, in the same process when hosting one, are not).
-JUDGE_NODE_NAMES = (REFEREE_NAME, CHECKOFF_NAME)
 DEFAULT_LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<time>\d+\.\d+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
 
 
@@ -205,10 +204,8 @@ class NodeTerminal:
                 self.show(line, self._sim())
             else:
                 self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
-        elif name in ("referee", "checkoff", "sim"):  # a judge of its own process, or hosted by the simulator's
+        elif judge_line(name, line) is not None:  # a judge's, of its own process or hosted by the simulator's
             log = DEFAULT_LOG_LINE.match(line)
-            if log is not None and log["node"].rsplit(".", 1)[-1] not in JUDGE_NODE_NAMES:
-                return  # the simulator's own lines stay in its log file
             if log is None:
                 if not PYTHON_ERROR.match(line):  # a judge stopped early says so in its log file, not here
                     with self._lock:

@@ -144,7 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     logs = Logs(run_dir, echo_logs=not opts.quiet)
     stamped = cmd_vel_stamped(run["specs"])
     topics = [f"/{n}/cmd_vel" for n in names] if len(names) > 1 else ["/cmd_vel"]
-    mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, last_word=lambda: [
+    mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, verdicts=list(run["results"].values()),
+                         last_word=lambda: [
         publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
     logs.sim_time = mission.recorders[names[0]].sim_time
     logs.clock = mission.recorders[names[0]].clock

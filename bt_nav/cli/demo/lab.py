@@ -102,7 +102,7 @@ def run_lab(opts: argparse.Namespace) -> int:
     events = EventPublisher() if bag_dir else None
     terminal = LabTerminal(logs, launch_line(run), events)
     stamped = cmd_vel_stamped(run["specs"])
-    mission = RosMission(run["specs"], ["robot1"], env, sink=terminal.sink, stop=stop,
+    mission = RosMission(run["specs"], ["robot1"], env, sink=terminal.sink, stop=stop, verdicts=[run["results"]],
                          last_word=lambda: publish_zero_twist(domain, topic="/cmd_vel", stamped=stamped))
     logs.sim_time = mission.recorders["robot1"].sim_time
     logs.clock = mission.recorders["robot1"].clock

@@ -102,8 +102,12 @@ class GraphAudit:
     def __init__(self, node: Node, service: str, inputs: tuple[tuple[str, str], ...] = (
             ("scan", "sensor_msgs/msg/LaserScan"), ("/clock", "rosgraph_msgs/msg/Clock")),
             command: str = "cmd_vel", parameters: tuple[str, ...] = (),
-            now: Callable[[], float] | None = None) -> None:
+            now: Callable[[], float] | None = None, message_info: bool = True) -> None:
         self.node = node
+        # Each command's DDS sequence number (rclpy's MessageInfo): the command rate then counts what the node sent,
+        # not what reached this best-effort reader. Off: what arrived (a lower bound), for rclpy's EventsExecutor,
+        # which cannot pass MessageInfo in Jazzy.
+        self.message_info = message_info
         # sim seconds of a heard command (the command rate is per sim second): the node clock, or the judge's own
         self.now = now if now is not None else (lambda: node.get_clock().now().nanoseconds * 1e-9)
         self.parameters = parameters  # parameters the assignment asks the node to declare (the lab: safety_distance)
@@ -218,10 +222,15 @@ class GraphAudit:
         if not kinds:
             return
         stamped = kinds[0] == TWIST_STAMPED
+        if self.message_info:
+            def read(msg: Any, info: Any) -> None:
+                self._on_command(msg.twist if stamped else msg, info)
+        else:
+            def read(msg: Any) -> None:  # type: ignore[misc]
+                self._on_command(msg.twist if stamped else msg, {"publication_sequence_number": self.commands.received})
         try:
             self._reader = self.node.create_subscription(
-                COMMAND_TYPES[kinds[0]], self.command,
-                lambda msg, info: self._on_command(msg.twist if stamped else msg, info),
+                COMMAND_TYPES[kinds[0]], self.command, read,
                 QoSProfile(depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
         except Exception as exc:  # this process already uses cmd_vel with the other type: DDS refuses a second
             self._reader_failed = True
