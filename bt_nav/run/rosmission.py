@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -28,6 +29,8 @@ from bt_nav.run.recorder import Recorder, Recording, rec_ready
 
 #: Extra wall time allowed beyond the referees' own timeout before the run gives up itself.
 GRACE = 15.0
+#: Wall seconds a hosted judge's report may take to be read from the simulator's output after its verdict file.
+REPORT_WAIT = 1.0
 #: Wall time to wait for the recorders to see ground truth and commands before starting the referees anyway.
 STARTUP = 30.0
 
@@ -66,6 +69,9 @@ class RosMission:
         self.verdicts = [Path(v) for v in verdicts or ()]
         if self.hosted and not self.verdicts:
             raise ValueError("a graph whose judge the simulator hosts needs its verdict files")
+        self._printed: set[str] = set()
+        self._lock = threading.Lock()
+        self._written_at: float | None = None
         self.names = names
         self.recorders = {name: Recorder(name if len(names) > 1 else "") for name in names}
         self.launcher = Launcher(env, sink=sink, stop=stop, last_word=last_word)
@@ -77,6 +83,9 @@ class RosMission:
         robot, parent = spec.namespace, self.launcher.sink
 
         def sink(name: str, line: str) -> None:
+            if self.hosted and not line.startswith(("[", "@")):
+                with self._lock:
+                    self._printed.add(line)  # the hosted judge's report lines (see _judged)
             if not robot:
                 parent(name, line)
             else:
@@ -131,9 +140,18 @@ class RosMission:
         return "timeout", None
 
     def _judged(self) -> bool:
-        if self.hosted:
-            return all(path.is_file() for path in self.verdicts)
-        return all(r.poll() is not None for r in self.referees)
+        """Every referee has exited; hosted: every verdict file is written and its report read from the simulator's
+        output (it is printed just before the file is written, but read by another thread of this process: a line
+        of ours printed after the verdict must come after the report), or ``REPORT_WAIT`` s have passed."""
+        if not self.hosted:
+            return all(r.poll() is not None for r in self.referees)
+        if not all(path.is_file() for path in self.verdicts):
+            return False
+        now = time.monotonic()
+        self._written_at = self._written_at or now
+        with self._lock:
+            read = all(_last_report_line(path) in self._printed for path in self.verdicts)
+        return read or now - self._written_at > REPORT_WAIT
 
     def supervise(self, timeout: float, run_dir: Path) -> int:
         """Start the nodes, the referees once every robot is seen, wait for every verdict (``timeout`` wall s);
@@ -175,6 +193,15 @@ class RosMission:
         finally:
             recordings = {name: rec.close() for name, rec in self.recorders.items()}
         return recordings
+
+
+def _last_report_line(path: Path) -> str | None:
+    """The last line of a verdict file's report (None: none, or unreadable)."""
+    try:
+        lines = json.loads(path.read_text(encoding="utf-8")).get("report_lines") or []
+    except (OSError, ValueError):
+        return None
+    return lines[-1] if lines else None
 
 
 def _verdict_code(path: Path) -> int:

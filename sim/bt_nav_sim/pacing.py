@@ -61,6 +61,11 @@ class Followers:
         """``who`` is done (the referee after its verdict); returns whether it was a follower."""
         return self.members.pop(who, None) is not None
 
+    def active(self, who: str) -> bool:
+        """Is ``who`` being followed?"""
+        member = self.members.get(who)
+        return member is not None and member.active
+
     def any_active(self, exclude: tuple[str, ...] = ()) -> bool:
         """Is anybody (but ``exclude``) being followed?"""
         return any(m.active for who, m in self.members.items() if who not in exclude)

@@ -79,6 +79,12 @@ def _bag_topics(names: list[str]) -> list[str]:
     return shared + [f"/{n}{t}" for n in names for t in DEFAULT_TOPICS if t in ROBOT_TOPICS]
 
 
+def bag_truth_readers(opts: argparse.Namespace) -> dict[str, int]:
+    """The hosted judge's ``truth_readers``: this process's recorder, and the bag's (``--bag``, ``--video``) whose
+    recording must hold the schedule from t0 too (its process starts with the graph)."""
+    return {"truth_readers": 2} if opts.bag or opts.video else {}
+
+
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     """Names, maneuver, domain, run directory, overrides and the graph (ValueError on a bad option)."""
     from bt_nav_sim.multi import robot_names
@@ -100,7 +106,8 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                            f"{time.strftime('%Y%m%d-%H%M%S')}_{label}_{maneuver}_seed{opts.seed}{several}")
     results = {n: str((run_dir / (f"results_{n}.json" if several else "results.json")).resolve()) for n in names}
     specs = mission_graph(names, results, world=opts.world, maneuver=maneuver if opts.maneuver is not None else None,
-                          seed=opts.seed, rtf=opts.rtf, referee={"timeout": float(opts.timeout)},
+                          seed=opts.seed, rtf=opts.rtf,
+                          referee={"timeout": float(opts.timeout), **bag_truth_readers(opts)},
                           sim=parse_assignments(opts.sim_param), executive=overrides or None)
     run_info = {"world": opts.world, "maneuver": maneuver, "seed": opts.seed, "profile": opts.profile,
                 "robots": names, "overrides": overrides, "parameters": parameters,

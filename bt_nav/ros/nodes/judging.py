@@ -158,6 +158,7 @@ class JudgeNode(QuietQosEvents, Node):
         self.fed = fed
         self._fed_ns = 0  # a hosted judge's clock: the simulator's, at its latest step
         self.sync_sink: SyncSink | None = None  # a hosted judge's heartbeats (set by the host)
+        self.start_gate: Callable[[], str | None] | None = None  # what t0 waits for in a hosting simulator (or None)
         p = declare_node_parameters(self, self.PARAMETERS)
         self.judge, self.config = self.make_judge(p)
         self.json_path = str(p["json"])
@@ -222,7 +223,8 @@ class JudgeNode(QuietQosEvents, Node):
         """The activate client, the inputs, and the sim_sync heartbeat if ``sync`` (hosted: the world's inputs and
         the heartbeat come from the host)."""
         self.activate_client = self.create_client(SetBool, self.activate_name)
-        self._cmd_vel_seen = not bool(p["wait_for_cmd_vel"])
+        self.wait_for_cmd_vel = bool(p["wait_for_cmd_vel"])
+        self._cmd_vel_seen = not self.wait_for_cmd_vel
         self._cmd_type = "TwistStamped" if bool(p["cmd_vel_stamped"]) else str(p["cmd_vel_type"])
         if self._cmd_type not in (*CMD_TYPES, "auto"):
             raise ValueError(f"cmd_vel_type must be auto, Twist or TwistStamped, got {self._cmd_type!r}")
@@ -339,6 +341,9 @@ class JudgeNode(QuietQosEvents, Node):
             missing.append("a simulator listening on sim_sync")
         if not self._robot_clock_ready():
             missing.append("the robot's /clock subscription")
+        gate = self.start_gate() if self.start_gate is not None else None
+        if gate:
+            missing.append(gate)
         if self.truth_readers > 0 and \
                 self.count_subscribers("ground_truth_odom") - (0 if self.fed else 1) < self.truth_readers:
             missing.append("a recorder of ground_truth_odom")

@@ -337,6 +337,11 @@ class SimulatorNode(QuietQosEvents, Node):
             return
         self.follow_report(who, int(round(t * 1e9)), hold, leave)
 
+    def follows(self, who: str) -> bool:
+        """Whether sim time waits for follower ``who`` now (any thread)."""
+        with self._cond:
+            return self.follow and self.followers.active(who)
+
     def follow_report(self, who: str, t_ns: int, hold: bool, leave: bool) -> None:
         """A follower's heartbeat (its clock ``t_ns``, whether it holds) or goodbye: from ``sim_sync``, or straight
         from a judge hosted in this process (any thread)."""
