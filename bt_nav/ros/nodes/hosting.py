@@ -72,7 +72,15 @@ class HostedJudge:
         self._walkers = sim.sim.walkers if len(sim.sim.walkers) else None
         judge.sync_sink = sim.follow_report
         judge.start_gate = self._robot_followed
+        judge.clock_matched = self._clock_matched
         sim.observers.append(self._on_outputs)
+
+    def _clock_matched(self) -> bool:
+        """Whether the simulator's ``/clock`` publisher has matched every ``/clock`` subscription on the graph: the
+        robot's node then gets the next sample, and the judge need not let its subscription settle for
+        ``robot_clock_settle`` wall seconds as a judge of its own process must (it cannot see the matching)."""
+        on_graph = len(self.sim.get_subscriptions_info_by_topic("/clock"))
+        return on_graph > 0 and self.sim.clock_pub.get_subscription_count() >= on_graph
 
     def _robot_followed(self) -> str | None:
         """What t0 still waits for here: a judge that waits for the robot's first command, in a simulator that follows

@@ -159,6 +159,8 @@ class JudgeNode(QuietQosEvents, Node):
         self._fed_ns = 0  # a hosted judge's clock: the simulator's, at its latest step
         self.sync_sink: SyncSink | None = None  # a hosted judge's heartbeats (set by the host)
         self.start_gate: Callable[[], str | None] | None = None  # what t0 waits for in a hosting simulator (or None)
+        # a hosting simulator: whether its /clock publisher has matched every /clock subscription on the graph
+        self.clock_matched: Callable[[], bool] | None = None
         p = declare_node_parameters(self, self.PARAMETERS)
         self.judge, self.config = self.make_judge(p)
         self.json_path = str(p["json"])
@@ -370,6 +372,9 @@ class JudgeNode(QuietQosEvents, Node):
         if self._robot_clock_since is not None and self._clock_wall is not None \
                 and now - max(self._robot_clock_since, self._clock_wall) >= self.robot_clock_settle:
             return True
+        if self._robot_clock_since is not None and self._clock_wall is not None and self.clock_matched is not None \
+                and self.clock_matched():
+            return True  # hosted: the simulator's own publisher says it reaches the subscription, no need to settle
         return now - self.wall_start >= self.robot_clock_wait
 
     def _try_start(self) -> None:
