@@ -20,10 +20,12 @@ class Wall:
         return self.now
 
 
-def _judge(subscribers: list[str]) -> SimpleNamespace:
+def _judge(subscribers: list[str], matched: bool | None = None) -> SimpleNamespace:
+    """A judge's state for ``_robot_clock_ready``; ``matched``: a hosting simulator's answer (None: not hosted)."""
     return SimpleNamespace(robot_clock_wait=20.0, robot_clock_settle=0.5, wall_start=100.0, _robot_clock_since=None,
                            _clock_wall=None, get_subscriptions_info_by_topic=lambda topic: [
-                               SimpleNamespace(node_name=name) for name in subscribers])
+                               SimpleNamespace(node_name=name) for name in subscribers],
+                           clock_matched=None if matched is None else (lambda: matched))
 
 
 def test_the_settling_counts_from_the_later_of_the_subscription_and_the_first_clock(
@@ -39,6 +41,18 @@ def test_the_settling_counts_from_the_later_of_the_subscription_and_the_first_cl
     assert not JudgeNode._robot_clock_ready(judge), "0.4 s since the first /clock"
     wall.now = 101.5
     assert JudgeNode._robot_clock_ready(judge)
+
+
+def test_a_hosted_judge_starts_once_its_simulator_has_matched_the_subscription(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    wall = Wall()
+    monkeypatch.setattr(judging.time, "monotonic", wall)
+    judge = _judge(["reactive_control"], matched=False)
+    judge._clock_wall = 100.0
+    assert not JudgeNode._robot_clock_ready(judge), "seen on the graph, not matched yet: settle as a lone judge"
+    judge.clock_matched = lambda: True
+    assert JudgeNode._robot_clock_ready(judge), "matched by the simulator's own publisher: no settling"
+    assert not JudgeNode._robot_clock_ready(_judge(["bt_nav_referee"], matched=True)), "the robot's, not ours"
 
 
 def test_only_a_foreign_subscription_counts_and_the_wait_ends(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -31,6 +31,12 @@ def add_mission_options(parser: argparse.ArgumentParser, *, grid: bool = False) 
                         "lidar=NAME for a real LiDAR (lds01, lds01_cw, lds02, rplidar, ust10)")
 
 
+def bag_truth_readers(bag: str | None, video: str | None) -> dict[str, int]:
+    """A demo's hosted judge's ``truth_readers``: the demo's own recorder (the default), and with ``--bag`` or
+    ``--video`` the bag's too, whose recording must hold the schedule from t0 (its process starts with the graph)."""
+    return {"truth_readers": 2} if bag or video else {}
+
+
 def bag_for(bag: str | None, video: str | None) -> str | None:
     """The bag directory of a run: ``--bag``, else next to ``--video`` (``FILE_bag``: a film is always made
     from a bag, so what it shows is what ``ros2 bag play`` would replay), else none.

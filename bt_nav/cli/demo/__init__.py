@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.cli import plain
-from bt_nav.cli.options import add_mission_options
+from bt_nav.cli.options import add_mission_options, bag_truth_readers
 from bt_nav.mission.params import parse_assignments
 from bt_nav.run.recorder import Recording, speed_line
 from bt_nav.run.rosmission import GRACE, RosMission, mission_graph
@@ -79,12 +79,6 @@ def _bag_topics(names: list[str]) -> list[str]:
     return shared + [f"/{n}{t}" for n in names for t in DEFAULT_TOPICS if t in ROBOT_TOPICS]
 
 
-def bag_truth_readers(opts: argparse.Namespace) -> dict[str, int]:
-    """The hosted judge's ``truth_readers``: this process's recorder, and the bag's (``--bag``, ``--video``) whose
-    recording must hold the schedule from t0 too (its process starts with the graph)."""
-    return {"truth_readers": 2} if opts.bag or opts.video else {}
-
-
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     """Names, maneuver, domain, run directory, overrides and the graph (ValueError on a bad option)."""
     from bt_nav_sim.multi import robot_names
@@ -107,7 +101,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     results = {n: str((run_dir / (f"results_{n}.json" if several else "results.json")).resolve()) for n in names}
     specs = mission_graph(names, results, world=opts.world, maneuver=maneuver if opts.maneuver is not None else None,
                           seed=opts.seed, rtf=opts.rtf,
-                          referee={"timeout": float(opts.timeout), **bag_truth_readers(opts)},
+                          referee={"timeout": float(opts.timeout), **bag_truth_readers(opts.bag, opts.video)},
                           sim=parse_assignments(opts.sim_param), executive=overrides or None)
     run_info = {"world": opts.world, "maneuver": maneuver, "seed": opts.seed, "profile": opts.profile,
                 "robots": names, "overrides": overrides, "parameters": parameters,

@@ -32,7 +32,7 @@ SHOWN_PARAMETERS = (("safety_distance", "m"), ("pivot_distance", "m"), ("creep_s
 
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     """Maneuver, world, domain, run directory, parameters and the graph (ValueError on a bad option)."""
-    from bt_nav.cli.demo import bag_truth_readers
+    from bt_nav.cli.options import bag_truth_readers
     from bt_nav.ros.supervise import choose_domain_id
     from bt_nav.run.rosmission import mission_graph
     from bt_nav.run.rundir import make_run_dir
@@ -51,7 +51,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                            f"{time.strftime('%Y%m%d-%H%M%S')}_{label}_{maneuver}_seed{opts.seed}_lab")
     results = str((run_dir / "results.json").resolve())
     judge = {"timeout": float(opts.timeout), **{k: parameters[k] for k in ("safety_distance", "pivot_distance")},
-             **bag_truth_readers(opts)}
+             **bag_truth_readers(opts.bag, opts.video)}
     specs = mission_graph(["robot1"], {"robot1": results}, "checkoff", world=world, maneuver=maneuver,
                           seed=opts.seed, rtf=opts.rtf, referee=judge, sim=parse_assignments(opts.sim_param),
                           executive=overrides or None)

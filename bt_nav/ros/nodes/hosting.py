@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import importlib
 import json
+from typing import Any
 
 from bt_nav_sim.core import StepOutput
 
 from bt_nav.ros.nodes.judging import JudgeNode
-from bt_nav.ros.nodes.simulator import SimulatorNode
 from bt_nav.ros.rosutil import ConfigError
 
 #: ``--judge`` values: the judge node class of each (module, class).
@@ -58,13 +58,14 @@ def parse_judge_args(text: str) -> list[str]:
 
 class HostedJudge:
     """The runner's wiring of a simulator with its judge (the Finishing protocol of :mod:`bt_nav.ros.runner`, plus
-    ``extra_nodes`` for the executor). The simulator's loop must not have started yet.
+    ``extra_nodes`` for the executor). ``sim``: the :class:`bt_nav.ros.nodes.simulator.SimulatorNode` (not imported
+    here: its command line imports this module), whose loop must not have started yet.
 
     Raises:
         ConfigError: more than one robot (a hosted judge judges the one robot of today's topic names).
     """
 
-    def __init__(self, sim: SimulatorNode, judge: JudgeNode) -> None:
+    def __init__(self, sim: Any, judge: JudgeNode) -> None:
         if len(sim.robots) != 1 or sim.robots[0].prefix:
             raise ConfigError("a hosted judge judges one robot at the root topics")
         self.sim, self.judge = sim, judge
