@@ -86,17 +86,20 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     return "\n".join(lines) + "\n"
 
 
-def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings,
-                     workers: int | None = None) -> tuple[Path, Path]:
+def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings, workers: int | None = None,
+                     drawn: dict[str, dict[str, Any]] | None = None) -> tuple[Path, Path]:
     """``grade.json`` (settings, summary, every row with its pictures), ``summary.md`` and ``report.html`` in the
-    grid's directory, after drawing the runs' pictures and videos (``workers`` processes, default one per core).
+    grid's directory, after drawing the runs' pictures and videos (``workers`` processes, default one per core;
+    ``drawn``: those a :class:`bt_nav.grading.media.Drawer` drew during the grid).
 
     Returns the JSON and Markdown paths; the page is ``report.html`` next to them.
     """
     summary = summarize_exe(rows)
     settings.out.mkdir(parents=True, exist_ok=True)
-    media = render_runs(rows, settings.videos, settings.record, workers) if rows else {}
-    figures = grid_figures(rows, settings.out)
+    drawn = dict(drawn or {})
+    made = drawn.pop("figures", None)  # the grid's figures, when the Drawer's worker drew them
+    media = render_runs(rows, settings.videos, settings.record, workers, drawn) if rows else {}
+    figures = list(made["names"]) if made is not None else grid_figures(rows, settings.out)
     appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params)
     doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
                         "rtf": settings.rtf, "appended": appended, "record": settings.record,

@@ -52,6 +52,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
     from bt_nav.grading.admission import describe
+    from bt_nav.grading.media import Drawer
     from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
@@ -69,16 +70,25 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     progress = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())
     stop = StopRequest().install()
     started = time.perf_counter()
+    drawer = Drawer(settings.videos, settings.record)  # the ended runs' pictures while the others run
+
+    def ended_run(row: dict[str, Any]) -> None:
+        _show(row)
+        if row["outcome"] != STOPPED:
+            drawer.submit(row)
+
+    rows: list[dict[str, Any]] = []
     try:
-        rows = run_exe_grid(jobs, settings, args.jobs, stop, _show, scheduler=args.scheduler, done=done,
+        rows = run_exe_grid(jobs, settings, args.jobs, stop, ended_run, scheduler=args.scheduler, done=done,
                             progress=progress)
         rows = _check_at_real_time(jobs, settings, rows, args.jobs, stop)
     finally:
         stop.closing = True
         stop.restore()
-    ended = [row for row in rows if row["outcome"] != STOPPED]
+        ended = [row for row in rows if row["outcome"] != STOPPED]
+        drawn = drawer.finish(wait=not stop.requested, figures=(ended, settings.out) if ended else None)
     print(format_exe_table(summarize_exe(ended)))
-    json_path, md_path = write_exe_report(ended, settings)
+    json_path, md_path = write_exe_report(ended, settings, drawn=drawn)
     if args.json:  # the grid's JSON results there too: --json means the same with and without --exe
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json_path.read_text(encoding="utf-8"), encoding="utf-8")
