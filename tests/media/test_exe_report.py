@@ -211,3 +211,27 @@ def test_the_videos_are_shared_out_between_the_drawing_processes() -> None:
     assert sorted(len([t for t in c if t[1]]) for c in chunks) == [1, 1], "one film per process"
     assert sorted(t[0]["job"] for c in chunks for t in c) == [str(k) for k in range(6)]
     assert balanced(tasks[:1], 2) == [[tasks[0]]], "no empty process"
+
+
+def test_the_drawer_draws_ended_runs_while_the_grid_runs(mission_bag: Path, tmp_path: Path) -> None:
+    """A :class:`Drawer` draws a passed run's picture in its worker (a failed run to be filmed is left to the report),
+    then the grid's figures; the report takes both as they are and draws only the rest."""
+    from bt_nav.grading.media import PICTURE, Drawer
+
+    out = tmp_path / "grid"
+    passed = _row(out, mission_bag, 0, True, _verdict(True, 8.6), "passed")
+    failed = _row(out, mission_bag, 1, False, _verdict(False, 7.4), "failed: minimum travelled distance")
+    drawer = Drawer(videos="failures", record="failures")
+    drawer.submit(passed)
+    drawer.submit(failed)
+    assert drawer.sent == 1, "the run to be filmed waits for the report"
+    drawn = drawer.finish(figures=([passed, failed], out))
+    assert drawn[passed["job"]]["picture"] == PICTURE and drawn[passed["job"]]["picture_s"] > 0
+    assert not (Path(passed["run_dir"]) / "bag").exists(), "record=failures: a passed run's bag goes with its picture"
+    assert drawn["figures"]["names"] == ["distance.png"] and (out / "distance.png").is_file()
+    assert not (Path(failed["run_dir"]) / PICTURE).exists()
+    settings = ExeSettings(COMMAND, "homework", out, limit=150.0, rtf=5.0, record="failures", videos="failures")
+    write_exe_report([passed, failed], settings, workers=1, drawn=drawn)
+    media = {r["seed"]: r["media"] for r in json.loads((out / "grade.json").read_text())["runs"]}
+    assert media[0] == drawn[passed["job"]], "the drawer's picture is the report's"
+    assert media[1]["picture"] == PICTURE and media[1]["video"], "the report drew and filmed the failure"
