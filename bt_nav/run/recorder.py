@@ -99,15 +99,14 @@ class Recorder:
         q = msg.pose.pose.orientation
         d = self.data
         seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
-        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if isinstance(info, dict) and info.get("source_timestamp") and (seq is None or d.truth_seq is None
-                                                                         or seq > d.truth_seq):
-            self.clock.add(info["source_timestamp"], stamp_ns)
         with self.lock:
             if seq is not None and d.truth_seq is not None and seq <= d.truth_seq:
                 d.foreign_truth += 1  # one publisher's numbers only grow: this is another simulator
                 return
             d.truth_seq = seq if seq is not None else d.truth_seq
+            stamp = msg.header.stamp
+            if isinstance(info, dict) and info.get("source_timestamp"):
+                self.clock.add(info["source_timestamp"], stamp.sec * 1_000_000_000 + stamp.nanosec)
             d.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
             d.x.append(msg.pose.pose.position.x)
             d.y.append(msg.pose.pose.position.y)

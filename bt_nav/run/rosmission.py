@@ -83,13 +83,13 @@ class RosMission:
         robot, parent = spec.namespace, self.launcher.sink
 
         def sink(name: str, line: str) -> None:
-            if self.hosted and not line.startswith(("[", "@")):
+            is_log = line.startswith(("[", "@"))  # "@<ns> [INFO] ...": a log line stamped (rundir.LOG_FORMAT)
+            if self.hosted and not is_log:
                 with self._lock:
                     self._printed.add(line)  # the hosted judge's report lines (see _judged)
             if not robot:
                 parent(name, line)
             else:
-                is_log = line.startswith(("[", "@"))  # "@<ns> [INFO] ...": a log line stamped (rundir.LOG_FORMAT)
                 parent(f"{robot}_{name}", line if is_log else f"{robot}: {line}")
 
         return self.launcher.start(spec, sink=sink)
@@ -195,21 +195,24 @@ class RosMission:
         return recordings
 
 
+def _read_verdict(path: Path) -> dict[str, Any]:
+    """A hosted judge's verdict file ({} while it cannot be read)."""
+    try:
+        verdict = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return verdict if isinstance(verdict, dict) else {}
+
+
 def _last_report_line(path: Path) -> str | None:
     """The last line of a verdict file's report (None: none, or unreadable)."""
-    try:
-        lines = json.loads(path.read_text(encoding="utf-8")).get("report_lines") or []
-    except (OSError, ValueError):
-        return None
+    lines = _read_verdict(path).get("report_lines") or []
     return lines[-1] if lines else None
 
 
 def _verdict_code(path: Path) -> int:
     """A hosted judge's verdict file as its own process's exit code would say it: 0 PASSED, 1 FAILED, 2 none."""
-    try:
-        verdict = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return 2
-    if verdict.get("timed_out") or verdict.get("foreign"):
+    verdict = _read_verdict(path)
+    if not verdict or verdict.get("timed_out") or verdict.get("foreign"):
         return 2
     return 0 if verdict.get("passed") else 1

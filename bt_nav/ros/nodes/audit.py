@@ -224,10 +224,11 @@ class GraphAudit:
         stamped = kinds[0] == TWIST_STAMPED
         if self.message_info:
             def read(msg: Any, info: Any) -> None:
-                self._on_command(msg.twist if stamped else msg, info)
+                seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
+                self._on_command(msg.twist if stamped else msg, seq)
         else:
             def read(msg: Any) -> None:  # type: ignore[misc]
-                self._on_command(msg.twist if stamped else msg, {"publication_sequence_number": self.commands.received})
+                self._on_command(msg.twist if stamped else msg, self.commands.received)  # what arrived, in order
         try:
             self._reader = self.node.create_subscription(
                 COMMAND_TYPES[kinds[0]], self.command, read,
@@ -241,9 +242,9 @@ class GraphAudit:
         """Whether the audit's own ``cmd_vel`` reader exists (a foreign command publisher was seen)."""
         return self._reader is not None
 
-    def _on_command(self, twist: Any, info: Any) -> None:
+    def _on_command(self, twist: Any, seq: int | None) -> None:
+        """One command heard, with the writer's sequence number (or this reader's count of arrivals)."""
         values = (twist.linear.x, twist.linear.y, twist.linear.z, twist.angular.x, twist.angular.y, twist.angular.z)
-        seq = info.get("publication_sequence_number") if isinstance(info, dict) else None
         self.commands.add(values, seq, self.now(), time.monotonic())
 
     # -------------------------------------------------------------- findings

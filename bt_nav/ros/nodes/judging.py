@@ -369,12 +369,11 @@ class JudgeNode(QuietQosEvents, Node):
         if self._robot_clock_since is None:
             if any(not is_ours(info.node_name) for info in self.get_subscriptions_info_by_topic("/clock")):
                 self._robot_clock_since = now
-        if self._robot_clock_since is not None and self._clock_wall is not None \
-                and now - max(self._robot_clock_since, self._clock_wall) >= self.robot_clock_settle:
-            return True
-        if self._robot_clock_since is not None and self._clock_wall is not None and self.clock_matched is not None \
-                and self.clock_matched():
-            return True  # hosted: the simulator's own publisher says it reaches the subscription, no need to settle
+        if self._robot_clock_since is not None and self._clock_wall is not None:
+            if now - max(self._robot_clock_since, self._clock_wall) >= self.robot_clock_settle:
+                return True
+            if self.clock_matched is not None and self.clock_matched():
+                return True  # hosted: the simulator's own publisher says it reaches the subscription, no need to settle
         return now - self.wall_start >= self.robot_clock_wait
 
     def _try_start(self) -> None:
