@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from bt_nav_sim import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays, load_world, world_from_dict
-from bt_nav_sim.lidar import closed_quads
+from bt_nav_sim.lidar import ScanLayout, closed_quads
 
 NOISELESS = LidarModel(range_max=10.0, noise_sigma=0.0)
 
@@ -193,3 +193,25 @@ def test_only_closed_counter_clockwise_quads_are_boxes() -> None:
     assert closed_quads(square[::-1, [2, 3, 0, 1]]).shape == (0, 4), "clockwise: the inside is on the right"
     assert closed_quads(square[:3]).shape == (0, 4), "open: three walls of a room"
     assert closed_quads(np.vstack([square[:1], square])).tolist() == [[1, 2, 3, 4]]
+
+
+def test_a_still_sensor_reuses_its_geometry_and_nothing_else() -> None:
+    """Scans from one pose reuse the geometry, not the noise: each equals a fresh caster's scan from the same
+    stream state. An object that appears, or a new beam layout, ends the reuse."""
+    world = world_from_dict({"name": "t", "segments": [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]],
+                             "boxes": [{"x": 0.5, "y": 0.0, "length": 0.3, "thickness": 0.3, "appear_within": 0.45}]})
+    model = LidarModel(range_max=3.5, dropout_prob=0.05)
+    still = RayCaster(world, model)
+    ours, theirs = np.random.default_rng(5), np.random.default_rng(5)
+    scans = [still.cast(-1.0, 0.0, 0.0, ours) for _ in range(3)]
+    for scan in scans:
+        np.testing.assert_array_equal(scan, RayCaster(world, model).cast(-1.0, 0.0, 0.0, theirs))
+    assert not np.array_equal(scans[0], scans[1]), "fresh noise every scan"
+    assert world.update([(0.3, 0.0)]) and world.version == 1
+    seen = still.cast(-1.0, 0.0, 0.0)
+    assert seen[0] == pytest.approx(1.35, abs=1e-6), "the appeared box is seen from the same pose"
+    wider = ScanLayout(0.0, 2 * math.pi / 180, 180)
+    still.use_layout(wider)
+    fresh = RayCaster(world, model)
+    fresh.use_layout(wider)
+    np.testing.assert_array_equal(still.cast(-1.0, 0.0, 0.0), fresh.cast(-1.0, 0.0, 0.0))
