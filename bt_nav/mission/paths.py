@@ -52,6 +52,7 @@ class FreePaths:
     headings: np.ndarray
     free: np.ndarray
     _answers: dict[tuple[float, int, float, int], float | None] = field(default_factory=dict, repr=False)
+    _along: dict[float, float] = field(default_factory=dict, repr=False)
 
     @property
     def ahead(self) -> float:
@@ -59,8 +60,14 @@ class FreePaths:
         return self.along(0.0)
 
     def along(self, heading: float) -> float:
-        """Free travel along ``heading`` (rad; interpolated between the candidate headings)."""
-        return float(np.interp(heading, self.headings, self.free))
+        """Free travel along ``heading`` (rad; interpolated between the candidate headings). The guards ask
+        it of the same few headings on every tick between two scans, so answers are kept."""
+        answer = self._along.get(heading)
+        if answer is None:
+            if len(self._along) >= 64:  # a turning robot asks of ever new headings: keep it bounded
+                self._along.clear()
+            answer = self._along[heading] = float(np.interp(heading, self.headings, self.free))
+        return answer
 
     def steer(self, need: float, side: int = 0, turn_cost: float = TURN_COST,
               edge: int = EDGE_HEADINGS) -> float | None:
@@ -166,14 +173,12 @@ def _corridor_free(x: np.ndarray, y: np.ndarray, half_width: float, horizon: flo
     along += y * sin_h
     lateral = y * cos_h
     lateral -= x * sin_h
-    outside = np.abs(lateral) < half_width  # inside the corridor ...
-    outside &= along > 0.0  # ... and ahead
-    np.logical_not(outside, out=outside)
+    outside = np.abs(lateral) >= half_width  # beside the corridor ...
+    outside |= along <= 0.0  # ... or behind (x and y are finite: the near test dropped NaN and inf)
     np.multiply(lateral, lateral, out=lateral)
-    np.subtract(half_width * half_width, lateral, out=lateral)
-    np.maximum(lateral, 0.0, out=lateral)
-    np.sqrt(lateral, out=lateral)
+    np.subtract(half_width * half_width, lateral, out=lateral)  # >= 0 inside: |l| < w gives l * l <= w * w
+    np.sqrt(lateral, out=lateral, where=~outside)  # outside stays negative: overwritten below
     along -= lateral  # the reach
-    along[outside] = math.inf
+    np.copyto(along, math.inf, where=outside)
     free = along.min(axis=1)
-    return FreePaths(headings, np.clip(free, 0.0, float(horizon)))
+    return FreePaths(headings, np.clip(free, 0.0, float(horizon), out=free))

@@ -54,6 +54,7 @@ class Leaf(BehaviourWithPorts):
         self.node: Any = None
         self._port_keys: dict[str, str] = {}
         self._output_keys: dict[str, tuple[str, type]] = {}
+        self._read_back_keys: dict[str, str] = {}  # last_output's resolved keys
 
     def get_input(self, port_name: str, default: Any = None) -> Any:
         """Read an input port: a direct blackboard lookup once the port's key is known.
@@ -86,7 +87,10 @@ class Leaf(BehaviourWithPorts):
     def last_output(self, port_name: str, default: Any = None) -> Any:
         """What an output port's key holds now (``default`` when nothing): a value written on an earlier
         tick, by this leaf or another writer of the same key (py_trees has no port both in and out)."""
-        value = _STORAGE.get(self._get_blackboard_key(port_name))
+        key = self._read_back_keys.get(port_name)
+        if key is None:  # resolved once, as get_input does (a remapping is fixed when the tree is built)
+            key = self._read_back_keys[port_name] = self._get_blackboard_key(port_name)
+        value = _STORAGE.get(key)
         return default if value is None else value
 
     def _set_output(self, port_name: str, value: Any) -> None:

@@ -101,7 +101,7 @@ class ArmService(Leaf):
 
     def update(self) -> Status:
         """Always SUCCESS: this leaf's work happens in the service callback."""
-        self.feedback_message = "armed" if self.blackboard_client.get("armed") else "disarmed"
+        self.feedback_message = "armed" if self.last_output("armed", False) else "disarmed"
         return Status.SUCCESS
 
 
@@ -145,7 +145,7 @@ class MissionDeadline(Condition):
 
     def answer(self) -> bool:
         """Has the deadline passed (latched)?"""
-        if self.blackboard_client.get("mission_over"):
+        if self.last_output("mission_over", False):
             return True
         duration = self.get_input("mission_duration")
         if duration <= 0.0:
