@@ -123,3 +123,27 @@ def test_a_lidar_off_the_centre_gives_the_body_its_own_free_paths(mount: tuple[f
     assert np.allclose(told.free, centred.free, atol=0.02), np.abs(told.free - centred.free).max()
     assert told.ahead == pytest.approx(1.0 - HALF, abs=0.02)
     assert naive.ahead == pytest.approx(1.0 - HALF - mount[0], abs=0.02)  # what a mount left out costs
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(0.05, 1.3), min_size=1, max_size=360),
+       st.lists(st.floats(-1.6, 1.6), min_size=70, max_size=70))
+def test_free_paths_are_the_plain_formula_and_along_keeps_its_answers(ranges: list[float], asked: list[float]) -> None:
+    """The in-place free paths equal the module docstring's formula written plainly, and along() answers what
+    interpolation says however often and of however many headings it is asked (its answers are kept)."""
+    step = 2 * math.pi / len(ranges)
+    scan = Scan(-math.pi, -math.pi + (len(ranges) - 1) * step, step, 0.0, LDS01.range_max,
+                np.asarray(ranges, dtype=np.float32))
+    paths = free_paths(scan, HALF, horizon=1.0)
+    r, beam = scan.ranges.astype(float), -math.pi + np.arange(len(ranges)) * step
+    x, y = r * np.cos(beam), r * np.sin(beam)
+    expected = []
+    for phi in HEADINGS:
+        ahead = x * math.cos(phi) + y * math.sin(phi)
+        lateral = y * math.cos(phi) - x * math.sin(phi)
+        inside = (np.abs(lateral) < HALF) & (ahead > 0.0)
+        reach = ahead[inside] - np.sqrt(HALF * HALF - lateral[inside] ** 2)
+        expected.append(min(1.0, max(0.0, float(reach.min()))) if inside.any() else 1.0)
+    np.testing.assert_allclose(paths.free, expected, rtol=0, atol=1e-12)
+    for heading in asked + asked[:5]:
+        assert paths.along(heading) == float(np.interp(heading, HEADINGS, paths.free))
