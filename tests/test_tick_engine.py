@@ -58,6 +58,20 @@ class Scripted(py_trees.behaviour.Behaviour):
         self.log.append(("terminate", self.name, new_status.name))
 
 
+class Quiet(py_trees.behaviour.Behaviour):
+    """A scripted leaf with py_trees' own (empty) ``initialise`` and ``terminate``, which the ticker skips."""
+
+    def __init__(self, name: str, seed: int, log: list[tuple[str, ...]]) -> None:
+        super().__init__(name=name)
+        self.rng = random.Random(seed)
+        self.log = log
+
+    def update(self) -> Status:  # noqa: D102
+        status = self.rng.choice(STATUSES)
+        self.log.append(("update", self.name, status.name))
+        return status
+
+
 def build(rng: random.Random, log: list[tuple[str, ...]], depth: int = 0) -> py_trees.behaviour.Behaviour:
     """A random tree; the same ``rng`` state gives the same tree (names, kinds, leaf scripts)."""
     name = f"n{rng.randrange(10**9)}"
@@ -76,6 +90,8 @@ def build(rng: random.Random, log: list[tuple[str, ...]], depth: int = 0) -> py_
     if kind < 0.74:
         return py_trees.composites.Parallel(name, policy=py_trees.common.ParallelPolicy.SuccessOnAll(),
                                             children=[build(rng, log, depth + 1) for _ in range(2)])
+    if kind < 0.8:
+        return Quiet(name, rng.randrange(10**9), log)
     return Scripted(name, rng.randrange(10**9), log)
 
 

@@ -124,10 +124,24 @@ def _arc(x: float, y: float, yaw: float, v: float, w: float, t: float) -> tuple[
     return x + chord * math.cos(heading), y + chord * math.sin(heading), yaw + dth
 
 
+#: target_twist's last question and answer: (cmd_v, cmd_w, params, twist).
+_last_target: tuple[Any, Any, RobotParams, tuple[float, float]] | None = None
+
+
 def target_twist(cmd_v: float, cmd_w: float, params: RobotParams) -> tuple[float, float]:
-    """The twist the base settles at under a command: sanitised, clamped, wheel-limited."""
-    return wheel_limited(_clamp(_finite(cmd_v), params.max_linear), _clamp(_finite(cmd_w), params.max_angular),
-                         params)
+    """The twist the base settles at under a command: sanitised, clamped, wheel-limited.
+
+    The simulator asks it of one command at every physics step until the next arrives, so the last answer
+    is kept for the very same number objects and the same (frozen) params: a hit is the same answer.
+    """
+    global _last_target
+    last = _last_target
+    if last is not None and last[0] is cmd_v and last[1] is cmd_w and last[2] is params:
+        return last[3]
+    twist = wheel_limited(_clamp(_finite(cmd_v), params.max_linear), _clamp(_finite(cmd_w), params.max_angular),
+                          params)
+    _last_target = (cmd_v, cmd_w, params, twist)
+    return twist
 
 
 def _velocity_pieces(

@@ -55,6 +55,14 @@ Tick = Callable[[], None]
 Stop = Callable[[Status], None]
 
 
+def _hook(node: py_trees.behaviour.Behaviour, name: str) -> Callable[..., None] | None:
+    """``node``'s ``initialise`` or ``terminate``, or None when it is py_trees' empty one (nothing to call):
+    about 50 such calls a tick in the mission tree do nothing."""
+    if name not in vars(node) and getattr(type(node), name) is getattr(py_trees.behaviour.Behaviour, name):
+        return None
+    return getattr(node, name)
+
+
 def _checked(node: py_trees.behaviour.Behaviour, status: Any) -> Status:
     """``status`` when it is a Status; INVALID (logged, as py_trees does) otherwise."""
     if status is _SUCCESS or status is _FAILURE or status is _RUNNING or status is _INVALID:
@@ -84,8 +92,9 @@ def compile_tick(root: py_trees.behaviour.Behaviour) -> Tick:
     every stop and never reads). A node of any other kind (a composite with memory, a Parallel, a
     class that overrides ``tick`` or ``stop``) is ticked and stopped by py_trees itself.
 
-    The tree's shape is read once: build the ticker after the tree is complete. Methods are looked up
-    at call time, so behaviours wrapped on the instance afterwards (fault injection) are honoured.
+    The tree's shape, and each node's ``initialise`` and ``terminate``, are read once (py_trees' empty
+    ones are not called at all): build the ticker after the tree is complete. ``update`` is looked up at
+    call time, so an ``update`` wrapped on the instance afterwards (fault injection) is honoured.
     Callers keep py_trees' own tick whenever its debug logging is on (the strings are then wanted).
     """
     return _compile(root)[0]
@@ -107,14 +116,19 @@ def _compile(node: py_trees.behaviour.Behaviour) -> tuple[Tick, Stop]:
 
 def _leaf(node: py_trees.behaviour.Behaviour) -> tuple[Tick, Stop]:
     """``Behaviour.tick`` / ``Behaviour.stop``."""
+    initialise, terminate = _hook(node, "initialise"), _hook(node, "terminate")
+
     def stop(new: Status) -> None:
-        node.terminate(new)
+        if terminate is not None:
+            terminate(new)
         node.status = new
 
     def tick() -> None:
-        if node.status is not _RUNNING:
-            node.initialise()
-        new = _checked(node, node.update())
+        if node.status is not _RUNNING and initialise is not None:
+            initialise()
+        new = node.update()
+        if new is not _SUCCESS and new is not _FAILURE and new is not _RUNNING:
+            new = _checked(node, new)
         if new is not _RUNNING:
             stop(new)
         node.status = new
@@ -126,9 +140,11 @@ def _decorator(node: py_trees.decorators.Decorator, child: tuple[Tick, Stop]) ->
     """``Decorator.tick`` / ``Decorator.stop``."""
     child_tick, child_stop = child
     decorated = node.decorated
+    initialise, terminate = _hook(node, "initialise"), _hook(node, "terminate")
 
     def stop(new: Status) -> None:
-        node.terminate(new)
+        if terminate is not None:
+            terminate(new)
         if new is _INVALID:
             child_stop(new)
         if decorated.status is _RUNNING:
@@ -136,8 +152,8 @@ def _decorator(node: py_trees.decorators.Decorator, child: tuple[Tick, Stop]) ->
         node.status = new
 
     def tick() -> None:
-        if node.status is not _RUNNING:
-            node.initialise()
+        if node.status is not _RUNNING and initialise is not None:
+            initialise()
         child_tick()
         new = _checked(node, node.update())
         if new is not _RUNNING:
@@ -149,13 +165,16 @@ def _decorator(node: py_trees.decorators.Decorator, child: tuple[Tick, Stop]) ->
 
 def _composite_stop(node: py_trees.composites.Composite, stops: list[tuple[Any, Stop]]) -> Stop:
     """``Composite.stop`` (what Sequence.stop and Selector.stop call)."""
+    terminate = _hook(node, "terminate")
+
     def stop(new: Status) -> None:
         if new is _INVALID:
             node.current_child = None
             for child, child_stop in stops:
                 if child.status is not _INVALID:
                     child_stop(new)
-        node.terminate(new)
+        if terminate is not None:
+            terminate(new)
         node.status = new
 
     return stop
@@ -169,6 +188,7 @@ def _sequence(node: py_trees.composites.Sequence, children: list[tuple[Tick, Sto
              for i, (kid, child) in enumerate(zip(kids, children, strict=True))]
     stop = _composite_stop(node, stops)
     first = kids[0] if kids else None
+    initialise = _hook(node, "initialise")
 
     def tick() -> None:
         if node.status is not _RUNNING:
@@ -176,7 +196,8 @@ def _sequence(node: py_trees.composites.Sequence, children: list[tuple[Tick, Sto
             for kid, kid_stop in stops:
                 if kid.status is not _INVALID:
                     kid_stop(_INVALID)
-            node.initialise()
+            if initialise is not None:
+                initialise()
         else:
             node.current_child = first
         if not kids:
@@ -210,11 +231,13 @@ def _selector(node: py_trees.composites.Selector, children: list[tuple[Tick, Sto
     steps = [(kid, child[0], stops[i + 1:]) for i, (kid, child) in enumerate(zip(kids, children, strict=True))]
     stop = _composite_stop(node, stops)
     first, last = (kids[0], kids[-1]) if kids else (None, None)
+    initialise = _hook(node, "initialise")
 
     def tick() -> None:
         if node.status is not _RUNNING:
             node.current_child = first
-            node.initialise()
+            if initialise is not None:
+                initialise()
         if not kids:
             node.current_child = None
             stop(_FAILURE)
