@@ -27,10 +27,12 @@ import contextlib
 import dataclasses
 import json
 import os
+import queue
 import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -234,57 +236,93 @@ def _in_processes(chunks: list[list[Task]]) -> dict[str, dict[str, Any]]:
     return done
 
 
+#: Wall seconds :meth:`Drawer.finish` waits for the worker's next answer before it draws the rest at normal priority.
+DRAWER_STALL = 5.0
+
+
 class Drawer:
     """The pictures of a grid's ended runs, drawn while the others run (see the module docstring): :meth:`submit`
     each row as its run ends, :meth:`finish` after the grid (what was drawn, by job key, for :func:`render_runs`).
 
     The worker (``python -m bt_nav.grading.media --serve``, started at the first row, so not among the grid's first
     start-ups) reads one task per line on stdin and answers one line each; it ends when its stdin closes, so it never
-    outlives the grid. A row to be filmed is left to the report (a video is ten pictures' work)."""
+    outlives the grid. A row to be filmed is left to the report (a video is ten pictures' work).
 
-    def __init__(self, videos: str, record: str) -> None:
-        self.videos, self.record = videos, record
+    Nothing here waits on the worker while the grid runs: a worker at ``nice`` 19 on a busy machine (another grade,
+    a build) may read nothing for minutes, so the tasks go through a queue that a thread of their own writes to its
+    pipe, and a thread of their own reads the answers. At :meth:`finish` the worker gets as long as it keeps
+    answering; one that is starved is stopped and the report draws the rest at the grade's own priority."""
+
+    def __init__(self, videos: str, record: str, stall: float = DRAWER_STALL) -> None:
+        self.videos, self.record, self.stall = videos, record, stall
         self.proc: subprocess.Popen[str] | None = None
         self.sent = 0
+        self._tasks: queue.Queue[str | None] = queue.Queue()
+        self._answers: list[str] = []
+        self._last_answer = time.monotonic()
+        self._threads: list[threading.Thread] = []
 
     def submit(self, row: dict[str, Any]) -> None:
-        """Draw ``row``'s picture now, unless it has no bag or is to be filmed."""
+        """Draw ``row``'s picture now, unless it has no bag or is to be filmed; returns at once."""
         task = _task(row, self.videos, self.record)
         if task[1] or not (Path(row["run_dir"]) / BAG).is_dir():
             return
         if self.proc is None:
-            self.proc = subprocess.Popen([sys.executable, "-m", "bt_nav.grading.media", "--serve"],
-                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                         text=True)
-        try:
-            assert self.proc.stdin is not None
-            self.proc.stdin.write(json.dumps(task) + "\n")
-            self.proc.stdin.flush()
-            self.sent += 1
-        except (OSError, ValueError):  # the worker died: the report draws what it did not
-            pass
+            self._start()
+        self._tasks.put(json.dumps(task))
+        self.sent += 1
+
+    def _start(self) -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "bt_nav.grading.media", "--serve"],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                     text=True)
+        self._threads = [threading.Thread(target=self._write, name="drawer-write", daemon=True),
+                         threading.Thread(target=self._read, name="drawer-read", daemon=True)]
+        for thread in self._threads:
+            thread.start()
+
+    def _write(self) -> None:
+        """The queued tasks to the worker's stdin, in order; None closes it (the worker then ends)."""
+        assert self.proc is not None and self.proc.stdin is not None
+        stdin = self.proc.stdin
+        with contextlib.suppress(OSError, ValueError):  # the worker died or was stopped: the report draws the rest
+            while (line := self._tasks.get()) is not None:
+                stdin.write(line + "\n")
+                stdin.flush()
+        with contextlib.suppress(OSError, ValueError):
+            stdin.close()
+
+    def _read(self) -> None:
+        """The worker's answers, one line each, as they come."""
+        assert self.proc is not None and self.proc.stdout is not None
+        with contextlib.suppress(OSError, ValueError):
+            for line in self.proc.stdout:
+                self._answers.append(line)
+                self._last_answer = time.monotonic()
 
     def finish(self, timeout: float = 60.0, wait: bool = True,
                figures: tuple[Sequence[dict[str, Any]], Path] | None = None) -> dict[str, dict[str, Any]]:
-        """Wait for the worker to draw what it was sent (``wait`` False, a stopped grid: kill it now); what it drew, by
-        job key (the report draws the rest). ``figures``: the grid's rows and directory, whose :func:`grid_figures`
-        the worker draws last (its libraries are loaded), their names under the key ``figures``."""
+        """Wait for the worker to draw what it was sent (``wait`` False, a stopped grid: stop it now); what it drew,
+        by job key (the report draws the rest). ``figures``: the grid's rows and directory, whose :func:`grid_figures`
+        the worker draws last (its libraries are loaded), their names under the key ``figures``. The wait ends after
+        ``timeout`` s, or when no answer came for ``stall`` s: the worker is then stopped."""
         if self.proc is None:
             return {}
-        if not wait:
+        if wait and figures is not None:
+            self._tasks.put(json.dumps({"figures": list(figures[0]), "out": str(figures[1])}))
+        self._tasks.put(None)
+        end = time.monotonic() + timeout
+        self._last_answer = max(self._last_answer, time.monotonic())
+        while wait and self.proc.poll() is None and time.monotonic() < min(end, self._last_answer + self.stall):
+            time.sleep(0.05)
+        if self.proc.poll() is None:
             self.proc.kill()
-        elif figures is not None:
-            with contextlib.suppress(OSError, ValueError):
-                assert self.proc.stdin is not None
-                self.proc.stdin.write(json.dumps({"figures": list(figures[0]), "out": str(figures[1])}) + "\n")
-        try:
-            out, _ = self.proc.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            out, _ = self.proc.communicate()
+        self.proc.wait()
+        for thread in self._threads:
+            thread.join(timeout=2.0)
         done: dict[str, dict[str, Any]] = {}
-        for line in (out or "").splitlines():
-            with contextlib.suppress(ValueError, KeyError, TypeError):
+        for line in list(self._answers):
+            with contextlib.suppress(ValueError, KeyError, TypeError, AttributeError):
                 media = json.loads(line)
                 done[media.get("job", "figures")] = media
         return done

@@ -8,6 +8,7 @@ so importing this module costs nothing for runs that never plot.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,10 +45,18 @@ def frame_axes(ax: Any, world: World) -> None:
 
 
 def save_figure(fig: Any, path: str | Path) -> Path:
-    """Write ``fig`` to ``path`` (format from the suffix), creating the folder; the path written."""
+    """Write ``fig`` to ``path`` (format from the suffix), creating the folder; the path written.
+
+    Written whole or not at all (a temporary name, then renamed): a drawing process stopped half-way (the grade's
+    starved :class:`~bt_nav.grading.media.Drawer`) leaves no half a picture that a report would take as drawn."""
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, bbox_inches="tight")
+    partial = out.with_name(f".{out.name}.partial")
+    try:
+        fig.savefig(partial, format=out.suffix.lstrip(".") or None, bbox_inches="tight")
+        os.replace(partial, out)
+    finally:
+        partial.unlink(missing_ok=True)
     return out
 
 

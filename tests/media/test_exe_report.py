@@ -8,6 +8,7 @@ failures`` would: the passed run's bag goes once its picture exists, the failed 
 from __future__ import annotations
 
 import json
+import os
 import shutil
 from pathlib import Path
 from typing import Any
@@ -235,3 +236,34 @@ def test_the_drawer_draws_ended_runs_while_the_grid_runs(mission_bag: Path, tmp_
     media = {r["seed"]: r["media"] for r in json.loads((out / "grade.json").read_text())["runs"]}
     assert media[0] == drawn[passed["job"]], "the drawer's picture is the report's"
     assert media[1]["picture"] == PICTURE and media[1]["video"], "the report drew and filmed the failure"
+
+
+def test_a_starved_drawer_never_holds_the_grid_and_the_report_draws_the_rest(mission_bag: Path,
+                                                                               tmp_path: Path) -> None:
+    """A worker that gets no CPU (stopped here, as nice 19 is under two busy loops) holds neither the grid's threads
+    (a submit returns at once, more than a pipe's worth of tasks included) nor the report for longer than ``stall``
+    seconds; the report then draws every picture itself."""
+    import signal
+    import time
+
+    from bt_nav.grading.media import PICTURE, Drawer
+
+    out = tmp_path / "grid"
+    rows = [_row(out, mission_bag, seed, True, _verdict(True, 8.6), "passed") for seed in range(2)]
+    drawer = Drawer(videos="failures", record="on", stall=0.5)
+    drawer.submit(rows[0])
+    assert drawer.proc is not None
+    os.kill(drawer.proc.pid, signal.SIGSTOP)
+    bulky = {**rows[1], "padding": "x" * 200_000}  # more than a pipe holds: a blocking write would hang here
+    began = time.monotonic()
+    drawer.submit(bulky)
+    drawer.submit(rows[1])
+    assert time.monotonic() - began < 0.5, "submit waited for the worker"
+    drawn = drawer.finish(figures=(rows, out))
+    assert time.monotonic() - began < 5.0, "finish waited for a starved worker"
+    assert drawn == {} and drawer.proc.poll() is not None, "the starved worker was stopped, nothing taken from it"
+    settings = ExeSettings(COMMAND, "homework", out, limit=150.0, rtf=5.0, record="on", videos="failures")
+    write_exe_report(rows, settings, workers=1, drawn=drawn)
+    for row in rows:
+        assert (Path(row["run_dir"]) / PICTURE).stat().st_size > 1000, "the report drew it, whole"
+    assert not list(out.rglob("*.partial")), "no half-written picture left"
