@@ -38,38 +38,29 @@ Status = py_trees.common.Status
 STATUSES = (Status.SUCCESS, Status.FAILURE, Status.RUNNING)
 
 
-class Scripted(py_trees.behaviour.Behaviour):
-    """A leaf whose ``update`` answers from a seeded random script and logs every call."""
+class Quiet(py_trees.behaviour.Behaviour):
+    """A leaf whose ``update`` answers from a seeded random script and logs every call; py_trees' own (empty)
+    ``initialise`` and ``terminate``, which the ticker skips."""
 
     def __init__(self, name: str, seed: int, log: list[tuple[str, ...]]) -> None:
         super().__init__(name=name)
         self.rng = random.Random(seed)
         self.log = log
+
+    def update(self) -> Status:  # noqa: D102
+        status = self.rng.choice(STATUSES)
+        self.log.append(("update", self.name, status.name))
+        return status
+
+
+class Scripted(Quiet):
+    """A scripted leaf that logs its ``initialise`` and ``terminate`` calls too."""
 
     def initialise(self) -> None:  # noqa: D102
         self.log.append(("initialise", self.name))
 
-    def update(self) -> Status:  # noqa: D102
-        status = self.rng.choice(STATUSES)
-        self.log.append(("update", self.name, status.name))
-        return status
-
     def terminate(self, new_status: Status) -> None:  # noqa: D102
         self.log.append(("terminate", self.name, new_status.name))
-
-
-class Quiet(py_trees.behaviour.Behaviour):
-    """A scripted leaf with py_trees' own (empty) ``initialise`` and ``terminate``, which the ticker skips."""
-
-    def __init__(self, name: str, seed: int, log: list[tuple[str, ...]]) -> None:
-        super().__init__(name=name)
-        self.rng = random.Random(seed)
-        self.log = log
-
-    def update(self) -> Status:  # noqa: D102
-        status = self.rng.choice(STATUSES)
-        self.log.append(("update", self.name, status.name))
-        return status
 
 
 def build(rng: random.Random, log: list[tuple[str, ...]], depth: int = 0) -> py_trees.behaviour.Behaviour:
