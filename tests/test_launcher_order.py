@@ -68,6 +68,18 @@ def test_the_first_child_stops_before_the_others_get_sigint(tmp_path: Path) -> N
     assert all(c.poll() == 0 and c.stopped_by == signal.SIGINT for c in launcher.children)
 
 
+def test_after_first_comes_between_the_first_child_and_the_others(tmp_path: Path) -> None:
+    """A grade's recorder is told to stop once the node has stopped, before the world and the judge get SIGINT."""
+    launcher, outs = _started(tmp_path)
+    node = next(c for c in launcher.children if c.name == "node")
+    called: list[tuple[float, bool]] = []
+    launcher.shutdown(grace=3.0, together=True, first=node,
+                      after_first=lambda: called.append((time.time(), node.poll() is not None)))
+    got = {name: float(path.read_text()) for name, path in outs.items()}
+    assert len(called) == 1 and called[0][1], "called once, the node ended"
+    assert got["node"] < called[0][0] <= min(got["world"], got["judge"]), (got, called)
+
+
 def test_without_first_they_stop_together(tmp_path: Path) -> None:
     launcher, outs = _started(tmp_path)
     launcher.shutdown(grace=3.0, together=True)

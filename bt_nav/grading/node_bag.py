@@ -2,8 +2,9 @@
 
 Why a child of the run's launcher: it lives in the run's ROS domain, its output goes to ``record.log`` like every
 other process's, and the launcher stops it with the rest (and kills it, should the grid die). It gets its SIGINT
-when the run ends (:meth:`RecorderWatch.stop`), so it closes its bag while the launcher stops the other processes
-one by one, not after them; a recorder that SIGINT closes writes ``metadata.yaml``, one that had to be killed still
+(:meth:`RecorderWatch.stop`) once the graded node has stopped, as the simulator and the judge get theirs: the bag
+then holds what the node sent on its way out (bt_nav's executive: its three last zero twists; stopped before the node,
+the recorder missed them). A recorder that SIGINT closes writes ``metadata.yaml``, one that had to be killed still
 leaves a readable ``.mcap`` up to its last second.
 
 Why it starts with the others, not before the simulator: the judge's schedule begins at t0 (the node's service
@@ -96,8 +97,8 @@ class RecorderWatch:
         self.forward(name, line)
 
     def stop(self, grace: float = RECORDER_GRACE) -> None:
-        """SIGINT the recorder now (it closes its bag), so that it does so while the launcher stops the others; one
-        still running ``grace`` s later is killed (its ``.mcap`` is readable up to its last flush)."""
+        """SIGINT the recorder now (it closes its bag); one still running ``grace`` s later is killed (its ``.mcap`` is
+        readable up to its last flush), sooner than the launcher's own ladder would."""
         child = self.child
         if child is None or child.poll() is not None:
             return

@@ -277,10 +277,10 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         if on_verdict is not None:
             on_verdict()
     finally:
-        if recorder is not None:
-            recorder.stop()  # closes its bag while the others stop
-        # the verdict is in (or never will be): the node first, while its world runs on; then the rest at once
-        launcher.shutdown(grace=STOP_GRACE, together=True, first=node)
+        # the verdict is in (or never will be): the node first, while its world and its recorder run on (the bag
+        # holds what the node sends on its way out); then the rest at once
+        launcher.shutdown(grace=STOP_GRACE, together=True, first=node,
+                          after_first=recorder.stop if recorder is not None else None)
         logs.close()
         release_domain_id(domain)
     if row["outcome"] != "stopped":  # a run bt_nav stopped says only that: how its node ended is not the node's

@@ -443,7 +443,8 @@ class Launcher:
             time.sleep(poll)
         return None
 
-    def shutdown(self, grace: float = 5.0, *, together: bool = False, first: Child | None = None) -> None:
+    def shutdown(self, grace: float = 5.0, *, together: bool = False, first: Child | None = None,
+                 after_first: Callable[[], None] | None = None) -> None:
         """Stop every child, last started first: SIGINT, ``grace`` s, SIGTERM, 2 s, SIGKILL (to its group).
 
         ``together``: every child at once, each step to every live group and then one wait for them all, for
@@ -459,7 +460,8 @@ class Launcher:
         and the second one ends it; :attr:`Child.sigints` says how many it got.
 
         Which signal ended each running child is kept (:attr:`Child.stopped_by`): a graded node that ignores
-        SIGINT cannot be stopped with Ctrl-C, and its grader says so.
+        SIGINT cannot be stopped with Ctrl-C, and its grader says so. ``after_first`` is called once ``first`` has
+        ended (or was killed), before the others get their signals.
         """
         live = [child for child in reversed(self.children) if child is not first]
         groups = [live] if together else [[child] for child in live]
@@ -483,6 +485,8 @@ class Launcher:
                     child.stopped_by, child.stop_seconds = signum, time.monotonic() - began
             for child in group:
                 child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
+            if group[0] is first and after_first is not None:
+                after_first()
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
         if unclean and self.last_word is not None:
             self.last_word()  # the driver may not have sent its stop: say it for it
