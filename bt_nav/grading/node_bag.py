@@ -42,7 +42,7 @@ from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
 BAG = "bag"
 #: Wall seconds a recorder gets to close its bag after SIGINT before it is killed. It takes a fifth of a second; the
 #: ROS teardown of its EventsExecutor hung once in ~16 graded runs on a loaded machine, spinning a core until killed,
-#: and the launcher's own grace is 3 s (5 s to SIGKILL): CPU the other runs' nodes need.
+#: and the launcher's own grace is 5 s (7 s to SIGKILL): CPU the other runs' nodes need.
 RECORDER_GRACE = 1.5
 #: What a run's bag records: what the pictures and videos draw (ground truth, scans, commands, collisions, the judge's
 #: log lines as events, a bt_nav executive's tree). Not ``/clock`` (every message is stamped with its sim time
