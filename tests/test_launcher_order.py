@@ -80,6 +80,17 @@ def test_after_first_comes_between_the_first_child_and_the_others(tmp_path: Path
     assert got["node"] < called[0][0] <= min(got["world"], got["judge"]), (got, called)
 
 
+def test_a_failing_after_first_keeps_no_child_running(tmp_path: Path) -> None:
+    launcher, _ = _started(tmp_path)
+    node = next(c for c in launcher.children if c.name == "node")
+
+    def broken() -> None:
+        raise RuntimeError("the hook failed")
+
+    launcher.shutdown(grace=3.0, together=True, first=node, after_first=broken)
+    assert all(c.poll() is not None and c.stopped_by == signal.SIGINT for c in launcher.children)
+
+
 def test_without_first_they_stop_together(tmp_path: Path) -> None:
     launcher, outs = _started(tmp_path)
     launcher.shutdown(grace=3.0, together=True)

@@ -300,6 +300,11 @@ class Drawer:
                 self._answers.append(line)
                 self._last_answer = time.monotonic()
 
+    def _patience(self) -> float:
+        """Seconds to wait for the next answer: ``stall``, three times that for the grid's figures (one answer for
+        several pictures of the whole grid)."""
+        return self.stall * (3.0 if len(self._answers) >= self.sent else 1.0)
+
     def finish(self, timeout: float = 60.0, wait: bool = True,
                figures: tuple[Sequence[dict[str, Any]], Path] | None = None) -> dict[str, dict[str, Any]]:
         """Wait for the worker to draw what it was sent (``wait`` False, a stopped grid: stop it now); what it drew,
@@ -313,13 +318,16 @@ class Drawer:
         self._tasks.put(None)
         end = time.monotonic() + timeout
         self._last_answer = max(self._last_answer, time.monotonic())
-        while wait and self.proc.poll() is None and time.monotonic() < min(end, self._last_answer + self.stall):
+        while wait and self.proc.poll() is None and time.monotonic() < min(end, self._last_answer + self._patience()):
             time.sleep(0.05)
         if self.proc.poll() is None:
             self.proc.kill()
         self.proc.wait()
         for thread in self._threads:
             thread.join(timeout=2.0)
+        with contextlib.suppress(OSError, ValueError):
+            if self.proc.stdout is not None:
+                self.proc.stdout.close()
         done: dict[str, dict[str, Any]] = {}
         for line in list(self._answers):
             with contextlib.suppress(ValueError, KeyError, TypeError, AttributeError):

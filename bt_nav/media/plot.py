@@ -50,10 +50,15 @@ def save_figure(fig: Any, path: str | Path) -> Path:
     Written whole or not at all (a temporary name, then renamed): a drawing process stopped half-way (the grade's
     starved :class:`~bt_nav.grading.media.Drawer`) leaves no half a picture that a report would take as drawn."""
     out = Path(path)
+    fmt = out.suffix.lstrip(".").lower()
+    if not fmt:  # as matplotlib does: its default format, and that suffix on the name
+        fmt = fig.canvas.get_default_filetype()
+        out = out.with_name(f"{out.name.rstrip('.')}.{fmt}")
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_name(f".{out.name}.partial")
     try:
-        fig.savefig(partial, format=out.suffix.lstrip(".") or None, bbox_inches="tight")
+        with open(partial, "wb") as stream:  # a stream: no format writes the temporary name into the file
+            fig.savefig(stream, format=fmt, bbox_inches="tight")
         os.replace(partial, out)
     finally:
         partial.unlink(missing_ok=True)

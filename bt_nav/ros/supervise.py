@@ -32,6 +32,7 @@ import os
 import random
 import signal
 import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -463,6 +464,8 @@ class Launcher:
         SIGINT cannot be stopped with Ctrl-C, and its grader says so. ``after_first`` is called once ``first`` has
         ended (or was killed), before the others get their signals.
         """
+        if first is None and after_first is not None:
+            self._after_first(after_first)
         live = [child for child in reversed(self.children) if child is not first]
         groups = [live] if together else [[child] for child in live]
         ladder = ((signal.SIGINT, grace), (signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0))
@@ -486,7 +489,7 @@ class Launcher:
             for child in group:
                 child.signal_group(signal.SIGKILL)  # anything the child left behind in its group
             if group[0] is first and after_first is not None:
-                after_first()
+                self._after_first(after_first)
         unclean = [c for c in self.children if c.name == self.driver and c.poll() != 0]
         if unclean and self.last_word is not None:
             self.last_word()  # the driver may not have sent its stop: say it for it
@@ -498,6 +501,14 @@ class Launcher:
             except OSError:
                 pass
         self._watch_read = self._watch_write = -1
+
+    @staticmethod
+    def _after_first(hook: Callable[[], None]) -> None:
+        """``shutdown``'s hook, which must not keep the others from being stopped."""
+        try:
+            hook()
+        except Exception as exc:  # noqa: BLE001 - whatever it raised, the children are stopped next
+            print(f"bt-nav: while stopping: {exc!r}", file=sys.stderr, flush=True)
 
 
 # ---------------------------------------------------------------------------------------------- the last word

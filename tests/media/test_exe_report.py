@@ -267,3 +267,24 @@ def test_a_starved_drawer_never_holds_the_grid_and_the_report_draws_the_rest(mis
     for row in rows:
         assert (Path(row["run_dir"]) / PICTURE).stat().st_size > 1000, "the report drew it, whole"
     assert not list(out.rglob("*.partial")), "no half-written picture left"
+
+
+@pytest.mark.parametrize(("name", "written"), [("t.svg", "t.svg"), ("t", "t.png"), ("t.", "t.png"), ("t.eps", "t.eps")])
+def test_a_figure_is_written_whole_under_its_name(name: str, written: str, tmp_path: Path) -> None:
+    """save_figure writes through a temporary name: the format from the suffix (none: matplotlib's default, added to
+    the name, as matplotlib does), no temporary file or name left behind."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from bt_nav.media.plot import save_figure
+
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [1, 0])
+    try:
+        assert save_figure(fig, tmp_path / "d" / name) == tmp_path / "d" / written
+    finally:
+        plt.close(fig)
+    assert [p.name for p in (tmp_path / "d").iterdir()] == [written]
+    assert b"partial" not in (tmp_path / "d" / written).read_bytes()
