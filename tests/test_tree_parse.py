@@ -11,7 +11,7 @@ import pytest
 
 from bt_nav.media.treedot import nodes_model
 from bt_nav.mission.behaviours import LEAF_CLASSES, REGISTRY
-from bt_nav.mission.resources import read_yaml, tree_file
+from bt_nav.mission.resources import read_yaml, tree_file, written_whole
 from bt_nav.mission.tree import load_tree
 from bt_nav.testing import TickHarness
 
@@ -134,3 +134,16 @@ def test_read_yaml_parses_each_version_once_and_hands_out_copies(tmp_path: Path)
     assert read_yaml(path) == {"boxes": [[1, 2]]}, "a caller's change must not reach the next reader"
     path.write_text("boxes: [[5, 6, 7]]\n")  # another size: another version of the file
     assert read_yaml(path) == {"boxes": [[5, 6, 7]]}
+
+
+def test_a_file_written_whole_appears_complete_or_not_at_all(tmp_path: Path) -> None:
+    path = tmp_path / "verdict.json"
+    with written_whole(path) as stream:
+        stream.write("{}")
+        assert not path.exists(), "nothing under the name before the block ends"
+    assert path.read_text() == "{}" and (path.stat().st_mode & 0o777) == 0o644
+    with pytest.raises(RuntimeError), written_whole(path) as stream:
+        stream.write('{"half": ')
+        raise RuntimeError("stopped half-way")
+    assert path.read_text() == "{}", "a writer stopped half-way leaves the old file"
+    assert [p.name for p in tmp_path.iterdir()] == ["verdict.json"], "no temporary file left"

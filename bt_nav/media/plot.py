@@ -8,7 +8,6 @@ so importing this module costs nothing for runs that never plot.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +16,8 @@ from typing import Any
 import numpy as np
 from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, box_corners
+
+from bt_nav.mission.resources import written_whole
 
 #: Branch labels, in legend order.
 BRANCHES = ("FullSpeed", "TurnAway", "RotateInPlace", "Creep", "AEB", "Maneuver", "Stopped")
@@ -55,13 +56,8 @@ def save_figure(fig: Any, path: str | Path) -> Path:
         fmt = fig.canvas.get_default_filetype()
         out = out.with_name(f"{out.name.rstrip('.')}.{fmt}")
     out.parent.mkdir(parents=True, exist_ok=True)
-    partial = out.with_name(f".{out.name}.partial")
-    try:
-        with open(partial, "wb") as stream:  # a stream: no format writes the temporary name into the file
-            fig.savefig(stream, format=fmt, bbox_inches="tight")
-        os.replace(partial, out)
-    finally:
-        partial.unlink(missing_ok=True)
+    with written_whole(out, "wb") as stream:  # a stream: no format writes the temporary name into the file
+        fig.savefig(stream, format=fmt, bbox_inches="tight")
     return out
 
 

@@ -10,9 +10,12 @@ from __future__ import annotations
 import copy
 import os
 import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 
 @lru_cache(maxsize=1)
@@ -58,3 +61,23 @@ def _parsed(path: str, _mtime_ns: int, _size: int) -> Any:
 
     with open(path, encoding="utf-8") as stream:
         return yaml.safe_load(stream)
+
+
+@contextmanager
+def written_whole(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[Any]]:
+    """A stream whose content becomes ``path`` when the block ends, whole or not at all: written to a temporary file of
+    this call's own beside it (``.NAME.*.partial``, mode 644) and renamed into place; removed if the block raises.
+
+    Why: a reader that polls for the file (a grade waiting for a judge's verdict, a report taking a picture as drawn)
+    must never see half of it, and a writer stopped half-way leaves the old file or none. The temporary name is this
+    call's alone, so threads writing the same path do not trip over each other's (the DDS profile of a grid's runs).
+    """
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".partial", dir=target.parent)
+    try:
+        with os.fdopen(fd, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as stream:
+            yield stream
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, target)
+    finally:
+        Path(tmp).unlink(missing_ok=True)

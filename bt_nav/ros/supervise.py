@@ -41,6 +41,8 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any, Protocol
 
+from bt_nav.mission.resources import written_whole
+
 # ---------------------------------------------------------------------------------------------- DDS env
 #: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
 LAUNCHER_DOMAINS = (100, 199)
@@ -172,11 +174,8 @@ def discovery_profile() -> Path:
         # A temporary file of this call's own: the runs of a grid start in threads of one process, and a name made
         # of the pid alone was shared by two of them (one moved it into place, the other's move then failed with
         # FileNotFoundError: a run lost to "bt_nav failed to run it" on a fresh machine).
-        fd, tmp = tempfile.mkstemp(prefix=f"{path.name}.", suffix=".tmp", dir=path.parent)
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
+        with written_whole(path) as stream:
             stream.write(DISCOVERY_PROFILE)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
     return path
 
 

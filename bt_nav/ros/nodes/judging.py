@@ -61,7 +61,6 @@ from __future__ import annotations
 
 import functools
 import json
-import os
 import sys
 import threading
 import time
@@ -80,6 +79,7 @@ from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.mission.resources import written_whole
 from bt_nav.ros.nodes.audit import GraphAudit, is_ours
 from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
 
@@ -668,8 +668,7 @@ class JudgeNode(QuietQosEvents, Node):
         path = Path(self.json_path)
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            partial = path.with_name(path.name + ".partial")  # whole or absent: a host's reader polls for it
-            partial.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
-            os.replace(partial, path)
+            with written_whole(path) as stream:  # whole or absent: a host's reader polls for it
+                stream.write(json.dumps(results, indent=2) + "\n")
         except OSError as exc:
             self.get_logger().error(f"could not write {path}: {exc}")
