@@ -64,3 +64,33 @@ def test_only_a_foreign_subscription_counts_and_the_wait_ends(monkeypatch: pytes
     assert not JudgeNode._robot_clock_ready(judge), "bt_nav's own readers are not the robot's"
     wall.now = 120.0
     assert JudgeNode._robot_clock_ready(judge), "after robot_clock_wait t0 comes anyway (the audit names it)"
+
+
+@pytest.mark.parametrize(("passed", "missing", "code"), [(True, [], 0), (True, ["no node declares safety_distance"], 1),
+                                                         (False, [], 1)])
+def test_the_verdict_file_and_the_exit_code_say_the_same(passed: bool, missing: list[str], code: int,
+                                                          tmp_path, capsys) -> None:
+    """A check the file adds (the check-off's declared parameters) fails the exit code too, and the file carries the
+    code (a hosted judge's process is the simulator's: its readers take the code from the file)."""
+    import json
+    from dataclasses import dataclass
+
+    from bt_nav.run.rosmission import _verdict_code
+
+    @dataclass
+    class Config:
+        rate_hz: float = 20.0
+
+    results = {"passed": passed, "checks": []}
+    judge = SimpleNamespace(
+        json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_PASSED if passed else judging.EXIT_FAILED,
+        audit=SimpleNamespace(findings=lambda exclude: [], parameter_findings=lambda: missing),
+        judge=SimpleNamespace(results=lambda: dict(results), t0=1.0), not_started=None,
+        required_parameters=("safety_distance",), findings=[], timed_out=False, foreign=None, config=Config(),
+        wall_start=0.0, calls=[], get_logger=lambda: None)
+    JudgeNode._write_json(judge, ["overall: PASSED" if passed else "overall: FAILED"])
+    written = json.loads((tmp_path / "v.json").read_text())
+    assert judge.exit_code == code and written["exit_code"] == code and written["passed"] is (code == 0)
+    assert _verdict_code(tmp_path / "v.json") == code
+    assert _verdict_code(tmp_path / "absent.json") == 2
+    capsys.readouterr()

@@ -211,8 +211,6 @@ def _last_report_line(path: Path) -> str | None:
 
 
 def _verdict_code(path: Path) -> int:
-    """A hosted judge's verdict file as its own process's exit code would say it: 0 PASSED, 1 FAILED, 2 none."""
-    verdict = _read_verdict(path)
-    if not verdict or verdict.get("timed_out") or verdict.get("foreign"):
-        return 2
-    return 0 if verdict.get("passed") else 1
+    """A hosted judge's exit code, as its verdict file gives it (``exit_code``): 0 PASSED, 1 FAILED, 2 none."""
+    code = _read_verdict(path).get("exit_code")
+    return code if isinstance(code, int) and not isinstance(code, bool) else 2

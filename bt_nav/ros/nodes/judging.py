@@ -652,7 +652,10 @@ class JudgeNode(QuietQosEvents, Node):
             results["passed"] = False
             for line in missing:
                 print(f"parameters declared ({line}): FAILED")
+        if not results["passed"] and self.exit_code == EXIT_PASSED:
+            self.exit_code = EXIT_FAILED  # the process's status says what the file says
         results.update({
+            "exit_code": self.exit_code,
             "findings": self.findings,
             "not_started": self.not_started,
             "report_lines": lines,
