@@ -57,6 +57,7 @@ from bt_nav.ros.supervise import (
     launcher_domains,
     release_domain_id,
 )
+from bt_nav.run.rosmission import read_verdict
 from bt_nav.run.rundir import LogFiles, make_run_dir
 from bt_nav.run.settings import DEFAULT_JITTER
 
@@ -175,12 +176,7 @@ def _wait(sim: Child, node: Child, limit: float, stop: StopRequest | None, start
 
 def _verdict_row(outcome: str, reason: str, sim: Child, results_json: Path) -> dict[str, Any]:
     """``passed``, ``reason`` and the judge's JSON (when it wrote one) of a finished run."""
-    verdict = None
-    if results_json.is_file():
-        try:
-            verdict = json.loads(results_json.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError):
-            verdict = None
+    verdict = read_verdict(results_json)
     if outcome == "verdict":
         if verdict is None:
             reason = f"the judge's verdict could not be read (see {results_json.name} and {sim.name}.log)"

@@ -107,7 +107,7 @@ class Recorder:
             stamp = msg.header.stamp
             if isinstance(info, dict) and info.get("source_timestamp"):
                 self.clock.add(info["source_timestamp"], stamp.sec * 1_000_000_000 + stamp.nanosec)
-            d.t.append(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+            d.t.append(stamp.sec + stamp.nanosec * 1e-9)
             d.x.append(msg.pose.pose.position.x)
             d.y.append(msg.pose.pose.position.y)
             d.yaw.append(yaw_from_quaternion(q.x, q.y, q.z, q.w))

@@ -195,22 +195,22 @@ class RosMission:
         return recordings
 
 
-def _read_verdict(path: Path) -> dict[str, Any]:
-    """A hosted judge's verdict file ({} while it cannot be read)."""
+def read_verdict(path: Path) -> dict[str, Any] | None:
+    """A judge's verdict file (its JSON object); None while there is none or it cannot be read."""
     try:
         verdict = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return {}
-    return verdict if isinstance(verdict, dict) else {}
+        return None
+    return verdict if isinstance(verdict, dict) else None
 
 
 def _last_report_line(path: Path) -> str | None:
     """The last line of a verdict file's report (None: none, or unreadable)."""
-    lines = _read_verdict(path).get("report_lines") or []
+    lines = (read_verdict(path) or {}).get("report_lines") or []
     return lines[-1] if lines else None
 
 
 def _verdict_code(path: Path) -> int:
     """A hosted judge's exit code, as its verdict file gives it (``exit_code``): 0 PASSED, 1 FAILED, 2 none."""
-    code = _read_verdict(path).get("exit_code")
+    code = (read_verdict(path) or {}).get("exit_code")
     return code if isinstance(code, int) and not isinstance(code, bool) else 2
