@@ -19,9 +19,11 @@ def _world(*segments: list[float]):
 
 
 def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, start=(0.0, 0.0, 0.0),
-         collide_at: float | None = None, end: float = 40.0) -> CheckoffJudge:
+         collide_at: float | None = None, end: float = 40.0,
+         between: tuple[float, float] | None = None) -> CheckoffJudge:
     """Play ``script`` ((seconds, v, w), each started at once; the robot follows its command instantly)
-    from t = 0 until the judge reports. Commands are published every 0.05 s from t = 0."""
+    from t = 0 until the judge reports. Commands are published every 0.05 s from t = 0; with ``between``, a
+    second publisher of the node sends that command 0.02 s after each turning one (and the robot follows it)."""
     x, y, yaw = start
     judge.start(0.0)
     timeline, t_at = [], 0.0
@@ -39,6 +41,9 @@ def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, star
         if k % 5 == 0:  # 20 Hz commands
             cmd = next(((v, w) for t0, v, w in reversed(timeline) if t0 <= t + 1e-9), (0.0, 0.0))
             judge.on_command(t, *cmd)
+        if between is not None and k % 5 == 2 and abs(cmd[1]) > 0.0 and cmd != between:
+            judge.on_command(t, *between)
+            cmd = (between[0], cmd[1])
         if k % 3 == 0:
             judge.observe(t, x, y, yaw)
         if collide_at is not None and abs(t - collide_at) < DT / 2:
@@ -92,7 +97,8 @@ def test_a_correct_retreat_passes() -> None:
     assert "left 0.35 m and right 0.35 m < 0.55 m" in _line(judge, "maneuver 1")
 
 
-C_WORLD = _world(WALL_AHEAD, [0.0, -0.3, 1.0, -0.3])  # a wall on the right: the left has more room
+BOX_AHEAD = [1.0, -0.15, 1.0, 0.15]  # a 0.3 m box face 1 m ahead: unlike a wall, no side sector sees it
+C_WORLD = _world(BOX_AHEAD, [0.0, -0.3, 1.0, -0.3])  # a wall on the right: the left has more room
 
 
 def _c_script(w: float) -> list[tuple[float, float, float]]:
@@ -176,15 +182,15 @@ def test_no_maneuver_and_no_move_on_fail() -> None:
 
 
 def test_an_emergency_stop_turn_is_a_recovery_not_a_maneuver() -> None:
-    """B in an open room: the robot braked 0.3 m before the wall (B's trigger cannot hold), stood 1 s and
+    """B in an open room: the robot braked 0.3 m before a box (B's trigger cannot hold), stood 1 s and
     turns away: listed as a recovery turn, checked only for forward motion. Without the standstill the
     same turn is judged as a maneuver (whose trigger did not hold)."""
     unbraked = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.6, 0.0, 1.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
-    res = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD)), unbraked).results()
+    res = _run(CheckoffJudge(_cfg("B"), _world(BOX_AHEAD)), unbraked).results()
     assert len(res["maneuvers"]) == 1 and not res["maneuvers"][0]["trigger"]
     script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (1.0, 0.0, 0.0), (1.6, 0.0, 1.0), (3.0, 0.05, 0.0),
               (10.0, 0.0, 0.0)]
-    judge = _run(CheckoffJudge(_cfg("B"), _world(WALL_AHEAD)), script)
+    judge = _run(CheckoffJudge(_cfg("B"), _world(BOX_AHEAD)), script)
     res = judge.results()
     assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
     rec = res["recovery_turns"][0]
@@ -290,3 +296,85 @@ def test_forward_motion_while_turning_is_a_turn_judged_for_it() -> None:
     gentle = [(5.0, 0.0, 0.0), (2.0, 0.05, 0.12), (10.0, 0.05, 0.0), (10.0, 0.0, 0.0)]  # 14 deg while driving
     assert _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), gentle).results()["maneuvers"] == []
     assert len(_run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), steer).results()["maneuvers"]) == 1
+
+
+# ----------------------------------------------------------------------------------------- every reasonable reading
+def test_a_smart_pivot_where_the_aeb_braked_at_safety_distance_passes_and_says_which_reading() -> None:
+    """The sheet's C pivots at 0.3 m, its AEB brakes at safety_distance: a node that brakes at 0.5 m and pivots
+    there is a reasonable reading and passes; the line says it was judged at either distance. A pivot 0.7 m
+    from the box (neither reading) still did not hold."""
+    brake_and_pivot = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (0.5, 0.0, 0.0), (1.6, 0.0, math.pi / 2 / 1.6),
+                       (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), brake_and_pivot)
+    assert judge.passed, judge.report_lines()
+    assert "front 0.49 m < 0.55 m" in _line(judge, "maneuver 1")
+    assert "the sheet's pivot_distance 0.30 m or safety_distance 0.50 m" in judge.config.trigger_rule()
+    too_early = [(5.0, 0.0, 0.0), (6.0, 0.05, 0.0), (1.6, 0.0, math.pi / 2 / 1.6), (4.0, 0.05, 0.0),
+                 (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), too_early)
+    assert "turned although its trigger did not hold (front 0.60 m < 0.55 m is not true)" in _line(judge, "maneuver 1")
+
+
+@pytest.mark.parametrize("pause", [0.0, 0.5, 1.0, 2.0])
+def test_a_pause_before_a_right_pivot_keeps_it_the_maneuver(pause: float) -> None:
+    """A node that stands still before it turns (a pause, an AEB stop) at 0.31 m: 1 cm beyond the sheet's
+    0.3 m, inside every other reading. It was once classed as an emergency-stop recovery after 0.5 s."""
+    script = [(5.0, 0.0, 0.0), (13.8, 0.05, 0.0), (pause, 0.0, 0.0), (1.6, 0.0, math.pi / 2 / 1.6),
+              (2.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), script)
+    res = judge.results()
+    assert judge.passed and len(res["maneuvers"]) == 1 and res["recovery_turns"] == [], judge.report_lines()
+    assert res["maneuvers"][0]["readings"]["front"] == pytest.approx(0.31, abs=0.01)
+
+
+def test_a_braked_turn_that_is_not_the_maneuver_stays_a_recovery_and_the_count_says_why() -> None:
+    """Both readings of a turn after a stop with the path blocked: a half pivot there is the brake's way out (not
+    every reading held C's trigger), and the maneuver count names it; the same half pivot where every reading held
+    (front 0.25 m) is the maneuver, failed for its angle."""
+    half = [(5.0, 0.0, 0.0), (13.8, 0.05, 0.0), (1.0, 0.0, 0.0), (0.8, 0.0, math.pi / 2 / 1.6), (4.0, 0.05, 0.0),
+            (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), half)
+    res = judge.results()
+    assert res["maneuvers"] == [] and len(res["recovery_turns"]) == 1
+    assert "turned 45 deg left; the Smart Pivot needs 90 +- 10 deg left" in _line(judge, "maneuvers performed")
+    deeper = [(5.0, 0.0, 0.0), (14.9, 0.05, 0.0), (1.0, 0.0, 0.0), *half[3:]]
+    res = _run(CheckoffJudge(_cfg("C"), C_WORLD), deeper).results()
+    assert len(res["maneuvers"]) == 1 and not res["maneuvers"][0]["angle_ok"] and res["recovery_turns"] == []
+
+
+OBLIQUE = [0.55, 0.25, 1.5, 0.25]  # a wall beside the path, 0.25 m left of it: seen at 20-30 deg, never dead ahead
+
+
+def test_late_only_when_every_front_reading_held() -> None:
+    """Creeping past a wall that only a wide front sector sees (+-30 deg reads it below 0.5 m for seconds, +-5
+    deg never): a node reading +-15 deg turns later than a +-30 deg one and is not late. The same creep towards
+    a wall dead ahead (every reading holds) is late."""
+    script = [(5.0, 0.0, 0.0), (14.0, 0.05, 0.0), (math.pi / 2, 0.0, -1.0), (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), _world(OBLIQUE)), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["trigger"] and not m.get("late") and judge.passed, judge.report_lines()
+    ahead = [(5.0, 0.0, 0.0), (12.0, 0.05, 0.0), (math.pi / 2, 0.0, 1.0), (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    (m,) = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), ahead).results()["maneuvers"]
+    assert m["late"] and m["crept_with_trigger"] >= 0.09
+
+
+def test_did_not_hold_only_when_no_side_reading_held() -> None:
+    """B at the mouth of a passage whose walls are seen only ahead of abeam (60 +- 30 deg reads their corners at
+    0.5 m, 90 +- 30 deg nothing near): a node reading its sides centred at 60 deg is squeezed, so its Retreat's
+    trigger held."""
+    funnel = _world([0.6, 0.4, 1.6, 0.4], [0.6, -0.4, 1.6, -0.4])  # the passage begins 0.3 m ahead of the turn
+    script = [(5.0, 0.0, 0.0), (6.0, 0.05, 0.0), (math.pi, 0.0, 1.0), (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("B"), funnel), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["trigger"] and m["readings"]["left"] < 0.55 < m["readings"]["left_all"], m
+    assert judge.passed, judge.report_lines()
+
+
+def test_forward_figures_come_from_the_turns_own_window() -> None:
+    """A node whose second publisher keeps creeping while its timer turns: every turning command says 0 m/s, the
+    creep commands between them do not, and the line gives those figures together (it once said "commanded up
+    to 0.00 m/s, moved 0.02 m")."""
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.pi / 2, 0.0, 1.0), (8.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script, between=(0.05, 0.0))
+    fails = [line for line in judge.report_lines() if line.startswith("maneuver ") and line.endswith("FAILED")]
+    assert fails and all("drove forward during the turn (commanded up to 0.05 m/s, moved 0.0" in f for f in fails)

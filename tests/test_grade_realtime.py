@@ -100,3 +100,27 @@ def test_a_resumed_check_reuses_the_finished_1x_runs(tmp_path: Path, ran: list) 
     assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 2
     assert ran == [(2, 1.0)]
     assert rows[jobs[0].key]["run_dir"] == "/kept/0"
+
+
+def _verdict(durations: list[float], called: float | None = None) -> dict[str, Any]:
+    return {"maneuvers": [{"t": 10.0 * k, "settled": 10.0 * k + d} for k, d in enumerate(durations)],
+            "evaluation_called": called}
+
+
+def test_the_wall_clock_is_named_only_on_evidence() -> None:
+    """Both readings of a run that failed at 5x and passed at 1x: turns that lasted five times longer in sim time
+    (the same wall time) name the wall clock, with the figures; a ROS-time node whose 90 deg pivot overshot to 114 deg
+    under load (its turn as long in sim time at both speeds) is not told it keeps time by the wall clock."""
+    wall = realtime.wall_clock_evidence(_verdict([2.6, 2.7]), _verdict([13.1, 13.0]), 5.0)
+    assert wall == "its turns lasted 13.1 sim s at 5x and 2.7 sim s at 1x: the same wall time"
+    assert realtime.wall_clock_evidence(_verdict([2.6]), _verdict([3.2]), 5.0) is None
+    finding = realtime.wall_clock_finding(5.0, "failed: maneuver 1 turned 114 deg left", None)
+    assert "wall clock" not in finding and "followed sim time at both speeds" in finding
+    assert "keeps time by the wall clock" in realtime.wall_clock_finding(5.0, "failed: ...", wall)
+
+
+def test_a_homework_timer_by_the_wall_clock_shows_in_its_evaluation_call() -> None:
+    """The homework's 50 s by the wall clock: called at 50 s at 1x, never within the mission at 5x (250 sim s)."""
+    said = realtime.wall_clock_evidence(_verdict([], called=50.1), _verdict([], called=None), 5.0)
+    assert said == "its evaluation call came at t=50.1 s at 1x and never at 5x"
+    assert realtime.wall_clock_evidence(_verdict([], called=50.1), _verdict([], called=50.3), 5.0) is None

@@ -4,17 +4,22 @@ around a command that is not bt_nav's, once per world x maneuver x seed, each ru
 Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (handed back at its end), a run
 directory of its own, and three process groups started by one :class:`bt_nav.ros.supervise.Launcher`:
 
-- the simulator node with ``follow`` off, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop,
-  no ``/clock`` or ground truth to read over DDS, no process of its own): it never waits on the node's command
-  timing, so a node that publishes from its scan callback, from a timer or only on change runs at the same pace,
-  ``rtf`` sim seconds per wall second (the node's sim-time timers tick that much faster too);
+- the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
+  truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second (the node's sim-time
+  timers tick that much faster too) and *paced to the node* (``follow``, :data:`FOLLOW_NODE`): the node's
+  ``cmd_vel`` publisher is a follower, so sim time never runs more than a scan period (:func:`node_lead`) ahead of
+  its latest command. A node starved of CPU on a busy machine then finds the world where it
+  left it instead of a turn 20 deg further on, and its verdict does not depend on the load. A node silent for
+  ``follower_timeout`` wall seconds (before its arming, after its stop, one that publishes only on change) is not
+  waited for until it publishes again, so the pace costs such a node a second of wall time, never its verdict.
+  ``cmd_vel`` is read best effort, which hears reliable and best-effort writers alike;
 - the user's command, with :func:`exe_ros_args` appended (``--ros-args -p use_sim_time:=true``, the
   profile's remaps of bt_nav's own names ``arm`` and ``evaluate_mission`` onto the assignment's, plus
   ``-p maneuver:="X"`` when the grid has maneuvers): a foreign node serves the homework's
   ``/reactive_control/activate`` and calls ``/reactive_control/evaluate_mission`` under those names itself, or
   serves the lab's ``toggle_navigation``;
 - the judge it hosts (homework: the referee; lab: the check-off judge) without ``wait_for_cmd_vel`` (a node may stay
-  silent until armed), without ``sync`` (the simulator follows nobody), with ``robot_clock_wait`` (t0 once the
+  silent until armed), without ``sync`` (the hosted judge needs no heartbeat), with ``robot_clock_wait`` (t0 once the
   node's /clock subscription has settled), with ``start_wait`` (a node that never offers its arm service gets a
   failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
   (:mod:`bt_nav.ros.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
@@ -128,10 +133,31 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
     return args
 
 
+#: The simulator's pacing for a graded node (see the module docstring): its ``cmd_vel`` is followed, a silence of
+#: ``follower_timeout`` wall seconds ends the wait; ``max_lag`` is set per run (:func:`node_lead`).
+FOLLOW_NODE: dict[str, Any] = {"follow": True, "cmd_vel_reliability": "best_effort", "follower_timeout": 1.0}
+#: Sim seconds the lead allows beyond the LiDAR's scan period (a node's answer to a scan comes a little after it).
+LEAD_MARGIN = 0.05
+
+
+def node_lead(job: Job, profile: str) -> float:
+    """How far sim time may lead a graded node's latest command (sim s): its LiDAR's longest scan period and
+    :data:`LEAD_MARGIN`. A node that publishes from its scan callback answers each scan and can answer nothing
+    before the next one is out, so any shorter lead would hold sim time until the node is given up for silent;
+    a node on a faster timer or on odometry is held at this lead, which bounds what a starved node misses."""
+    from bt_nav_sim.core import profile as sim_profile
+    from bt_nav_sim.lidar import lidar_model
+    from bt_nav_sim.world import load_world
+
+    name = job.lidar or load_world(job.world).lidar
+    model = lidar_model(name) if name else sim_profile(profile).lidar
+    return round((1.0 + model.speed_spread) / model.rate_hz + LEAD_MARGIN, 4)
+
+
 def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
     lab = settings.profile == "lab"
-    sim: dict[str, Any] = {"follow": False, "cmd_vel_stamped": False}
+    sim: dict[str, Any] = {**FOLLOW_NODE, "max_lag": node_lead(job, settings.profile), "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
     sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them

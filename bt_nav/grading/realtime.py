@@ -42,11 +42,40 @@ def failed_jobs(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]
     return [job for job in jobs if failed_at_speed(rows.get(job.key))]
 
 
-def wall_clock_finding(rtf: float, reason: str) -> str:
-    """What a run that passed at 1x after failing faster tells its student."""
-    return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x: the node keeps time by the wall clock "
-            "(time.sleep, time.time) where ROS time (self.get_clock(), sim time under use_sim_time) would keep it "
-            "right in a simulation at any speed")
+def wall_clock_finding(rtf: float, reason: str, evidence: str | None = None) -> str:
+    """What a run that passed at 1x after failing faster tells its student: the wall clock only on ``evidence``
+    (:func:`wall_clock_evidence`), else that its timing followed sim time and the load is the likelier cause."""
+    if evidence is None:
+        return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x, graded at 1x; its timing followed sim "
+                "time at both speeds, so the faster run's failure is put down to the machine's load, not to the node")
+    return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x ({evidence}): the node keeps time by the wall "
+            "clock (time.sleep, time.time) where ROS time (self.get_clock(), sim time under use_sim_time) would keep "
+            "it right in a simulation at any speed")
+
+
+def _median(values: list[float]) -> float | None:
+    values = sorted(values)
+    return values[len(values) // 2] if values else None
+
+
+def wall_clock_evidence(slow: dict[str, Any] | None, fast: dict[str, Any] | None, rtf: float) -> str | None:
+    """What the two verdicts (at 1x and at ``rtf``) show of a node timing itself by the wall clock, in words; None
+    where they show nothing of it. A wall-clock node's timed acts last the same *wall* time at every speed, so
+    ``rtf`` times longer in sim time: its turns (the lab), or its 50 s (the homework: called at 1x, never or
+    late at ``rtf``). A ROS-time node that overshot a turn under load took about as long in sim time."""
+    if not slow or not fast:
+        return None
+    threshold = rtf ** 0.5  # the geometric midpoint of 1 (sim time) and rtf (wall time)
+    durations = [_median([m["settled"] - m["t"] for m in v.get("maneuvers") or [] if "settled" in m])
+                 for v in (slow, fast)]
+    if durations[0] and durations[1] is not None and durations[1] / durations[0] >= threshold:
+        return (f"its turns lasted {durations[1]:.1f} sim s at {rtf:g}x and {durations[0]:.1f} sim s at 1x: "
+                "the same wall time")
+    called_slow, called_fast = slow.get("evaluation_called"), fast.get("evaluation_called")
+    if called_slow and (called_fast is None or called_fast / called_slow >= threshold):
+        at = "never" if called_fast is None else f"at t={called_fast:.1f} s"
+        return f"its evaluation call came at t={called_slow:.1f} s at 1x and {at} at {rtf:g}x"
+    return None
 
 
 def realtime_settings(settings: ExeSettings) -> ExeSettings:
@@ -116,7 +145,8 @@ def _graded_at_real_time(slow: Row, fast: Row, rtf: float) -> Row:
     row = dict(slow)
     row["realtime"] = {"rtf": rtf, "passed": fast["passed"], "reason": fast["reason"], "run_dir": fast["run_dir"]}
     if row["passed"]:  # a passed row is a verdict (never a bt_nav error nor stopped)
-        finding = wall_clock_finding(rtf, fast["reason"])
+        finding = wall_clock_finding(rtf, fast["reason"], wall_clock_evidence(slow.get("verdict"),
+                                                                              fast.get("verdict"), rtf))
         row["findings"] = [*row.get("findings", []), finding]
         row["reason"] = f"{row['reason']}; {finding}"
     return row

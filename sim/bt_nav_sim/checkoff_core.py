@@ -49,6 +49,7 @@ import numpy as np
 
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
+from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.referee_core import Activate, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
 
@@ -69,11 +70,17 @@ class CheckoffConfig:
     rate_hz: float = 2.0  # how often the driver calls step()
     moving_linear: float = 0.01  # m/s, as the homework referee
     moving_angular: float = 0.01  # rad/s
-    safety_distance: float = 0.5  # A and B trigger
-    pivot_distance: float = 0.3  # C trigger
+    safety_distance: float = 0.5  # A and B trigger; C's too for a node that brakes there and pivots
+    pivot_distance: float = 0.3  # C trigger (the sheet's)
     trigger_margin: float = 0.05  # the trigger reading may exceed its threshold by this much (sensor noise)
-    front_half_angle_deg: float = 30.0  # front sector: 0 deg +- this
-    side_half_angle_deg: float = 30.0  # left sector: 90 deg +- this; right: -90 deg +- this
+    # The reasonable sector readings (bt_nav_sim.readings.SectorFamily): "did not hold" only when none held,
+    # "late" only when every one held
+    front_min_half_deg: float = 5.0
+    front_max_half_deg: float = 30.0
+    side_centre_min_deg: float = 60.0
+    side_centre_max_deg: float = 110.0
+    side_min_half_deg: float = 5.0
+    side_max_half_deg: float = 30.0
     rotation_min_rate: float = 0.1  # rad/s: a command turning at least this fast ...
     turn_max_linear: float = 0.03  # m/s: a turning command driving faster is forward motion during the turn ...
     steer_max_deg: float = 20.0  # ... unless the robot turned less than this: then it was steering, not a turn
@@ -95,8 +102,9 @@ class CheckoffConfig:
     # long before the episode's start
     scan_age: float = 0.4
     open_space: float = 3.0  # C: both sides beyond this count as a tie too
-    aeb_distance: float = 0.35  # an obstacle this close in the swept path makes a turn an AEB recovery
-    aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned)
+    aeb_distance: float = 0.35  # an obstacle this close in the swept path may make a turn an AEB recovery ...
+    aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned), not
+    # every reading held its trigger, and it does not pass as the maneuver
     half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
     min_maneuvers: int = 1
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
@@ -104,10 +112,33 @@ class CheckoffConfig:
     lidar: str = ""
 
     def __post_init__(self) -> None:
+        self.family()  # refuses an empty or inverted sector family
         if self.maneuver not in MANEUVERS:
             raise ValueError(f"maneuver must be one of {', '.join(MANEUVERS)}, got {self.maneuver!r}")
         if not (self.armed_for > 0 and self.rate_hz > 0 and self.grace >= 0 and self.static_after > 0):
             raise ValueError("need armed_for > 0, rate_hz > 0, grace >= 0 and static_after > 0")
+
+    def family(self) -> SectorFamily:
+        """The sector readings this config accepts as reasonable."""
+        return SectorFamily(self.front_min_half_deg, self.front_max_half_deg, self.side_centre_min_deg,
+                            self.side_centre_max_deg, self.side_min_half_deg, self.side_max_half_deg)
+
+    def limits(self) -> tuple[float, float]:
+        """The maneuver's trigger distance as the loosest and as the tightest reasonable reading (m, no margin):
+        C's is the sheet's ``pivot_distance`` or, for a node that brakes at ``safety_distance`` and pivots there,
+        that; A's and B's is ``safety_distance``."""
+        if self.maneuver == "C":
+            return max(self.pivot_distance, self.safety_distance), min(self.pivot_distance, self.safety_distance)
+        return self.safety_distance, self.safety_distance
+
+    def trigger_rule(self) -> str:
+        """Which readings the trigger was judged by, in words (the maneuver lines and the docs say it)."""
+        loose, tight = self.limits()
+        what = "left and right" if self.maneuver == "B" else "front"
+        c = (f" (the sheet's pivot_distance {self.pivot_distance:.2f} m or safety_distance "
+             f"{self.safety_distance:.2f} m)" if self.maneuver == "C" else "")
+        return (f"held: {what} < {loose:.2f} m{c} + {self.trigger_margin:.2f} m by any of the "
+                f"{self.family().describe()}; late: only once every one of them read < {tight:.2f} m")
 
 
 #: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
@@ -115,22 +146,6 @@ CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers p
           "recovery turns", "no collision", "static after deactivation")
 
 
-#: The readings of "left" and "right" a student may reasonably take for C's "higher distance reading": the
-#: minimum over sectors of half-width 30, 20 and 5 degrees around +-90 deg, and the mean over the widest.
-SIDE_READINGS = ("min 60-120 deg", "min 70-110 deg", "min 85-95 deg", "mean 60-120 deg")
-#: What a side's mean counts for a beam with nothing in range (the LDS-01's range).
-MEAN_CAP = 3.5
-
-
-@dataclass
-class _Reading:
-    """Noise-free trigger readings at one ground-truth sample (m; inf: nothing there)."""
-
-    front: float
-    left: float
-    right: float
-    ahead: float  # distance to the first obstacle in the swept path (robot's width + margin)
-    sides: tuple[tuple[float, float], ...] = ()  # (left, right) per SIDE_READINGS
 
 
 class CheckoffJudge(Verdict):
@@ -142,14 +157,9 @@ class CheckoffJudge(Verdict):
         self.update_world = update_world
         name = config.lidar or world.lidar
         self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
-        angles = np.remainder(self.caster.layout.angles() + math.pi, 2 * math.pi) - math.pi
+        angles = self.caster.layout.angles()
         self._mount = (self.caster.model.mount_x, self.caster.model.mount_y)
-        front, side = math.radians(config.front_half_angle_deg), math.radians(config.side_half_angle_deg)
-        self._front = np.abs(angles) <= front + 1e-9
-        self._left = np.abs(angles - math.pi / 2) <= side + 1e-9
-        self._right = np.abs(angles + math.pi / 2) <= side + 1e-9
-        self._side_masks = [(np.abs(angles - math.pi / 2) <= math.radians(h) + 1e-9,
-                             np.abs(angles + math.pi / 2) <= math.radians(h) + 1e-9) for h in (30.0, 20.0, 5.0)]
+        self._sectors = SectorReader(angles, config.family())
         self._cos, self._sin = np.cos(angles), np.sin(angles)
         self.t0: float | None = None
         self._t: list[float] = []
@@ -157,7 +167,7 @@ class CheckoffJudge(Verdict):
         self._y: list[float] = []
         self._yaw: list[float] = []
         self._uyaw: list[float] = []  # unwrapped yaw
-        self._readings: list[_Reading | None] = []
+        self._readings: list[Reading | None] = []
         self._walkers: list[tuple[float, np.ndarray]] = []  # (t, circles (K, 3)) as the simulator reported them
         self.commands: list[tuple[float, float, float]] = []
         self.collisions: list[tuple[float, float, float]] = []
@@ -264,19 +274,14 @@ class CheckoffJudge(Verdict):
             return False
         return self.deactivation_requested is None or t <= self.deactivation_requested + self.config.grace
 
-    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None) -> _Reading:
+    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None) -> Reading:
         """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range), the
         people walking included."""
         sx, sy = self.caster.sensor_pose(float(x), float(y), float(yaw))
         r = self.caster.true_ranges(sx, sy, float(yaw), walkers)
         along, across = r * self._cos + self._mount[0], np.abs(r * self._sin + self._mount[1])  # from the centre
         in_path = (along > 0.0) & (across <= self.config.half_width)
-        sides = [(float(r[lm].min()), float(r[rm].min())) for lm, rm in self._side_masks]
-        capped = np.minimum(r, MEAN_CAP)
-        sides.append((float(capped[self._left].mean()), float(capped[self._right].mean())))
-        return _Reading(front=float(r[self._front].min()), left=float(r[self._left].min()),
-                        right=float(r[self._right].min()),
-                        ahead=float(along[in_path].min()) if in_path.any() else math.inf, sides=tuple(sides))
+        return self._sectors.read(r, float(along[in_path].min()) if in_path.any() else math.inf)
 
     def _index_at(self, t: float) -> int:
         """The last sample at or before ``t`` (the first one if none is)."""
@@ -326,7 +331,9 @@ class CheckoffJudge(Verdict):
     def episodes(self) -> list[tuple[int, int]]:
         """Rotation episodes as (first, last) command indices: maximal runs of turning commands given while
         armed, whatever their forward speed (a node that drives forward while it turns is judged for it, not
-        left unseen); a run that drove forward and turned less than ``steer_max_deg`` is steering, not a turn."""
+        left unseen), two runs between which the robot never stopped rotating being one turn (a node whose second
+        publisher sends creep commands between its turning ones); a run that drove forward and turned less than
+        ``steer_max_deg`` is steering, not a turn."""
         cfg = self.config
         runs: list[tuple[int, int]] = []
         first: int | None = None
@@ -339,7 +346,23 @@ class CheckoffJudge(Verdict):
                 first = None
         if first is not None:
             runs.append((first, len(self.commands) - 1))
-        return [(a, b) for a, b in runs if not self._steering(a, b)]
+        merged: list[tuple[int, int]] = []
+        for a, b in runs:
+            if merged and self._kept_turning(self.commands[merged[-1][1]][0], self.commands[a][0]):
+                merged[-1] = (merged[-1][0], b)
+            else:
+                merged.append((a, b))
+        return [(a, b) for a, b in merged if not self._steering(a, b)]
+
+    def _kept_turning(self, last: float, start: float) -> bool:
+        """Whether the true yaw rate stayed at ``settle_rate`` or more on every sample pair from ``last`` (a turning
+        command) to ``start`` (the next one): the robot never stopped rotating in between."""
+        ts, uy = self._t, self._uyaw
+        i, j = bisect.bisect_left(ts, last), bisect.bisect_right(ts, start)
+        if j - i < 2 or start - last > self.config.settle_timeout:
+            return False
+        return all(abs(uy[k] - uy[k - 1]) >= self.config.settle_rate * max(ts[k] - ts[k - 1], 1e-9)
+                   for k in range(i + 1, j))
 
     def _steering(self, a: int, b: int) -> bool:
         """Commands ``a..b`` drove forward and turned the robot less than ``steer_max_deg``: a course correction."""
@@ -368,18 +391,18 @@ class CheckoffJudge(Verdict):
         return out
 
     def _judge_lateness(self, episode: dict[str, Any], since: float, start: float) -> None:
-        """A maneuver whose trigger held (without the margin) while the robot crept on for ``late_distance`` or
-        more before it turned fired late: its node does not react to its trigger's distance (e.g. a
-        ``safety_distance`` parameter it declares but never reads). Only a trigger that began to hold while the
-        robot crept counts: not one that held already at ``since`` (the arming, or the end of the last turn)."""
+        """A maneuver whose trigger held by every reasonable reading (:meth:`_trigger_all`) while the robot crept
+        on for ``late_distance`` or more before it turned fired late: its node does not react to its trigger's
+        distance (e.g. a ``safety_distance`` parameter it declares but never reads). Only a trigger that began to
+        hold while the robot crept counts: not one that held already at ``since`` (the arming, or the end of the
+        last turn)."""
         cfg = self.config
         if not self._t or episode["interrupted"]:
             return
         i = self._index_at(start)
         k = i
         while k > 0 and self._t[k - 1] > since:
-            reading = self._readings[k - 1]
-            if reading is None or not self._trigger(reading, margin=0.0)[0]:
+            if not self._trigger_all(self._readings[k - 1]):
                 break
             k -= 1
         if k == 0 or self._t[k - 1] <= since:
@@ -395,41 +418,35 @@ class CheckoffJudge(Verdict):
     def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float) -> dict[str, Any]:
         """One episode: trigger at its start, angle and side, no forward command or motion, moved on.
 
-        A turn after a standstill of ``aeb_stop`` whose trigger did not hold but whose swept path was blocked
-        within ``aeb_distance`` is an emergency-stop recovery turn (the executive braked, stood and turns
-        away): only the forward rules apply.
+        A turn in place after the trigger held is the maneuver, whatever the pause before it. A turn after a
+        standstill of ``aeb_stop`` whose swept path was blocked within ``aeb_distance`` may instead be the node's
+        emergency-stop way out (it braked, stood and turns away): when not every reading held its trigger and it
+        does not pass as the maneuver, it is a recovery turn, held to the forward rules only. So no turn's class
+        rests on a centimetre at the trigger's distance: one that passes as the maneuver is one.
         """
         cfg = self.config
-        start = self.commands[a][0]
+        start, last = self.commands[a][0], self.commands[b][0]
         candidates = self._readings_at(start)
         reading = candidates[0]
         trigger, trigger_text = self._trigger(reading)
-        # A recovery: the robot stood (it braked), its path was blocked, and the trigger did not hold even
-        # without the margin (the margin is the robot's benefit of the doubt for its own maneuvers, not a
-        # reason to judge its brake's way out by the maneuver's rule; and a maneuver that fires with no
-        # standstill before it, C's at 0.3 m with a 0.35 m brake zone, is judged as one).
-        recovery = (reading is not None and reading.ahead < cfg.aeb_distance
-                    and self._stood_before(a) >= cfg.aeb_stop and not self._trigger(reading, margin=0.0)[0])
         disarm = self.deactivation_requested
-        interrupted = disarm is not None and self.commands[b][0] >= disarm - INTERRUPT_SLACK
+        interrupted = disarm is not None and last >= disarm - INTERRUPT_SLACK
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, start)) if self._t else 0.0
+        # the commands and the motion of one window: the turn's commands (those the node sent between its turning
+        # ones too, in the order they came: several may share a stamp), and where they (not the creep that follows
+        # the turn) can have moved the robot
         cmd_forward = max(abs(v) for _, v, _ in self.commands[a:b + 1])
-        motion = self._max_displacement(start + cfg.brake_allowance, settle) if self._t else 0.0
+        end = min(settle, last + cfg.brake_allowance)
+        motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
-        angle_ok, rule = self._angle_rule(angle, reading)
-        for other in candidates[1:]:  # among people: the side may follow any reading the robot could have had
-            if not angle_ok:
-                angle_ok, rule = self._angle_rule(angle, other)
+        angle_ok, rule = self._judged_angle(angle, candidates, interrupted)
         moved_on, moved_text = self._moved_on(settle, next_start, now)
-        if interrupted and self._within_max(angle):  # the disarm stopped it: its angle is what it had reached
-            angle_ok, rule = True, "interrupted by the disarm (angle not judged)"
-        elif interrupted:  # ... but it had turned past its rule's largest angle: it would never have stopped
-            angle_ok = False
-            rule += ", and it was still turning at the disarm"
-        passed = forward_ok if recovery else trigger and angle_ok and forward_ok and moved_on
+        as_maneuver = trigger and angle_ok and forward_ok and moved_on
+        recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
+                    and self._stood_before(a) >= cfg.aeb_stop and not self._trigger_all(reading))
         return {"t": start - (self.t0 or 0.0), "t0": self.t0 or 0.0, "settled": settle - (self.t0 or 0.0), "kind":
-                "recovery" if recovery else "maneuver", "passed": passed, "trigger": trigger,
-                "interrupted": interrupted,
+                "recovery" if recovery else "maneuver", "passed": forward_ok if recovery else as_maneuver,
+                "trigger": trigger, "interrupted": interrupted,
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
                 "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule,
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
@@ -437,22 +454,32 @@ class CheckoffJudge(Verdict):
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items() if k != "sides"}}
 
-    def _readings_at(self, start: float) -> list[_Reading | None]:
-        """The trigger readings an episode starting at ``start`` may have been decided on: the sample at it;
-        among people walking, those of the last ``scan_age`` s at which the trigger held, if any did (a
-        person moves half a metre in the time a scan takes to reach the robot's decision), oldest first."""
+    def _judged_angle(self, angle: float, candidates: list[Reading | None], interrupted: bool) -> tuple[bool, str]:
+        """The angle rule for a turn that may have been decided on any of ``candidates`` (the side may follow any
+        reading the robot could have had), and what the disarm did to it."""
+        angle_ok, rule = self._angle_rule(angle, candidates[0])
+        for other in candidates[1:]:
+            if not angle_ok:
+                angle_ok, rule = self._angle_rule(angle, other)
+        if interrupted and self._within_max(angle):  # the disarm stopped it: its angle is what it had reached
+            return True, "interrupted by the disarm (angle not judged)"
+        if interrupted:  # ... but it had turned past its rule's largest angle: it would never have stopped
+            return False, rule + ", and it was still turning at the disarm"
+        return angle_ok, rule
+
+    def _readings_at(self, start: float) -> list[Reading | None]:
+        """The trigger readings an episode starting at ``start`` may have been decided on: those of the last
+        ``scan_age`` s at which the trigger held, if any did, newest first (a scan takes that long to reach the
+        robot's decision, and a person walking moves half a metre in it); else the sample at the start."""
         if not self._t:
             return [None]
         i = self._index_at(start)
-        if self._walkers:
-            first = self._index_at(start - self.config.scan_age)
-            window = [self._readings[k] or self._cast_at(k) for k in range(first, i + 1)]
-            held = [r for r in window if self._trigger(r)[0]]
-            if held:
-                return held
-        return [self._readings[i]]
+        first = self._index_at(start - self.config.scan_age)
+        window = [self._readings[k] or self._cast_at(k) for k in range(i, first - 1, -1)]
+        held = [r for r in window if self._trigger(r)[0]]
+        return held or [self._readings[i]]
 
-    def _cast_at(self, k: int) -> _Reading:
+    def _cast_at(self, k: int) -> Reading:
         """The reading of sample ``k`` though it was taken before the arming (an episode that starts at the arming
         may have been decided on a scan from just before it)."""
         t = self._t[k]
@@ -466,21 +493,30 @@ class CheckoffJudge(Verdict):
                 return start - t
         return start - self.commands[0][0] if self.commands else 0.0
 
-    def _trigger(self, r: _Reading | None, margin: float | None = None) -> tuple[bool, str]:
-        """Whether the configured maneuver's trigger held for reading ``r`` (within ``margin``, the config's
-        ``trigger_margin`` by default), and how it read."""
+    def _trigger(self, r: Reading | None, margin: float | None = None) -> tuple[bool, str]:
+        """Whether the maneuver's trigger held for reading ``r`` by any reasonable reading (the widest sectors,
+        the loosest limit, within ``margin``: the config's ``trigger_margin`` by default), and how it read."""
         cfg = self.config
         margin = cfg.trigger_margin if margin is None else margin
         if r is None:
             return False, "no ground truth at the start"
+        limit = cfg.limits()[0] + margin
         if cfg.maneuver == "B":
-            limit = cfg.safety_distance + margin
             return (r.left < limit and r.right < limit,
                     f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")
-        limit = (cfg.safety_distance if cfg.maneuver == "A" else cfg.pivot_distance) + margin
         return r.front < limit, f"front {r.front:.2f} m < {limit:.2f} m"
 
-    def _angle_rule(self, angle: float, r: _Reading | None) -> tuple[bool, str]:
+    def _trigger_all(self, r: Reading | None) -> bool:
+        """Whether the trigger held by every reasonable reading: the narrowest front, every side centre, the
+        tightest limit, no margin."""
+        if r is None:
+            return False
+        tight = self.config.limits()[1]
+        if self.config.maneuver == "B":
+            return r.left_all < tight and r.right_all < tight
+        return r.front_all < tight
+
+    def _angle_rule(self, angle: float, r: Reading | None) -> tuple[bool, str]:
         """Whether ``angle`` (deg, + = left) obeys the maneuver's rule; the rule in words."""
         cfg = self.config
         tol, size = cfg.angle_tolerance_deg, abs(angle)
@@ -492,9 +528,9 @@ class CheckoffJudge(Verdict):
         side_ok = side == "either side" or (side == "left") == (angle > 0)
         return abs(size - 90) <= tol and side_ok, f"90 +- {tol:.0f} deg {side}"
 
-    def _clearer_side(self, r: _Reading | None) -> str:
-        """C's side: "left" or "right" where every reasonable reading of the two sides (:data:`SIDE_READINGS`)
-        finds that side clearer by ``side_tie`` or more (and not both in open space); else "either side"."""
+    def _clearer_side(self, r: Reading | None) -> str:
+        """C's side: "left" or "right" where every reasonable reading of the two sides (:class:`Reading`'s
+        ``sides``) finds that side clearer by ``side_tie`` or more (and not both in open space); else "either side"."""
         cfg = self.config
         if r is None:
             return "either side"
@@ -545,9 +581,7 @@ class CheckoffJudge(Verdict):
         episodes = self._judge_all(now)
         maneuvers = [e for e in episodes if e["kind"] == "maneuver"]
         recoveries = [e for e in episodes if e["kind"] == "recovery"]
-        checks.append({"name": "maneuvers performed", "passed": len(maneuvers) >= cfg.min_maneuvers,
-                       "value": len(maneuvers), "required": cfg.min_maneuvers,
-                       "detail": f"{len(maneuvers)} performed, required >= {cfg.min_maneuvers}"})
+        checks.append(_performed_check(cfg, maneuvers, recoveries))
         checks += [_maneuver_check(i + 1, cfg.maneuver, e) for i, e in enumerate(maneuvers)]
         if recoveries:
             bad = [e for e in recoveries if not e["passed"]]
@@ -622,6 +656,24 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
     if not e["moved_on"]:
         out.append(f"did not move on after the turn ({e['moved_on_detail']})")
     return out
+
+
+def _performed_check(cfg: CheckoffConfig, maneuvers: list[dict[str, Any]],
+                     recoveries: list[dict[str, Any]]) -> dict[str, Any]:
+    """Enough maneuvers; when there are too few and some turns were counted as emergency-stop recoveries, the
+    detail says why the first of them is not the maneuver (a student sees a turn and must learn why it did not
+    count)."""
+    passed = len(maneuvers) >= cfg.min_maneuvers
+    detail = f"{len(maneuvers)} performed, required >= {cfg.min_maneuvers}"
+    if not passed and recoveries:
+        e = recoveries[0]
+        n = len(recoveries)
+        why = "; ".join(maneuver_problems(cfg.maneuver, e)) or "it is one"
+        detail += (f"; {n} turn{'s' if n != 1 else ''} after a stop with the path blocked counted as "
+                   f"emergency-stop recover{'ies' if n != 1 else 'y'}, not as {cfg.maneuver}: the one at "
+                   f"t={e['t']:.1f} s {why} ({_readings_text(e)})")
+    return {"name": "maneuvers performed", "passed": passed, "value": len(maneuvers),
+            "required": cfg.min_maneuvers, "detail": detail}
 
 
 def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:

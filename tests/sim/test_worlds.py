@@ -346,12 +346,15 @@ def test_lab_arena_is_documented_closed_and_clear(name: str) -> None:
 
 def _creep(name: str) -> dict[str, float]:
     """Creep straight ahead from the spawn at 0.05 m/s (noise-free) and note, per maneuver, the distance
-    crept when its trigger first holds on noise-free ground truth (the judge's readings)."""
+    crept when its trigger first holds on noise-free ground truth, read over the sectors the arenas' headers
+    describe (front +-30 deg, sides 90 +-30 deg: one member of the judge's family of readings)."""
     from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
     from bt_nav_sim.core import SimConfig, SimCore
 
     core = SimCore(SimConfig(world=name, noise=False, profile="lab"))
-    judge = CheckoffJudge(CheckoffConfig(), core.world, update_world=False)
+    classic = CheckoffConfig(front_min_half_deg=30.0, side_centre_min_deg=90.0, side_centre_max_deg=90.0,
+                             side_min_half_deg=30.0)
+    judge = CheckoffJudge(classic, core.world, update_world=False)
     x0, y0 = core.state.x, core.state.y
     first: dict[str, float] = {}
     while core.collisions == 0 and core.t < 40.0:
