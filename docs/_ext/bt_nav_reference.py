@@ -131,13 +131,13 @@ def checks_page() -> str:
                "angle_ok": False, "angle_deg": 45.0, "side": "left", "forward_ok": False, "forward_command": 0.05,
                "forward_motion": 0.14, "moved_on": False, "moved_on_detail": "still at the obstacle"}
     for maneuver, name in MANEUVER_NAMES.items():
-        cfg = CheckoffConfig()
-        tol, near = cfg.angle_tolerance_deg, cfg.safety_distance + cfg.trigger_margin
+        cfg = CheckoffConfig(maneuver=maneuver)
+        tol, near = cfg.angle_tolerance_deg, cfg.limits()[0] + cfg.trigger_margin
         trigger = {"A": f"front 0.84 m < {near:.2f} m", "B": f"left 0.84 m and right 0.40 m < {near:.2f} m",
-                   "C": f"front 0.84 m < {cfg.pivot_distance + cfg.trigger_margin:.2f} m"}
+                   "C": f"front 0.84 m < {near:.2f} m"}
         rule = {"A": f"{90 - tol:.0f}-{180 + tol:.0f} deg either side", "B": f"180 +- {tol:.0f} deg either side",
                 "C": f"90 +- {tol:.0f} deg right"}
-        out += [f"### {maneuver}: {name}", ""]
+        out += [f"### {maneuver}: {name}", "", f"The trigger, read every reasonable way: {cfg.trigger_rule()}.", ""]
         event = {**example, "rule": rule[maneuver], "trigger_detail": trigger[maneuver]}
         out += [f"- {line}" for line in maneuver_problems(maneuver, event)]
         out += [""]

@@ -1,0 +1,201 @@
+"""The grader's confusion matrix: right nodes passed, mistakes failed, each for its own reason.
+
+A grader is judged by two things: it fails every wrong node for its real reason (the mutation suite: the lab
+fixture's ``--mistake`` copies) and it never fails a right one (the correct-variant suite: the fixture's
+``--variant`` nodes, each a reasonable reading of the lab sheet, written the ways students write them). This
+command grades both over real DDS, as an instructor grades a class (``bt-nav grade --class``, one class per lab
+choice), and prints one table::
+
+    python tests/grader_suite.py                      # every variant and mistake, three LiDARs, --jobs auto
+    python tests/grader_suite.py --hogs 2             # the same with two CPU hogs running
+    python tests/grader_suite.py --compare runs/grader-suite/confusion.json --out runs/grader-suite-loaded
+
+``--compare`` names every run whose verdict differs from an earlier suite's (the verdicts must not depend on the
+machine's load). ``make grader-suite`` runs the first line. Written: ``<out>/confusion.json`` (every run's verdict)
+and ``<out>/confusion.md`` (the table and every wrong result), beside each class's own pages.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+FIXTURE = Path(__file__).resolve().parent / "fixtures" / "lab_student_node.py"
+#: The mutation suite: what the grader must say of each mistake (``LAB_C``) and which show on one LiDAR only.
+MUTANTS = Path(__file__).resolve().parent / "ros" / "test_mutants.py"
+#: The mistakes' arena and choice, as the mutation suite grades them (a box to the side: C has a side to pick).
+MISTAKE_GRID = ("--maneuvers", "C", "--worlds", "lab_side")
+
+
+def _load(path: Path) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[path.stem] = module  # a dataclass of the module looks itself up there
+    spec.loader.exec_module(module)
+    return module
+
+
+def fixture() -> ModuleType:
+    """The lab fixture as a module (its VARIANTS and MISTAKES)."""
+    return _load(FIXTURE)
+
+
+def expectations() -> tuple[dict[str, str], dict[str, tuple[str, str]]]:
+    """The mutation suite's table: each mistake's reason (a regex), and the (right, wrong) LiDAR of those that only
+    some LiDARs show."""
+    mutants = _load(MUTANTS)
+    return mutants.LAB_C, mutants.BY_LIDAR
+
+
+def classes(node: ModuleType, variants: Sequence[str], mistakes: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The classes to grade: one per lab choice of the right variants, one of the mistakes (choice C)."""
+    command = f"{sys.executable} {FIXTURE}"
+    out: dict[str, dict[str, Any]] = {}
+    for name in variants:
+        choice = node.VARIANTS[name][0]
+        right = out.setdefault(f"right_{choice}", {"grid": ("--maneuvers", choice), "students": {}})
+        right["students"][name] = f"{command} --variant {name}"
+    if mistakes:
+        out["mistakes"] = {"grid": MISTAKE_GRID,
+                           "students": {name: f"{command} --choice C --mistake {name}" for name in mistakes}}
+    return out
+
+
+def grade_class(name: str, spec: dict[str, Any], options: Sequence[str], out: Path) -> dict[str, list[dict]]:
+    """Grade one class with ``bt-nav grade --class`` in a process of its own; each student's rows."""
+    folder = out / name
+    folder.mkdir(parents=True, exist_ok=True)
+    manifest = folder / "class.yaml"
+    manifest.write_text("".join(f"{student}: {command}\n" for student, command in spec["students"].items()))
+    argv = [sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--class", str(manifest),
+            "--out", str(folder / "class"), *spec["grid"], *options]
+    subprocess.run(argv, check=False)
+    rows = {}
+    for student in spec["students"]:
+        path = folder / "class" / student / "grade.json"
+        rows[student] = json.loads(path.read_text())["runs"] if path.is_file() else []
+    return rows
+
+
+def judged(kind: str, student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """One student's line of the matrix: how it came out and, where it came out wrong, why. A right node must pass
+    every run; a mistake must fail every run for its own reason (:func:`expectations`), except one that only some
+    LiDARs show (it must pass with the one it reads right and fail with the other)."""
+    runs = [{"cell": " ".join(str(r.get(k) or "") for k in ("world", "maneuver", "lidar")).strip(),
+             "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]),
+             "reason": r["reason"]} for r in rows]
+    if not runs:
+        return {"student": student, "kind": kind, "outcome": "not graded", "runs": runs, "wrong": ["no runs"]}
+    if kind == "right":
+        wrong = [f"{r['cell']} seed {r['seed']}: {r['reason']}" for r in runs if not r["passed"]]
+        return {"student": student, "kind": kind, "outcome": "failed" if wrong else "passed", "runs": runs,
+                "wrong": wrong}
+    must_say, by_lidar = expectations()
+    pattern, (good, bad) = must_say[student], by_lidar.get(student, (None, None))
+    wrong = []
+    for r in runs:
+        if r["lidar"] == good and not r["passed"]:
+            wrong.append(f"{r['cell']}: failed with the LiDAR it reads right ({r['reason']})")
+        elif (good is None or r["lidar"] == bad) and (r["passed"] or not re.search(pattern, r["reason"])):
+            wrong.append(f"{r['cell']}: {'PASSED' if r['passed'] else r['reason']}")
+    return {"student": student, "kind": kind, "outcome": "failed for its reason" if not wrong else "wrong",
+            "runs": runs, "wrong": wrong}
+
+
+def matrix(lines: list[dict[str, Any]]) -> str:
+    """The confusion matrix and every wrong result, as Markdown."""
+    right = [x for x in lines if x["kind"] == "right"]
+    mistakes = [x for x in lines if x["kind"] == "mistake"]
+    runs = sum(len(x["runs"]) for x in right)
+    passed = sum(r["passed"] for x in right for r in x["runs"])
+    out = ["| | nodes | runs | passed | failed for its reason | wrong |", "|---|---|---|---|---|---|",
+           f"| right nodes (correct variants) | {len(right)} | {runs} | {passed} | - | {runs - passed} runs |",
+           f"| mistakes (mutation suite) | {len(mistakes)} | {sum(len(x['runs']) for x in mistakes)} | - | "
+           f"{sum(x['outcome'] == 'failed for its reason' for x in mistakes)} nodes | "
+           f"{sum(x['outcome'] != 'failed for its reason' for x in mistakes)} nodes |", ""]
+    for x in lines:
+        out.append(f"- {x['kind']} `{x['student']}`: {x['outcome']}" + "".join(f"\n  - {w}" for w in x["wrong"]))
+    return "\n".join(out) + "\n"
+
+
+def differences(lines: list[dict[str, Any]], earlier: Path) -> list[str]:
+    """The runs whose verdict (passed or not) differs from an earlier suite's confusion.json."""
+    before = {(x["student"], r["cell"], r["seed"]): r["passed"] for x in json.loads(earlier.read_text())
+              for r in x["runs"]}
+    return [f"{x['student']} {r['cell']} seed {r['seed']}: {'passed' if r['passed'] else 'failed'} now"
+            for x in lines for r in x["runs"] if before.get((x["student"], r["cell"], r["seed"]), r["passed"])
+            != r["passed"]]
+
+
+@contextmanager
+def cpu_hogs(count: int) -> Iterator[None]:
+    """``count`` busy processes for the duration (each dies with this process, on any signal)."""
+    from bt_nav.ros.supervise import child_preexec
+
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"], preexec_fn=child_preexec(os.getpid()))
+            for _ in range(count)]
+    try:
+        yield
+    finally:
+        for hog in hogs:
+            hog.send_signal(signal.SIGKILL)
+            hog.wait()
+
+
+def parse(argv: Sequence[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path("runs/grader-suite"))
+    parser.add_argument("--only", choices=("all", "right", "mistakes"), default="all")
+    parser.add_argument("--variants", default="", help="comma-separated variant names (default: every one)")
+    parser.add_argument("--mistakes", default="", help="comma-separated mistakes (default: every one but "
+                                                       "ignores_safety_distance, which needs a TA's parameter)")
+    parser.add_argument("--lidars", default="lds01,lds02,rplidar")
+    parser.add_argument("--seeds", default="1")
+    parser.add_argument("--jobs", default="auto")
+    parser.add_argument("--hogs", type=int, default=0, help="CPU hogs running during the grade")
+    parser.add_argument("--compare", type=Path, help="an earlier suite's confusion.json: name differing verdicts")
+    return parser.parse_args(argv)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Grade, print the matrix; exit 0 only if every right node passed and every mistake failed for its reason."""
+    args = parse(argv)
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    node = fixture()
+    variants = [v for v in args.variants.split(",") if v] or list(node.VARIANTS)
+    mistakes = [m for m in args.mistakes.split(",") if m] or list(expectations()[0])
+    todo = classes(node, variants if args.only != "mistakes" else [], mistakes if args.only != "right" else [])
+    options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
+               "--progress", "off"]
+    lines = []
+    with cpu_hogs(args.hogs):
+        for name, spec in todo.items():
+            kind = "mistake" if name == "mistakes" else "right"
+            for student, rows in grade_class(name, spec, options, args.out).items():
+                lines.append(judged(kind, student, rows))
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "confusion.json").write_text(json.dumps(lines, indent=1))
+    text = matrix(lines)
+    if args.compare is not None:
+        changed = differences(lines, args.compare)
+        text += f"\nVerdicts that differ from {args.compare}: {len(changed)}\n" + "".join(f"- {c}\n" for c in changed)
+    (args.out / "confusion.md").write_text(text)
+    print(text)
+    ok = all(x["outcome"] in ("passed", "failed for its reason") for x in lines)
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
