@@ -378,3 +378,24 @@ def test_forward_figures_come_from_the_turns_own_window() -> None:
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script, between=(0.05, 0.0))
     fails = [line for line in judge.report_lines() if line.startswith("maneuver ") and line.endswith("FAILED")]
     assert fails and all("drove forward during the turn (commanded up to 0.05 m/s, moved 0.0" in f for f in fails)
+
+
+CORNER = _world(WALL_AHEAD, [-2.0, 0.45, 2.0, 0.45])  # a wall ahead and one 0.45 m to the left: a corner
+
+
+def test_back_to_back_maneuvers_are_two_turns_and_a_closed_loops_correction_is_part_of_one() -> None:
+    """A Randomizer whose trigger still holds after its first turn turns again at once: the other way without a
+    stop (two maneuvers, each judged on its own angle), or the same way after one creep command on its next
+    scan. A closed loop that overshot by 5 deg and turns back is one maneuver of 90 deg."""
+    reverse = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (2.1, 0.0, 1.0), (2.3, 0.0, -1.0), (3.0, 0.05, 0.0),
+               (20.0, 0.0, 0.0)]
+    res = _run(CheckoffJudge(_cfg("A"), CORNER), reverse).results()
+    assert [round(m["angle_deg"] / 10) for m in res["maneuvers"]] == [12, -13], res["maneuvers"]
+    again = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (1.6, 0.0, 1.0), (0.2, 0.05, 0.0), (1.7, 0.0, 1.0),
+             (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    res = _run(CheckoffJudge(_cfg("A"), CORNER), again).results()
+    assert len(res["maneuvers"]) == 2, res["maneuvers"]
+    corrected = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.radians(95.0), 0.0, 1.0), (0.45, 0.0, -0.2),
+                 (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    (m,) = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), corrected).results()["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(92.0, abs=1.0) and m["passed"], m  # 97 deg on the 20 Hz grid, 5 back

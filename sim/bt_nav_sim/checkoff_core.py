@@ -54,8 +54,9 @@ from bt_nav_sim.referee_core import Activate, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
-#: stopped by the disarm, as it must be: its angle is not judged.
-INTERRUPT_SLACK = 0.15
+#: stopped by the disarm, as it must be: its angle is not judged. A node that publishes from its scan callback
+#: sends its last turning command up to a scan period (the LDS-01's 0.2 s) before the disarm reaches it.
+INTERRUPT_SLACK = 0.3
 
 
 @dataclass(frozen=True)
@@ -331,8 +332,8 @@ class CheckoffJudge(Verdict):
     def episodes(self) -> list[tuple[int, int]]:
         """Rotation episodes as (first, last) command indices: maximal runs of turning commands given while
         armed, whatever their forward speed (a node that drives forward while it turns is judged for it, not
-        left unseen), two runs between which the robot never stopped rotating being one turn (a node whose second
-        publisher sends creep commands between its turning ones); a run that drove forward and turned less than
+        left unseen), cut where the turn reverses (:meth:`_reversals`) and joined across another publisher's creep
+        commands sent while it went on (:meth:`_interleaved`); a run that drove forward and turned less than
         ``steer_max_deg`` is steering, not a turn."""
         cfg = self.config
         runs: list[tuple[int, int]] = []
@@ -347,22 +348,40 @@ class CheckoffJudge(Verdict):
         if first is not None:
             runs.append((first, len(self.commands) - 1))
         merged: list[tuple[int, int]] = []
-        for a, b in runs:
-            if merged and self._kept_turning(self.commands[merged[-1][1]][0], self.commands[a][0]):
+        for a, b in (piece for run in runs for piece in self._reversals(*run)):
+            if merged and self._interleaved(merged[-1][1], a):
                 merged[-1] = (merged[-1][0], b)
             else:
                 merged.append((a, b))
         return [(a, b) for a, b in merged if not self._steering(a, b)]
 
-    def _kept_turning(self, last: float, start: float) -> bool:
-        """Whether the true yaw rate stayed at ``settle_rate`` or more on every sample pair from ``last`` (a turning
-        command) to ``start`` (the next one): the robot never stopped rotating in between."""
-        ts, uy = self._t, self._uyaw
-        i, j = bisect.bisect_left(ts, last), bisect.bisect_right(ts, start)
-        if j - i < 2 or start - last > self.config.settle_timeout:
+    def _interleaved(self, b: int, a: int) -> bool:
+        """Whether the commands between turning command ``b`` and the next one, ``a``, are another publisher's
+        creep sent while the turn went on: all drive forward, and ``a`` came within one and a half of the turn's
+        command periods (a maneuver that ends and starts again on the next scan leaves a longer gap, or a stop)."""
+        between = self.commands[b + 1:a]
+        if not between or any(v <= self.config.forward_epsilon for _, v, _ in between):
             return False
-        return all(abs(uy[k] - uy[k - 1]) >= self.config.settle_rate * max(ts[k] - ts[k - 1], 1e-9)
-                   for k in range(i + 1, j))
+        turning = self.config.rotation_min_rate
+        near = [k for k in range(max(0, b - 10), min(len(self.commands), a + 11))
+                if abs(self.commands[k][2]) >= turning]
+        gaps = [self.commands[k2][0] - self.commands[k1][0] for k1, k2 in zip(near, near[1:], strict=False)
+                if (k1, k2) != (b, a)]  # the turn's command period, on both sides of this gap
+        return 0.0 < self.commands[a][0] - self.commands[b][0] <= 1.5 * max(gaps, default=0.0) + 1e-9
+
+    def _reversals(self, a: int, b: int) -> list[tuple[int, int]]:
+        """Run ``a..b`` cut where the commanded turn changes direction and the robot then turns ``steer_max_deg`` or
+        more the other way (a new maneuver that began without a stop; a few degrees back is a closed loop's
+        correction of its overshoot, part of the turn)."""
+        pieces, first = [], a
+        for i in range(a + 1, b + 1):
+            if self.commands[i][2] * self.commands[i - 1][2] < 0 and self._t:
+                nxt = next((k for k in range(i + 1, b + 1) if self.commands[k][2] * self.commands[i][2] < 0), b)
+                turned = self._interp(self._uyaw, self.commands[nxt][0]) - self._interp(self._uyaw, self.commands[i][0])
+                if abs(math.degrees(turned)) >= self.config.steer_max_deg:
+                    pieces.append((first, i - 1))
+                    first = i
+        return [*pieces, (first, b)]
 
     def _steering(self, a: int, b: int) -> bool:
         """Commands ``a..b`` drove forward and turned the robot less than ``steer_max_deg``: a course correction."""
@@ -426,7 +445,7 @@ class CheckoffJudge(Verdict):
         """
         cfg = self.config
         start, last = self.commands[a][0], self.commands[b][0]
-        candidates = self._readings_at(start)
+        candidates = self._readings_at(start, self._stood_before(a))
         reading = candidates[0]
         trigger, trigger_text = self._trigger(reading)
         disarm = self.deactivation_requested
@@ -467,14 +486,15 @@ class CheckoffJudge(Verdict):
             return False, rule + ", and it was still turning at the disarm"
         return angle_ok, rule
 
-    def _readings_at(self, start: float) -> list[Reading | None]:
+    def _readings_at(self, start: float, stood: float = 0.0) -> list[Reading | None]:
         """The trigger readings an episode starting at ``start`` may have been decided on: those of the last
-        ``scan_age`` s at which the trigger held, if any did, newest first (a scan takes that long to reach the
-        robot's decision, and a person walking moves half a metre in it); else the sample at the start."""
+        ``scan_age`` s, and of the ``stood`` s the robot stood still before it (a node that decides, pauses, then
+        turns), at which the trigger held, if any did, newest first (a scan takes that long to reach the robot's
+        decision, and a person walking moves half a metre in it); else the sample at the start."""
         if not self._t:
             return [None]
         i = self._index_at(start)
-        first = self._index_at(start - self.config.scan_age)
+        first = self._index_at(start - self.config.scan_age - stood)
         window = [self._readings[k] or self._cast_at(k) for k in range(i, first - 1, -1)]
         held = [r for r in window if self._trigger(r)[0]]
         return held or [self._readings[i]]

@@ -50,9 +50,11 @@ class Followers:
             self.members[who] = Follower(int(t_ns), bool(hold), float(wall))
             return True
         joined = not member.active
-        if joined:
-            member.intervals.clear()  # a gap that spans a silence is no period
-        elif t_ns > member.t_ns:
+        if t_ns > member.t_ns:
+            # A gap that spans a silence counts too: the silence was in wall time, while sim time waited for this
+            # follower, so a slow follower's first gap is its period (cleared, a node on a 5 Hz timer behind a
+            # faster lead was given up for silent before every message and never learnt). A long gap before a
+            # follower's arming only widens the lead until its next, shorter one.
             member.intervals.append(int(t_ns) - member.t_ns)
         member.t_ns, member.hold, member.seen, member.active = int(t_ns), bool(hold), float(wall), True
         return joined

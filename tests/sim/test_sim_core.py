@@ -84,7 +84,18 @@ def test_followers_bound_the_lead_and_time_out() -> None:
     assert f.blocking(1060 * MS, wall=1.2) == (None, ["cmd_vel"])  # silent too long: dropped
     assert not f.any_active()
     assert f.report("cmd_vel", 1070 * MS, False, wall=1.3)  # speaks again: rejoins
-    assert f.blocking(1130 * MS, wall=1.3) == ("cmd_vel", [])
+    assert f.blocking(1150 * MS, wall=1.3) == ("cmd_vel", [])  # the 70 ms across its silence is its period now
+
+
+def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() -> None:
+    """A node on a 5 Hz timer behind a 0.15 s lead (a 10 Hz LiDAR's): its first gap spans a silence (sim time
+    waited for it while it was given up for silent), and still is its period, so from then on sim time reaches its
+    next message time (when the gap was forgotten at every rejoin, it was given up before every message)."""
+    f = Followers(max_lag_ns=150 * MS, silence_s=1.0, hold_s=5.0)
+    f.report("cmd_vel", 1000 * MS, False, wall=0.0)
+    assert f.blocking(1160 * MS, wall=1.1) == (None, ["cmd_vel"])
+    f.report("cmd_vel", 1200 * MS, False, wall=1.2)
+    assert f.lead_ns("cmd_vel") == 200 * MS and f.blocking(1400 * MS, wall=1.2) == (None, [])
 
 
 def test_followers_learn_a_longer_period() -> None:
