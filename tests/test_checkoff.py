@@ -399,3 +399,17 @@ def test_back_to_back_maneuvers_are_two_turns_and_a_closed_loops_correction_is_p
                  (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
     (m,) = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), corrected).results()["maneuvers"]
     assert m["angle_deg"] == pytest.approx(92.0, abs=1.0) and m["passed"], m  # 97 deg on the 20 Hz grid, 5 back
+
+
+@pytest.mark.parametrize("yaw_deg", [-8.0, 0.0, 8.0])
+def test_c_compares_the_sides_beside_the_robot_not_a_sector_that_sees_the_obstacle_ahead(yaw_deg: float) -> None:
+    """lab_side at C's pivot: a wall 0.5 m to the left, the room 2 m to the right. Read 30-90 deg wide, the right side
+    may see the box C pivots from (0.33 m, when the robot's yaw puts its corner there) and call the left clearer;
+    every side reading from 60 deg outwards says right, so right is required (a node turning left fails), and the
+    line shows the sides beside the robot."""
+    from bt_nav_sim.world import load_world
+
+    judge = CheckoffJudge(CheckoffConfig(maneuver="C"), load_world("lab_side"), update_world=False)
+    r = judge._read(-0.31, 0.0, math.radians(yaw_deg))
+    assert judge._clearer_side(r) == "right", r.sides
+    assert r.left_abeam == pytest.approx(0.5, abs=0.01) and r.right_abeam > 1.9

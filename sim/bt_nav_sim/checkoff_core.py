@@ -650,11 +650,14 @@ class CheckoffJudge(Verdict):
 MANEUVER_NAMES = {"A": "the Randomizer", "B": "the Retreat", "C": "the Smart Pivot"}
 
 
-def _readings_text(e: dict[str, Any]) -> str:
-    """The judge's readings at a turn's start, as the failing line shows them."""
+def _readings_text(e: dict[str, Any], maneuver: str = "") -> str:
+    """The judge's readings at a turn's start, as the failing line shows them: the front and the nearest of any
+    side sector (what A's and B's triggers read); for C the sides beside the robot (60-120 deg), as it compares
+    them (a wide side sector also sees the obstacle ahead)."""
     r = e.get("readings") or {}
-    parts = [f"{k} {r[k]:.2f} m" if r.get(k) is not None else f"{k} nothing" for k in ("front", "left", "right")
-             if k in r]
+    keys = (("front", "front"), ("left", "left_abeam"), ("right", "right_abeam")) if maneuver == "C" else \
+        (("front", "front"), ("left", "left"), ("right", "right"))
+    parts = [f"{name} {r[k]:.2f} m" if r.get(k) is not None else f"{name} nothing" for name, k in keys if k in r]
     return "readings at the start: " + ", ".join(parts) if parts else "no readings at the start"
 
 
@@ -691,7 +694,7 @@ def _performed_check(cfg: CheckoffConfig, maneuvers: list[dict[str, Any]],
         why = "; ".join(maneuver_problems(cfg.maneuver, e)) or "it is one"
         detail += (f"; {n} turn{'s' if n != 1 else ''} after a stop with the path blocked counted as "
                    f"emergency-stop recover{'ies' if n != 1 else 'y'}, not as {cfg.maneuver}: the one at "
-                   f"t={e['t']:.1f} s {why} ({_readings_text(e)})")
+                   f"t={e['t']:.1f} s {why} ({_readings_text(e, cfg.maneuver)})")
     return {"name": "maneuvers performed", "passed": passed, "value": len(maneuvers),
             "required": cfg.min_maneuvers, "detail": detail}
 
@@ -703,10 +706,10 @@ def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, 
     detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
               f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
               f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
-              f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e)}; " + "; ".join(problems)
+              f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e, maneuver)}; " + "; ".join(problems)
                                                      if problems else ""))
     check = {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
              "detail": detail}
     if problems:
-        check["reason"] = f"maneuver {number} " + "; ".join(problems) + f" ({_readings_text(e)})"
+        check["reason"] = f"maneuver {number} " + "; ".join(problems) + f" ({_readings_text(e, maneuver)})"
     return check

@@ -12,8 +12,10 @@ against the whole family, and which way a rule leans depends on what it accuses 
 - **"it turned late"** only when *every* reading held: the nearest distance of the narrowest front (+-5 deg)
   and, for each side, the largest over the sector centres of the narrow (+-5 deg) sector's nearest distance,
   against the tightest limit (C: the smaller of the two), with no margin;
-- **C's side**: the sides as each (centre, half-width) pair of the family reads them, and their means; a side is
-  required only where every pair agrees (see :class:`bt_nav_sim.checkoff_core.CheckoffJudge`).
+- **C's side**: the sides as each (centre, half-width) pair of the family that keeps clear of the front reads
+  them (from 60 deg outwards: a sector reaching 30 deg off the bow sees the obstacle C pivots from, not where the
+  room is), and their means; a side is required only where every pair agrees (see
+  :class:`bt_nav_sim.checkoff_core.CheckoffJudge`).
 
 Pure (NumPy only): the judge casts noise-free ranges from the true pose and hands them here.
 """
@@ -65,6 +67,8 @@ class Reading:
     front_all: float = math.inf  # nearest in the narrowest front: below a limit, every front reading is
     left_all: float = math.inf  # the largest narrow-sector distance over the centres: below a limit, every left is
     right_all: float = math.inf
+    left_abeam: float = math.inf  # nearest over 60..120 deg: beside the robot, what C's sides are shown as
+    right_abeam: float = math.inf
     sides: tuple[tuple[float, float], ...] = ()  # (left, right) per (centre, half-width) of the family, and means
 
 
@@ -76,9 +80,12 @@ class SectorReader:
         self.family = family = family or SectorFamily()
         deg = np.degrees(np.remainder(np.asarray(angles, dtype=np.float64) + math.pi, 2 * math.pi) - math.pi)
         centres = np.arange(family.side_centre_min, family.side_centre_max + 1e-9, CENTRE_STEP_DEG)
+        # C's comparison of the sides: sectors that stay clear of the front (none reaching within side_centre_min of
+        # it). One that reaches 30 deg off the bow sees the very obstacle C pivots away from on whichever side the
+        # robot's yaw puts its corner, and says nothing of where the room is.
         pairs = [(c, h) for c in sorted({family.side_centre_min, 75.0, 90.0, family.side_centre_max})
                  for h in sorted({family.side_min_half, 15.0, family.side_max_half})
-                 if family.side_min_half <= h <= family.side_max_half]
+                 if family.side_min_half <= h <= family.side_max_half and c - h >= family.side_centre_min - 1e-9]
         lo, hi = family.side_centre_min - family.side_max_half, family.side_centre_max + family.side_max_half
         rows = [np.abs(deg) <= family.front_max_half + 1e-9, np.abs(deg) <= family.front_min_half + 1e-9]
         for sign in (1.0, -1.0):  # left, then right
@@ -90,6 +97,7 @@ class SectorReader:
         self._centres, self._pairs = len(centres), len(pairs)
         self._mean_left = np.abs(deg - 90.0) <= 30.0 + 1e-9
         self._mean_right = np.abs(deg + 90.0) <= 30.0 + 1e-9
+        self._masks = np.vstack([self._masks, self._mean_left, self._mean_right])
 
     def read(self, ranges: np.ndarray, ahead: float) -> Reading:
         """The family's readings of ``ranges`` (one per beam, inf: nothing) and the swept path's ``ahead``."""
@@ -103,4 +111,5 @@ class SectorReader:
             sides.append((float(capped[self._mean_left].mean()), float(capped[self._mean_right].mean())))
         return Reading(front=float(nearest[0]), left=float(left[0]), right=float(right[0]), ahead=float(ahead),
                        front_all=float(nearest[1]), left_all=float(left[1:1 + n].max()),
-                       right_all=float(right[1:1 + n].max()), sides=tuple(sides))
+                       right_all=float(right[1:1 + n].max()), left_abeam=float(nearest[-2]),
+                       right_abeam=float(nearest[-1]), sides=tuple(sides))
