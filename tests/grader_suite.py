@@ -177,8 +177,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     variants = [v for v in args.variants.split(",") if v] or list(node.VARIANTS)
     mistakes = [m for m in args.mistakes.split(",") if m] or list(expectations()[0])
     todo = classes(node, variants if args.only != "mistakes" else [], mistakes if args.only != "right" else [])
+    # at --rtf 5 only: a right node must pass there on its own (the 1x re-run would hide a grader that fails it)
     options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
-               "--progress", "off"]
+               "--realtime-check", "off", "--progress", "off"]
     lines = []
     with cpu_hogs(args.hogs):
         for name, spec in todo.items():
