@@ -20,17 +20,18 @@ def _world(*segments: list[float]):
 
 def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, start=(0.0, 0.0, 0.0),
          collide_at: float | None = None, end: float = 40.0,
-         between: tuple[float, float] | None = None) -> CheckoffJudge:
+         between: tuple[float, float] | None = None, accel: float | None = None) -> CheckoffJudge:
     """Play ``script`` ((seconds, v, w), each started at once; the robot follows its command instantly)
     from t = 0 until the judge reports. Commands are published every 0.05 s from t = 0; with ``between``, a
-    second publisher of the node sends that command 0.02 s after each turning one (and the robot follows it)."""
+    second publisher of the node sends that command 0.02 s after each turning one (and the robot follows it); with
+    ``accel`` (rad/s^2) the turn rate follows the command at most that fast (the Burger's 10 rad/s^2)."""
     x, y, yaw = start
     judge.start(0.0)
     timeline, t_at = [], 0.0
     for seconds, v, w in script:
         timeline.append((t_at, v, w))
         t_at += seconds
-    cmd = (0.0, 0.0)
+    cmd, rate = (0.0, 0.0), 0.0
     for k in range(round(end / DT) + 1):
         t = k * DT
         if k % 50 == 0:  # 2 Hz
@@ -49,6 +50,8 @@ def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, star
         if collide_at is not None and abs(t - collide_at) < DT / 2:
             judge.on_collision(t, x, y)
         v, w = cmd
+        if accel is not None:
+            rate = w = rate + max(-accel * DT, min(accel * DT, w - rate))
         x += v * DT * math.cos(yaw)
         y += v * DT * math.sin(yaw)
         yaw = math.remainder(yaw + w * DT, 2 * math.pi)
@@ -413,3 +416,15 @@ def test_c_compares_the_sides_beside_the_robot_not_a_sector_that_sees_the_obstac
     r = judge._read(-0.31, 0.0, math.radians(yaw_deg))
     assert judge._clearer_side(r) == "right", r.sides
     assert r.left_abeam == pytest.approx(0.5, abs=0.01) and r.right_abeam > 1.9
+
+
+def test_a_fast_turn_reversed_at_once_is_split_where_the_robot_turned_back() -> None:
+    """At 2 rad/s and 10 rad/s^2 the robot coasts 11 deg after the command flips: the first turn is measured to the
+    yaw's extremum (115 deg) and the second from it (92 deg: its first 0.2 s stopped the first turn); measured at
+    the command's flip they were 103 and 80 deg, and a right Randomizer failed."""
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (1.0, 0.0, 2.0), (1.0, 0.0, -2.0), (3.0, 0.05, 0.0),
+              (20.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("A"), CORNER), script, accel=10.0)
+    res = judge.results()
+    assert [m["angle_deg"] for m in res["maneuvers"]] == pytest.approx([115.0, -92.0], abs=2.0), res["maneuvers"]
+    assert judge.passed, judge.report_lines()

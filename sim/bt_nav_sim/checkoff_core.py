@@ -397,17 +397,38 @@ class CheckoffJudge(Verdict):
         starts = [self.commands[a][0] for a, _ in runs]
         out = []
         since = self.activation_requested if self.activation_requested is not None else -math.inf
+        begin = None  # where the last turn's rotation really ended, when the next began before it settled
         for k, (a, b) in enumerate(runs):
             last = self.commands[b][0]
             nxt = starts[k + 1] if k + 1 < len(runs) else math.inf
             limit = min(nxt, last + self.config.settle_timeout, now)
             settle = min(nxt, self._settled_at(last, limit))
-            episode = self._judge_episode(a, b, settle, nxt, now)
+            joined = None
+            if k + 1 < len(runs) and settle >= nxt and self._t:  # back to back: split where the rotation turned
+                joined = self._turning_point(last, nxt, now, self.commands[b][2], self.commands[runs[k + 1][0]][2])
+                settle = joined
+            episode = self._judge_episode(a, b, settle, nxt, now, begin)
+            begin = joined
             if episode["kind"] == "maneuver":
                 self._judge_lateness(episode, since, self.commands[a][0])
             out.append(episode)
             since = settle
         return out
+
+    def _turning_point(self, last: float, nxt: float, now: float, w_before: float, w_after: float) -> float:
+        """Where one turn ends and the next, begun before the robot settled, starts: the yaw's extremum when the
+        next turns the other way (the robot coasts on for up to a fifth of a second first), else the slowest
+        moment of the rotation between them."""
+        sign = 1.0 if w_before > 0 else -1.0
+        ts, uy = self._t, self._uyaw
+        i, j = bisect.bisect_left(ts, last), bisect.bisect_right(ts, min(nxt + 0.5, now))
+        if j - i < 2:
+            return nxt
+        if w_before * w_after < 0:
+            k = max(range(i, j), key=lambda n: sign * uy[n])
+            return ts[k]
+        k = min(range(i + 1, j), key=lambda n: sign * (uy[n] - uy[n - 1]) / max(ts[n] - ts[n - 1], 1e-9))
+        return ts[k - 1]
 
     def _judge_lateness(self, episode: dict[str, Any], since: float, start: float) -> None:
         """A maneuver whose trigger held by every reasonable reading (:meth:`_trigger_all`) while the robot crept
@@ -434,7 +455,8 @@ class CheckoffJudge(Verdict):
             episode["late"] = True
             episode["passed"] = False
 
-    def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float) -> dict[str, Any]:
+    def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float,
+                       begin: float | None = None) -> dict[str, Any]:
         """One episode: trigger at its start, angle and side, no forward command or motion, moved on.
 
         A turn in place after the trigger held is the maneuver, whatever the pause before it. A turn after a
@@ -450,7 +472,8 @@ class CheckoffJudge(Verdict):
         trigger, trigger_text = self._trigger(reading)
         disarm = self.deactivation_requested
         interrupted = disarm is not None and last >= disarm - INTERRUPT_SLACK
-        angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, start)) if self._t else 0.0
+        turn_from = start if begin is None else max(begin, start - 0.5)  # a turn begun while the last one coasted
+        angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, turn_from)) if self._t else 0.0
         # the commands and the motion of one window: the turn's commands (those the node sent between its turning
         # ones too, in the order they came: several may share a stamp), and where they (not the creep that follows
         # the turn) can have moved the robot
