@@ -536,14 +536,13 @@ class CheckoffJudge(Verdict):
                 return start - t
         return start - self.commands[0][0] if self.commands else 0.0
 
-    def _trigger(self, r: Reading | None, margin: float | None = None) -> tuple[bool, str]:
+    def _trigger(self, r: Reading | None) -> tuple[bool, str]:
         """Whether the maneuver's trigger held for reading ``r`` by any reasonable reading (the widest sectors,
-        the loosest limit, within ``margin``: the config's ``trigger_margin`` by default), and how it read."""
+        the loosest limit, within the config's ``trigger_margin``), and how it read."""
         cfg = self.config
-        margin = cfg.trigger_margin if margin is None else margin
         if r is None:
             return False, "no ground truth at the start"
-        limit = cfg.limits()[0] + margin
+        limit = cfg.limits()[0] + cfg.trigger_margin
         if cfg.maneuver == "B":
             return (r.left < limit and r.right < limit,
                     f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")

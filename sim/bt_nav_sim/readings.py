@@ -98,6 +98,7 @@ class SectorReader:
         self._mean_left = np.abs(deg - 90.0) <= 30.0 + 1e-9
         self._mean_right = np.abs(deg + 90.0) <= 30.0 + 1e-9
         self._masks = np.vstack([self._masks, self._mean_left, self._mean_right])
+        self._has_means = bool(self._mean_left.any() and self._mean_right.any())  # beams beside the robot on both sides
 
     def read(self, ranges: np.ndarray, ahead: float) -> Reading:
         """The family's readings of ``ranges`` (one per beam, inf: nothing) and the swept path's ``ahead``."""
@@ -107,7 +108,7 @@ class SectorReader:
         left, right = nearest[2:2 + per_side], nearest[2 + per_side:2 + 2 * per_side]
         sides = [(float(a), float(b)) for a, b in zip(left[1 + n:], right[1 + n:], strict=True)]
         capped = np.minimum(ranges, MEAN_CAP)
-        if self._mean_left.any() and self._mean_right.any():
+        if self._has_means:
             sides.append((float(capped[self._mean_left].mean()), float(capped[self._mean_right].mean())))
         return Reading(front=float(nearest[0]), left=float(left[0]), right=float(right[0]), ahead=float(ahead),
                        front_all=float(nearest[1]), left_all=float(left[1:1 + n].max()),
