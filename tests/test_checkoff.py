@@ -428,3 +428,17 @@ def test_a_fast_turn_reversed_at_once_is_split_where_the_robot_turned_back() -> 
     res = judge.results()
     assert [m["angle_deg"] for m in res["maneuvers"]] == pytest.approx([115.0, -92.0], abs=2.0), res["maneuvers"]
     assert judge.passed, judge.report_lines()
+
+
+def test_the_creep_sent_while_an_open_loop_turn_coasts_is_moving_on_not_forward_motion() -> None:
+    """An open-loop 2 rad/s pivot whose node creeps on as soon as its timed turn ends: the robot's yaw coasts on
+    for a moment (here 0.4 s at 5 rad/s^2) and the creep moves it a centimetre before the yaw settles. That is
+    the node moving on, not forward motion during the turn (a right node was failed "commanded up to 0.00 m/s,
+    moved 0.01 m"); a creep sent during the turn's commands still fails."""
+    coast = [(5.0, 0.0, 0.0), (14.4, 0.05, 0.0), (0.70, 0.0, 2.0), (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), coast, accel=5.0)
+    (m,) = judge.results()["maneuvers"]
+    assert judge.passed and m["forward_motion"] < 0.005, (m, judge.report_lines())
+    during = coast[:2] + [(0.60, 0.0, 2.0), (0.10, 0.05, 2.0)] + coast[3:]
+    judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), during, accel=5.0)
+    assert not judge.passed and "drove forward during the turn" in " ".join(judge.report_lines())

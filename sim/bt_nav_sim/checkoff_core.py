@@ -476,9 +476,9 @@ class CheckoffJudge(Verdict):
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, turn_from)) if self._t else 0.0
         # the commands and the motion of one window: the turn's commands (those the node sent between its turning
         # ones too, in the order they came: several may share a stamp), and where they (not the creep that follows
-        # the turn) can have moved the robot
+        # the turn, from its first forward command on) can have moved the robot
         cmd_forward = max(abs(v) for _, v, _ in self.commands[a:b + 1])
-        end = min(settle, last + cfg.brake_allowance)
+        end = min(settle, last + cfg.brake_allowance, self._next_forward(b))
         motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
         angle_ok, rule = self._judged_angle(angle, candidates, interrupted)
@@ -495,6 +495,13 @@ class CheckoffJudge(Verdict):
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items() if k != "sides"}}
+
+    def _next_forward(self, b: int) -> float:
+        """When the node first commands forward speed after the turn's last command (``inf`` if never): the robot
+        may coast on in rotation for a moment (an open-loop turn's commands end before the yaw settles), and the
+        creep it was sent then is the node moving on, not forward motion during the turn."""
+        eps = self.config.forward_epsilon
+        return next((t for t, v, _ in self.commands[b + 1:] if abs(v) > eps), math.inf)
 
     def _judged_angle(self, angle: float, candidates: list[Reading | None], interrupted: bool) -> tuple[bool, str]:
         """The angle rule for a turn that may have been decided on any of ``candidates`` (the side may follow any
