@@ -87,10 +87,45 @@ def test_the_verdict_file_and_the_exit_code_say_the_same(passed: bool, missing: 
         audit=SimpleNamespace(findings=lambda exclude: [], parameter_findings=lambda: missing),
         judge=SimpleNamespace(results=lambda: dict(results), t0=1.0), not_started=None,
         required_parameters=("safety_distance",), findings=[], timed_out=False, foreign=None, config=Config(),
-        wall_start=0.0, calls=[], get_logger=lambda: None)
+        wall_start=0.0, calls=[], get_logger=lambda: None, started=True)
     JudgeNode._write_json(judge, ["overall: PASSED" if passed else "overall: FAILED"])
     written = json.loads((tmp_path / "v.json").read_text())
     assert judge.exit_code == code and written["exit_code"] == code and written["passed"] is (code == 0)
     assert _verdict_code(tmp_path / "v.json") == code
     assert _verdict_code(tmp_path / "absent.json") == 2
     capsys.readouterr()
+
+
+def test_a_run_never_started_reports_the_robots_own_motion_and_no_check_passes(tmp_path) -> None:
+    """A node that never offered the service: the verdict file carries what the robot did from ground truth (not
+    the schedule's zeros), and none of the schedule's checks over no data (``no collision: PASSED``)."""
+    import json
+    from dataclasses import dataclass
+
+    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav_sim.unjudged import FreeMotion
+    from bt_nav_sim.world import world_from_dict
+
+    @dataclass
+    class Config:
+        rate_hz: float = 2.0
+
+    free = FreeMotion()
+    for k in range(101):  # 10 s at 0.3 m/s, a wall hit at 6 s
+        free.observe(2.0 + k * 0.1, 0.03 * k, 0.0, 0.0)
+    free.on_collision(6.0, 1.2, 0.0)
+    checkoff = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "t", "segments": []}))
+    judge = SimpleNamespace(
+        json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_FAILED, started=False, free=free,
+        audit=None, judge=checkoff, required_parameters=(), findings=[],
+        not_started="the service /toggle_navigation never appeared within 20 s wall", timed_out=False,
+        foreign=None, config=Config(), wall_start=0.0, calls=0, get_logger=lambda: None,
+        resolve_service_name=lambda name: "/toggle_navigation", activate_name="toggle_navigation")
+    judge._unjudged_checks = lambda: JudgeNode._unjudged_checks(judge)
+    JudgeNode._write_json(judge, [])
+    written = json.loads((tmp_path / "v.json").read_text())
+    assert not written["passed"] and not any(c["passed"] for c in written["checks"]), written["checks"]
+    assert [c["name"] for c in written["checks"]] == ["/toggle_navigation offered", "still while not armed",
+                                                      "no collision"]
+    assert written["travelled"] == 3.0 and written["collisions"] == 1
+    assert written["unjudged"].startswith("it moved without being armed (travelled 3.00 m")

@@ -210,7 +210,7 @@ def _verdict_row(outcome: str, reason: str, sim: Child, results_json: Path) -> d
         if verdict is None:
             reason = f"the judge's verdict could not be read (see {results_json.name} and {sim.name}.log)"
         elif verdict.get("not_started"):
-            reason = f"not judged: {verdict['not_started']}"
+            reason = "; ".join(filter(None, [f"not judged: {verdict['not_started']}", verdict.get("unjudged")]))
         elif verdict.get("timed_out"):
             reason = "the judge timed out: " + "; ".join(c["name"] for c in verdict.get("checks", [])
                                                         if not c.get("passed")) + " not met"

@@ -5,6 +5,7 @@ output kept in node.log, and no process left behind."""
 from __future__ import annotations
 
 import json
+import re
 import signal
 import sys
 from pathlib import Path
@@ -77,6 +78,21 @@ def test_a_node_that_never_offers_the_service(tmp_path: Path) -> None:
     assert row["reason"] == ("not judged: the service /reactive_control/activate never appeared within 18.3 s wall "
                              "(the node offers std_srvs/srv/SetBool as /activate)"), row["reason"]
     assert row["wall_time"] < 40.0
+    assert not any(c["passed"] for c in row["verdict"]["checks"]), row["verdict"]["checks"]
+    assert row["verdict"]["travelled"] == 0.0 and row["verdict"]["report_lines"] == [
+        "/reactive_control/activate offered (" + row["reason"].removeprefix("not judged: ") + "): FAILED"]
+
+
+def test_a_node_that_drives_without_the_service_is_told_what_its_robot_did(tmp_path: Path) -> None:
+    """Never armed, it drives on (0.3 m/s) for the judge's whole wait: the verdict gives its own ground-truth
+    motion and its collisions (the simulator's events), not ``travelled 0.00 m`` and ``no collision: PASSED``."""
+    row = _grade(tmp_path, "noservice_node.py --drive 0.3", 60)
+    verdict, sim_log = row["verdict"], (Path(row["run_dir"]) / "sim.log").read_text()
+    assert not row["passed"] and not any(c["passed"] for c in verdict["checks"]), verdict["checks"]
+    assert verdict["travelled"] > 1.0 and "it moved without being armed (travelled" in row["reason"], row["reason"]
+    logged = int(re.search(r"(\d+) collision events", sim_log).group(1))
+    assert 0 < verdict["collisions"] <= logged, (verdict["collisions"], logged)  # the simulator runs on a moment
+    assert any(line.startswith("no collision (") and line.endswith("FAILED") for line in verdict["report_lines"])
 
 
 def test_nan_commands_are_counted(tmp_path: Path) -> None:

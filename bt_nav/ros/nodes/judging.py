@@ -69,6 +69,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.unjudged import FreeMotion
 from bt_nav_sim.walkers import read_walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
@@ -218,6 +219,7 @@ class JudgeNode(QuietQosEvents, Node):
         self._truth_t: float | None = None  # stamp of the last ground truth taken (sim s)
         self.foreign: str | None = None  # why the judged messages cannot all be this run's
         self.not_started: str | None = None  # why the robot was never judged (start_wait)
+        self.free = FreeMotion()  # what the robot did before t0: the account of a run never judged
         self.findings: list[str] = []  # the audit's, at the end
         self._cmd_sub: Any = None
 
@@ -537,9 +539,10 @@ class JudgeNode(QuietQosEvents, Node):
                          yaw_from_quaternion(q.x, q.y, q.z, q.w))
 
     def _take_truth(self, t: float, x: float, y: float, yaw: float) -> None:
-        """One ground-truth pose (before t0 it only says that ground truth runs)."""
+        """One ground-truth pose (before t0: ground truth runs, and what the robot does goes to ``free``)."""
         if not self.started:
             self._truth_seen = True
+            self.free.observe(t, x, y, yaw)
             return
         self._truth_t = t
         if self.judge.t0 is not None and t < self.judge.t0:
@@ -548,15 +551,13 @@ class JudgeNode(QuietQosEvents, Node):
 
     @locked
     def _on_collision(self, msg: Any) -> None:
-        if not self.started:
-            return
         try:
             event = json.loads(msg.data)
             t, x, y = float(event["t"]), float(event["x"]), float(event["y"])
         except (ValueError, KeyError, TypeError) as exc:
             self.get_logger().warning(f"unreadable collision event {msg.data!r}: {exc}")
             return
-        self.judge.on_collision(t, x, y)
+        (self.judge if self.started else self.free).on_collision(t, x, y)
 
     @locked
     def _on_walkers(self, msg: Any) -> None:
@@ -576,8 +577,8 @@ class JudgeNode(QuietQosEvents, Node):
         timer's grid is due. Called from the simulator's loop thread."""
         self._fed_ns = t_ns
         t = t_ns * 1e-9
-        if collision is not None and self.started:
-            self.judge.on_collision(t, *collision)
+        if collision is not None:
+            (self.judge if self.started else self.free).on_collision(t, *collision)
         if walkers is not None and hasattr(self.judge, "on_walkers"):
             self.judge.on_walkers(t, walkers)
         if truth is not None:
@@ -611,8 +612,20 @@ class JudgeNode(QuietQosEvents, Node):
         hint = self.audit.service_hint() if self.audit is not None and self.activate_name in missing else ""
         self.not_started = f"{' and '.join(what)} never appeared within {self.start_wait:g} s wall{hint}"
         print(f"NOT JUDGED: {self.not_started}")
+        lines = self._unjudged_lines()
+        for line in lines:
+            print(line)
         sys.stdout.flush()
-        self._write_json([], exclude=("service",) if self.activate_name in missing else ())
+        self._write_json(lines, exclude=("service",) if self.activate_name in missing else ())
+
+    def _unjudged_checks(self) -> list[dict[str, Any]]:
+        """The checks of a run whose schedule never began: the service's absence and what the robot did meanwhile
+        (from ground truth), never the schedule's checks over no data (they would pass vacuously)."""
+        why = self.not_started or "the run ended before t0"
+        return self.free.checks(self.resolve_service_name(self.activate_name), why)
+
+    def _unjudged_lines(self) -> list[str]:
+        return [f"{c['name']} ({c['detail']}): FAILED" for c in self._unjudged_checks()]
 
     def _give_up(self) -> None:
         self.leave()
@@ -626,7 +639,7 @@ class JudgeNode(QuietQosEvents, Node):
             lines = []
         else:
             print(f"TIMEOUT: no verdict after {self.timeout:g} s wall, {state}; provisional report:")
-            lines = self.judge.report_lines()
+            lines = self.judge.report_lines() if self.started else self._unjudged_lines()
         for line in lines:
             print(line)
         sys.stdout.flush()
@@ -642,8 +655,9 @@ class JudgeNode(QuietQosEvents, Node):
         if not self.json_path:
             return
         results = dict(self.judge.results())
-        if self.not_started is not None:
-            results["passed"] = False
+        if not self.started:  # no schedule ran: the figures are the robot's own, from ground truth
+            results.update(self.free.results(), checks=self._unjudged_checks(), passed=False,
+                           unjudged=self.free.summary())
         missing = self.audit.parameter_findings() if self.audit is not None else []
         if missing:  # the check-off's `ros2 param list` step failed
             results["checks"] = [*results["checks"], {
