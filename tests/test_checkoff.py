@@ -442,3 +442,28 @@ def test_the_creep_sent_while_an_open_loop_turn_coasts_is_moving_on_not_forward_
     during = coast[:2] + [(0.60, 0.0, 2.0), (0.10, 0.05, 2.0)] + coast[3:]
     judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), during, accel=5.0)
     assert not judge.passed and "drove forward during the turn" in " ".join(judge.report_lines())
+
+
+def test_a_refused_disarm_is_named_a_refusal() -> None:
+    """toggle_navigation(false) answered with success false: "refused", with the node's own message, never "false
+    never answered"."""
+    judge = CheckoffJudge(_cfg("C"), C_WORLD)
+    judge.start(0.0)
+    for k in range(0, 70):
+        t = k * 0.5
+        for action in judge.step(t):
+            judge.on_activate_result(t, action.data, bool(action.data), message="" if action.data else "busy")
+        judge.observe(t, 0.0, 0.0, 0.0)
+    line = _line(judge, "toggle_navigation answered")
+    assert "toggle_navigation(false) refused" in line and "('busy')" in line and "never answered" not in line, line
+
+
+def test_the_forward_rule_speaks_in_figures_that_agree() -> None:
+    """No forward command but motion is said as such, never "commanded up to 0.00 m/s, moved 0.02 m"."""
+    from bt_nav_sim.checkoff_core import _forward_text
+
+    rolled = _forward_text({"forward_command": 0.0, "forward_motion": 0.0213})
+    assert rolled.startswith("moved 0.021 m during the turn (ground truth) though none of its commands asked for "
+                             "forward speed") and "commanded up to" not in rolled
+    assert _forward_text({"forward_command": 0.004, "forward_motion": 0.0})[:52] == \
+        "drove forward during the turn (commanded up to 0.004"

@@ -8,6 +8,7 @@ every check on its own.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import pytest
@@ -252,3 +253,24 @@ def test_a_step_on_a_schedule_time_acts_whatever_the_float_error_of_t0() -> None
     judge = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
     judge.start(t0)
     assert judge.step(t) == [Activate(True)]  # activate_at 5 s
+
+
+def test_an_activation_refused_for_good_is_named_a_refusal_not_silence() -> None:
+    """A node that answers every activate(true) with success false never drives: the distance checks say it was
+    refused (and how often), not merely that the robot did not travel."""
+    ref = run(Robot(refuse_first_activations=10_000, evaluate_at=None))
+    detail = {c["name"]: c["detail"] for c in ref.results()["checks"]}
+    assert "minimum travelled distance" in failed(ref)
+    assert re.search(r"travelled \d\.\d\d m, required 8\.0 m \(activate\(true\) refused \d+ times: the node answered "
+                     r"success false\)", detail["minimum travelled distance"]), detail
+
+
+def test_an_unanswered_activation_is_named_silence_not_a_refusal() -> None:
+    ref = Referee(RefereeConfig())
+    ref.start(0.0)
+    for k in range(0, 30):
+        for action in ref.step(k * 0.5):
+            ref.on_activate_result(k * 0.5, action.data, False, answer="unanswered")
+        ref.observe(k * 0.5, 0.0, 0.0, 0.0)
+    assert ref.answers.failed_text("activate", True).startswith("activate(true) never answered (")
+    assert "calls unanswered" in ref.answers.failed_text("activate", True)

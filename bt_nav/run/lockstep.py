@@ -71,7 +71,7 @@ class RefereeLike(Protocol):
 
     def start(self, t0: float) -> None: ...  # noqa: D102
     def step(self, t: float) -> list[Any]: ...  # noqa: D102
-    def on_activate_result(self, t: float, data: bool, ok: bool) -> None: ...  # noqa: D102
+    def on_activate_result(self, t: float, data: bool, ok: bool, answer: str = ..., message: str = ...) -> None: ...  # noqa: D102, E501
     def observe(self, t: float, x: float, y: float, yaw: float) -> None: ...  # noqa: D102
     def on_collision(self, t: float, x: float, y: float) -> None: ...  # noqa: D102
     def on_evaluate(self, t: float) -> tuple[bool, str]: ...  # noqa: D102
@@ -176,7 +176,7 @@ class Robot:
         t = self.clock.now
         for action in self.referee.step(t):
             ok, message = self.core.request_arm(action.data)
-            self.referee.on_activate_result(t, action.data, ok)
+            self.referee.on_activate_result(t, action.data, ok, message=message)
             self.events.info(f"referee: activate({str(action.data).lower()}) -> {ok}: {message}")
 
     def tick(self) -> None:

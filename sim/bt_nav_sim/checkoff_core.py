@@ -50,7 +50,7 @@ import numpy as np
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
-from bt_nav_sim.referee_core import Activate, Verdict, since_t0, static_check
+from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
@@ -141,6 +141,16 @@ class CheckoffConfig:
         return (f"held: {what} < {loose:.2f} m{c} + {self.trigger_margin:.2f} m by any of the "
                 f"{self.family().describe()}; late: only once every one of them read < {tight:.2f} m")
 
+    def angle_rule(self, side: str = "either side") -> str:
+        """The maneuver's angle rule in words, as a maneuver line and the rules page (bt-nav rules) say it; ``side``
+        is C's (where its readings put the clearer side), A and B turn either way."""
+        tol = self.angle_tolerance_deg
+        if self.maneuver == "A":
+            return f"{90 - tol:.0f}-{180 + tol:.0f} deg either side"
+        if self.maneuver == "B":
+            return f"180 +- {tol:.0f} deg either side"
+        return f"90 +- {tol:.0f} deg {side}"
+
 
 #: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
 CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers performed", "maneuver",
@@ -176,6 +186,7 @@ class CheckoffJudge(Verdict):
         self.max_distance = 0.0
         self.activation_requested: float | None = None
         self.activated: float | None = None
+        self.answers = ServiceAnswers()
         self.deactivation_requested: float | None = None
         self.deactivated: float | None = None
         self.evaluation_calls = 0
@@ -207,8 +218,11 @@ class CheckoffJudge(Verdict):
             return [] if self.activated is not None else [Activate(True)]
         return []
 
-    def on_activate_result(self, t: float, data: bool, success: bool) -> None:
-        """The answer to an :class:`Activate` action (``success`` False also for a failed call)."""
+    def on_activate_result(self, t: float, data: bool, success: bool, answer: str = ANSWERED,
+                           message: str = "") -> None:
+        """The answer to an :class:`Activate` action (``success`` False also for a failed call: ``answer`` says
+        whether a response came, ``message`` is the node's)."""
+        self.answers.record(data, success, answer, message)
         if not success:
             return  # step() asks again
         if data and self.activated is None and self.deactivation_requested is None:
@@ -570,12 +584,12 @@ class CheckoffJudge(Verdict):
         cfg = self.config
         tol, size = cfg.angle_tolerance_deg, abs(angle)
         if cfg.maneuver == "A":
-            return 90 - tol <= size <= 180 + tol, f"{90 - tol:.0f}-{180 + tol:.0f} deg either side"
+            return 90 - tol <= size <= 180 + tol, cfg.angle_rule()
         if cfg.maneuver == "B":
-            return abs(size - 180) <= tol, f"180 +- {tol:.0f} deg either side"
+            return abs(size - 180) <= tol, cfg.angle_rule()
         side = self._clearer_side(r)
         side_ok = side == "either side" or (side == "left") == (angle > 0)
-        return abs(size - 90) <= tol and side_ok, f"90 +- {tol:.0f} deg {side}"
+        return abs(size - 90) <= tol and side_ok, cfg.angle_rule(side)
 
     def _clearer_side(self, r: Reading | None) -> str:
         """C's side: "left" or "right" where every reasonable reading of the two sides (:class:`Reading`'s
@@ -659,10 +673,12 @@ class CheckoffJudge(Verdict):
     def _answered_check(self) -> dict[str, Any]:
         """Both toggle_navigation calls (true, then false) were answered with success."""
         t0 = self.t0 or 0.0
-        parts = [f"true at t={self.activated - t0:.2f} s" if self.activated is not None else "true never answered"]
+        name = "toggle_navigation"
+        parts = [f"true at t={self.activated - t0:.2f} s" if self.activated is not None
+                 else self.answers.failed_text(name, True)]
         if self.deactivation_requested is not None:
             parts.append(f"false at t={self.deactivated - t0:.2f} s" if self.deactivated is not None
-                         else "false never answered")
+                         else self.answers.failed_text(name, False))
         ok = self.activated is not None and self.deactivated is not None
         return {"name": "toggle_navigation answered", "passed": ok, "value": ok, "required": "true, then false",
                 "detail": ", ".join(parts)}
@@ -677,6 +693,17 @@ class CheckoffJudge(Verdict):
 
 #: The lab's names of the maneuvers.
 MANEUVER_NAMES = {"A": "the Randomizer", "B": "the Retreat", "C": "the Smart Pivot"}
+
+
+def _forward_text(e: dict[str, Any]) -> str:
+    """Why a turn failed the forward rule, in figures that agree with each other: a forward command during it, or
+    (none commanded) the ground truth's motion alone."""
+    rule = "the check-off allows no forward motion during a maneuver"
+    if e["forward_command"] > 0.0:
+        speed = f"{e['forward_command']:.2f}" if e["forward_command"] >= 0.01 else f"{e['forward_command']:.3f}"
+        return f"drove forward during the turn (commanded up to {speed} m/s, moved {e['forward_motion']:.2f} m); {rule}"
+    return (f"moved {e['forward_motion']:.3f} m during the turn (ground truth) though none of its commands asked for "
+            f"forward speed: stop fully before turning; {rule}")
 
 
 def _readings_text(e: dict[str, Any], maneuver: str = "") -> str:
@@ -703,8 +730,7 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
     if not e["angle_ok"]:
         out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}")
     if not e["forward_ok"]:
-        out.append(f"drove forward during the turn (commanded up to {e['forward_command']:.2f} m/s, moved "
-                   f"{e['forward_motion']:.2f} m); the check-off allows no forward motion during a maneuver")
+        out.append(_forward_text(e))
     if not e["moved_on"]:
         out.append(f"did not move on after the turn ({e['moved_on_detail']})")
     return out

@@ -34,7 +34,7 @@ when no pair lying inside it moves; "static at the end" looks at the last ``wind
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from bt_nav.mission.geometry import wrap_angle  # the +-pi seam is not a 2 pi jump
@@ -77,6 +77,39 @@ class Activate:
     """An action for the driver: call the robot's activate (SetBool) service with ``data``."""
 
     data: bool
+
+
+#: How an activate call ended, as the driver saw it: a response came (``success`` says armed or refused), none came
+#: in time, the service was not there, or the call raised.
+ANSWERED, UNANSWERED, UNAVAILABLE = "answered", "unanswered", "unavailable"
+
+
+@dataclass
+class ServiceAnswers:
+    """What came back from the robot's activate service for each request (``data`` True/False): a refusal (a
+    response with ``success`` False) is not silence, and a student must read which it was."""
+
+    refused: dict[bool, int] = field(default_factory=lambda: {True: 0, False: 0})
+    refusal: dict[bool, str] = field(default_factory=dict)  # the node's last message with a refusal
+    silent: dict[bool, dict[str, int]] = field(default_factory=lambda: {True: {}, False: {}})
+
+    def record(self, data: bool, success: bool, answer: str = ANSWERED, message: str = "") -> None:
+        if answer != ANSWERED:
+            self.silent[data][answer] = self.silent[data].get(answer, 0) + 1
+        elif not success:
+            self.refused[data] += 1
+            self.refusal[data] = message
+
+    def failed_text(self, name: str, data: bool) -> str:
+        """Why ``name(data)`` never succeeded: ``toggle_navigation(false) refused 3 times ('busy')``, ``... never
+        answered (2 calls unanswered)``, or ``... never answered`` when it was not even asked."""
+        call = f"{name}({str(data).lower()})"
+        if self.refused[data]:
+            n = self.refused[data]
+            said = f" ({self.refusal[data]!r})" if self.refusal.get(data) else ""
+            return f"{call} refused {n} time{'s' if n != 1 else ''}{said}: the node answered success false"
+        silent = ", ".join(f"{n} call{'s' if n != 1 else ''} {how}" for how, n in self.silent[data].items())
+        return f"{call} never answered" + (f" ({silent})" if silent else "")
 
 
 #: Check names, in report order.
@@ -164,6 +197,7 @@ class Referee(Verdict):
         self.report_time: float | None = None
         self._resend_false = False
         self._results: dict[str, Any] | None = None
+        self.answers = ServiceAnswers()
 
     # ------------------------------------------------------------------ driver inputs
     def start(self, t0: float) -> None:
@@ -204,8 +238,11 @@ class Referee(Verdict):
         return True, (f"evaluation requested at t={self._rel(t):.2f} s; the robot must stay static, "
                       f"report in {self.config.settle_after_call:.0f} s")
 
-    def on_activate_result(self, t: float, data: bool, success: bool) -> None:
-        """The answer to an :class:`Activate` action (``success`` False also for a failed call)."""
+    def on_activate_result(self, t: float, data: bool, success: bool, answer: str = ANSWERED,
+                           message: str = "") -> None:
+        """The answer to an :class:`Activate` action (``success`` False also for a failed call: ``answer`` says
+        whether a response came, ``message`` is the node's)."""
+        self.answers.record(data, success, answer, message)
         if data:
             if not success:
                 return  # step() asks again
@@ -265,6 +302,18 @@ class Referee(Verdict):
         """(peak planar speed, peak turn rate, pairs seen) over sample pairs lying inside [start, end]."""
         return peak_motion(self._t, self._x, self._y, self._yaw, start, end)
 
+    def _name_unanswered(self, checks: list[dict[str, Any]]) -> None:
+        """A failed check whose cause is the service's answer says so: never armed (the distances), or the
+        deactivation not taken (the stop after it): refused or never answered, as it was."""
+        causes = {}
+        if self.activation_requested is not None and self.activated is None:
+            causes.update(dict.fromkeys(("minimum distance from start", "minimum travelled distance"), True))
+        if self.deactivation_requested is not None and self.deactivated is None:
+            causes["static after deactivation"] = False
+        for check in checks:
+            if not check["passed"] and check["name"] in causes:
+                check["detail"] += f" ({self.answers.failed_text('activate', causes[check['name']])})"
+
     def _static_check(self, name: str, start: float | None, end: float | None, missing: str) -> dict[str, Any]:
         """A "must be static over [start, end]" check (see :func:`static_check`)."""
         cfg = self.config
@@ -300,6 +349,7 @@ class Referee(Verdict):
                        "detail": f"{n} collision{'s' if n != 1 else ''}"
                        + ("" if not n else " at " + ", ".join(f"t={c[0] - t0:.1f} s ({c[1]:.2f}, {c[2]:.2f})"
                                                             for c in self.collisions[:5]))})
+        self._name_unanswered(checks)
         return {
             "passed": all(c["passed"] for c in checks),
             "checks": checks,

@@ -69,6 +69,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.referee_core import ANSWERED, UNANSWERED, UNAVAILABLE
 from bt_nav_sim.unjudged import FreeMotion
 from bt_nav_sim.walkers import read_walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
@@ -432,7 +433,7 @@ class JudgeNode(QuietQosEvents, Node):
         if not self.activate_client.service_is_ready():
             self.get_logger().warning(f"{self.activate_name} unavailable: {self.call_name}({data}) failed",
                                       throttle_duration_sec=5.0)
-            self.judge.on_activate_result(now, data, False)
+            self.judge.on_activate_result(now, data, False, UNAVAILABLE)
             return
         self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) sent")
         self._send(data, attempt=1)
@@ -463,7 +464,7 @@ class JudgeNode(QuietQosEvents, Node):
         message = "" if response is None else str(response.message)
         self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) -> "
                                f"{'success' if success else 'failure'}: {message}")
-        self.judge.on_activate_result(now, data, success)
+        self.judge.on_activate_result(now, data, success, ANSWERED if response is not None else UNANSWERED, message)
 
     def _expire_calls(self) -> None:
         """Resend a request unanswered for ``call_timeout`` wall seconds (sim time stays held), up to
@@ -485,7 +486,7 @@ class JudgeNode(QuietQosEvents, Node):
                 continue
             self._heartbeat()
             self.get_logger().warning(f"{self.call_name}({data}) unanswered after {attempt} attempts")
-            self.judge.on_activate_result(self.now(), data, False)
+            self.judge.on_activate_result(self.now(), data, False, UNANSWERED)
 
     def _heartbeat(self) -> None:
         """Tell the simulator where this node's clock is and whether a call is in flight."""
