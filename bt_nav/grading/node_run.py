@@ -203,12 +203,18 @@ def _wait(sim: Child, node: Child, limit: float, stop: StopRequest | None, start
     return "timeout", f"no verdict within {limit:g} s wall"
 
 
+#: The outcome of an attempt that found its domain shared; how many times a run moves to another domain.
+SHARED_DOMAIN, DOMAIN_MOVES = "shared domain", 3
+
+
 def _verdict_row(outcome: str, reason: str, sim: Child, results_json: Path) -> dict[str, Any]:
     """``passed``, ``reason`` and the judge's JSON (when it wrote one) of a finished run."""
     verdict = read_verdict(results_json)
     if outcome == "verdict":
         if verdict is None:
             reason = f"the judge's verdict could not be read (see {results_json.name} and {sim.name}.log)"
+        elif verdict.get("foreign"):
+            outcome, reason = SHARED_DOMAIN, f"no verdict: {verdict['foreign']}"
         elif verdict.get("not_started"):
             reason = "; ".join(filter(None, [f"not judged: {verdict['not_started']}", verdict.get("unjudged")]))
         elif verdict.get("timed_out"):
@@ -270,9 +276,44 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     ``on_start`` is called with the run's domain and directory before any process starts (the demo's clock node);
     ``on_verdict`` once the run's outcome is known, before its processes are stopped (the grid's next run may start
     while this one shuts down: stopping is waiting, not work).
+
+    A program that is not the run's on its domain (:mod:`bt_nav.ros.domain_guard`) ends the attempt without a
+    verdict; the run starts again on another domain (the shared one held until the job ends, so no attempt picks it
+    again), up to :data:`DOMAIN_MOVES` times, and its row's ``notes`` say so.
     """
     low, high = launcher_domains()
-    domain = claim_domain_id(low, high, start=hash(job.key))
+    shared: list[int] = []  # the domains claimed: the last the run's, the others found shared
+    moves: list[str] = []
+    try:
+        while True:
+            domain = claim_domain_id(low, high, start=hash(job.key) + len(moves))
+            shared.append(domain)  # held until the job ends
+            row = _attempt(job, settings, domain, stop, sink, on_start, on_verdict)
+            if row["outcome"] != SHARED_DOMAIN or len(moves) >= DOMAIN_MOVES:
+                break
+            aside = _set_aside(Path(row["run_dir"]))
+            moves.append(f"{row['reason']}: the run started again on another domain (that attempt: {aside})")
+    finally:
+        for domain in shared:
+            release_domain_id(domain)
+    if moves:
+        row["notes"] = [*moves, *row.get("notes", [])]
+        (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
+    return row
+
+
+def _set_aside(run_dir: Path) -> Path:
+    """Move an abandoned attempt's directory out of the run's name (kept: its logs show the other program)."""
+    aside = make_run_dir(run_dir.parent, f"{run_dir.name}.shared-domain")
+    aside.rmdir()
+    run_dir.rename(aside)
+    return aside
+
+
+def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | None,
+             sink: Callable[[str, str], None] | None, on_start: Callable[[int, Path], None] | None,
+             on_verdict: Callable[[], None] | None) -> dict[str, Any]:
+    """One attempt of a run on ``domain``: its processes, its verdict, its row."""
     lidar = f"_{job.lidar}" if job.lidar else ""
     run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}{lidar}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
@@ -307,7 +348,6 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         launcher.shutdown(grace=STOP_GRACE, together=True, first=node,
                           after_first=recorder.stop if recorder is not None else None)
         logs.close()
-        release_domain_id(domain)
     if row["outcome"] != "stopped":  # a run bt_nav stopped says only that: how its node ended is not the node's
         findings, notes = _ending_findings(node, run_dir / "node.log")
         _with_findings(row, findings)

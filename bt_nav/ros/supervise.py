@@ -42,6 +42,7 @@ from types import FrameType
 from typing import IO, Any, Protocol
 
 from bt_nav.mission.resources import written_whole
+from bt_nav.ros.domain_guard import RUN_MARK_ENV, run_mark
 
 # ---------------------------------------------------------------------------------------------- DDS env
 #: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
@@ -180,9 +181,11 @@ def discovery_profile() -> Path:
 
 
 def child_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:
-    """:func:`dds_env` for a launched node: also unbuffered, uncoloured output (it is piped), and
-    :data:`DISCOVERY_PROFILE` unless the user named a Fast DDS profile of their own."""
+    """:func:`dds_env` for a launched node: also unbuffered, uncoloured output (it is piped),
+    :data:`DISCOVERY_PROFILE` unless the user named a Fast DDS profile of their own, and the run's mark
+    (:mod:`bt_nav.ros.domain_guard`: a participant on the domain without it is not the run's)."""
     env = dds_env(domain_id, base)
+    env[RUN_MARK_ENV] = run_mark(domain_id)  # the run's own processes, told from others on its domain
     env["PYTHONUNBUFFERED"] = "1"
     env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
     if not any(env.get(name) for name in PROFILE_VARIABLES):

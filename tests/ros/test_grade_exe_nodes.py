@@ -168,3 +168,40 @@ def test_a_missing_module_in_the_node_log_is_named(tmp_path: Path) -> None:
     assert found.startswith("the node could not import rclpy (ModuleNotFoundError)")
     log.write_text("all fine\n")
     assert _ending_findings(None, log) == ([], [])
+
+
+def test_a_run_whose_domain_another_program_uses_moves_and_says_so(tmp_path: Path) -> None:
+    """A program that is not the run's sits on the first domain the run claims (a talker publishing cmd_vel, as
+    someone's shell with a fixed ROS_DOMAIN_ID would): the run is not blamed on the node; it starts again on another
+    domain, passes there, and its row says why it moved."""
+    import os
+    import subprocess
+
+    from bt_nav.grading.grid import Job
+    from bt_nav.run.settings import DEFAULT_JITTER
+
+    low = 150 + os.getpid() % 40  # three domains: the first the run claims (hash of its key) is the talker's
+    key = Job("lab_object", "C", 0, "lab", jitter=DEFAULT_JITTER, sim_params=(("lidar", "lds01"),)).key
+    seed = next(s for s in range(100) if subprocess.run(
+        [sys.executable, "-c", f"print(hash({key!r}) % 3)"], env={**os.environ, "PYTHONHASHSEED": str(s)},
+        capture_output=True, text=True).stdout.strip() == "0")
+    talker = subprocess.Popen([sys.executable, str(FIXTURES / "noservice_node.py")],
+                              env={**os.environ, "ROS_DOMAIN_ID": str(low)}, start_new_session=True)
+    try:
+        out = tmp_path / "grid"
+        subprocess.run([sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--exe",
+                        f"{sys.executable} {FIXTURES / 'lab_student_node.py'} --variant c_stands_05",
+                        "--worlds", "lab_object", "--maneuvers", "C", "--lidars", "lds01", "--seeds", "1",
+                        "--realtime-check", "off", "--record", "off", "--out", str(out)],
+                       env={**os.environ, "PYTHONHASHSEED": str(seed), "BT_NAV_DOMAIN_RANGE": f"{low}-{low + 2}"},
+                       check=False, timeout=240)
+    finally:
+        talker.terminate()
+        talker.wait(10)
+    [row] = json.loads((out / "grade.json").read_text())["runs"]
+    assert row["job"] == key, "the job's key changed: the test no longer knows which domain the run claims first"
+    assert row["passed"] and row["domain"] != low, row["reason"]
+    [move] = row["notes"]
+    assert move.startswith(f"no verdict: another program is on ROS_DOMAIN_ID {low}: node reactive_control of pid "
+                           f"{talker.pid} ("), move
+    assert "the run started again on another domain" in move

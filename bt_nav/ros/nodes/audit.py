@@ -34,6 +34,8 @@ from geometry_msgs.msg import Twist, TwistStamped
 from rclpy.node import Node
 from rclpy.qos import QoSCompatibility, QoSProfile, ReliabilityPolicy, qos_check_compatible
 
+from bt_nav.ros.domain_guard import DomainGuard
+
 #: Commands per sim second beyond any controller (bt_nav's executive sends 20, the homework's suggested 10).
 FLOOD_RATE = 1000.0
 #: Wall seconds between two looks at the graph.
@@ -126,6 +128,7 @@ class GraphAudit:
         self._reader: Any = None
         self._reader_failed = False
         self._last = -math.inf
+        self.guard = DomainGuard()  # every endpoint's process: the run's own, or another program's
 
     # -------------------------------------------------------------- sampling
     def sample(self, force: bool = False) -> None:
@@ -175,6 +178,8 @@ class GraphAudit:
         for topic, _ in self.node.get_topic_names_and_types():
             publishers = self.node.get_publishers_info_by_topic(topic)
             subscriptions = self.node.get_subscriptions_info_by_topic(topic)
+            for endpoint in (*publishers, *subscriptions):
+                self.guard.see(endpoint)
             # An endpoint discovered before its node's name is nobody's yet: the next sample names it.
             publishers = [e for e in publishers if e.node_name != UNKNOWN_NODE]
             subscriptions = [e for e in subscriptions if e.node_name != UNKNOWN_NODE]
