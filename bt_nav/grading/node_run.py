@@ -223,7 +223,8 @@ def _verdict_row(outcome: str, reason: str, sim: Child, results_json: Path) -> d
         else:
             reason = "passed" if verdict.get("passed") else failure_reason(verdict.get("checks", []))
     passed = outcome == "verdict" and verdict is not None and bool(verdict.get("passed"))
-    findings = list(verdict.get("findings") or []) if verdict is not None else []
+    # an attempt on a shared domain says nothing of the node (the audit saw the other program's endpoints too)
+    findings = list(verdict.get("findings") or []) if verdict is not None and outcome != SHARED_DOMAIN else []
     return _with_findings({"passed": passed, "outcome": outcome, "reason": reason, "verdict": verdict}, findings)
 
 
@@ -348,7 +349,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         launcher.shutdown(grace=STOP_GRACE, together=True, first=node,
                           after_first=recorder.stop if recorder is not None else None)
         logs.close()
-    if row["outcome"] != "stopped":  # a run bt_nav stopped says only that: how its node ended is not the node's
+    if row["outcome"] not in ("stopped", SHARED_DOMAIN):  # how its node ended is not the node's to answer for
         findings, notes = _ending_findings(node, run_dir / "node.log")
         _with_findings(row, findings)
         if notes:

@@ -26,6 +26,8 @@ RUN_MARK_ENV = "BT_NAV_RUN"
 #: Node names of passive observers any run may meet on its domain: the ros2 CLI's daemon (started by the first
 #: ``ros2`` command on a domain, it outlives that run and only watches the graph).
 PASSIVE_PREFIX = "_ros2cli"
+#: rclpy's name of an endpoint whose node is not discovered yet.
+UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"
 #: Fast DDS's vendor id, the first two bytes of every GUID it makes.
 FAST_DDS_VENDOR = b"\x01\x0f"
 
@@ -94,8 +96,9 @@ class DomainGuard:
             return  # no such process (any more): ask again at the next sighting
         self._known[pid16] = verdict[0]
         if verdict[0]:
-            pid = verdict[1]
-            self.foreign[pid16] = f"node {endpoint.node_name or '?'} of pid {pid} ({_cmdline(pid, self.proc)})"
+            pid, name = verdict[1], str(endpoint.node_name or "")
+            who = f"node {name}" if name and name != UNKNOWN_NODE else "a participant"  # named at a later sighting
+            self.foreign[pid16] = f"{who} of pid {pid} ({_cmdline(pid, self.proc)})"
 
     def _classify(self, pid16: int) -> tuple[bool, int] | None:
         """(foreign, pid) of the process behind ``pid16``; None when no process here has that pid."""
