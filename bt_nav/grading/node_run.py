@@ -7,9 +7,10 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
 - the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
   truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second (the node's sim-time
   timers tick that much faster too) and *paced to the node* (``follow``, :data:`FOLLOW_NODE`): the node's
-  ``cmd_vel`` publisher is a follower, so sim time never runs more than a scan period or a 5 Hz tick
-  (:func:`node_lead`) ahead of its latest command. A node starved of CPU on a busy machine then finds the world where it
-  left it instead of a turn 20 deg further on, and its verdict does not depend on the load. A node silent for
+  ``cmd_vel`` publisher is a follower, so sim time never runs more than 0.05 s (or the node's own command period)
+  ahead of its latest command, except to publish the next scan the node answers (:data:`FOLLOW_NODE`). A node
+  starved of CPU on a busy machine then finds the world where it left it instead of a turn 20 deg further on,
+  and its verdict does not depend on the load. A node silent for
   ``follower_timeout`` wall seconds (before its arming, after its stop, one that publishes only on change) is not
   waited for until it publishes again, so the pace costs such a node a second of wall time, never its verdict.
   ``cmd_vel`` is read best effort, which hears reliable and best-effort writers alike;
@@ -133,34 +134,17 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
     return args
 
 
-#: The simulator's pacing for a graded node (see the module docstring): its ``cmd_vel`` is followed, a silence of
-#: ``follower_timeout`` wall seconds ends the wait; ``max_lag`` is set per run (:func:`node_lead`).
-FOLLOW_NODE: dict[str, Any] = {"follow": True, "cmd_vel_reliability": "best_effort", "follower_timeout": 1.0}
-#: Sim seconds the lead allows beyond the longest command period (a node's answer to a scan comes a little after it).
-LEAD_MARGIN = 0.05
-#: The slowest command rate a right node may use (a 5 Hz control timer, the LDS-01's scan rate), as a period.
-SLOWEST_PERIOD = 0.2
-
-
-def node_lead(job: Job, profile: str) -> float:
-    """How far sim time may lead a graded node's latest command (sim s): the longer of its LiDAR's longest scan
-    period and :data:`SLOWEST_PERIOD`, plus :data:`LEAD_MARGIN`. A node that publishes from its scan callback or
-    a 5 Hz timer can publish nothing before its next scan or tick, so any shorter lead would hold sim time until
-    the node is given up for silent (a 5 Hz timer behind a 10 Hz LiDAR's lead was, before every message); a node
-    on a faster timer or on odometry is held at this lead, which bounds what a starved node misses."""
-    from bt_nav_sim.core import profile as sim_profile
-    from bt_nav_sim.lidar import lidar_model
-    from bt_nav_sim.world import load_world
-
-    name = job.lidar or load_world(job.world).lidar
-    model = lidar_model(name) if name else sim_profile(profile).lidar
-    return round(max((1.0 + model.speed_spread) / model.rate_hz, SLOWEST_PERIOD) + LEAD_MARGIN, 4)
+#: The simulator's pacing for a graded node (see the module docstring): its ``cmd_vel`` is followed (at most
+#: ``max_lag`` sim s past its latest command or its own command period, and in any case until the next scan it
+#: answers is out: :class:`bt_nav_sim.pacing.Followers`), a silence of ``follower_timeout`` wall seconds ends the wait.
+FOLLOW_NODE: dict[str, Any] = {"follow": True, "cmd_vel_reliability": "best_effort", "follower_timeout": 1.0,
+                               "max_lag": 0.05}
 
 
 def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
     lab = settings.profile == "lab"
-    sim: dict[str, Any] = {**FOLLOW_NODE, "max_lag": node_lead(job, settings.profile), "cmd_vel_stamped": False}
+    sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
     sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them

@@ -227,6 +227,10 @@ class SimCore:
                 self._next_odom_ns += self.odom_period_ns
         return out
 
+    def scan_after_ns(self, t_ns: int) -> int:
+        """When the first scan after sim ``t_ns`` is due (scans fall on the grid of :attr:`scan_period_ns`)."""
+        return (int(t_ns) // self.scan_period_ns + 1) * self.scan_period_ns
+
     def scan(self) -> np.ndarray:
         """A scan from the current true pose (noise and dropouts from the seeded stream)."""
         s = self.state

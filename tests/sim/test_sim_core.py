@@ -84,7 +84,8 @@ def test_followers_bound_the_lead_and_time_out() -> None:
     assert f.blocking(1060 * MS, wall=1.2) == (None, ["cmd_vel"])  # silent too long: dropped
     assert not f.any_active()
     assert f.report("cmd_vel", 1070 * MS, False, wall=1.3)  # speaks again: rejoins
-    assert f.blocking(1150 * MS, wall=1.3) == ("cmd_vel", [])  # the 70 ms across its silence is its period now
+    assert f.blocking(1190 * MS, wall=1.3) == (None, [])  # the 70 ms across its silence is its period now
+    assert f.blocking(1200 * MS, wall=1.3) == ("cmd_vel", [])  # (plus the 50 ms lead)
 
 
 def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() -> None:
@@ -95,17 +96,36 @@ def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() 
     f.report("cmd_vel", 1000 * MS, False, wall=0.0)
     assert f.blocking(1160 * MS, wall=1.1) == (None, ["cmd_vel"])
     f.report("cmd_vel", 1200 * MS, False, wall=1.2)
-    assert f.lead_ns("cmd_vel") == 200 * MS and f.blocking(1400 * MS, wall=1.2) == (None, [])
+    assert f.lead_ns("cmd_vel") == 350 * MS and f.blocking(1400 * MS, wall=1.2) == (None, [])
 
 
 def test_followers_learn_a_longer_period() -> None:
     f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
     for k in range(5):  # a 10 Hz follower
         f.report("slow", k * 100 * MS, False, wall=0.0)
-    assert f.lead_ns("slow") == 100 * MS
+    assert f.lead_ns("slow") == 150 * MS  # its period and the lead
     assert f.blocking(500 * MS, wall=0.0) == (None, [])
     f.report("slow", 520 * MS, False, wall=0.0)  # one short gap: the shortest gap wins
-    assert f.lead_ns("slow") == 100 * MS
+    assert f.lead_ns("slow") == 150 * MS
+    f.report("slow", 610 * MS, False, wall=0.0)  # an arrival 20 ms late shortens the next gap: still led past it
+    assert f.blocking(610 * MS + 140 * MS, wall=0.0) == (None, [])
+
+
+def test_a_node_answering_its_scans_is_led_until_the_next_scan_is_out_and_no_further() -> None:
+    """A robot's cmd_vel follower answers a 5 Hz LiDAR (scans every 200 ms): sim time may run on to the next scan
+    after its latest command plus the small lead (never giving it up for silent while it waits for that scan), and
+    past that only once it has answered; a node on a fast timer is held at the small lead in between (its turns,
+    timed on its ROS clock, then last what it meant them to)."""
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    f.floors["cmd_vel"] = lambda t: (t // (200 * MS) + 1) * 200 * MS
+    f.report("cmd_vel", 1010 * MS, False, wall=0.0)  # its answer to the scan of 1.0 s
+    assert f.blocking(1250 * MS, wall=0.1) == (None, [])  # the 1.2 s scan must go out
+    assert f.blocking(1260 * MS, wall=0.1) == ("cmd_vel", [])  # not past it before the node has answered
+    f.report("cmd_vel", 1215 * MS, False, wall=0.2)  # its period is now 205 ms: led 255 ms, past the next scan's 50
+    assert f.blocking(1470 * MS, wall=0.2) == (None, []) and f.blocking(1480 * MS, wall=0.2) == ("cmd_vel", [])
+    g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)  # no sensor floor: the small lead alone
+    g.report("timer", 1010 * MS, False, wall=0.0)
+    assert g.blocking(1070 * MS, wall=0.1) == ("timer", [])
 
 
 def test_holds_block_until_released_or_too_long() -> None:

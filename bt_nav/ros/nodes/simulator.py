@@ -56,7 +56,8 @@ not turn into sim-time delays, or a busy CPU changes the verdict of a run. A fol
   of sim time and holds time while one of its service calls is in flight.
 
 Before each step the loop waits while an active follower lags more than ``max_lag`` (or its own
-period, if longer: see :class:`bt_nav_sim.pacing.Followers`) sim seconds behind, or holds; meanwhile it republishes
+period, if longer; a robot's ``cmd_vel`` at least until its next scan is out: see
+:class:`bt_nav_sim.pacing.Followers`) sim seconds behind, or holds; meanwhile it republishes
 ``/clock`` every 20 ms of wall time, so a lost best-effort sample cannot stall anyone. A follower
 silent for ``follower_timeout`` wall seconds (or holding for longer than ``hold_timeout``) is dropped
 with a log line until it speaks again, so a dead or absent process never stalls the simulation.
@@ -212,6 +213,8 @@ class SimulatorNode(QuietQosEvents, Node):
         self.cmd_reliability = cmd_qos.reliability.name.lower()  # best_effort or reliable, for the start-up line
         self.robots = [_RobotIO(self, prefix, i, bool(p["cmd_vel_stamped"]), cmd_qos)
                        for i, prefix in enumerate(prefixes)]
+        for robot in self.robots:  # a robot's node answers its scans (Followers' floors)
+            self.followers.floors[robot.follower] = robot.core.scan_after_ns
         self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
         self._init_shared_state()
         self.get_logger().info(self._describe())
