@@ -114,3 +114,83 @@ def test_a_class_says_once_which_arenas_cannot_check_its_maneuver(tmp_path: Path
     err = capsys.readouterr().err
     assert err.count("not checked off there: lab_object B") == 1, err
     assert planned == {"ann": 1, "bob": 1, "cy": 1}, "each student's grid keeps lab_dead_end"
+
+
+def _entries(tmp_path: Path) -> dict[str, str]:
+    """A class with one good lab node and one entry of each kind that cannot be graded."""
+    import sys
+
+    good, plain, binary = tmp_path / "good.py", tmp_path / "plain.py", tmp_path / "binary.py"
+    good.write_text("# CHOICE: C\nprint('node')\n")
+    plain.write_text("print('a node that declares no maneuver')\n")
+    binary.write_bytes(b"PK\x03\x04\x00\x00word document")
+    return {"ann": f"{sys.executable} {good}", "bob": f"{sys.executable} {tmp_path / 'bob.py'}",
+            "cy": f"{sys.executable} {plain}", "dee": f"{sys.executable} {binary}", "eve": "",
+            "fay": f"{sys.executable} {tmp_path}", "gus": f"{sys.executable} '{good}"}
+
+
+def test_a_bad_entry_fails_only_its_student_naming_its_file(tmp_path: Path) -> None:
+    entries = _entries(tmp_path)
+    students = [Student(name, command) for name, command in entries.items()]
+    admitted, refused = classroom.admit(students, True, lambda command: f"resolved {command}")
+    assert admitted == {"ann": f"resolved {entries['ann']}"}
+    assert refused == {
+        "bob": f"{tmp_path / 'bob.py'} does not exist",
+        "cy": f"{tmp_path / 'plain.py'} declares no maneuver (the lab template's '# CHOICE: X' line), and "
+              "--maneuvers is not given",
+        "dee": f"{tmp_path / 'binary.py'} is not a Python source file (it holds binary data)",
+        "eve": "no command",
+        "fay": f"{tmp_path} is not a file",
+        "gus": f"command {entries['gus']!r} cannot be split into words: No closing quotation"}
+    with_maneuvers, refused = classroom.admit(students, False, lambda command: command)
+    assert set(with_maneuvers) == {"ann", "cy"}, refused  # --maneuvers given: no choice needed
+
+
+def test_a_program_the_grader_refuses_fails_its_student(tmp_path: Path) -> None:
+    def resolve(command: str) -> str:
+        raise ValueError("--exe: program './nosuch' not found")
+
+    admitted, refused = classroom.admit([Student("ann", "./nosuch")], True, resolve)
+    assert admitted == {} and refused == {"ann": "program './nosuch' not found"}
+
+
+def test_a_class_with_bad_entries_grades_the_others_and_shows_each_reason(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
+    """``bt-nav grade --class``: the bad entries are failed students on the terminal, in class.json and class.md;
+    the good one is graded; the exit code says a student failed."""
+    import json
+
+    from bt_nav.cli import grade
+
+    entries = _entries(tmp_path)
+    manifest = tmp_path / "class.yaml"
+    manifest.write_text("".join(f"{name}: {json.dumps(command)}\n" for name, command in entries.items()))
+    graded: list[str] = []
+
+    def one_passed_run(students: list[Student], plan: Any, *rest: Any) -> dict[str, Any]:
+        graded.extend(s.name for s in students)
+        return {s.name: [{"passed": True}] for s in students}
+
+    monkeypatch.setattr(classroom, "run_class", one_passed_run)
+    out = tmp_path / "out"
+    code = grade.main(["--class", str(manifest), "--profile", "lab", "--worlds", "lab_object", "--lidars", "lds01",
+                       "--seeds", "1", "--progress", "off", "--out", str(out)])
+    stdout = capsys.readouterr().out
+    assert code == 1 and graded == ["ann"], stdout
+    assert f"  bob: FAILED (not run: {tmp_path / 'bob.py'} does not exist)" in stdout.splitlines()
+    assert f"  cy: FAILED (not run: {tmp_path / 'plain.py'} declares no maneuver" in stdout
+    page = {s["name"]: s for s in json.loads((out / "class.json").read_text())["students"]}
+    assert page["bob"]["refused"] == f"{tmp_path / 'bob.py'} does not exist" and page["bob"]["passed"] == 0
+    assert "refused" not in page["ann"]
+    assert f"{tmp_path / 'binary.py'} is not a Python source file" in (out / "class.md").read_text()
+
+
+def test_the_choice_is_read_from_the_file_the_command_runs(tmp_path: Path) -> None:
+    from bt_nav.grading.node_grid import declared_choice, node_file
+
+    node = tmp_path / "node"  # no .py: python runs it all the same
+    node.write_text("#  CHOICE:  C  (Smart Pivot)\n")
+    assert node_file(f"python3 -X dev -u {node} --choice A") == node
+    assert declared_choice(f"python3 {node}") == "C"
+    assert node_file("python3 -m my_pkg.node") is None and node_file("ros2 run pkg node") is None
+    assert node_file(f"./{node.name}.py --ros-args") == Path(f"./{node.name}.py")

@@ -97,3 +97,23 @@ def test_help_is_plain_text(command: str) -> None:
 def test_plain_reduces_rst_markup() -> None:
     assert plain("``bt-nav demo`` uses :func:`bt_nav.media.plot.plot_run` and :mod:`~x.y`") == \
         "bt-nav demo uses bt_nav.media.plot.plot_run and x.y"
+
+
+@pytest.mark.parametrize(("args", "said"), [
+    (["--world", "nosuchworld"], "unknown world 'nosuchworld'; bundled worlds: cluttered, "),
+    (["--profile", "lab", "--world", "nosuchworld"], "unknown world 'nosuchworld'; bundled worlds: "),
+    (["--exe", "true", "--world", "nosuchworld"], "unknown world 'nosuchworld'; bundled worlds: "),
+    (["--sim-param", "lidar=foo"], "unknown lidar 'foo'; choose one of lds01, "),
+    (["--sim-param", "nope=1"], "--sim-param nope: the simulator has no such setting; it has "),
+    (["--rtf", "-2"], "--rtf -2: sim seconds per wall second, >= 0"),
+    (["--domain-id", "999"], "--domain-id 999: a ROS_DOMAIN_ID is 0 to 232"),
+    (["--exe", ""], "--exe: an empty command"),
+])
+def test_demo_refuses_a_bad_option_before_anything_starts(args: list[str], said: str, tmp_path: Path) -> None:
+    """One line, exit 2, nothing printed as started and no run directory (the simulator would refuse an unknown
+    world only once the graph ran, behind a run directory; an unknown setting it would ignore)."""
+    result = bt_nav("demo", *args, "--out", str(tmp_path / "runs"), "--timeout", "5")
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert result.stdout == "" and result.stderr.count("\n") == 1, result.stdout + result.stderr
+    assert result.stderr.startswith(f"bt-nav demo: {said}"), result.stderr
+    assert not (tmp_path / "runs").exists()

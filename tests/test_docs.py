@@ -31,7 +31,7 @@ def test_the_site_builds_without_a_warning(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     index = (tmp_path / "html" / "index.html").read_text(encoding="utf-8")
     for page in ("lab.html", "grading.html", "reference/parameters.html", "reference/commands.html",
-                 "reference/worlds.html", "reference/checks.html", "lidars.html"):
+                 "reference/worlds.html", "reference/checks.html", "reference/node-rules.html", "lidars.html"):
         assert page in index, page
 
 
@@ -75,3 +75,10 @@ def test_every_world_and_check_has_its_entry(reference: dict[str, str]) -> None:
         assert f"### {name}\n" in reference["worlds.md"], name
     for check, words in CHECK_WORDS.items():
         assert f"| {check} | {words} |" in reference["checks.md"]
+
+
+def test_the_node_rules_page_is_the_rules_bt_nav_rules_prints(reference: dict[str, str]) -> None:
+    from bt_nav.grading.rules import rules_markdown
+
+    assert reference["node-rules.md"] == rules_markdown(note=bt_nav_reference.GENERATED)
+    assert "## The lab: what your node must do" in reference["node-rules.md"]

@@ -20,6 +20,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("bt_nav.cli.demo", "the homework mission (or --profile lab: the lab's check-off) over DDS in sim time"),
     "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),
     "grade": ("bt_nav.cli.grade", "grade worlds x maneuvers x seeds in lock-step, in parallel"),
+    "rules": ("bt_nav.cli.rules", "print what a graded node must do: topics, services, parameters, each maneuver's "
+              "trigger and tolerances, the schedule"),
     "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
     "replay": ("bt_nav.cli.replay", "print a recorded tick trace tick by tick, or render one tick"),
     "watch": ("bt_nav.cli.watch", "print the executive's ~/tree snapshots as they change"),

@@ -10,6 +10,11 @@ reports).
 
 The manifest (``--class FILE``) is YAML: a mapping ``name: command``, or a list of ``{name: ..., command: ...}``.
 A name becomes a directory: letters, digits, ``.``, ``_`` and ``-`` only, unique.
+
+A bad entry fails its student, not the class (:func:`admit`): an empty command, a program or Python file that is
+not there, not readable or not Python source, a lab node that declares no maneuver. Its student is refused with
+the reason, naming the file, and shown on the class page like any failed student; the others are graded. A
+manifest that cannot be read, or options that do not fit, still refuse the class before any run.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import html
 import json
 import re
+import shlex
 from collections import Counter, defaultdict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -25,6 +31,7 @@ from typing import Any
 
 import yaml
 
+from bt_nav.grading.grid import cell_label, failure_groups, runs_label
 from bt_nav.grading.html import STYLE, rate_colour
 
 #: What a student's name may hold (it names their grid's directory).
@@ -54,7 +61,7 @@ def read_manifest(path: Path) -> list[Student]:
     else:
         raise ValueError(f"{path}: a class manifest is a mapping 'name: command' or a list of "
                          "{name: ..., command: ...}")
-    students = [Student(str(name), str(command).strip()) for name, command in pairs]
+    students = [Student(str(name), "" if command is None else str(command).strip()) for name, command in pairs]
     if not students:
         raise ValueError(f"{path}: no students")
     seen: set[str] = set()
@@ -64,16 +71,93 @@ def read_manifest(path: Path) -> list[Student]:
                              "(it names a directory)")
         if s.name in seen:
             raise ValueError(f"{path}: student {s.name!r} appears twice")
-        if not s.command:
-            raise ValueError(f"{path}: student {s.name!r} has no command")
-        seen.add(s.name)
+        seen.add(s.name)  # an empty command fails its student (entry_problem), not the class
     return students
 
 
+def file_problem(path: Path) -> str | None:
+    """Why the Python file ``path`` cannot be a node (None: it can): not there, not a file, unreadable, or not a
+    Python source file (binary, or not text in the encoding Python reads it in): each would fail every run of its
+    student alike. Not compiled: the student's Python may be another version than the grader's."""
+    import tokenize
+
+    if not path.exists():
+        return f"{path} does not exist"
+    if not path.is_file():
+        return f"{path} is not a file"
+    try:
+        source = path.read_bytes()
+    except OSError as exc:
+        return f"{path} cannot be read ({exc.strerror or exc})"
+    if b"\0" in source:
+        return f"{path} is not a Python source file (it holds binary data)"
+    try:
+        encoding, _ = tokenize.detect_encoding(iter(source.splitlines(keepends=True)).__next__)
+        source.decode(encoding)
+    except (SyntaxError, UnicodeDecodeError, LookupError) as exc:
+        return f"{path} is not a Python source file ({exc})"
+    return None
+
+
+def entry_problem(student: Student) -> str | None:
+    """Why ``student``'s entry cannot be run, naming the file (None: it can)."""
+    from bt_nav.grading.node_grid import node_file
+
+    command = student.command
+    if not command:
+        return "no command"
+    try:
+        shlex.split(command)
+    except ValueError as exc:
+        return f"command {command!r} cannot be split into words: {exc}"
+    path = node_file(command)
+    return None if path is None else file_problem(path.absolute())
+
+
+def choice_problem(command: str) -> str | None:
+    """Why a lab node graded without ``--maneuvers`` has no maneuver (None: its file declares one)."""
+    from bt_nav.grading.node_grid import declared_choice, node_file
+
+    if declared_choice(command) is not None:
+        return None
+    path = node_file(command)
+    what = f"{path.absolute()} declares no maneuver" if path is not None else \
+        f"command {command!r} runs no Python file to read its maneuver from"
+    return f"{what} (the lab template's '# CHOICE: X' line), and --maneuvers is not given"
+
+
+def admit(students: Sequence[Student], needs_choice: bool, resolve: Callable[[str], str]
+          ) -> tuple[dict[str, str], dict[str, str]]:
+    """(each admitted student's command as ``resolve`` gives it, each refused student's reason): a bad entry fails
+    its student, so the rest of the class is graded. Bad: :func:`entry_problem`, a program ``resolve`` refuses with
+    ValueError (:func:`~bt_nav.grading.node_grid.resolve_program`: not found, or a Python without rclpy), and with
+    ``needs_choice`` (a lab class without ``--maneuvers``) a node that declares no maneuver (:func:`choice_problem`)."""
+    admitted: dict[str, str] = {}
+    refused: dict[str, str] = {}
+    for student in students:
+        problem = entry_problem(student)
+        if problem is None:
+            try:
+                admitted[student.name] = resolve(student.command)
+            except ValueError as exc:
+                problem = str(exc).removeprefix("--exe: ")
+        if problem is None and needs_choice:
+            problem = choice_problem(student.command)
+        if problem is not None:
+            admitted.pop(student.name, None)
+            refused[student.name] = problem
+    return admitted, refused
+
+
+def refused_summary(name: str, reason: str) -> dict[str, Any]:
+    """A refused student's line of the class (:func:`admit`): no run, failed for ``reason``."""
+    return {"name": name, "dir": name, "graded": False, "refused": reason, "cells": {}, "findings": {}, "runs": 0,
+            "passed": 0, "errors": 0, "reasons": {reason: 1}, "failures": [["not run", reason]]}
+
+
 def cell_key(row: dict[str, Any]) -> str:
-    """A grid cell's label: world, maneuver and (when the grid varies it) LiDAR."""
-    lidar = row.get("lidar") or ""
-    return " ".join(part for part in (row["world"], row["maneuver"], lidar) if part)
+    """A grid cell's label: world, maneuver and (when the grid varies it) LiDAR (:func:`.grid.cell_label`)."""
+    return cell_label(row)
 
 
 def student_summary(name: str, grid_dir: Path) -> dict[str, Any]:
@@ -100,7 +184,8 @@ def student_summary(name: str, grid_dir: Path) -> dict[str, Any]:
     return {"name": name, "dir": grid_dir.name, "graded": True, "cells": {k: v for k, v in sorted(cells.items())},
             "findings": dict(findings), "runs": sum(v[1] for v in cells.values()),
             "passed": sum(v[0] for v in cells.values()), "errors": errors,
-            "reasons": _reasons(doc.get("runs", []))}
+            "reasons": _reasons(doc.get("runs", [])),
+            "failures": [[runs_label(runs), reason] for reason, runs in failure_groups(doc.get("runs", []))]}
 
 
 def _reasons(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
@@ -112,9 +197,14 @@ def _reasons(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
     return dict(out)
 
 
-def write_class_page(out: Path, students: Sequence[Student], title: str) -> tuple[Path, Path, Path]:
-    """``class.json``, ``class.md`` and ``class.html`` in ``out`` from each student's grid in ``out/<name>``."""
-    rows = [student_summary(s.name, out / s.name) for s in students]
+def write_class_page(out: Path, students: Sequence[Student], title: str,
+                     refused: dict[str, str] | None = None) -> tuple[Path, Path, Path]:
+    """``class.json``, ``class.md`` and ``class.html`` in ``out`` from each student's grid in ``out/<name>``, and
+    each ``refused`` student's reason (:func:`admit`) in their place."""
+    refused = refused or {}
+    out.mkdir(parents=True, exist_ok=True)  # a class whose every student was refused ran nothing there
+    rows = [refused_summary(s.name, refused[s.name]) if s.name in refused else student_summary(s.name, out / s.name)
+            for s in students]
     cells = sorted({c for r in rows for c in r["cells"]})
     doc = {"title": title, "cells": cells, "students": rows,
            "commands": {s.name: s.command for s in students}}
@@ -138,11 +228,17 @@ def class_markdown(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: 
         lines.append(f"| [{r['name']}]({r['dir']}/report.html) | {total} | "
                      + " | ".join(_rate(r["cells"].get(c)) for c in cells) + f" | {r['errors']} |")
     for r in rows:
-        said = [*(f"{reason} (x{n})" for reason, n in r.get("reasons", {}).items()),
-                *(f"finding: {f} (x{n})" for f, n in r["findings"].items())]
+        said = _said(r)
         if said:
             lines += ["", f"## {r['name']}", "", *(f"- {line}" for line in said)]
     return "\n".join(lines) + "\n"
+
+
+def _said(row: dict[str, Any]) -> list[str]:
+    """A student's failures, each with the runs that failed so (named with their LiDAR: ``lab_side C rplidar seed
+    0: failed: ...``), then their findings with their counts (the grid's own across LiDARs among them)."""
+    return [*(f"{runs}: {reason}" for runs, reason in row.get("failures", [])),
+            *(f"finding: {f} (x{n})" for f, n in row["findings"].items())]
 
 
 def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
@@ -155,10 +251,8 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
         tds = "".join(
             f'<td class="rate" style="background:{rate_colour(*r["cells"][c])}">{_rate(r["cells"][c])}</td>'
             if c in r["cells"] else "<td>-</td>" for c in cells)
-        said = [*(f"{reason} (x{n})" for reason, n in r.get("reasons", {}).items()),
-                *(f"finding: {f} (x{n})" for f, n in r["findings"].items())]
-        notes = "<br>".join(esc(s) for s in said) or ('<span class="note">nothing to say</span>' if r["graded"]
-                                                       else '<span class="note">not graded yet</span>')
+        notes = "<br>".join(esc(s) for s in _said(r)) or ('<span class="note">nothing to say</span>' if r["graded"]
+                                                          else '<span class="note">not graded yet</span>')
         total = f"{r['passed']}/{r['runs']}" if r["graded"] else "-"
         body.append(f"<tr><td>{link}</td><td class=\"num\">{total}</td>{tds}<td class=\"num\">{r['errors']}</td>"
                     f"<td>{notes}</td></tr>")

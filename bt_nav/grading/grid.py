@@ -255,19 +255,89 @@ def per_lidar(rows: Sequence[dict[str, Any]]) -> dict[str, tuple[int, int]]:
 
 
 def lidar_findings(rows: Sequence[dict[str, Any]]) -> list[str]:
-    """A node that passes with one LiDAR and fails with another most likely reads the scan by fixed indices:
-    one sentence naming both (nothing when the grid has one LiDAR, or when every LiDAR fares alike)."""
+    """What differs across the grid's LiDARs: a node that crashes with some of them only, and one that passes with
+    one and fails with another, most likely reads the scan by fixed indices or takes a no-return reading for a
+    distance: a sentence each naming the LiDARs (nothing when the grid has one LiDAR, or every LiDAR fares alike)."""
     rates = {name: passed / runs for name, (passed, runs) in per_lidar(rows).items() if runs}
     if len(rates) < 2:
         return []
+    found = _crash_finding(rows)
     best = max(rates, key=lambda n: rates[n])
     worst = [n for n in rates if rates[n] < rates[best] - 0.34]
     if not worst or rates[best] < 0.5:
-        return []
+        return found
     failing = ", ".join(lidar_label(n) for n in sorted(worst, key=lambda n: rates[n]))
-    return [f"passes with {lidar_label(best)}, fails with {failing}: are the scan indices computed from "
+    return [*found, f"passes with {lidar_label(best)}, fails with {failing}: are the scan indices computed from "
             "angle_min and angle_increment (not fixed, not assuming 360 beams from 0 rad), and are NaN, inf and "
             "readings outside [range_min, range_max] filtered?"]
+
+
+#: How the reason of a run whose node died begins: an exit with an error code before the verdict, or a crash.
+CRASH_REASONS = ("the node exited with code", "the node crashed")
+
+
+def _crash_finding(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """A node that crashes with some LiDARs and never with the others: the scan those publish differently (beam
+    count, angle range, no-return readings) is what its code trips on. Nothing when no LiDAR or every one crashes."""
+    counts: dict[str, list[int]] = {}  # LiDAR -> [crashed, judged]
+    for row in rows:
+        if row.get("outcome") == "bt_nav error":
+            continue
+        cell = counts.setdefault(row.get("lidar", ""), [0, 0])
+        cell[0] += str(row.get("reason", "")).startswith(CRASH_REASONS)
+        cell[1] += 1
+    crashed = [n for n, (k, _) in counts.items() if k]
+    clean = [n for n, (k, _) in counts.items() if not k]
+    if not crashed or not clean:
+        return []
+    k, n = sum(counts[c][0] for c in crashed), sum(counts[c][1] for c in crashed)
+    return [f"crashes with {', '.join(lidar_label(c) for c in crashed)} only ({k} of {n} runs), never with "
+            f"{', '.join(lidar_label(c) for c in clean)}: the exception is in those runs' node.log; does the node "
+            "index past the end of a scan with another beam count or angle range, or turn an inf or NaN reading "
+            "into an int?"]
+
+
+def cell_label(row: dict[str, Any]) -> str:
+    """A grid cell's name, ``lab_object C rplidar``: world, maneuver and (when the grid varies it) LiDAR; a grid over
+    three LiDARs has three cells per world and maneuver, and a report that left the LiDAR out would name them alike."""
+    return " ".join(part for part in (row["world"], row["maneuver"], row.get("lidar") or "") if part)
+
+
+def run_label(row: dict[str, Any]) -> str:
+    """A run's name, ``lab_object C rplidar seed 0``: how the CLI's lines, ``summary.md``, ``report.html`` and
+    ``class.md`` name a run."""
+    return f"{cell_label(row)} seed {row['seed']}"
+
+
+def runs_label(rows: Sequence[dict[str, Any]]) -> str:
+    """Runs of one cell named at once: ``lab_object C rplidar seed 0``, ``lab_object C rplidar seeds 0, 3``."""
+    if len(rows) == 1:
+        return run_label(rows[0])
+    return f"{cell_label(rows[0])} seeds {', '.join(str(r['seed']) for r in rows)}"
+
+
+def failure_groups(rows: Sequence[dict[str, Any]]) -> list[tuple[str, list[dict[str, Any]]]]:
+    """The failed runs (bt_nav's own errors are none of the node's) by cell and reason, in the rows' order: each
+    reason with the runs of one cell that failed so."""
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for row in rows:
+        if not row.get("passed") and row.get("outcome") != "bt_nav error":
+            groups.setdefault((cell_label(row), str(row.get("reason", "?"))), []).append(row)
+    return [(reason, runs) for (_, reason), runs in groups.items()]
+
+
+def rate_table(summary: Sequence[dict[str, Any]]) -> tuple[list[str], list[tuple[str, str, dict[str, list[int]]]]]:
+    """The pass rates of a summary of ``--exe`` cells (:func:`bt_nav.grading.report.summarize_exe`) as a table: its
+    maneuvers (the columns), and a row per world and LiDAR (``""`` when the grid has the profile's only) with the
+    passed and judged runs per maneuver. Why per LiDAR: a node failing with one LiDAR in three would read 2/3 on a
+    row of the world, as if it failed by chance."""
+    maneuvers = sorted({s["maneuver"] for s in summary})
+    table: dict[tuple[str, str], dict[str, list[int]]] = {}
+    for s in summary:
+        cell = table.setdefault((s["world"], s.get("lidar") or ""), {}).setdefault(s["maneuver"], [0, 0])
+        cell[0] += s["passed"]
+        cell[1] += s["runs"]
+    return maneuvers, [(world, lidar, cells) for (world, lidar), cells in sorted(table.items())]
 
 
 def format_lidars(rows: Sequence[dict[str, Any]]) -> list[str]:

@@ -5,8 +5,9 @@ manager; the page needs no server, no script and nothing from the network, and e
 logs, JSON, bags) is relative to the page, so the directory works wherever it is unpacked. What it shows:
 
 - the command graded, the profile, the real-time factor and the wall-time limit per run;
-- the overall pass rate and the pass rate per world (rows) and maneuver (columns), each cell coloured from red
-  (none passed) to green (all passed), then every failure reason with its count;
+- the overall pass rate and the pass rate per world and LiDAR (rows) and maneuver (columns), each cell coloured
+  from red (none passed) to green (all passed); per LiDAR, the pass rate and what differs across them (a finding);
+  then every failure reason with the runs that failed so, each named ``world maneuver lidar seed N``;
 - the grid's figures (:func:`bt_nav.grading.media.grid_figures`);
 - one row per run: its trajectory picture as a thumbnail (a link to the full picture), verdict, reason, travelled
   distance, wall time, the judge's findings when it gives any, links to its logs, ``verdict.json``,
@@ -24,7 +25,17 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
+from bt_nav.grading.grid import (
+    cell_label,
+    failure_groups,
+    lidar_findings,
+    lidar_label,
+    per_lidar,
+    rate_table,
+    run_label,
+)
 from bt_nav.grading.node_run import ExeSettings, exe_ros_args
+from bt_nav.grading.rules import RULES_LINE_HTML
 
 STYLE = """
  body { font-family: sans-serif; margin: 1.5em; color: #222; max-width: 1400px; }
@@ -79,36 +90,54 @@ def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
 
 
 def _rates(summary: Sequence[dict[str, Any]]) -> list[str]:
-    """The pass rate per world and maneuver, each cell coloured by its rate."""
-    maneuvers = sorted({s["maneuver"] for s in summary})
-    worlds = sorted({s["world"] for s in summary})
-    cell = {(s["world"], s["maneuver"]): s for s in summary}
-    lines = ["<h2>Pass rate per world and maneuver</h2>", "<table>",
-             "<tr><th>world</th>" + "".join(f"<th>{html.escape(m)}</th>" for m in maneuvers) + "</tr>"]
-    for world in worlds:
+    """The pass rate per world and LiDAR (rows, when the grid varies it) and maneuver, each cell coloured by its
+    rate."""
+    maneuvers, table = rate_table(summary)
+    lidars = any(lidar for _, lidar, _ in table)
+    lines = [f"<h2>Pass rate per world{', LiDAR' if lidars else ''} and maneuver</h2>", "<table>",
+             "<tr><th>world</th>" + ("<th>LiDAR</th>" if lidars else "")
+             + "".join(f"<th>{html.escape(m)}</th>" for m in maneuvers) + "</tr>"]
+    for world, lidar, cells in table:
         tds = []
         for m in maneuvers:
-            s = cell.get((world, m))
-            tds.append("<td>-</td>" if s is None else
-                       f'<td class="rate" style="background: {rate_colour(s["passed"], s["runs"])}">'
-                       f"{s['passed']}/{s['runs']} ({100 * s['passed'] / s['runs']:.0f} %)</td>")
-        lines.append(f"<tr><th>{html.escape(world)}</th>{''.join(tds)}</tr>")
+            passed, runs = cells.get(m, (0, 0))
+            tds.append("<td>-</td>" if m not in cells else
+                       f'<td class="rate" style="background: {rate_colour(passed, runs)}">'
+                       f"{passed}/{runs} ({100 * passed / max(1, runs):.0f} %)</td>")
+        name = f"<th>{html.escape(lidar or 'profile')}</th>" if lidars else ""
+        lines.append(f"<tr><th>{html.escape(world)}</th>{name}{''.join(tds)}</tr>")
     lines.append("</table>")
     return lines
 
 
-def _failures(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]]) -> list[str]:
-    """Every failure reason per world and maneuver with its count and a link to each run that failed so."""
-    failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
-    if not failures:
+def _lidars(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The pass rate per LiDAR and what differs across them (:func:`bt_nav.grading.grid.lidar_findings`, the words
+    of ``summary.md`` and ``class.md``); nothing for a grid of one LiDAR."""
+    rates = per_lidar(rows)
+    if len(rates) < 2:
         return []
-    lines = ["<h2>Why runs failed</h2>", "<ul>"]
-    for world, maneuver, reason, n in failures:
-        runs = [r for r in rows if not r.get("passed") and r["world"] == world and r["maneuver"] == maneuver
-                and r.get("reason") == reason]
-        links = ", ".join(f'<a href="#{quote(Path(r["run_dir"]).name)}">seed {r["seed"]}</a>' for r in runs)
-        lines.append(f"<li>{html.escape(world)} {html.escape(maneuver)}: {html.escape(reason)} (x{n}: {links})</li>")
-    return [*lines, "</ul>"]
+    lines = ["<h2>Per LiDAR</h2>", "<table>", "<tr><th>LiDAR</th><th>passed</th></tr>"]
+    lines += [f'<tr><td>{html.escape(lidar_label(n))}</td><td class="rate" style="background: {rate_colour(p, r)}">'
+              f"{p}/{r}</td></tr>" for n, (p, r) in rates.items()]
+    return [*lines, "</table>", *(f"<p><b>Finding:</b> {html.escape(f)}</p>" for f in lidar_findings(rows))]
+
+
+def _failures(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """Every failure reason with the runs that failed so, each named with its LiDAR and linked to its row."""
+    groups = failure_groups(rows)
+    if not groups:
+        return []
+
+    def link(row: dict[str, Any], text: str) -> str:
+        return f'<a href="#{quote(Path(row["run_dir"]).name)}">{html.escape(text)}</a>'
+
+    def named(runs: list[dict[str, Any]]) -> str:  # as runs_label names them, each run a link to its row
+        if len(runs) == 1:
+            return link(runs[0], run_label(runs[0]))
+        return f"{html.escape(cell_label(runs[0]))} seeds " + ", ".join(link(r, str(r["seed"])) for r in runs)
+
+    items = [f"<li>{named(runs)}: {html.escape(reason)}</li>" for reason, runs in groups]
+    return ["<h2>Why runs failed</h2>", "<ul>", *items, "</ul>", RULES_LINE_HTML]
 
 
 def _findings(row: dict[str, Any]) -> str:
@@ -155,8 +184,8 @@ def _run_row(out: Path, row: dict[str, Any], media: dict[str, Any]) -> str:
     verdict = "PASSED" if row.get("passed") else "FAILED"
     thumb, video = _media_cells(out, row, media)
     travelled = (row.get("verdict") or {}).get("travelled")
-    name = f"{row['world']} {row['maneuver']} seed {row['seed']}"
-    cells = [thumb, _link(out, run_dir, name), verdict, html.escape(str(row.get("reason", ""))) + _findings(row),
+    reason = html.escape(str(row.get("reason", ""))) + _findings(row)
+    cells = [thumb, _link(out, run_dir, run_label(row)), verdict, reason,
              "-" if travelled is None else f"{travelled:.2f} m", f"{row.get('wall_time', 0):.1f} s",
              _files(out, run_dir), video]
     classes = ["", "", verdict, "", "num", "num", "", ""]
@@ -171,7 +200,7 @@ def report_html(rows: Sequence[dict[str, Any]], summary: Sequence[dict[str, Any]
     out = settings.out
     lines = ["<!doctype html>", '<html lang="en"><head><meta charset="utf-8">',
              f"<title>grade: {html.escape(settings.command)}</title><style>{STYLE}</style></head><body>",
-             *_header(rows, settings), *_rates(summary), *_failures(rows, summary)]
+             *_header(rows, settings), *_rates(summary), *_lidars(rows), *_failures(rows)]
     if figures:
         lines.append("<h2>Figures</h2>")
         lines += [f'<p><img class="figure" src="{quote(f)}" alt="{html.escape(f)}"></p>' for f in figures]

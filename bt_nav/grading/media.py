@@ -60,8 +60,10 @@ def wants_video(row: dict[str, Any], videos: str) -> bool:
 
 
 def run_title(row: dict[str, Any]) -> str:
-    """``stage_4, maneuver none, seed 3``: what a picture of the run is titled with."""
-    return f"{row['world']}, maneuver {row['maneuver']}, seed {row['seed']}"
+    """``stage_4, maneuver none, seed 3`` (``..., LiDAR rplidar, seed 3`` when the grid varies it): what a picture of
+    the run is titled with."""
+    lidar = f"LiDAR {row['lidar']}, " if row.get("lidar") else ""
+    return f"{row['world']}, maneuver {row['maneuver']}, {lidar}seed {row['seed']}"
 
 
 def _results(row: dict[str, Any], record: Any) -> dict[str, Any]:
@@ -428,7 +430,9 @@ def turns_figure(rows: Sequence[dict[str, Any]], path: Path) -> Path | None:
     judged = [r for r in rows if r.get("verdict") and "maneuvers" in r["verdict"]]
     if not judged:
         return None
-    names = [f"{r['world']} {r['maneuver']} s{r['seed']}" for r in judged]
+    from bt_nav.grading.grid import cell_label
+
+    names = [f"{cell_label(r)} s{r['seed']}" for r in judged]  # the LiDAR too: one run per LiDAR otherwise alike
     total = [len(r["verdict"]["maneuvers"]) for r in judged]
     ok = [sum(1 for m in r["verdict"]["maneuvers"] if m.get("passed")) for r in judged]
     fig, ax = plt.subplots(figsize=(max(5.0, 0.3 * len(judged) + 2.0), 3.6), dpi=100)

@@ -120,19 +120,46 @@ def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
     return {**shared, "jobs": [job.key for job in jobs]}
 
 
-def declared_choice(command: str) -> str | None:
-    """The lab choice (A, B or C) a ``# CHOICE: X`` comment declares in the first Python file ``command`` names
-    (the lab's template asks for it), else None."""
+#: Python options that take the next word as their value (``python3 -X dev node.py``: the file is node.py).
+_VALUED_OPTIONS = ("-W", "-X")
+#: The lab template's declaration of the student's maneuver.
+CHOICE_LINE = re.compile(r"^\s*#\s*CHOICE\s*:\s*([ABC])\b", re.MULTILINE)
+
+
+def node_file(command: str) -> Path | None:
+    """The Python file ``command`` runs, as written (relative to where it runs): a ``python...`` program's script
+    (its first argument that is not an option; none with ``-m`` or ``-c``), else the first word ending in ``.py``
+    (``./node.py``). None when it runs no file of its own (``ros2 run pkg node``) or cannot be split."""
     try:
         words = shlex.split(command)
     except ValueError:
         return None
-    for word in words:
-        path = Path(word)
-        if path.suffix == ".py" and path.is_file():
-            found = re.search(r"^\s*#\s*CHOICE\s*:\s*([ABC])\b", path.read_text(errors="replace"), re.MULTILINE)
-            return found.group(1) if found else None
-    return None
+    if words and Path(words[0]).name.startswith("python"):
+        skip = False
+        for word in words[1:]:
+            if skip:
+                skip = False
+            elif word in ("-m", "-c"):
+                return None
+            elif word in _VALUED_OPTIONS:
+                skip = True
+            elif not word.startswith("-"):
+                return Path(word)
+        return None
+    return next((Path(word) for word in words if word.endswith(".py")), None)
+
+
+def declared_choice(command: str) -> str | None:
+    """The lab choice (A, B or C) a ``# CHOICE: X`` comment declares in the Python file ``command`` runs
+    (:func:`node_file`; the lab's template asks for it), else None."""
+    path = node_file(command)
+    if path is None or not path.is_file():
+        return None
+    try:
+        found = CHOICE_LINE.search(path.read_text(errors="replace"))
+    except OSError:
+        return None
+    return found.group(1) if found else None
 
 
 def prepare_out(settings: ExeSettings, jobs: Sequence[Job], resume: bool) -> dict[str, Row]:

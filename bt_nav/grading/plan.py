@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from bt_nav_sim.world import list_worlds, world_file
 
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
-from bt_nav.grading.node_grid import declared_choice
+from bt_nav.grading.node_grid import declared_choice, node_file
 from bt_nav.mission.params import LAB_MANEUVERS, MANEUVERS, normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER
 
@@ -28,8 +28,7 @@ EXE_LIDARS = ("lds01", "lds02", "rplidar")
 EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
 
 
-
-def _check_worlds(worlds: Sequence[str]) -> None:
+def check_worlds(worlds: Sequence[str]) -> None:
     """Refuse a world that is neither bundled nor a world file before any run starts: a typo would otherwise cost
     every run of the grid a simulator that refuses to start. ValueError names the bundled worlds."""
     for world in worlds:
@@ -47,7 +46,7 @@ def grid_axes(args: argparse.Namespace) -> tuple[list[str], list[int]]:
     worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
     if worlds == ["all"]:
         worlds = list_worlds("lab" if lab else "homework")
-    _check_worlds(worlds)
+    check_worlds(worlds)
     count = args.seeds if args.seeds is not None else 2 if exe else 20
     return worlds, list(range(args.first_seed, args.first_seed + count))
 
@@ -65,11 +64,33 @@ def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
         return ",".join(LAB_MANEUVERS if lab else MANEUVERS)
     if not lab:
         return "none"  # a foreign homework node has no maneuvers of bt_nav's
-    choice = declared_choice(args.exe)
-    if choice is None:
-        raise ValueError("which maneuver does the node perform? give --maneuvers A, B or C (or write the lab "
-                         "template's '# CHOICE: X' comment in the node's file)")
-    return choice
+    return lab_maneuver(args.exe, None, "--maneuvers")[0]
+
+
+def no_choice(option: str) -> str:
+    """What a lab node that declares no maneuver is told (``grade`` and ``demo`` alike; ``option`` is theirs)."""
+    return (f"which maneuver does the node perform? give {option} A, B or C (or write the lab template's "
+            "'# CHOICE: X' comment in the node's file)")
+
+
+def lab_maneuver(command: str, given: str | None, option: str) -> tuple[str, str]:
+    """The maneuver(s) a lab node is run on: ``given`` (the command line's ``option``) when there is one, else the
+    ``# CHOICE: X`` its file declares (:func:`~bt_nav.grading.node_grid.declared_choice`), and a line to say when
+    the two differ (empty when they agree or the file declares none): a node is judged on one maneuver, so the
+    one that wins must be said.
+
+    Raises:
+        ValueError: neither ``given`` nor a declared choice (:func:`no_choice`), or an unknown maneuver.
+    """
+    declared = declared_choice(command)
+    if not given:
+        if declared is None:
+            raise ValueError(no_choice(option))
+        return declared, ""
+    wanted = [normalise_maneuver(m.strip()) for m in given.split(",") if m.strip()]
+    if declared is None or declared in wanted:
+        return given, ""
+    return given, f"{option} {given} wins over the '# CHOICE: {declared}' in {node_file(command)}"
 
 
 def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int],

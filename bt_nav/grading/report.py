@@ -10,11 +10,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.grid import lidar_findings, lidar_label, per_lidar
+from bt_nav.grading.grid import failure_groups, lidar_findings, lidar_label, per_lidar, rate_table, runs_label
 from bt_nav.grading.html import report_html
 from bt_nav.grading.media import grid_figures, render_runs
 from bt_nav.grading.node_grid import ERROR
 from bt_nav.grading.node_run import ExeSettings, exe_ros_args
+from bt_nav.grading.rules import RULES_FILE, RULES_LINE_MD, grade_rules
 
 
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -51,24 +52,20 @@ def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
 
 def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
                      rows: Sequence[dict[str, Any]] = ()) -> str:
-    """The grid's report: pass rate per world (rows) and maneuver (columns), then every failure reason."""
-    maneuvers = sorted({s["maneuver"] for s in summary})
-    worlds = sorted({s["world"] for s in summary})
-    cell: dict[tuple[str, str], dict[str, int]] = {}
-    for s in summary:  # every LiDAR of a world and maneuver together (the LiDAR table follows)
-        c = cell.setdefault((s["world"], s["maneuver"]), {"passed": 0, "runs": 0})
-        c["passed"] += s["passed"]
-        c["runs"] += s["runs"]
+    """The grid's report: pass rate per world and LiDAR (rows) and maneuver (columns), the pass rate per LiDAR and
+    what differs across them, then every failure reason with the runs that failed so (each named with its LiDAR)."""
+    maneuvers, table = rate_table(summary)
+    lidars = any(lidar for _, lidar, _ in table)
     runs = sum(s["runs"] for s in summary)
     passed = sum(s["passed"] for s in summary)
     lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
              f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; {settings.rtf:g}x real time, "
              f"{settings.limit:g} s wall per run.", "",
-             "| world | " + " | ".join(maneuvers) + " |", "|---|" + "---|" * len(maneuvers)]
-    for world in worlds:
-        lines.append(f"| {world} | " + " | ".join(
-            f"{cell[(world, m)]['passed']}/{cell[(world, m)]['runs']}" if (world, m) in cell else "-"
-            for m in maneuvers) + " |")
+             "| world | " + ("LiDAR | " if lidars else "") + " | ".join(maneuvers) + " |",
+             "|---|" + ("---|" if lidars else "") + "---|" * len(maneuvers)]
+    for world, lidar, cells in table:
+        lines.append(f"| {world} | " + (f"{lidar or 'profile'} | " if lidars else "") + " | ".join(
+            f"{cells[m][0]}/{cells[m][1]}" if m in cells else "-" for m in maneuvers) + " |")
     rates = per_lidar(rows)
     if len(rates) > 1:
         lines += ["", "| LiDAR | passed |", "|---|---|"] + [f"| {lidar_label(n)} | {p}/{r} |"
@@ -78,9 +75,9 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     if errors:
         lines += ["", f"{errors} run(s) hit a bt_nav error (not the node's failure; tracebacks in bt_nav_errors/, "
                   "`--resume` reruns them)."]
-    failures = [(s["world"], s["maneuver"], reason, n) for s in summary for reason, n in s["reasons"].items()]
+    failures = [f"- {runs_label(runs)}: {reason}" for reason, runs in failure_groups(rows)]
     if failures:
-        lines += ["", "## Failures", ""] + [f"- {w} {m}: {reason} (x{n})" for w, m, reason, n in failures]
+        lines += ["", "## Failures", "", *failures, "", RULES_LINE_MD + "."]
     lines += ["", "Every run's trajectory picture, the videos of the failed runs and the logs: "
               "[report.html](report.html)."]
     return "\n".join(lines) + "\n"
@@ -112,5 +109,6 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings, work
     json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     md_path.write_text(summary_markdown(summary, settings, rows), encoding="utf-8")
+    (settings.out / RULES_FILE).write_text(grade_rules(settings, rows), encoding="utf-8")  # the failures link it
     (settings.out / "report.html").write_text(report_html(rows, summary, settings, media, figures), encoding="utf-8")
     return json_path, md_path

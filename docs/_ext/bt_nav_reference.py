@@ -6,7 +6,9 @@
 - ``commands.md``: every ``bt-nav`` command's ``--help``, as its argument parser prints it;
 - ``worlds.md``: every bundled world and lab arena, from its YAML file (its header comment and keys);
 - ``checks.md``: what the homework's referee and the lab's check-off judge check, and the sentence a failed
-  check gives (the judge's own functions, fed an example).
+  check gives (the judge's own functions, fed an example);
+- ``node-rules.md``: what a graded node must do, per assignment (:func:`bt_nav.grading.rules.rules_markdown`, the
+  page ``bt-nav rules`` prints and every grade writes as ``rules.md``).
 
 ``python docs/_ext/bt_nav_reference.py OUT`` writes them without Sphinx (the tests do).
 """
@@ -132,20 +134,24 @@ def checks_page() -> str:
                "forward_motion": 0.14, "moved_on": False, "moved_on_detail": "still at the obstacle"}
     for maneuver, name in MANEUVER_NAMES.items():
         cfg = CheckoffConfig(maneuver=maneuver)
-        tol, near = cfg.angle_tolerance_deg, cfg.limits()[0] + cfg.trigger_margin
+        near = cfg.limits()[0] + cfg.trigger_margin
         trigger = {"A": f"front 0.84 m < {near:.2f} m", "B": f"left 0.84 m and right 0.40 m < {near:.2f} m",
                    "C": f"front 0.84 m < {near:.2f} m"}
-        rule = {"A": f"{90 - tol:.0f}-{180 + tol:.0f} deg either side", "B": f"180 +- {tol:.0f} deg either side",
-                "C": f"90 +- {tol:.0f} deg right"}
         out += [f"### {maneuver}: {name}", "", f"The trigger, read every reasonable way: {cfg.trigger_rule()}.", ""]
-        event = {**example, "rule": rule[maneuver], "trigger_detail": trigger[maneuver]}
+        event = {**example, "rule": cfg.angle_rule("right"), "trigger_detail": trigger[maneuver]}
         out += [f"- {line}" for line in maneuver_problems(maneuver, event)]
         out += [""]
     return "\n".join(out)
 
 
+def node_rules_page() -> str:
+    from bt_nav.grading.rules import rules_markdown
+
+    return rules_markdown(note=GENERATED)
+
+
 PAGES = {"parameters.md": parameters_page, "commands.md": commands_page, "worlds.md": worlds_page,
-         "checks.md": checks_page}
+         "checks.md": checks_page, "node-rules.md": node_rules_page}
 
 
 def write_reference(out: Path) -> list[Path]:

@@ -40,3 +40,18 @@ def test_demo_films_a_foreign_node(tmp_path: Path) -> None:
     assert turning.size, "the node never turned"
     caption = renderer.text(float(turning[len(turning) // 2])).lines()[1]
     assert "turning" in caption.split(";")[0] and "Stopped" not in caption, caption
+
+
+def test_the_hand_in_films_the_maneuver_the_node_declares(tmp_path: Path) -> None:
+    """The README's hand-in (``demo --exe ... --profile lab``, no ``--maneuver``) of a right C node whose file says
+    ``# CHOICE: C``: filmed doing the Smart Pivot in lab_object, and passed."""
+    source = (REPO / "tests" / "fixtures" / "lab_student_node.py").read_text()
+    node = tmp_path / "reactive_navigator.py"
+    node.write_text(re.sub(r"^# CHOICE: given on the command line.*$", "# CHOICE: C", source, count=1, flags=re.M))
+    demo = Proc("demo", "--exe", f"{sys.executable} {node}", "--profile", "lab", "--out", str(tmp_path),
+                "--name", "hand-in", "--timeout", "120")
+    code = demo.wait(240.0)
+    out = demo.output()
+    assert demo.stdout and ", lab judge, lab_object, maneuver C, seed 0, " in demo.stdout[0], out
+    assert code == 0 and "bt-nav demo: PASSED: passed" in demo.stdout, out
+    assert (tmp_path / "hand-in" / "lab_object_C_seed0" / "video.mp4").is_file(), out

@@ -56,11 +56,42 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--robots", type=int, default=1, help="robots in the world (default 1); > 1: robot1, "
                         "robot2, ... each with its executive and referee in its namespace, a verdict each")
     parser.add_argument("--exe", metavar="CMD", help="run this robot node (your own, any command) instead of "
-                        "bt_nav's executive, judged by the homework's referee or --profile lab's check-off judge; "
+                        "bt_nav's executive, judged by the homework's referee or --profile lab's check-off judge (on "
+                        "the maneuver its file's '# CHOICE: X' declares, unless --maneuver); "
                         "its log lines are shown at their sim time and the run is filmed (run directory's video.mp4, "
                         "or --video) for the hand-in")
     parser.set_defaults(world=None)  # the lab's default arena depends on the maneuver; the homework's is stage_4
     return parser
+
+
+def check_options(opts: argparse.Namespace) -> None:
+    """Refuse, before any process or run directory exists, what the graph would refuse only once started: a world
+    neither bundled nor a file (the simulator's refusal would be buried in its log, behind a run directory), a
+    maneuver no tree knows, a simulator setting the simulator does not have (it would be ignored) or a LiDAR it
+    does not know, a negative pace, a limit that is no time, a ROS domain DDS cannot open. ValueError: one line,
+    naming what is known."""
+    from bt_nav_sim.lidar import lidar_model
+
+    from bt_nav.grading.plan import check_worlds
+    from bt_nav.mission.params import normalise_maneuver
+    from bt_nav.ros.nodes.simulator import SimulatorNode
+
+    if opts.rtf < 0:
+        raise ValueError(f"--rtf {opts.rtf:g}: sim seconds per wall second, >= 0 (0: as fast as possible)")
+    if opts.timeout <= 0:
+        raise ValueError(f"--timeout {opts.timeout:g}: the judge's wall-clock limit, > 0 s")
+    if opts.domain_id is not None and not 0 <= opts.domain_id <= 232:
+        raise ValueError(f"--domain-id {opts.domain_id}: a ROS_DOMAIN_ID is 0 to 232")
+    sim = parse_assignments(opts.sim_param)
+    check_worlds([w for w in (opts.world, sim.get("world")) if w])
+    if opts.maneuver is not None:
+        normalise_maneuver(opts.maneuver)
+    unknown = sorted(set(sim) - set(SimulatorNode.PARAMETERS))
+    if unknown:
+        raise ValueError(f"--sim-param {unknown[0]}: the simulator has no such setting; it has "
+                         + ", ".join(sorted(SimulatorNode.PARAMETERS)))
+    if sim.get("lidar"):
+        lidar_model(str(sim["lidar"]))
 
 
 def effective_maneuver(requested: str | None) -> str:
@@ -119,7 +150,12 @@ def main(argv: list[str] | None = None) -> int:
     from bt_nav.run.bagrecorder import start_process, stop_process
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
-    if opts.exe:
+    try:
+        check_options(opts)
+    except ValueError as exc:
+        print(f"bt-nav demo: {exc}", file=sys.stderr)
+        return 2
+    if opts.exe is not None:  # an empty one is refused as such, not taken for bt_nav's executive
         from bt_nav.cli.demo.exe import run_exe_demo
 
         return run_exe_demo(opts)

@@ -7,6 +7,10 @@ log lines with the sim time each was logged at, the judge's service calls and re
 (``bag/``) and filmed (``--video``, default ``video.mp4`` there): the robot, its scan, the node's command and its
 log lines, which is what the lab's hand-in asks for (the terminal output and the robot reacting).
 
+In the lab the maneuver is the one the node's file declares (the template's ``# CHOICE: X``, read as ``bt-nav
+grade`` reads it) unless ``--maneuver`` says another (a line says which wins), and the arena the one that checks it
+off (``lab_object`` for A and C, ``lab_dead_end`` for B) unless ``--world``.
+
 The run directory is ``<out>/<name>/<world>_<maneuver>_seed<seed>`` with grade --exe's files (``node.log``,
 ``verdict.json``, ``result.json``, ``bag/``). Exit code: 0 PASSED, 1 FAILED, 2 no verdict or a bad option.
 """
@@ -23,14 +27,28 @@ from typing import Any
 EXE_RTF = 5.0
 
 
-def _settings(opts: argparse.Namespace) -> tuple[Any, Any]:
-    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.node_run.ExeSettings` (ValueError
-    on a bad option)."""
+def exe_maneuver(opts: argparse.Namespace) -> tuple[str, str]:
+    """The maneuver a node is filmed on, and a line to say when ``--maneuver`` overrides its file's: in the lab the
+    ``# CHOICE: X`` the node's file declares, as ``bt-nav grade`` reads it, unless ``--maneuver`` is given
+    (:func:`bt_nav.grading.plan.lab_maneuver`); the homework's as for bt_nav's executive. ValueError: a lab node
+    without either, or an unknown maneuver."""
+    from bt_nav.grading.plan import lab_maneuver
+    from bt_nav.mission.params import normalise_maneuver
+    from bt_nav.run.settings import profile_maneuver
+
+    if opts.profile != "lab":
+        return profile_maneuver(opts.profile, opts.maneuver), ""
+    chosen, note = lab_maneuver(opts.exe, opts.maneuver, "--maneuver")
+    return normalise_maneuver(chosen), note
+
+
+def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
+    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.node_run.ExeSettings`, and a note on
+    its maneuver (:func:`exe_maneuver`; ValueError on a bad option)."""
     from bt_nav.grading.grid import Job
     from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.node_run import ExeSettings
     from bt_nav.ros.bringup import CHECKOFF_WORLDS
-    from bt_nav.run.settings import profile_maneuver
 
     if opts.profile not in ("homework", "lab"):
         raise ValueError(f"--profile {opts.profile}: --exe runs the homework's referee or the lab's check-off judge")
@@ -41,7 +59,7 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any]:
     if opts.overrides:
         raise ValueError("--set is for bt_nav's executive; give your node its parameters in the --exe command")
     lab = opts.profile == "lab"
-    maneuver = profile_maneuver(opts.profile, opts.maneuver)
+    maneuver, note = exe_maneuver(opts)
     if lab and maneuver not in CHECKOFF_WORLDS:
         raise ValueError(f"--profile lab checks off maneuver A, B or C, not {maneuver!r}")
     world = opts.world or (CHECKOFF_WORLDS[maneuver] if lab else "stage_4")
@@ -49,7 +67,7 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any]:
     settings = ExeSettings(resolve_program(opts.exe), opts.profile, Path(opts.out) / name,
                            limit=opts.timeout, rtf=opts.rtf or EXE_RTF, maneuvers=opts.maneuver is not None or lab,
                            record="on", videos="off", cwd=str(Path.cwd()))
-    return Job(world, maneuver, opts.seed, profile=opts.profile), settings
+    return Job(world, maneuver, opts.seed, profile=opts.profile), settings, note
 
 
 def run_exe_demo(opts: argparse.Namespace) -> int:
@@ -62,10 +80,12 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
     from bt_nav.run.terminal import NodeTerminal
 
     try:
-        job, settings = _settings(opts)
+        job, settings, note = _settings(opts)
     except (ValueError, FileNotFoundError) as exc:
         print(f"bt-nav demo: {exc}", file=sys.stderr)
         return 2
+    if note:
+        print(f"bt-nav demo: {note}", flush=True)
     print(f"bt-nav demo: {settings.command!r} as the robot node, {opts.profile} judge, {job.world}, maneuver "
           f"{job.maneuver}, seed {job.seed}, {settings.rtf:g}x real time", flush=True)
     clock = SimClock()

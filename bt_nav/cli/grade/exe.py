@@ -17,13 +17,14 @@ from typing import Any
 
 from tqdm import tqdm
 
-from bt_nav.grading.grid import Job
+from bt_nav.grading.grid import Job, run_label
 from bt_nav.run.settings import DEFAULT_JITTER
 
 
-def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
-    """The grid's :class:`ExeSettings`: the program resolved, the command run in this directory, ``--out``
-    absolute for a cluster (its workers may start elsewhere; both must be on a filesystem they share)."""
+def _settings(args: argparse.Namespace, maneuvers: bool, command: str | None = None) -> Any:
+    """The grid's :class:`ExeSettings`: the program resolved (``command``: resolved already), the command run in
+    this directory, ``--out`` absolute for a cluster (its workers may start elsewhere; both must be on a filesystem
+    they share)."""
     from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.node_run import ExeSettings
 
@@ -33,7 +34,7 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
     from bt_nav.mission.params import parse_assignments
 
     node_params = tuple(parse_assignments(args.node_param).items())
-    return ExeSettings(resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
+    return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
                        args.videos, os.getcwd(), node_params, args.realtime_check == "on")
 
@@ -41,9 +42,10 @@ def _settings(args: argparse.Namespace, maneuvers: bool) -> Any:
 def _show(row: dict[str, Any]) -> None:
     """One line per run as it ends (above the progress bar, when there is one)."""
     label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
-    lidar = f" {row['lidar']}" if row.get("lidar") else ""
-    tqdm.write(f"  {row['world']} {row['maneuver']}{lidar} seed {row['seed']}: {label} ({row['reason']}; "
+    tqdm.write(f"  {run_label(row)}: {label} ({row['reason']}; "
                f"{row['wall_time']:.1f} s wall) {row['run_dir']}", file=sys.stdout)
+    for note in row.get("notes", []):  # not the node's: a domain it had to leave, a lost SIGINT
+        tqdm.write(f"    note: {note}", file=sys.stdout)
     sys.stdout.flush()
 
 
@@ -139,12 +141,17 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     return 3 if errors or len(judged) < planned else 0
 
 
+def _runs(count: int) -> str:
+    return f"{count} run{'' if count == 1 else 's'}"
+
+
 def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """``bt-nav grade --class MANIFEST``: every student's grid (:func:`bt_nav.grading.classroom.run_class`), each
     written as ``--exe`` writes one, then the class page. Exit codes as for one grid, over the whole class."""
     import copy
 
-    from bt_nav.grading.classroom import read_manifest, run_class, write_class_page
+    from bt_nav.grading.classroom import admit, read_manifest, run_class, write_class_page
+    from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.plan import build_jobs, grid_axes
     from bt_nav.ros.supervise import StopRequest
 
@@ -154,29 +161,35 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         students = read_manifest(Path(args.klass))
         out = Path(args.out or f"runs/grade-class-{time.strftime('%Y%m%d-%H%M%S')}").absolute()
         worlds, seeds = grid_axes(args)
+        # A bad entry fails its student; options that do not fit refuse the class, every plan before the first run.
+        commands, refused = admit(students, args.profile == "lab" and not args.maneuvers, resolve_program)
         plans, left_out = {}, set()
-        for student in students:  # every plan checked before the first run (a bad command refuses the class)
+        for student in (s for s in students if s.name in commands):
             own = copy.copy(args)
             own.exe, own.out, own.json = student.command, str(out / student.name), None
             jobs = build_jobs(own, worlds, seeds, left_out)
-            plans[student.name] = (_settings(own, own.profile == "lab" or own.maneuvers is not None), jobs)
+            plans[student.name] = (_settings(own, own.profile == "lab" or own.maneuvers is not None,
+                                             commands[student.name]), jobs)
     except ValueError as exc:
         parser.error(str(exc))
     if left_out:
         print("not checked off there: " + ", ".join(sorted(left_out)), file=sys.stderr)
     print(f"bt-nav grade: a class of {len(students)} in {out}/: " + ", ".join(
-        f"{name} ({len(jobs)} runs)" for name, (_, jobs) in plans.items()), flush=True)
+        f"{s.name} (not run)" if s.name in refused else f"{s.name} ({_runs(len(plans[s.name][1]))})"
+        for s in students), flush=True)
+    for name, reason in refused.items():
+        print(f"  {name}: FAILED (not run: {reason})", flush=True)
     stop = StopRequest().install()
     started = time.perf_counter()
     try:
-        done = run_class(students, lambda s: plans[s.name], args.jobs, stop,
+        done = run_class([s for s in students if s.name in plans], lambda s: plans[s.name], args.jobs, stop,
                          lambda name, row: _show({**row, "world": f"{name}: {row['world']}"}), args.resume)
     except ValueError as exc:  # a student's directory holds another grade
         parser.error(str(exc))
     finally:
         stop.closing = True
         stop.restore()
-    paths = write_class_page(out, students, f"Class grade ({args.profile} profile)")
+    paths = write_class_page(out, students, f"Class grade ({args.profile} profile)", refused)
     wall = time.perf_counter() - started
     print(f"class of {len(students)} in {wall:.1f} s wall; wrote " + ", ".join(map(str, paths)))
     if stop.requested:
