@@ -182,7 +182,9 @@ def test_a_class_with_bad_entries_grades_the_others_and_shows_each_reason(
     page = {s["name"]: s for s in json.loads((out / "class.json").read_text())["students"]}
     assert page["bob"]["refused"] == f"{tmp_path / 'bob.py'} does not exist" and page["bob"]["passed"] == 0
     assert "refused" not in page["ann"]
-    assert f"{tmp_path / 'binary.py'} is not a Python source file" in (out / "class.md").read_text()
+    md = (out / "class.md").read_text()
+    assert f"{tmp_path / 'binary.py'} is not a Python source file" in md
+    assert "| bob | FAILED, not run |" in md and "bob/report.html" not in md  # a refused student has no report
 
 
 def test_the_choice_is_read_from_the_file_the_command_runs(tmp_path: Path) -> None:

@@ -224,8 +224,9 @@ def class_markdown(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: 
     lines = [f"# {title}", "", "| student | passed | " + " | ".join(cells) + " | bt_nav errors |",
              "|---|---|" + "---|" * len(cells) + "---|"]
     for r in rows:
-        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "not graded"
-        lines.append(f"| [{r['name']}]({r['dir']}/report.html) | {total} | "
+        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "FAILED, not run" if r.get("refused") else "not graded"
+        name = f"[{r['name']}]({r['dir']}/report.html)" if r["graded"] else r["name"]  # a refused one has no report
+        lines.append(f"| {name} | {total} | "
                      + " | ".join(_rate(r["cells"].get(c)) for c in cells) + f" | {r['errors']} |")
     for r in rows:
         said = _said(r)
@@ -253,7 +254,7 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
             if c in r["cells"] else "<td>-</td>" for c in cells)
         notes = "<br>".join(esc(s) for s in _said(r)) or ('<span class="note">nothing to say</span>' if r["graded"]
                                                           else '<span class="note">not graded yet</span>')
-        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "-"
+        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "FAILED, not run" if r.get("refused") else "-"
         body.append(f"<tr><td>{link}</td><td class=\"num\">{total}</td>{tds}<td class=\"num\">{r['errors']}</td>"
                     f"<td>{notes}</td></tr>")
     return (f"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{esc(title)}</title><style>{STYLE}</style>"
