@@ -21,7 +21,8 @@ def _job(seed: int) -> Job:
 
 def _row(job: Job, passed: bool, outcome: str = "verdict", where: str = "fast") -> dict[str, Any]:
     return {"job": job.key, "passed": passed, "outcome": outcome, "reason": "passed" if passed else "failed: angle",
-            "findings": [], "run_dir": f"/{where}/{job.seed}"}
+            "findings": [], "run_dir": f"/{where}/{job.seed}", "world": job.world, "maneuver": job.maneuver,
+            "lidar": "lds01", "seed": job.seed}
 
 
 @pytest.fixture
@@ -124,3 +125,80 @@ def test_a_homework_timer_by_the_wall_clock_shows_in_its_evaluation_call() -> No
     said = realtime.wall_clock_evidence(_verdict([], called=50.1), _verdict([], called=None), 5.0)
     assert said == "its evaluation call came at t=50.1 s at 1x and never at 5x"
     assert realtime.wall_clock_evidence(_verdict([], called=50.1), _verdict([], called=50.3), 5.0) is None
+
+
+def _verdict_row(job: Job, failed: list[str], findings: tuple[str, ...] = (), **verdict: Any) -> dict[str, Any]:
+    """A failed row with a verdict: ``failed`` the names of its failed checks (one passed check besides)."""
+    checks = [{"name": name, "passed": False} for name in failed] + [{"name": "no collision", "passed": True}]
+    return {**_row(job, False), "verdict": {"passed": False, "checks": checks, "findings": list(findings), **verdict}}
+
+
+def _crashed(job: Job, exception: str | None = None, starting: bool = False) -> dict[str, Any]:
+    """A row whose node exited with an error, with the crash its traceback showed (None: no traceback)."""
+    row = {**_row(job, False, "node exited"), "verdict": None}
+    if exception is not None:
+        row["crash"] = {"exception": exception, "where": "node.py:10 in __init__", "starting": starting}
+    return row
+
+
+TWIST_STAMPED = ("reactive_navigator publishes /cmd_vel as geometry_msgs/msg/TwistStamped, but bt_nav_sim reads "
+                 "geometry_msgs/msg/Twist: not one message passes")
+NO_SCAN = "no node subscribed to /scan: the node never received one message from it"
+NO_CLOCK = ("no node subscribed to /clock: the node does not run on sim time (use_sim_time:=true was given with "
+            "--ros-args; does it pass its arguments to rclpy.init?)")
+
+
+def test_which_failures_a_speed_can_change() -> None:
+    """Settled before the simulation moves (no 1x run): a crash while starting, the arm service never offered,
+    ``parameters declared`` the only failed check, scans or commands no message carries. Everything a turn, a
+    stop, a lateness or a callback racing the clock decides may depend on the speed (a 1x run)."""
+    job = _job(0)
+    cannot = realtime.speed_cannot_matter
+    assert cannot(_crashed(job, "rclpy.exceptions.ParameterNotDeclaredException: Invalid access to undeclared "
+                                "parameter(s): safety_distance", starting=True)) == \
+        "the node crashed while starting (ParameterNotDeclaredException)"
+    assert cannot(_crashed(job, "ModuleNotFoundError: No module named 'rclpy'", starting=True)) == \
+        "the node crashed while starting (ModuleNotFoundError)"
+    assert cannot(_crashed(job, "ValueError: min() arg is an empty sequence")) is None  # in its scan callback
+    assert cannot(_crashed(job)) is None  # no traceback: nothing says when or why
+    never = "the service /toggle_navigation never appeared within 20 s wall"
+    assert cannot(_verdict_row(job, ["/toggle_navigation offered"], not_started=never)) == f"not judged: {never}"
+    assert cannot(_verdict_row(job, ["parameters declared"])) == "only parameters declared failed"
+    assert cannot(_verdict_row(job, ["maneuvers performed"], (TWIST_STAMPED,))) == TWIST_STAMPED.split(": ")[0]
+    assert cannot(_verdict_row(job, ["maneuvers performed"], (NO_SCAN,))) == "no node subscribed to /scan"
+    for failed in (["maneuver 1"], ["parameters declared", "maneuver 1"], ["no collision"], ["static at the end"],
+                   ["evaluation service called"], ["minimum travelled distance"], ["recovery turns"]):
+        assert cannot(_verdict_row(job, failed)) is None, failed
+    assert cannot(_verdict_row(job, ["maneuvers performed"], (NO_CLOCK,))) is None  # on the wall clock: right at 1x
+    assert cannot(_verdict_row(job, ["parameters declared"], timed_out=True)) is None
+    assert cannot({**_row(job, False, "timeout"), "verdict": None}) is None
+
+
+def test_only_failures_a_speed_can_change_run_at_1x(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(s) for s in (0, 2, 4)]
+    rows = {jobs[0].key: _crashed(jobs[0], "ModuleNotFoundError: No module named 'rclpy'", starting=True),
+            jobs[1].key: _verdict_row(jobs[1], ["maneuver 1"]), jobs[2].key: _verdict_row(jobs[2], ["maneuver 1"])}
+    settings = _settings(tmp_path)
+    assert realtime.check_plan(jobs, settings, rows) == [
+        f"bt-nav grade: lab_object C lds01 seed 2 again at 1x real time before the failures stand, then the 1 other "
+        f"failed run that may depend on speed if it passes there (--realtime-check off skips it): into "
+        f"{tmp_path / 'realtime'}/",
+        "bt-nav grade: not re-run at 1x, no speed changes their verdict: lab_object C lds01 seed 0 (the node crashed "
+        "while starting (ModuleNotFoundError))"]
+    assert realtime.confirm_at_real_time(jobs, settings, rows, 2) == 2
+    assert ran == [(2, 1.0), (4, 1.0)]
+    assert rows[jobs[0].key]["outcome"] == "node exited"
+
+
+def test_nothing_runs_at_1x_when_no_failure_depends_on_speed(tmp_path: Path, ran: list) -> None:
+    jobs = [_job(s) for s in (0, 2, 4, 6)]
+    rows = {jobs[0].key: _verdict_row(jobs[0], ["parameters declared"]),
+            jobs[1].key: _verdict_row(jobs[1], ["parameters declared"]),
+            jobs[2].key: _verdict_row(jobs[2], ["maneuvers performed"], (NO_SCAN,)), jobs[3].key: _row(jobs[3], True)}
+    assert realtime.check_plan(jobs, _settings(tmp_path), rows) == [
+        "bt-nav grade: no failed run depends on speed, so none is re-run at 1x: lab_object C lds01 seed 0, "
+        "lab_object C lds01 seed 2 (only parameters declared failed); lab_object C lds01 seed 4 (no node subscribed "
+        "to /scan)"]
+    assert realtime.confirm_at_real_time(jobs, _settings(tmp_path), rows, 2) == 0
+    assert ran == []
+    assert realtime.check_plan(jobs, _settings(tmp_path, realtime_check=False), rows) == []

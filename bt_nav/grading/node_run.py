@@ -30,11 +30,12 @@ directory of its own, and three process groups started by one :class:`bt_nav.ros
   films the failed runs from it.
 
 The run ends when the judge's JSON (the verdict) appears, when the node exits first with an error (the
-reason names its exit code; a node that ends by itself with 0 still gets its verdict), at the wall-time
-limit, or on a stop request; then every group gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the
-audit's plus how the node ended (it ignored SIGINT, it ended before the verdict), each also appended to its
-``reason``. The output of each process (stdout and stderr, merged in order) is ``<name>.log`` in the run
-directory, the row ``result.json``. Grids: :mod:`bt_nav.grading.node_grid`; reports: :mod:`bt_nav.grading.report`.
+reason quotes the exception that ended it and where the node's code raised it, else names its exit code; a node
+that ends by itself with 0 still gets its verdict), at the wall-time limit, or on a stop request; then every group
+gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the audit's plus how the node ended (it ignored SIGINT,
+it ended before the verdict), each also appended to its ``reason``. The output of each process (stdout and
+stderr, merged in order) is ``<name>.log`` in the run directory, the row ``result.json``. Grids:
+:mod:`bt_nav.grading.node_grid`; reports: :mod:`bt_nav.grading.report`.
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ import shlex
 import signal
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +53,7 @@ from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.grid import Job
 from bt_nav.grading.node_bag import bag_row, start_recorder
-from bt_nav.grading.node_log import import_findings, rclpy_shutdown_race
+from bt_nav.grading.node_log import Crash, import_findings, node_crash, rclpy_shutdown_race
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, host_judge, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
@@ -163,28 +164,46 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
 
 
 def _wait(sim: Child, node: Child, limit: float, stop: StopRequest | None, started: float,
-          results_json: Path) -> tuple[str, str]:
-    """Wait for the judge's verdict file (``("verdict", "")``), or why there is none: ``(outcome, reason line)``.
+          results_json: Path) -> tuple[str, str, Crash | None]:
+    """Wait for the judge's verdict file (``("verdict", "", None)``), or why there is none: ``(outcome, reason
+    line, the node's crash)``.
 
     A node that exits with 0 ended by itself (some call ``rclpy.shutdown()`` after their mission): the judge
-    still judges what the robot did; any other exit code is a crash and ends the run now.
+    still judges what the robot did; any other exit code is a crash and ends the run now (:func:`_exit_reason`).
     """
     end = started + limit
     while time.monotonic() < end:
         if results_json.is_file():
-            return "verdict", ""
+            return "verdict", "", None
         code = node.poll()
         if code is not None and code != 0:
-            return "node exited", (f"the node exited with code {code} after {time.monotonic() - started:.1f} s "
-                                   "wall, before the verdict (see node.log)")
+            wall = time.monotonic() - started
+            node.thread.join(LOG_DRAIN)  # the traceback's last lines may still be in the pipe
+            log = results_json.parent / f"{node.name}.log"
+            crash = node_crash(log.read_text(errors="replace")) if log.is_file() else None
+            return "node exited", _exit_reason(code, wall, crash), crash
         if sim.poll() is not None:
             if results_json.is_file():
-                return "verdict", ""
-            return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)"
+                return "verdict", "", None
+            return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)", None
         if stop is not None and stop.requested:
-            return "stopped", f"stopped by {stop.name or 'a stop request'}"
+            return "stopped", f"stopped by {stop.name or 'a stop request'}", None
         time.sleep(0.05)
-    return "timeout", f"no verdict within {limit:g} s wall"
+    return "timeout", f"no verdict within {limit:g} s wall", None
+
+
+#: Wall seconds a crashed node's output is waited for (its pipe closes at once unless a child of its holds it).
+LOG_DRAIN = 2.0
+
+
+def _exit_reason(code: int, wall: float, crash: Crash | None) -> str:
+    """Why a node that exited with ``code`` after ``wall`` seconds has no verdict: the exception that ended it and
+    where its code raised it, from its traceback (:func:`bt_nav.grading.node_log.node_crash`); without one (no
+    traceback, or one that is not a crash of the node's), only the exit code."""
+    if crash is None:
+        return f"the node exited with code {code} after {wall:.1f} s wall, before the verdict (see node.log)"
+    status = "" if code == 1 else f" (exit code {code})"  # 1: what Python exits with on an uncaught exception
+    return f"the node crashed after {wall:.1f} s wall{status}: {crash.quote()}"
 
 
 #: The outcome of an attempt that found its domain shared; how many times a run moves to another domain.
@@ -323,8 +342,10 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
                    "verdict": None}
         else:
             sim = launcher.start(sim_spec)
-            outcome, reason = _wait(sim, node, settings.limit, stop, started, results_json)
+            outcome, reason, crash = _wait(sim, node, settings.limit, stop, started, results_json)
             row = _verdict_row(outcome, reason, sim, results_json)
+            if crash is not None:  # what the 1x re-run is decided on (bt_nav.grading.realtime)
+                row["crash"] = asdict(crash)
         if on_verdict is not None:
             on_verdict()
     finally:

@@ -8,17 +8,22 @@ The grader must never fail a right node, so before failures stand one failed run
 If it passes there, every failed run is run at 1x, graded there, and carries a finding that names the wall clock;
 a node that fails at 1x too keeps its verdicts (its mistake is not the speed), at the cost of one run at 1x.
 
+Only failures a speed can have caused are run again (:func:`speed_cannot_matter`): not a node that crashed while
+starting, whose arm service never appeared, that only failed to declare a parameter, or whose scans or commands
+no message could carry (a wrong topic, type or QoS). Those are fixed before the simulation moves.
+
 The 1x runs live in ``<out>/realtime/`` (the faster runs stay where they are, linked from the finding); resuming
 reuses the 1x runs that finished there.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
 
-from bt_nav.grading.grid import Job
+from bt_nav.grading.grid import Job, run_label
 from bt_nav.grading.node_grid import ERROR, STOPPED, finished_runs, run_pool
 from bt_nav.grading.node_run import ExeSettings
 from bt_nav.ros.supervise import StopRequest
@@ -35,11 +40,78 @@ def failed_at_speed(row: Row | None) -> bool:
     return bool(row) and not row["passed"] and row["outcome"] not in (ERROR, STOPPED) and "realtime" not in row
 
 
+#: Failed checks no speed can change: what the node declares at start-up (the lab's ``ros2 param list``), not what
+#: it does in time. Every other check can (maneuvers, stops, lateness, collisions, distances, the evaluation call).
+TIMELESS_CHECKS = frozenset({"parameters declared"})
+#: Audit findings after which the node hears no scan or moves no robot at any speed (a wrong topic, type or QoS).
+#: Not ``/clock``: a node off sim time keeps the wall clock, which is right at 1x.
+_CUT_OFF = re.compile(r"^no node subscribed to |^no node published on |: not one message passes$")
+
+
+def speed_cannot_matter(row: Row) -> str | None:
+    """Why no speed of the simulation can change this failed run's verdict (a clause), or None when one can (the
+    run then goes again at 1x). Only what is settled before the simulation moves: a crash while starting
+    (:func:`bt_nav.grading.node_log.node_crash`: importing or in an ``__init__``), the arm service never offered,
+    ``parameters declared`` the only failed check, or scans or commands that no message could carry. A crash in a
+    callback, a timeout and every other check may depend on time (a callback racing the first scan, a turn timed by
+    the wall clock), so they do not count here."""
+    if row["outcome"] == "node exited":
+        crash = row.get("crash") or {}
+        kind = str(crash.get("exception", "")).split(":")[0].rsplit(".", 1)[-1]  # ParameterNotDeclaredException
+        return f"the node crashed while starting ({kind})" if crash.get("starting") else None
+    verdict = row.get("verdict")
+    if row["outcome"] != "verdict" or not verdict or verdict.get("timed_out"):
+        return None
+    if verdict.get("not_started"):
+        return f"not judged: {verdict['not_started']}"
+    failed = [check["name"] for check in verdict.get("checks", []) if not check.get("passed")]
+    if failed and set(failed) <= TIMELESS_CHECKS:
+        return f"only {', '.join(failed)} failed"
+    cut = [finding.split(": ")[0] for finding in verdict.get("findings") or [] if _CUT_OFF.search(finding)]
+    cut = [finding for finding in cut if "/clock" not in finding]
+    return cut[0] if cut else None
+
+
 def failed_jobs(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]) -> list[Job]:
-    """The jobs whose failure the grid checks at 1x: none at ``rtf <= 1`` or with the check off."""
+    """The jobs whose failure the grid checks at 1x: the failed runs a speed can have failed
+    (:func:`speed_cannot_matter`); none at ``rtf <= 1`` or with the check off."""
     if settings.rtf <= 1.0 or not settings.realtime_check:
         return []
-    return [job for job in jobs if failed_at_speed(rows.get(job.key))]
+    return [job for job in jobs if failed_at_speed(rows.get(job.key)) and speed_cannot_matter(rows[job.key]) is None]
+
+
+def check_plan(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]) -> list[str]:
+    """What the terminal says before the 1x check: the failed run that goes first at 1x (and that the others follow
+    if it passes there), then the failed runs not run again, grouped by why; nothing at ``rtf <= 1``, with the check
+    off, or without a failure."""
+    if settings.rtf <= 1.0 or not settings.realtime_check:
+        return []
+    again = failed_jobs(jobs, settings, rows)
+    kept: dict[str, list[str]] = {}
+    for job in jobs:
+        row = rows.get(job.key)
+        why = speed_cannot_matter(row) if row is not None and failed_at_speed(row) else None
+        if why is not None:
+            kept.setdefault(why, []).append(run_label(row))
+    lines = []
+    if again:
+        others = len(again) - 1
+        then = f", then the {others} other failed run{'s' if others > 1 else ''} that may depend on speed if it " \
+            "passes there" if others else ""
+        lines.append(f"bt-nav grade: {run_label(rows[again[0].key])} again at 1x real time before the failures "
+                     f"stand{then} (--realtime-check off skips it): into {settings.out / REALTIME_DIR}/")
+    if kept:
+        head = "not re-run at 1x, no speed changes their verdict" if again else \
+            "no failed run depends on speed, so none is re-run at 1x"
+        groups = "; ".join(f"{_labels(labels)} ({why})" for why, labels in kept.items())
+        lines.append(f"bt-nav grade: {head}: {groups}")
+    return lines
+
+
+def _labels(labels: list[str], shown: int = 3) -> str:
+    """The first ``shown`` run labels, and how many more."""
+    more = f" and {len(labels) - shown} more" if len(labels) > shown else ""
+    return ", ".join(labels[:shown]) + more
 
 
 def wall_clock_finding(rtf: float, reason: str, evidence: str | None = None) -> str:

@@ -64,7 +64,12 @@ def test_a_node_crashing_at_start_is_a_verdict(tmp_path: Path, profile: str) -> 
     code, doc = _grade(tmp_path, "crash_node.py", "--timeout", "60", "--profile", profile)
     [row] = doc["runs"]
     assert code == 1 and not row["passed"]
-    assert row["outcome"] == "node exited" and "the node exited with code 1" in row["reason"], row["reason"]
+    assert row["outcome"] == "node exited", row["reason"]
+    # its traceback's last line and its own frame that raised it (below rclpy's none: create_node returned)
+    assert row["reason"].startswith("the node crashed after ") and row["reason"].endswith(
+        " s wall: RuntimeError: this node crashes at start (crash_node.py:10 in main; see node.log)"), row["reason"]
+    assert row["crash"] == {"exception": "RuntimeError: this node crashes at start",
+                            "where": "crash_node.py:10 in main", "starting": False}  # not in an __init__: see node_log
     assert row["wall_time"] < 40.0
     assert "this node crashes at start" in (Path(row["run_dir"]) / "node.log").read_text()
     _no_children_left(before)

@@ -103,16 +103,19 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
 
 def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: int,
                         stop: Any) -> list[dict[str, Any]]:
-    """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying so when it runs."""
-    from bt_nav.grading.realtime import confirm_at_real_time, failed_jobs
+    """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying which runs go again and which
+    not (and why)."""
+    from bt_nav.grading.realtime import check_plan, confirm_at_real_time, failed_jobs
 
     by_key = {row["job"]: row for row in rows}
-    if stop.requested or not failed_jobs(jobs, settings, by_key):
+    if stop.requested:
         return rows
-    print(f"bt-nav grade: a failed run again at 1x real time before the failures stand (--realtime-check off "
-          f"skips it): into {settings.out / 'realtime'}/", flush=True)
+    for line in check_plan(jobs, settings, by_key):
+        print(line, flush=True)
+    if not failed_jobs(jobs, settings, by_key):
+        return rows
     replaced = confirm_at_real_time(jobs, settings, by_key, workers, stop, _show)
-    if not replaced:
+    if not replaced and not stop.requested:
         print("bt-nav grade: it failed at 1x too: the failures stand", flush=True)
     return [by_key[job.key] for job in jobs if job.key in by_key]
 
