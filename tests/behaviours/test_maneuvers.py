@@ -188,3 +188,33 @@ def test_smart_pivot_reads_the_side_sectors_when_told() -> None:
     leaf = make(SmartPivotManeuver, clock=FakeClock(1.0))
     tick(leaf)
     assert leaf.rotation == pytest.approx(-math.pi / 2)
+
+
+@pytest.mark.parametrize(("cls", "s", "hands_over"), [
+    (SmartPivotManeuver, sectors(front=0.25, left=0.5, right=1.0), True),
+    (RandomizerManeuver, sectors(front=0.4), True),
+    (RetreatManeuver, sectors(left=0.4, right=0.45), False),
+])
+def test_a_rotation_in_place_after_a_maneuver_keeps_its_side(cls: type, s: Sectors, hands_over: bool) -> None:
+    """A front still close after a quarter turn (or A's random turn) is rotated away from on the maneuver's
+    side: choosing afresh turned the Smart Pivot back into the pocket it had turned away from (cluttered,
+    seeds 1 and 15, short of 8 m). B's half turn says nothing about where the room is: it hands nothing over."""
+    from bt_nav.mission.behaviours.motion import RotateInPlace, TurnSide
+
+    board = maneuver_board(s)
+    clock = FakeClock(1.0)
+    rotate = make(RotateInPlace, clock=clock)  # built with the tree, before the maneuver runs (as in a tree)
+    leaf = make(cls, clock=clock)
+    yaw = 0.0
+    while tick(leaf) == Status.RUNNING:
+        clock.now += 0.05
+        yaw += board.get("cmd_vel").angular * 0.05
+        board.set(odom=OdomSample(yaw, clock.now, 0.0, 0.0))
+    side = math.copysign(1.0, leaf.rotation)
+    memory = board.get("turn_side", TurnSide())
+    assert (memory.side, memory.in_place) == ((side, True) if hands_over else (0.0, False))
+    # the close branch next: its own reading of the room (every heading's free path, more on the other side)
+    board.set(paths=FreePaths(HEADINGS, np.where(side * HEADINGS > 0, 0.1, 0.25)), far_distance=0.7)
+    clock.now += 0.05
+    tick(rotate)
+    assert math.copysign(1.0, board.get("cmd_vel").angular) == (side if hands_over else -side)

@@ -139,7 +139,18 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                 "time_base": "logs: sim time (executive clock) [wall]; referee results: seconds from its t0"}
     (run_dir / "run.json").write_text(json.dumps(run_info, indent=1) + "\n", encoding="utf-8")
     return {"names": names, "maneuver": maneuver, "domain": domain, "run_dir": run_dir, "specs": specs,
-            "results": results, "label": label}
+            "results": results, "label": label, "parameters": parameters}
+
+
+def trigger_words(maneuver: str, parameters: dict[str, Any]) -> str:
+    """The executive's trigger of ``maneuver`` in words, from the run's parameter values: a demo whose count is 0
+    says what never happened (C's trigger is nearer than the close / far driving usually lets the robot get)."""
+    front = f"the front (+-{float(parameters['front_half_angle_deg']):g} deg)"
+    if maneuver == "A":
+        return f"{front} nearer than safety_distance {float(parameters['safety_distance']):.2f} m"
+    if maneuver == "B":
+        return f"left and right both nearer than safety_distance {float(parameters['safety_distance']):.2f} m"
+    return f"{front} nearer than pivot_distance {float(parameters['pivot_distance']):.2f} m"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -213,8 +224,13 @@ def _robot_files(run: dict[str, Any], name: str, rec: Recording) -> tuple[dict[s
     out.write_text(json.dumps(data) + "\n", encoding="utf-8")
     fired = sum(rec.maneuvers.values())
     detail = ", ".join(f"{tip.rsplit('.', 1)[-1]} x{n}" for tip, n in sorted(rec.maneuvers.items()))
+    why = ""
+    if not fired and run["maneuver"] != "none":
+        why = (f": its trigger, {trigger_words(run['maneuver'], run['parameters'])}, did not fire in this run "
+               "(the close / far driving steers away from obstacles, often before they are that near)")
     print(f"bt-nav demo: {name + ': ' if several else ''}maneuvers fired: {fired}"
-          + (f" ({detail})" if detail else "") + f" (maneuver {run['maneuver']}, counted from the tree)", flush=True)
+          + (f" ({detail})" if detail else "") + f" (maneuver {run['maneuver']}, counted from the tree){why}",
+          flush=True)
     if rec.foreign_truth:
         print(f"bt-nav demo: {rec.foreign_truth} ground-truth messages came from another simulator in this ROS "
               "domain: this run's figures cannot be trusted; give each run its own ROS_DOMAIN_ID", file=sys.stderr)
