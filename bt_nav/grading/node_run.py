@@ -139,7 +139,7 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
 #: ``max_lag`` sim s past its latest command or its own command period, and in any case until the next scan it
 #: answers is out: :class:`bt_nav_sim.pacing.Followers`), a silence of ``follower_timeout`` wall seconds ends the wait.
 FOLLOW_NODE: dict[str, Any] = {"follow": True, "cmd_vel_reliability": "best_effort", "follower_timeout": 1.0,
-                               "max_lag": 0.05}
+                               "max_lag": 0.05, "lead_margin": 0.05, "scan_floor": True}
 
 
 def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:

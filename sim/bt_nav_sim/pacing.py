@@ -43,11 +43,14 @@ class Followers:
     Args:
         max_lag_ns: the smallest lead allowed, sim ns.
         silence_s: wall seconds without a message after which a follower is dropped.
+        margin_ns: sim ns added to a learnt period (``bt-nav grade --exe``: ``max_lag``; 0, the default, keeps
+            bt_nav's own executive paced exactly as lock-step predicts).
         hold_s: wall seconds after which a hold is ignored (the follower is dropped).
     """
 
-    def __init__(self, max_lag_ns: int, silence_s: float, hold_s: float) -> None:
+    def __init__(self, max_lag_ns: int, silence_s: float, hold_s: float, margin_ns: int = 0) -> None:
         self.max_lag_ns = int(max_lag_ns)
+        self.margin_ns = int(margin_ns)
         self.silence_s = float(silence_s)
         self.hold_s = float(hold_s)
         self.members: dict[str, Follower] = {}
@@ -86,7 +89,7 @@ class Followers:
     def lead_ns(self, who: str) -> int:
         """How far sim time may lead ``who``'s latest message (its sensor's floor aside: :meth:`limit_ns`)."""
         m = self.members[who]
-        return self.max_lag_ns + min(m.intervals, default=0)
+        return max(self.max_lag_ns, self.margin_ns + min(m.intervals, default=0))
 
     def limit_ns(self, who: str) -> int:
         """The sim time ``who`` keeps sim time from passing: its latest message plus its lead, and at least its

@@ -76,7 +76,7 @@ def test_bad_config_is_refused() -> None:
 
 
 def test_followers_bound_the_lead_and_time_out() -> None:
-    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
     assert f.blocking(10**9, wall=0.0) == (None, [])
     assert f.report("cmd_vel", 1000 * MS, False, wall=0.0)  # joins
     assert f.blocking(1050 * MS, wall=0.1) == (None, [])  # exactly one period ahead is allowed
@@ -92,7 +92,7 @@ def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() 
     """A node on a 5 Hz timer behind a 0.15 s lead (a 10 Hz LiDAR's): its first gap spans a silence (sim time
     waited for it while it was given up for silent), and still is its period, so from then on sim time reaches its
     next message time (when the gap was forgotten at every rejoin, it was given up before every message)."""
-    f = Followers(max_lag_ns=150 * MS, silence_s=1.0, hold_s=5.0)
+    f = Followers(max_lag_ns=150 * MS, silence_s=1.0, hold_s=5.0, margin_ns=150 * MS)
     f.report("cmd_vel", 1000 * MS, False, wall=0.0)
     assert f.blocking(1160 * MS, wall=1.1) == (None, ["cmd_vel"])
     f.report("cmd_vel", 1200 * MS, False, wall=1.2)
@@ -100,7 +100,7 @@ def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() 
 
 
 def test_followers_learn_a_longer_period() -> None:
-    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
     for k in range(5):  # a 10 Hz follower
         f.report("slow", k * 100 * MS, False, wall=0.0)
     assert f.lead_ns("slow") == 150 * MS  # its period and the lead
@@ -116,16 +116,25 @@ def test_a_node_answering_its_scans_is_led_until_the_next_scan_is_out_and_no_fur
     after its latest command plus the small lead (never giving it up for silent while it waits for that scan), and
     past that only once it has answered; a node on a fast timer is held at the small lead in between (its turns,
     timed on its ROS clock, then last what it meant them to)."""
-    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
     f.floors["cmd_vel"] = lambda t: (t // (200 * MS) + 1) * 200 * MS
     f.report("cmd_vel", 1010 * MS, False, wall=0.0)  # its answer to the scan of 1.0 s
     assert f.blocking(1250 * MS, wall=0.1) == (None, [])  # the 1.2 s scan must go out
     assert f.blocking(1260 * MS, wall=0.1) == ("cmd_vel", [])  # not past it before the node has answered
     f.report("cmd_vel", 1215 * MS, False, wall=0.2)  # its period is now 205 ms: led 255 ms, past the next scan's 50
     assert f.blocking(1470 * MS, wall=0.2) == (None, []) and f.blocking(1480 * MS, wall=0.2) == ("cmd_vel", [])
-    g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)  # no sensor floor: the small lead alone
+    # no sensor floor: the small lead alone
+    g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
     g.report("timer", 1010 * MS, False, wall=0.0)
     assert g.blocking(1070 * MS, wall=0.1) == ("timer", [])
+
+
+def test_without_a_margin_the_learnt_period_is_the_lead_as_lock_step_predicts() -> None:
+    """bt_nav's own executive (sim-run, demo): no margin, so a 20 Hz follower is led exactly its period."""
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
+    for k in range(5):
+        f.report("exec", k * 100 * MS, False, wall=0.0)
+    assert f.lead_ns("exec") == 100 * MS and f.limit_ns("exec") == 500 * MS
 
 
 def test_holds_block_until_released_or_too_long() -> None:

@@ -630,7 +630,7 @@ class JudgeNode(QuietQosEvents, Node):
         return self.free.checks(self.resolve_service_name(self.activate_name), why)
 
     def _unjudged_lines(self) -> list[str]:
-        return [f"{c['name']} ({c['detail']}): FAILED" for c in self._unjudged_checks()]
+        return [*(f"{c['name']} ({c['detail']}): FAILED" for c in self._unjudged_checks()), "overall: FAILED"]
 
     def _give_up(self) -> None:
         self.leave()

@@ -186,6 +186,8 @@ class SimulatorNode(QuietQosEvents, Node):
         "follow": (True, "wait for the followers (cmd_vel publishers, sim_sync senders) to keep up"),
         "max_lag": (0.05, "sim s that sim time may lead an active follower (at least; see Followers)"),
         "follower_timeout": (1.0, "wall s of silence after which a follower is no longer waited for"),
+        "lead_margin": (0.0, "sim s added to a follower's learnt period (see Followers)"),
+        "scan_floor": (False, "lead a robot's cmd_vel at least until the next scan it answers is out (a graded node)"),
         "hold_timeout": (5.0, "wall s after which a follower's hold is ignored"),
         "idle_rtf": (10.0, "real_time_factor 0: speed while there is no follower"),
         "afap_max_rtf": (0.0, "real_time_factor 0: upper bound on the speed (0: none)"),
@@ -213,7 +215,7 @@ class SimulatorNode(QuietQosEvents, Node):
         self.cmd_reliability = cmd_qos.reliability.name.lower()  # best_effort or reliable, for the start-up line
         self.robots = [_RobotIO(self, prefix, i, bool(p["cmd_vel_stamped"]), cmd_qos)
                        for i, prefix in enumerate(prefixes)]
-        for robot in self.robots:  # a robot's node answers its scans (Followers' floors)
+        for robot in self.robots if self.scan_floor else ():  # a robot's node answers its scans (Followers' floors)
             self.followers.floors[robot.follower] = robot.core.scan_after_ns
         self.create_subscription(String, "sim_sync", self._on_sync, QoSProfile(depth=50))
         self._init_shared_state()
@@ -225,7 +227,8 @@ class SimulatorNode(QuietQosEvents, Node):
         self.rtf = max(0.0, float(p["real_time_factor"]))
         self.follow = bool(p["follow"])
         self.followers = Followers(int(max(0.0, float(p["max_lag"])) * 1e9), max(0.0, float(p["follower_timeout"])),
-                                   max(0.0, float(p["hold_timeout"])))
+                                   max(0.0, float(p["hold_timeout"])), int(max(0.0, float(p["lead_margin"])) * 1e9))
+        self.scan_floor = bool(p["scan_floor"])
         self.idle_rtf = max(0.0, float(p["idle_rtf"]))
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
