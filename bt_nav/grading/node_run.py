@@ -151,7 +151,7 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them
     timeout = max(1.0, settings.limit - JUDGE_MARGIN)
     judge = {"wait_for_cmd_vel": False, "sync": False, "cmd_vel_stamped": False, "timeout": timeout,
-             "start_wait": round(min(START_WAIT, timeout / 3.0), 1), "audit": True,
+             "start_wait": round(min(START_WAIT, timeout / 3.0), 1), "audit": True, "domain_guard": True,
              "robot_clock_wait": ROBOT_CLOCK_WAIT}
     if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
         judge["lidar"] = job.lidar

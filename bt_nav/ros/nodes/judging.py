@@ -108,6 +108,8 @@ DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
     "start_wait": (0.0, "wall s to wait for the robot's service (and first cmd_vel, if waited for) before a "
                         "failed verdict without a start (0: wait until the timeout)"),
     "audit": (True, "watch the graph and cmd_vel for what the robot did wrong that no check sees (findings)"),
+    "domain_guard": (False, "end the run without a verdict when a program that is not the run's is on its domain "
+                            "(bt-nav grade's runs own theirs; a sim-run or demo welcomes bt-nav arm, view, record)"),
     "audit_message_info": (True, "the audit counts the commands sent (DDS sequence numbers), not those that arrived; "
                                  "off: a hosting simulator may spin rclpy's EventsExecutor, which cannot pass them"),
     "wait_for_cmd_vel": (False, "also wait for the robot's first cmd_vel before t0 (its executive ticks)"),
@@ -172,6 +174,7 @@ class JudgeNode(QuietQosEvents, Node):
         self.call_retries = int(p["call_retries"])
         self.service_wait = float(p["service_wait"])
         self.start_wait = float(p["start_wait"])
+        self.domain_guard = bool(p["domain_guard"])
         self.sync_wait = float(p["sync_wait"])
         self.robot_clock_wait = float(p["robot_clock_wait"])
         self.robot_clock_settle = float(p["robot_clock_settle"])
@@ -302,7 +305,7 @@ class JudgeNode(QuietQosEvents, Node):
             return True
         if self.audit is not None:
             self.audit.sample()
-            shared = self.audit.guard.finding(os.environ.get("ROS_DOMAIN_ID", "0"))
+            shared = self.audit.guard.finding(os.environ.get("ROS_DOMAIN_ID", "0")) if self.domain_guard else None
             if shared is not None and self.foreign is None:
                 self.foreign = shared  # ends the run without a verdict (next poll): its launcher moves it
         self._subscribe_cmd_vel()
