@@ -59,3 +59,13 @@ def test_what_cannot_be_traced_is_blamed_on_nobody(tmp_path: Path) -> None:
 
 def test_a_launchers_mark_names_it_and_the_domain() -> None:
     assert run_mark(150, launcher_pid=4242) == MARK
+
+
+def test_a_foreign_program_is_named_by_its_file_however_deep_its_folder(tmp_path: Path) -> None:
+    _proc(tmp_path, {400: None})
+    deep = "/" + "/".join(["a_rather_long_folder_name"] * 8)
+    words = [f"{deep}/bin/python", f"{deep}/noservice_node.py", "--drive", "0.3"]
+    (tmp_path / "400" / "cmdline").write_bytes("\0".join(words).encode() + b"\0")
+    guard = DomainGuard(MARK, tmp_path)
+    guard.see(_endpoint(400, "wanderer"))
+    assert "node wanderer of pid 400 (python noservice_node.py --drive 0.3)" in (guard.finding("150") or "")

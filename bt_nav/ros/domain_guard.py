@@ -55,12 +55,18 @@ def _environ_mark(pid: int, proc: Path) -> str | None:
     return next((f[len(key):].decode(errors="replace") for f in fields if f.startswith(key)), "")
 
 
-def _cmdline(pid: int, proc: Path) -> str:
+def _cmdline(pid: int, proc: Path, limit: int = 120) -> str:
+    """The process's command line as a reader knows it: paths by their file names, at most ``limit`` characters.
+
+    File names rather than whole paths, so that the program's own name survives however deep its folder lies.
+    """
     try:
         words = (proc / str(pid) / "cmdline").read_bytes().split(b"\0")
     except OSError:
         return "?"
-    return " ".join(w.decode(errors="replace") for w in words if w)[:80]
+    text = " ".join(Path(w.decode(errors="replace")).name if b"/" in w else w.decode(errors="replace")
+                    for w in words if w)
+    return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
 class DomainGuard:

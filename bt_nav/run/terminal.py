@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import re
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -74,6 +75,19 @@ class EventPublisher:
     def publish(self, text: str) -> None:
         """One event line."""
         self.publisher.publish(self._string(data=text))
+
+    def wait_for_reader(self, timeout: float = 20.0) -> bool:
+        """Wait (``timeout`` wall s at most) until a recorder subscribes; True if one did.
+
+        Why: lines published before the recorder joins reach it only as transient-local history, which DDS may
+        hand over after the first live line; a recorder that is there from the first line gets them in order.
+        """
+        deadline = time.monotonic() + timeout
+        while self.publisher.get_subscription_count() == 0:
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.05)
+        return True
 
     def close(self, wait: float = 1.0) -> None:
         """Wait (``wait`` wall s at most) until the recorder has every line, then go."""

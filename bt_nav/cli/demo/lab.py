@@ -109,6 +109,9 @@ def run_lab(opts: argparse.Namespace) -> int:
     logs.sim_time = mission.recorders["robot1"].sim_time
     logs.clock = mission.recorders["robot1"].clock
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics()) if bag_dir else None
+    if events is not None and not events.wait_for_reader():
+        print("bt-nav demo: the recorder did not subscribe to the terminal's lines within 20 s; the bag may "
+              "miss or reorder the first ones", flush=True)
     try:
         code = mission.supervise(opts.timeout + GRACE, run_dir)
         verdict = _verdict(run)
