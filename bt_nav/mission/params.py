@@ -120,7 +120,7 @@ PARAMS: tuple[ParamSpec, ...] = (
     ParamSpec("mission_duration", 50.0, "Time from the first arming until the robot must have stopped "
               "and asked for evaluation; 0: no deadline and no evaluation call (the lab runs until disarmed).",
               "s", 0.0, 3600.0),
-    ParamSpec("stop_margin", 0.5, "The stop and the evaluation call happen this long before "
+    ParamSpec("stop_margin", 0.25, "The stop and the evaluation call happen this long before "
               "mission_duration runs out, so the referee sees them inside the limit.", "s", 0.0, 10.0),
     ParamSpec("evaluation_timeout", 2.0, "How long one evaluation call may take before it is abandoned.",
               "s", 0.05, 60.0),

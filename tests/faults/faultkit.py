@@ -28,7 +28,7 @@ from bt_nav.testing import front_scan, laserscan_msg, scan_from_ranges
 FREE = laserscan_msg(front_scan())  # nothing within 3 m: full speed
 
 W_TURN = float(_SPECS["angular_speed"].default)  # rotating in place and the Close branch
-DUE_MARGIN = 0.5  # stop_margin default
+DUE_MARGIN = float(_SPECS["stop_margin"].default)  # the stop comes this long before mission_duration
 #: A WARN/ERROR/FATAL line of rclpy's console output.
 COMPLAINT = r"\[(WARN|ERROR|FATAL)\]"
 

@@ -21,7 +21,7 @@ from typing import Any
 import pytest
 from conftest import FaultCases
 from faultinject import FAULT_INJECT_ENV
-from faultkit import FREE, EvaluationServer, Run, connect
+from faultkit import DUE_MARGIN, FREE, EvaluationServer, Run, connect
 from rclpy.parameter import Parameter
 from ros_harness import PERIOD, ExecutiveProcess, Harness
 
@@ -67,7 +67,7 @@ def test_signal_mid_evaluation(executive: Callable[..., Harness], signum: signal
     run = Run(h, server)
     armed_at = run.arm()
     run.assert_full_speed(run.tick(FREE))
-    run.tick(FREE, to=armed_at + 4.5 + PERIOD + 1e-3)
+    run.tick(FREE, to=armed_at + 5.0 - DUE_MARGIN + PERIOD + 1e-3)
     run.tick_until(lambda: server.count() == 1, "the evaluation request")
     assert all(s.is_zero for s in run.ticks(3, FREE))
     assert shut_down(run, signum) == 0
@@ -165,7 +165,7 @@ def test_exception_while_evaluating(start_executive: Callable[..., ExecutiveProc
         armed_at = run.arm()
         run.assert_full_speed(run.tick(FREE))
         mark = run.mark()
-        run.tick(FREE, to=armed_at + 4.5 + PERIOD + 1e-3)
+        run.tick(FREE, to=armed_at + 5.0 - DUE_MARGIN + PERIOD + 1e-3)
         run.tick_until(lambda: bool(run.since(mark, r"evaluation accepted")), "the evaluation to be accepted")
         assert all(s.is_zero for s in run.ticks(10, FREE))
         run.expect_one(exception_line(leaf), mark)

@@ -16,21 +16,21 @@ from typing import Any
 
 import rclpy
 from conftest import LONG, FaultCases
-from faultkit import FREE, EvaluationServer, Run
+from faultkit import DUE_MARGIN, FREE, EvaluationServer, Run
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from ros_harness import PERIOD, Harness
 from std_srvs.srv import SetBool
 
 from bt_nav.testing import front_scan, laserscan_msg
 
-SHORT_MISSION = 5.0  # s: mission_duration of these runs (deadline 4.5 s after the first arming)
+SHORT_MISSION = 5.0  # s: mission_duration of these runs (the deadline stop_margin before it)
 
 
 def to_deadline(run: Run) -> None:
     """Drive, then jump to the deadline: the robot stops and the first attempt opens."""
     run.assert_full_speed(run.tick(FREE))
     assert run.armed_at is not None
-    run.tick(FREE, to=run.armed_at + SHORT_MISSION - 0.5 + PERIOD + 1e-3)
+    run.tick(FREE, to=run.armed_at + SHORT_MISSION - DUE_MARGIN + PERIOD + 1e-3)
     assert run.h.samples[-1].is_zero, run.h.samples[-1]
 
 
@@ -217,8 +217,8 @@ def test_arm_service_abuse(executive: Callable[..., Harness], make_harness: Call
             assert not run.since(mark, r"ArmService")
         arm_bursts(h, run, faults)
         with faults.case("arm group: deadline after the burst", "mission",
-                         "the deadline is 49.5 s after the FIRST arming (the burst never restarted the timer): stop, "
-                         "exactly one evaluation call, one 'deadline reached' line"):
+                         "the deadline is 50 s - stop_margin after the FIRST arming (no burst restarted the timer): "
+                         "stop, exactly one evaluation call, one 'deadline reached' line"):
             run.finish()
         with faults.case("arm after the mission ended (evaluated)", "services",
                          "arm(true) from both clients after the deadline: refused with the reason, one warning line "

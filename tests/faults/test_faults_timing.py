@@ -184,8 +184,8 @@ def test_clock_faults(executive: Callable[..., Harness], faults: FaultCases) -> 
         run.alive()
 
     with faults.case("clock group: deadline after the reset", "mission",
-                     "the deadline follows the clock (first arming + 49.5 s on the reset clock): stop, exactly one "
-                     "evaluation call, one 'deadline reached' line"):
+                     "the deadline follows the clock (first arming + 50 s - stop_margin on the reset clock): "
+                     "stop, exactly one evaluation call, one 'deadline reached' line"):
         run.finish()
 
     with faults.case("/clock jumps back 20 s after the deadline", "timing",

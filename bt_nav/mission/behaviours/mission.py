@@ -139,7 +139,7 @@ class MissionDeadline(Condition):
     INPUT_PORTS = {
         "first_armed_at": port(float, default=math.nan),
         "mission_duration": port(float, default=50.0),
-        "stop_margin": port(float, default=0.5),
+        "stop_margin": port(float, default=0.25),
     }
     OUTPUT_PORTS = {"mission_over": port(bool, "latched deadline", default=False)}
 
