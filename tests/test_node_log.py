@@ -4,6 +4,12 @@ while the node was starting."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
 from bt_nav.grading.node_log import (
     Crash,
     import_findings,
@@ -249,3 +255,19 @@ def test_the_reason_of_a_node_that_exited_with_an_error() -> None:
     assert _exit_reason(3, 2.0, node_crash(IMPORT)).startswith("the node crashed after 2.0 s wall (exit code 3): ")
     assert _exit_reason(-11, 3.0, node_crash(THREAD)) == ("the node exited with code -11 after 3.0 s wall, before "
                                                          "the verdict (see node.log)")
+
+
+@pytest.mark.parametrize("source, error", [
+    ("import rclpy\ndef scan_cb(msg:\n    pass\n", "SyntaxError: "),
+    ("import rclpy\nif True:\nprint('x')\n", "IndentationError: expected an indented block"),
+])
+def test_a_script_that_does_not_compile_is_quoted_at_its_line(tmp_path: Path, source: str, error: str) -> None:
+    """Python reports a script that does not compile without a "Traceback" header: the crash is still quoted,
+    at the script's line, as one that came while starting."""
+    script = tmp_path / "reactive_navigator.py"
+    script.write_text(source)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True)
+    crash = node_crash("[INFO] [launcher]: starting\n" + out.stderr)
+    assert crash is not None and crash.exception.startswith(error), out.stderr
+    assert crash.where == "reactive_navigator.py:2" or crash.where == "reactive_navigator.py:3"
+    assert crash.starting

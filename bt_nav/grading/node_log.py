@@ -83,6 +83,23 @@ def rclpy_shutdown_race(text: str) -> str | None:
     return exception.split(" (#define")[0]  # pybind11's advice on its own build is no help to a student
 
 
+#: The end of Python's report on a script that does not compile: no "Traceback" header, the file and line, the
+#: source line and a caret, then ``SyntaxError: ...`` (or IndentationError, TabError) at the start of a line.
+_COMPILE_ERROR = re.compile(r'^  File "([^"]+)", line (\d+)\n(?:[ \t].*\n)*?((?:SyntaxError|IndentationError|TabError)'
+                            r'\b.*)$', re.MULTILINE)
+
+
+def script_compile_error(text: str) -> Crash | None:
+    """The node's own script did not compile (Python printed no traceback, only where and the error): a crash
+    while starting, at that line."""
+    matches = list(_COMPILE_ERROR.finditer(text))
+    if not matches:
+        return None
+    path, line, exception = matches[-1].groups()
+    quoted = exception if len(exception) <= QUOTE_LIMIT else exception[:QUOTE_LIMIT - 3] + "..."
+    return Crash(quoted, f"{PurePath(path).name}:{line}", True)
+
+
 @dataclass(frozen=True)
 class Crash:
     """The exception that ended a node, in the words of its traceback."""
@@ -117,7 +134,7 @@ def node_crash(text: str) -> Crash | None:
     """
     found = last_traceback(text)
     if found is None or not found[0] or not found[1]:
-        return None
+        return script_compile_error(text)
     frames, exception = found
     if frames[0][2] not in _TOP_LEVEL or exception.startswith("KeyboardInterrupt") or rclpy_shutdown_race(text):
         return None
