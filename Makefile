@@ -11,7 +11,7 @@ STAMP := $(VENV)/.bt_nav-installed
 # (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean browser docs grader-suite
+.PHONY: all venv test lint demo bench faults tree-svg colcon-check clean browser docs grader-suite wheel autograder-zip
 
 all: test
 
@@ -50,6 +50,21 @@ bench: $(STAMP)
 # reason, over DDS on three LiDARs (tests/grader_suite.py; --hogs 2 for a loaded machine). About 15 min on 2 cores.
 grader-suite: $(STAMP)
 	$(BIN)/python tests/grader_suite.py
+
+# bt_nav as a wheel, dist/bt_nav-<version>-py3-none-any.whl: what the Gradescope autograder's setup.sh installs
+# (docs/autograder.md). setuptools' own build/lib is emptied first, so that no file deleted since lands in it.
+wheel: $(STAMP)
+	rm -rf build/lib build/bdist.* dist/bt_nav-*.whl
+	$(BIN)/python -m pip wheel --no-deps --quiet -w dist .
+	@ls dist/bt_nav-*.whl
+
+# The zip to upload to Gradescope: setup.sh, run_autograder, the wheel and (when it exists) autograder/weights.yaml,
+# all at the zip's root, as Gradescope wants them.
+autograder-zip: wheel
+	rm -f dist/autograder.zip
+	$(BIN)/python -m zipfile -c dist/autograder.zip autograder/setup.sh autograder/run_autograder \
+		$(wildcard autograder/weights.yaml) dist/bt_nav-*.whl
+	@$(BIN)/python -m zipfile -l dist/autograder.zip
 
 faults: $(STAMP)
 	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults

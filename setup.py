@@ -34,7 +34,7 @@ setup(
     # under sim/ so that it can only be imported by its installed name.
     packages=find_packages(include=["bt_nav", "bt_nav.*"]) + find_packages("sim", include=["bt_nav_sim*"]),
     package_dir={"bt_nav_sim": "sim/bt_nav_sim"},
-    package_data={"bt_nav_sim": ["worlds/*.yaml"]},
+    package_data={"bt_nav_sim": ["worlds/*.yaml"], "bt_nav": ["grading/*.yaml"]},  # Gradescope's default weights
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

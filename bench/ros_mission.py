@@ -21,7 +21,6 @@ profile there; such a run is slower and only says where the executive's time goe
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import resource
@@ -156,7 +155,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     The DDS environment of this process is set to ``domain`` (the recorder node lives here).
     """
-    from bt_nav.run.rosmission import RosMission, mission_graph
+    from bt_nav.run.rosmission import RosMission, mission_graph, read_verdict
     from bt_nav.run.settings import profile_maneuver
 
     os.environ.update(dds_env(domain))
@@ -194,7 +193,7 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
         finally:
             rec = mission.close()["robot1"]
         out["total_wall_s"] = round(time.monotonic() - wall0, 3)
-        results = json.loads(results_path.read_text(encoding="utf-8")) if results_path.is_file() else {}
+        results = read_verdict(results_path) or {}
 
     out["referee_exit"] = referee_code
     out["passed"] = referee_code == 0

@@ -11,6 +11,7 @@ import pytest
 from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.grading.grid import Job, run_job
+from bt_nav.mission.snapshot import event
 from bt_nav.run.lab import angle_errors, announced_turns
 from bt_nav.run.lockstep import run_mission
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -45,9 +46,23 @@ def test_a_check_off_passes_and_its_report_reads_like_the_homeworks() -> None:
     assert any(line.startswith("maneuver 1 (C at t=") and line.endswith(": PASSED") for line in lines)
     assert lines[-2].startswith("static after deactivation")
     assert result.sim_time > 60.0  # the lab runs 60 s armed, beyond the homework's hard stop
-    turns = announced_turns(result.events)
+    turns = announced_turns(result.announcements)
+    for record in result.announcements:  # each event says what its log line says, at the same instant
+        said = f"{record['leaf']}: ", f": turning {record['side']} {record['angle_deg']:.0f} deg"
+        assert any(t == record["t"] and line.startswith(said[0]) and line.endswith(said[1])
+                   for t, _level, line in result.events), record
+        assert record["maneuver"] == "C" and set(record["readings"]) == {"front", "left", "right"}
     assert turns and all(abs(abs(deg) - 90.0) < 1e-9 for _, deg in turns)
-    assert len(angle_errors(result.events, result.results["maneuvers"])) == len(result.results["maneuvers"])
+    assert len(angle_errors(result.announcements, result.results["maneuvers"])) == len(result.results["maneuvers"])
+
+
+def test_announced_angles_come_from_the_event_fields_whatever_the_leaf_is_called() -> None:
+    """No log line, a leaf name no table knows: the angle and side are the event's fields."""
+    events = [event("maneuver", 10.0, "Wiggle", maneuver="D", side="right", angle_deg=143.0, readings={}),
+              event("brake", 10.2, "AEB")]
+    judged = [{"kind": "maneuver", "t": 10.5, "angle_deg": -141.0}]
+    assert announced_turns(events) == [(10.0, -143.0)]
+    assert angle_errors(events, judged) == [2.0]
 
 
 def test_the_lab_profile_needs_a_lab_maneuver() -> None:

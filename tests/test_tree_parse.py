@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -11,7 +12,9 @@ import pytest
 
 from bt_nav.media.treedot import nodes_model
 from bt_nav.mission.behaviours import LEAF_CLASSES, REGISTRY
+from bt_nav.mission.core import MissionCore, strip_ansi
 from bt_nav.mission.resources import read_yaml, tree_file, written_whole
+from bt_nav.mission.snapshot import render_art
 from bt_nav.mission.tree import load_tree
 from bt_nav.testing import TickHarness
 
@@ -86,8 +89,8 @@ def test_groot_model_in_the_tree_file_matches_the_leaves() -> None:
     assert set(LEAF_CLASSES) <= set(REGISTRY)
 
 
-def golden(name: str, text: str) -> None:
-    path = GOLDEN / f"{name}.txt"
+def golden(name: str, text: str, suffix: str = ".txt") -> None:
+    path = GOLDEN / f"{name}{suffix}"
     if UPDATE or not path.exists():
         path.write_text(text, encoding="utf-8")
         if not UPDATE:
@@ -95,20 +98,30 @@ def golden(name: str, text: str) -> None:
     assert text == path.read_text(encoding="utf-8"), f"snapshot differs from {path} (BT_NAV_UPDATE_GOLDEN=1)"
 
 
+def golden_snapshot(name: str, core: MissionCore) -> None:
+    """The structured snapshot (``~/tree``'s document) and the art drawn from it, each against its golden file;
+    the art is also what py_trees' own display prints for the live tree."""
+    snapshot = core.snapshot()
+    golden(name, json.dumps(snapshot, indent=1, ensure_ascii=False) + "\n", ".json")
+    art = render_art(snapshot)
+    golden(name, art)
+    assert art == strip_ansi(py_trees.display.unicode_tree(core.root, show_status=True))
+
+
 def test_golden_snapshots() -> None:
     h = TickHarness("A")
     h.tick()
-    golden("01_before_arming", h.core.snapshot())
+    golden_snapshot("01_before_arming", h.core)
     h.arm()
     h.tick()
-    golden("02_full_speed", h.core.snapshot())
+    golden_snapshot("02_full_speed", h.core)
     h.see((0.0, 0.45))
     h.tick(3)
-    golden("03_maneuver_a_running", h.core.snapshot())
+    golden_snapshot("03_maneuver_a_running", h.core)
     h.see()
     h.clock.now = 60.0
     h.tick()
-    golden("04_mission_over", h.core.snapshot())
+    golden_snapshot("04_mission_over", h.core)
 
 
 def test_cached_type_hints_answer_as_py_trees_does() -> None:

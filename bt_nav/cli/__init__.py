@@ -16,7 +16,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sim": ("bt_nav.ros.nodes.simulator", "run the 2D TurtleBot3 simulator node"),
     "referee": ("bt_nav.ros.nodes.referee", "run the homework referee node"),
     "checkoff": ("bt_nav.ros.nodes.checkoff", "run the lab's check-off judge node (calls toggle_navigation)"),
-    "sim-run": ("bt_nav.ros.bringup", "simulator + executive (+ referee) in one go, without ros2 launch"),
+    "sim-run": ("bt_nav.cli.sim_run", "simulator + executive (+ referee) in one go, without ros2 launch"),
     "demo": ("bt_nav.cli.demo", "the homework mission (or --profile lab: the lab's check-off) over DDS in sim time"),
     "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),
     "grade": ("bt_nav.cli.grade", "grade worlds x maneuvers x seeds in lock-step, in parallel"),

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from bt_nav.cli import plain
 from bt_nav.media.treedot import FORMATS, GraphvizMissingError, render
+from bt_nav.mission.maneuver_spec import choices_text
 from bt_nav.mission.params import normalise_maneuver
 
 
@@ -20,7 +21,7 @@ def main(argv: list[str] | None = None) -> int:
     """``bt-nav dump-tree``."""
     parser = argparse.ArgumentParser(prog="bt-nav dump-tree", description=plain(__doc__),
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--maneuver", default="none", help="none, A, B, C (or their names)")
+    parser.add_argument("--maneuver", default="none", help=f"{choices_text()} (or their names)")
     parser.add_argument("--format", default="unicode", choices=FORMATS,
                         help="text (ascii, unicode), graphviz (dot, svg, png), the tree file (xml), json, or the "
                              "Groot2 node model; default unicode")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from bt_nav.mission.maneuver_spec import choices_text
 from bt_nav.mission.profiles import PROFILE_FILES
 from bt_nav.ros.supervise import usable_cores
 
@@ -20,7 +21,7 @@ def add_mission_options(parser: argparse.ArgumentParser, *, grid: bool = False) 
     if not grid:
         parser.add_argument("--world", default="stage_4", help="bundled world name or YAML path (default stage_4)")
         parser.add_argument("--maneuver", default=None,
-                            help="none, A, B, C or a name (default: the profile's, config/homework.yaml says C)")
+                            help=f"{choices_text()} or a name (default: the profile's, config/homework.yaml says C)")
         parser.add_argument("--seed", type=int, default=0, help="seed of noise, worlds and maneuver A (default 0)")
     parser.add_argument("--profile", default="homework", choices=sorted(PROFILE_FILES),
                         help="params files and simulated robot (homework, lab, turtlebot3; default homework)")

@@ -19,33 +19,8 @@ import sys
 import threading
 from typing import Any
 
-from bt_nav.media.bag import TOPICS, BagError, typestore
-
-
-class FoxgloveBridge:
-    """Forwards (topic, msgtype, t_ns, cdr) to a Foxglove WebSocket server, one channel per topic."""
-
-    def __init__(self, host: str, port: int) -> None:
-        import foxglove
-
-        self._foxglove = foxglove
-        self.server = foxglove.start_server(name="bt_nav", host=host, port=port)
-        self.channels: dict[str, Any] = {}
-        self.lock = threading.Lock()
-
-    def feed(self, topic: str, msgtype: str, t_ns: int, data: bytes, _qos: Any = None) -> None:
-        """One message (the GraphTap handler signature)."""
-        with self.lock:
-            channel = self.channels.get(topic)
-            if channel is None:
-                text, _ = typestore().generate_msgdef(msgtype)
-                schema = self._foxglove.Schema(name=msgtype, encoding="ros2msg", data=text.encode())
-                channel = self.channels[topic] = self._foxglove.Channel(topic, schema=schema, message_encoding="cdr")
-        channel.log(data, log_time=int(t_ns))
-
-    def close(self) -> None:
-        """Stop the server."""
-        self.server.stop()
+from bt_nav.media.bag import TOPICS, BagError
+from bt_nav.media.foxglove import FoxgloveBridge
 
 
 def _world(name: str | None, seed: int) -> Any:

@@ -2,7 +2,8 @@
 
 Like py-trees-tree-watcher, for bt_nav: subscribes to the executive's ``~/tree`` topic
 (``/bt_nav_executive/tree``, std_msgs/String, transient local so the current tree arrives at once)
-and prints each new snapshot with the time it arrived.
+and prints each new snapshot with the time it arrived, drawn as py_trees' unicode tree from the JSON
+document the executive publishes (``--json`` prints the document itself).
 
 Honesty: every snapshot is printed with its age, and while nothing new arrives a status line every
 ``--status-period`` seconds says how old the last snapshot is and whether any executive still
@@ -33,6 +34,7 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--topic", default="/bt_nav_executive/tree", help="the executive's ~/tree topic")
     parser.add_argument("--once", action="store_true", help="print the first snapshot and exit")
+    parser.add_argument("--json", action="store_true", help="print each snapshot's JSON document, not the tree art")
     parser.add_argument("--timeout", type=float, default=0.0, help="give up after this many seconds (0: never)")
     parser.add_argument("--grace", type=float, default=3.0, help="seconds before saying no executive publishes")
     parser.add_argument("--status-period", type=float, default=5.0,
@@ -52,7 +54,8 @@ def main(argv: list[str] | None = None) -> int:
         state["arrived"] = state["said"] = time.monotonic()
         stamp = time.strftime("%H:%M:%S")
         age = "latched: published before this watch joined" if state["count"] == 1 else "age 0.0 s"
-        print(f"---- {stamp}  {args.topic}  (snapshot {state['count']}, {age}) ----\n{msg.data}", flush=True)
+        print(f"---- {stamp}  {args.topic}  (snapshot {state['count']}, {age}) ----\n{shown(msg.data, args.json)}",
+              flush=True)
 
     node.create_subscription(String, args.topic, on_tree, qos)
     start = time.monotonic()
@@ -90,3 +93,14 @@ def _report_liveness(publishers: int, state: dict, args: argparse.Namespace, ela
         state["said"] = now
         who = f"{publishers} publisher(s) on the topic" if alive else "NO executive publishing"
         print(f"     (last snapshot {now - state['arrived']:.0f} s ago, unchanged since; {who})", flush=True)
+
+
+def shown(data: str, as_json: bool) -> str:
+    """What the watch prints of one ``~/tree`` message: the art rendered from the snapshot document (or the document
+    itself with ``--json``); a message that is no snapshot document is printed as it came, with a note."""
+    from bt_nav.mission.snapshot import read_snapshot, render_art
+
+    snapshot = read_snapshot(data)
+    if snapshot is None:
+        return f"(not a bt_nav tree snapshot; printed as received)\n{data}"
+    return data if as_json else render_art(snapshot).rstrip("\n")

@@ -198,13 +198,18 @@ def _reasons(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
 
 
 def write_class_page(out: Path, students: Sequence[Student], title: str,
-                     refused: dict[str, str] | None = None) -> tuple[Path, Path, Path]:
+                     refused: dict[str, str] | None = None,
+                     annotate: Callable[[list[dict[str, Any]]], None] | None = None) -> tuple[Path, Path, Path]:
     """``class.json``, ``class.md`` and ``class.html`` in ``out`` from each student's grid in ``out/<name>``, and
-    each ``refused`` student's reason (:func:`admit`) in their place."""
+    each ``refused`` student's reason (:func:`admit`) in their place; ``annotate`` adds to the rows before they are
+    written (a folder of hand-ins: each row's launch-file lines and the hand-in's overall verdict,
+    :func:`bt_nav.grading.handins.add_verdicts`; this module does not import that one, which builds on it)."""
     refused = refused or {}
     out.mkdir(parents=True, exist_ok=True)  # a class whose every student was refused ran nothing there
     rows = [refused_summary(s.name, refused[s.name]) if s.name in refused else student_summary(s.name, out / s.name)
             for s in students]
+    if annotate is not None:
+        annotate(rows)
     cells = sorted({c for r in rows for c in r["cells"]})
     doc = {"title": title, "cells": cells, "students": rows,
            "commands": {s.name: s.command for s in students}}
@@ -220,13 +225,17 @@ def _rate(cell: list[int] | None) -> str:
 
 
 def class_markdown(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
-    """The class as Markdown: one row per student, one column per cell, then each student's findings."""
-    lines = [f"# {title}", "", "| student | passed | " + " | ".join(cells) + " | bt_nav errors |",
-             "|---|---|" + "---|" * len(cells) + "---|"]
+    """The class as Markdown: one row per student (with a hand-in's overall verdict and launch checks when the class
+    is a folder of hand-ins), one column per cell, then each student's launch lines, failures and findings."""
+    handins = any("verdict" in r for r in rows)
+    lines = [f"# {title}", "", "| student | " + ("hand-in | launch file | " if handins else "") + "passed | "
+             + " | ".join(cells) + " | bt_nav errors |",
+             "|---|" + ("---|---|" if handins else "") + "---|" + "---|" * len(cells) + "---|"]
     for r in rows:
         total = f"{r['passed']}/{r['runs']}" if r["graded"] else "FAILED, not run" if r.get("refused") else "not graded"
         name = f"[{r['name']}]({r['dir']}/report.html)" if r["graded"] else r["name"]  # a refused one has no report
-        lines.append(f"| {name} | {total} | "
+        lines.append(f"| {name} | " + (f"{r.get('verdict', '-')} | {_launch_rate(r)} | " if handins else "")
+                     + f"{total} | "
                      + " | ".join(_rate(r["cells"].get(c)) for c in cells) + f" | {r['errors']} |")
     for r in rows:
         said = _said(r)
@@ -235,17 +244,27 @@ def class_markdown(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: 
     return "\n".join(lines) + "\n"
 
 
+def _launch_rate(row: dict[str, Any]) -> str:
+    """``2/3``: the launch checks a hand-in passed (``-`` when the class is not a folder of hand-ins)."""
+    checks = (row.get("handin") or {}).get("launch", {}).get("checks", [])
+    return f"{sum(1 for c in checks if c['passed'])}/{len(checks)}" if checks else "-"
+
+
 def _said(row: dict[str, Any]) -> list[str]:
-    """A student's failures, each with the runs that failed so (named with their LiDAR: ``lab_side C rplidar seed
-    0: failed: ...``), then their findings with their counts (the grid's own across LiDARs among them)."""
-    return [*(f"{runs}: {reason}" for runs, reason in row.get("failures", [])),
+    """A hand-in's launch-file lines, the student's failures, each with the runs that failed so (named with their
+    LiDAR: ``lab_side C rplidar seed 0: failed: ...``), then their findings with their counts (the grid's own across
+    LiDARs among them)."""
+    return [*(row.get("handin") or {}).get("lines", []),
+            *(f"{runs}: {reason}" for runs, reason in row.get("failures", [])),
             *(f"finding: {f} (x{n})" for f, n in row["findings"].items())]
 
 
 def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
     """The class page: a static file, every link relative (the class directory can be zipped and sent)."""
     esc = html.escape
-    head = "".join(f"<th>{esc(c)}</th>" for c in cells)
+    handins = any("verdict" in r for r in rows)
+    head = ("<th>hand-in</th><th>launch file</th>" if handins else "") + "<th>passed</th>" + "".join(
+        f"<th>{esc(c)}</th>" for c in cells)
     body = []
     for r in rows:
         link = f'<a href="{esc(r["dir"])}/report.html">{esc(r["name"])}</a>' if r["graded"] else esc(r["name"])
@@ -255,10 +274,11 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
         notes = "<br>".join(esc(s) for s in _said(r)) or ('<span class="note">nothing to say</span>' if r["graded"]
                                                           else '<span class="note">not graded yet</span>')
         total = f"{r['passed']}/{r['runs']}" if r["graded"] else "FAILED, not run" if r.get("refused") else "-"
-        body.append(f"<tr><td>{link}</td><td class=\"num\">{total}</td>{tds}<td class=\"num\">{r['errors']}</td>"
-                    f"<td>{notes}</td></tr>")
+        verdict = f"<td>{esc(r.get('verdict', '-'))}</td><td class=\"num\">{_launch_rate(r)}</td>" if handins else ""
+        body.append(f"<tr><td>{link}</td>{verdict}<td class=\"num\">{total}</td>{tds}"
+                    f"<td class=\"num\">{r['errors']}</td><td>{notes}</td></tr>")
     return (f"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{esc(title)}</title><style>{STYLE}</style>"
-            f"</head><body><h1>{esc(title)}</h1><table><tr><th>student</th><th>passed</th>{head}"
+            f"</head><body><h1>{esc(title)}</h1><table><tr><th>student</th>{head}"
             f"<th>bt_nav errors</th><th>failures and findings</th></tr>{''.join(body)}</table></body></html>\n")
 
 

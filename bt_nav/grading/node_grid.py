@@ -40,6 +40,7 @@ from typing import Any
 from bt_nav.grading.admission import Admission
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.grading.node_run import ExeSettings, run_exe_job
+from bt_nav.mission.maneuver_spec import choice_pattern
 from bt_nav.ros.supervise import StopRequest
 
 #: The grid's own file in its directory: the settings every run shares, and the jobs.
@@ -122,8 +123,11 @@ def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
 
 #: Python options that take the next word as their value (``python3 -X dev node.py``: the file is node.py).
 _VALUED_OPTIONS = ("-W", "-X")
-#: The lab template's declaration of the student's maneuver.
-CHOICE_LINE = re.compile(r"^\s*#\s*CHOICE\s*:\s*([ABC])\b", re.MULTILINE)
+
+
+def choice_line() -> re.Pattern[str]:
+    """The lab template's declaration of the student's maneuver (``# CHOICE: B``), any letter of the maneuver spec."""
+    return re.compile(rf"^\s*#\s*CHOICE\s*:\s*({choice_pattern()})\b", re.MULTILINE)
 
 
 def node_file(command: str) -> Path | None:
@@ -150,13 +154,13 @@ def node_file(command: str) -> Path | None:
 
 
 def declared_choice(command: str) -> str | None:
-    """The lab choice (A, B or C) a ``# CHOICE: X`` comment declares in the Python file ``command`` runs
+    """The lab choice (a maneuver letter) a ``# CHOICE: X`` comment declares in the Python file ``command`` runs
     (:func:`node_file`; the lab's template asks for it), else None."""
     path = node_file(command)
     if path is None or not path.is_file():
         return None
     try:
-        found = CHOICE_LINE.search(path.read_text(errors="replace"))
+        found = choice_line().search(path.read_text(errors="replace"))
     except OSError:
         return None
     return found.group(1) if found else None

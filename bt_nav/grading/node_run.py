@@ -54,7 +54,8 @@ from bt_nav_sim.referee_core import failure_reason
 from bt_nav.grading.grid import Job
 from bt_nav.grading.node_bag import bag_row, start_recorder
 from bt_nav.grading.node_log import Crash, import_findings, node_crash, rclpy_shutdown_race
-from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, NodeSpec, host_judge, nodes, param_arg
+from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
+from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
 from bt_nav.ros.supervise import (
     Child,
     Launcher,
@@ -113,12 +114,13 @@ class ExeSpec:
         return list(self.argv)
 
 
-#: The remaps each profile appends: the assignment's service names for a node written against bt_nav's own
-#: (``arm``, ``evaluate_mission``); a remap of a name the node does not use changes nothing.
-PROFILE_REMAPS: dict[str, tuple[tuple[str, str], ...]] = {
-    "homework": (("arm", HOMEWORK_ACTIVATE), ("evaluate_mission", HOMEWORK_EVALUATE)),
-    "lab": (("arm", "/" + LAB_ARM),),
-}
+def profile_remaps(profile: str) -> tuple[tuple[str, str], ...]:
+    """The remaps a profile appends: its assignment's service names, from the root
+    (:meth:`bt_nav.mission.assignments.Assignment.remaps`), for a node written against bt_nav's own (``arm``,
+    ``evaluate_mission``); a remap of a name the node does not use changes nothing. None for a profile that is
+    not an assignment's own (``turtlebot3``)."""
+    assignment = ASSIGNMENTS.get(profile)
+    return assignment.remaps(absolute=True) if assignment is not None else ()
 
 
 def exe_ros_args(maneuver: str | None, profile: str = "homework",
@@ -126,7 +128,7 @@ def exe_ros_args(maneuver: str | None, profile: str = "homework",
     """What is appended to the user's command: sim time, the profile's remaps, the maneuver when the grid
     has maneuvers, and the ``--node-param`` parameters."""
     args = ["--ros-args", "-p", "use_sim_time:=true"]
-    for name, target in PROFILE_REMAPS.get(profile, ()):
+    for name, target in profile_remaps(profile):
         args += ["-r", f"{name}:={target}"]
     if maneuver is not None:
         args += ["-p", param_arg("maneuver", maneuver)]
@@ -144,7 +146,8 @@ FOLLOW_NODE: dict[str, Any] = {"follow": True, "cmd_vel_reliability": "best_effo
 
 def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
-    lab = settings.profile == "lab"
+    assignment = assignment_of(settings.profile)
+    lab = assignment.judge.executable == "checkoff"
     sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
@@ -155,10 +158,9 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
              "robot_clock_wait": ROBOT_CLOCK_WAIT}
     if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
         judge["lidar"] = job.lidar
-    given = dict(settings.node_params)
-    if lab and "safety_distance" in given:  # the trigger the node was given is the one it is judged by
-        judge["safety_distance"] = float(given["safety_distance"])
-    specs = nodes("checkoff" if lab else "eval", world=job.world, maneuver=job.maneuver if lab else None,
+    # the trigger the node was given (as a TA's launch file gives it) is the one it is judged by
+    judge.update(assignment.judge.given(dict(settings.node_params), assignment.judge.launch_shared))
+    specs = nodes(assignment.graph, world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
     return host_judge([spec for spec in specs if spec.executable != "executive"])[0]
 

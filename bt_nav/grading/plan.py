@@ -17,15 +17,16 @@ from bt_nav_sim.world import list_worlds, world_file
 
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
 from bt_nav.grading.node_grid import declared_choice, node_file
-from bt_nav.mission.params import LAB_MANEUVERS, MANEUVERS, normalise_maneuver, parse_assignments
+from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
+from bt_nav.mission.maneuver_spec import letters_text
+from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER
 
 #: The LiDARs an ``--exe`` grid varies by default: the LDS-01 (0..2pi, 360 beams), the LDS-02 (a different beam
 #: count every scan) and the RPLIDAR (-pi..pi): fixed indices are right for at most the first.
 EXE_LIDARS = ("lds01", "lds02", "rplidar")
-#: The ``--exe`` grid's default worlds: one each for the homework, and the lab's two arenas that check off every
-#: maneuver between them (lab_object: A and C with nothing else near; lab_dead_end: all three).
-EXE_WORLDS = {"homework": "stage_4", "lab": "lab_object,lab_dead_end"}
+#: The ``--exe`` grid's default worlds, per assignment (:attr:`bt_nav.mission.assignments.Assignment.exe_grid`).
+EXE_WORLDS = {name: a.exe_grid.worlds for name, a in ASSIGNMENTS.items()}
 
 
 def check_worlds(worlds: Sequence[str]) -> None:
@@ -41,13 +42,13 @@ def check_worlds(worlds: Sequence[str]) -> None:
 def grid_axes(args: argparse.Namespace) -> tuple[list[str], list[int]]:
     """The grid's worlds and seeds (defaults: a lock-step grid all the profile's 20 seeds; a node over DDS, the
     profile's representative worlds and 2 seeds, a size a class can afford). ValueError: an unknown world."""
-    lab, exe = args.profile == "lab", args.exe is not None or getattr(args, "klass", None) is not None
-    default_worlds = EXE_WORLDS.get(args.profile, "stage_4") if exe else "all" if lab else "stage_4"
-    worlds = [w.strip() for w in (args.worlds or default_worlds).split(",") if w.strip()]
+    assignment = assignment_of(args.profile)
+    grid = assignment.exe_grid if args.exe is not None or getattr(args, "klass", None) is not None else assignment.grid
+    worlds = [w.strip() for w in (args.worlds or grid.worlds).split(",") if w.strip()]
     if worlds == ["all"]:
-        worlds = list_worlds("lab" if lab else "homework")
+        worlds = list_worlds(assignment.world_kind)
     check_worlds(worlds)
-    count = args.seeds if args.seeds is not None else 2 if exe else 20
+    count = args.seeds if args.seeds is not None else grid.seeds
     return worlds, list(range(args.first_seed, args.first_seed + count))
 
 
@@ -61,7 +62,7 @@ def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
     if args.maneuvers:
         return args.maneuvers
     if args.exe is None:
-        return ",".join(LAB_MANEUVERS if lab else MANEUVERS)
+        return ",".join(ASSIGNMENTS["lab" if lab else "homework"].maneuvers)
     if not lab:
         return "none"  # a foreign homework node has no maneuvers of bt_nav's
     return lab_maneuver(args.exe, None, "--maneuvers")[0]
@@ -69,7 +70,7 @@ def grid_maneuvers(args: argparse.Namespace, lab: bool) -> str:
 
 def no_choice(option: str) -> str:
     """What a lab node that declares no maneuver is told (``grade`` and ``demo`` alike; ``option`` is theirs)."""
-    return (f"which maneuver does the node perform? give {option} A, B or C (or write the lab template's "
+    return (f"which maneuver does the node perform? give {option} {letters_text()} (or write the lab template's "
             "'# CHOICE: X' comment in the node's file)")
 
 

@@ -29,7 +29,7 @@ from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
 from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
 
-from bt_nav.grading.node_run import PROFILE_REMAPS, ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args
+from bt_nav.grading.node_run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
 from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
 from bt_nav.mission.params import LAB_MANEUVERS
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, param_arg
@@ -166,22 +166,24 @@ def _qos(qos: tuple[str, str, int]) -> str:
 
 
 def _sheet_trigger(cfg: CheckoffConfig) -> str:
-    """The maneuver's trigger as the lab's sheet gives it, with the distances the judge uses (C: either of two)."""
-    if cfg.maneuver == "C":
-        return (f"front < `pivot_distance` {cfg.pivot_distance:.2f} m (the sheet's), or < `safety_distance` "
-                f"{cfg.safety_distance:.2f} m for a node that brakes there and pivots")
-    what = "left and right" if cfg.maneuver == "B" else "front"
-    return f"{what} < `safety_distance` {cfg.safety_distance:.2f} m"
+    """The maneuver's trigger as the lab's sheet gives it, with the distances the judge uses (its spec's: the
+    sheet's, and one more where a node may brake and turn)."""
+    trigger = cfg.spec.trigger
+    if trigger.or_braked_at:
+        return (f"{trigger.words} < `{trigger.distance}` {cfg.distance(trigger.distance):.2f} m (the sheet's), or < "
+                f"`{trigger.or_braked_at}` {cfg.distance(trigger.or_braked_at):.2f} m for a node that brakes there and "
+                "pivots")
+    return f"{trigger.words} < `{trigger.distance}` {cfg.distance(trigger.distance):.2f} m"
 
 
 def _angle(cfg: CheckoffConfig) -> str:
-    """The maneuver's angle rule as the judge words it (C's side: the clearer one, as :func:`_side` says)."""
-    return cfg.angle_rule("towards the clearer side") if cfg.maneuver == "C" else cfg.angle_rule()
+    """The maneuver's angle rule as the judge words it (a clearer-side rule's side: as :func:`_side` says)."""
+    return cfg.angle_rule("towards the clearer side")
 
 
 def _side(cfg: CheckoffConfig) -> str:
-    """Where the maneuver turns: C towards the clearer side (as the judge decides it), A and B either way."""
-    if cfg.maneuver != "C":
+    """Where the maneuver turns: towards the clearer side (as the judge decides it) or either way, by its spec."""
+    if cfg.spec.angle.side != "clearer":
         return "either side"
     return (f"towards the clearer side: the one every reasonable reading of left and right finds farther by "
             f"{cfg.side_tie:.2f} m or more; where the readings disagree, differ by less, or both read beyond "
@@ -361,7 +363,7 @@ def _run(profile: str, setup: GradeSetup) -> list[str]:
             f"Appended to your command: `{' '.join(appended)}`"
             + (" (X: your file's `# CHOICE: X`, or `--maneuvers X`)" if profile == "lab" else "")
             + ". Remapping changes only a name your node uses: " + ", ".join(
-                f"`{src}` becomes `{dst}`" for src, dst in PROFILE_REMAPS[profile]) + ".", "",
+                f"`{src}` becomes `{dst}`" for src, dst in profile_remaps(profile)) + ".", "",
             f"It runs the world{'s' if len(worlds) > 1 else ''} " + ", ".join(f"`{w}`" for w in worlds)
             + f" ({where}, `--worlds`) on each of these LiDARs ({which}, `--lidars`), each run in its own ROS "
             "domain, and writes `summary.md`, `report.html` and this page as `rules.md` in its output directory:", "",

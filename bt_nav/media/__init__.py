@@ -3,8 +3,8 @@
 - :mod:`bt_nav.media.bag`: :class:`~bt_nav.media.bag.MissionBag`, a rosbag2 writer for in-process data
   (lock-step) and raw CDR from DDS (``bt-nav record``); topic names, types and QoS live here.
 - :mod:`bt_nav.media.bagread`: :func:`~bt_nav.media.bagread.read_bag` turns a bag (even one cut short by a
-  kill) into a :class:`~bt_nav.media.bagread.MissionRecord` of numpy arrays for replay, plots and video.
-- :mod:`bt_nav.media.treetext`: the executive's ``~/tree`` text parsed into (depth, name, status) rows.
+  kill) into a :class:`~bt_nav.media.bagread.MissionRecord` of numpy arrays for replay, plots and video; the
+  executive's ``~/tree`` and ``~/events`` come back as documents (:mod:`bt_nav.mission.snapshot`), never as text.
 - :mod:`bt_nav.media.video`: the mission video (H.264 MP4 through imageio-ffmpeg's bundled ffmpeg).
 - :mod:`bt_nav.media.view`: the browser view's HTTP + server-sent-events server.
 

@@ -19,18 +19,19 @@ How lock-step uses it (``bt-nav lockstep --bag DIR``): :class:`MissionBag` satis
         bag.event(result.sim_time, f"verdict: {'PASSED' if result.passed else 'FAILED'}")
 
 ``scan(t, Scan)``, ``odom(t, x, y, yaw, v, w)``, ``ground_truth(t, ...)``, ``cmd(t, v, w)``,
-``clock(t)``, ``tree(t, snapshot_text)`` (written only when a status changes, as the executive
-publishes ``~/tree``) and ``event(t, text)`` take sim seconds. ``close()`` writes ``metadata.yaml``;
+``clock(t)``, ``tree(t, snapshot)`` (a :mod:`bt_nav.mission.snapshot` document; the engine sends one when a
+status or the tip changes, as the executive publishes ``~/tree``), ``announce(t, event)`` (the tree's events, as
+``~/events``) and ``event(t, text)`` take sim seconds. ``close()`` writes ``metadata.yaml``;
 a writer killed before that leaves an ``.mcap`` that :func:`bt_nav.media.bagread.read_bag` still reads
 up to the last chunk written (:meth:`MissionBag.flush` closes a chunk early; the bag does so every
 ``flush_every`` sim seconds, and ``bt-nav record`` also every wall second).
 
 Several robots in one bag (``bt-nav lockstep --robots N --bag DIR``): :meth:`MissionBag.robot` gives a sink
 that writes the same messages into the same bag under the robot's namespace (``/robot1/scan``,
-``/robot1/bt_nav_executive/tree``, ``/robot1/bt_nav/events``, ...), as the namespaced executives publish them
-on the DDS graph. /clock and /bt_nav/mission stay at the root, one per bag: a robot's sink does not write
-/clock (the multi-robot runner writes it once per instant on the bag itself). A bag without robot sinks has
-exactly the topics it always had. :func:`split_namespace` undoes the prefix when reading.
+``/robot1/bt_nav_executive/tree``, ``/robot1/bt_nav_executive/events``, ``/robot1/bt_nav/events``, ...), as the
+namespaced executives publish them on the DDS graph. /clock and /bt_nav/mission stay at the root, one per bag:
+a robot's sink does not write /clock (the multi-robot runner writes it once per instant on the bag itself). A bag
+without robot sinks has exactly the topics it always had. :func:`split_namespace` undoes the prefix when reading.
 """
 
 from __future__ import annotations
@@ -46,12 +47,13 @@ from typing import Any
 import numpy as np
 from bt_nav_sim.walkers import walkers_message
 
-from bt_nav.media.treetext import parse_snapshot
+from bt_nav.mission.snapshot import snapshot_json
 
 #: Topic names (absolute, as the default bringup publishes them).
 CLOCK, SCAN, ODOM, TRUTH, CMD = "/clock", "/scan", "/odom", "/ground_truth_odom", "/cmd_vel"
 TREE, EVENTS, MISSION, COLLISIONS, ROSOUT = ("/bt_nav_executive/tree", "/bt_nav/events", "/bt_nav/mission",
                                              "/collisions", "/rosout")
+ANNOUNCEMENTS = "/bt_nav_executive/events"  # the executive's ``~/events``: its leaves' events as JSON (fields)
 WALKERS = "/walkers"  # the simulator's people walking (JSON {"t", "circles"}), in worlds that have them
 
 
@@ -74,6 +76,7 @@ TOPICS: dict[str, TopicSpec] = {
     TRUTH: TopicSpec("nav_msgs/msg/Odometry", depth=100),
     CMD: TopicSpec("geometry_msgs/msg/Twist"),
     TREE: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
+    ANNOUNCEMENTS: TopicSpec("std_msgs/msg/String", transient_local=True, depth=100),
     EVENTS: TopicSpec("std_msgs/msg/String", depth=100),
     MISSION: TopicSpec("std_msgs/msg/String", transient_local=True, depth=1),
     COLLISIONS: TopicSpec("std_msgs/msg/String", depth=50),
@@ -82,7 +85,7 @@ TOPICS: dict[str, TopicSpec] = {
 
 
 #: Topics a robot publishes in its namespace (the others, /clock and /bt_nav/mission, exist once per bag).
-ROBOT_TOPICS: tuple[str, ...] = (SCAN, ODOM, TRUTH, CMD, TREE, EVENTS, COLLISIONS, WALKERS)
+ROBOT_TOPICS: tuple[str, ...] = (SCAN, ODOM, TRUTH, CMD, TREE, ANNOUNCEMENTS, EVENTS, COLLISIONS, WALKERS)
 
 
 def split_namespace(topic: str) -> tuple[str, str]:
@@ -192,7 +195,6 @@ class MissionBag:
         except (WriterError, OSError) as exc:
             raise BagError(f"cannot write bag {self.path}: {exc}") from exc
         self._connections: dict[str, Any] = {}
-        self._last_tree: Any = None
         self.namespace = ""  # "" for the bag itself, "/robot1" for a robot's sink (:meth:`robot`)
         self._root = self
         self.counts: dict[str, int] = {}
@@ -233,13 +235,11 @@ class MissionBag:
     def robot(self, name: str) -> MissionBag:
         """A sink for robot ``name`` writing into this bag under ``/name`` (see the module docstring).
 
-        It shares this bag's writer, connections and :attr:`counts`, and has its own tree state (so each
-        robot's tree is written when *its* status changes); closing it does nothing, close the bag.
+        It shares this bag's writer, connections and :attr:`counts`; closing it does nothing, close the bag.
         """
         view = copy.copy(self)
         view.namespace = "/" + name.strip("/")
         view._root = self
-        view._last_tree = None
         return view
 
     def topic(self, name: str) -> str:
@@ -307,14 +307,15 @@ class MissionBag:
         """A std_msgs/String on ``topic``."""
         self.write(topic, t, self._String(data=str(text)))
 
-    def tree(self, t: float, snapshot: str) -> None:
-        """/bt_nav_executive/tree when a status or the tip changed, as the executive publishes ``~/tree``
-        (feedback-only changes are not written, so lock-step and DDS bags hold the same snapshots)."""
-        rows = parse_snapshot(snapshot)
-        key = tuple((r.name, r.status) for r in rows) if rows else snapshot
-        if key != self._last_tree:
-            self._last_tree = key
-            self.string(TREE, t, snapshot)
+    def tree(self, t: float, snapshot: dict[str, Any]) -> None:
+        """/bt_nav_executive/tree: a tree snapshot (:mod:`bt_nav.mission.snapshot`) in its wire form, as the executive
+        publishes ``~/tree``; the engine sends one only when a status or the tip changed
+        (:meth:`bt_nav.mission.core.MissionCore.changed_snapshot`), so lock-step and DDS bags hold the same ones."""
+        self.string(TREE, t, snapshot_json(snapshot))
+
+    def announce(self, t: float, record: dict[str, Any]) -> None:
+        """/bt_nav_executive/events: one of the tree's events (a maneuver's side and angle), as ``~/events``."""
+        self.string(ANNOUNCEMENTS, t, snapshot_json(record))
 
     def event(self, t: float, text: str) -> None:
         """/bt_nav/events: one mission log line."""

@@ -37,6 +37,7 @@ import numpy as np
 from bt_nav_sim.walkers import read_walkers_message
 
 from bt_nav.media.bag import (
+    ANNOUNCEMENTS,
     CLOCK,
     CMD,
     COLLISIONS,
@@ -54,6 +55,7 @@ from bt_nav.media.bag import (
     typestore,
 )
 from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.mission.snapshot import read_event, read_snapshot
 
 
 @dataclass
@@ -133,7 +135,10 @@ class MissionRecord:
     odom: Poses
     scans: Scans
     cmd: np.ndarray  # (n, 3): t, v, w
-    trees: list[tuple[float, str]] = field(default_factory=list)
+    #: (t, snapshot) of the executive's ``~/tree`` (:mod:`bt_nav.mission.snapshot`); a bag recorded before the
+    #: snapshots were JSON (unicode art) has none.
+    trees: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
+    announcements: list[tuple[float, dict[str, Any]]] = field(default_factory=list)  # (t, event) of ``~/events``
     events: list[tuple[float, str]] = field(default_factory=list)
     collisions: list[dict[str, Any]] = field(default_factory=list)
     walkers: list[tuple[float, np.ndarray]] = field(default_factory=list)  # (t, circles (K, 3)): people walking
@@ -268,7 +273,8 @@ class _Collector:
         self.scan_rows: list[np.ndarray] = []
         self.scan_meta: tuple[float, float, float] | None = None
         self.cmd: list[tuple[float, float, float]] = []
-        self.trees: list[tuple[float, str]] = []
+        self.trees: list[tuple[float, dict[str, Any]]] = []
+        self.announcements: list[tuple[float, dict[str, Any]]] = []
         self.events: list[tuple[float, str]] = []
         self.collisions: list[dict[str, Any]] = []
         self.walkers: list[tuple[float, np.ndarray]] = []
@@ -296,7 +302,13 @@ class _Collector:
             twist = getattr(msg, "twist", msg)  # geometry_msgs/Twist, or TwistStamped's twist
             self.cmd.append((t, twist.linear.x, twist.angular.z))
         elif topic == TREE:
-            self.trees.append((t, msg.data))
+            snapshot = read_snapshot(msg.data)
+            if snapshot is not None:  # not a snapshot document (an older bag's art): no tree
+                self.trees.append((t, snapshot))
+        elif topic == ANNOUNCEMENTS:
+            record = read_event(msg.data)
+            if record is not None:
+                self.announcements.append((t, record))
         elif topic == EVENTS:
             self.events.append((t, msg.data))
         elif topic == COLLISIONS:
@@ -330,13 +342,13 @@ class _Collector:
                 rec.robots[namespace.strip("/")] = robot
         if rec.robots and not self.truth:
             first = next(iter(rec.robots.values()))
-            for name in ("truth", "odom", "scans", "cmd", "trees", "events", "collisions", "walkers"):
+            for name in ("truth", "odom", "scans", "cmd", "trees", "announcements", "events", "collisions", "walkers"):
                 setattr(rec, name, getattr(first, name))
         return rec
 
     def _sort(self) -> None:
         """Every series in time order (stable): stamps at the source arrive out of the bag's order."""
-        for name in ("truth", "odom", "cmd", "trees", "events", "walkers"):
+        for name in ("truth", "odom", "cmd", "trees", "announcements", "events", "walkers"):
             getattr(self, name).sort(key=lambda item: item[0])
         order = sorted(range(len(self.scan_t)), key=self.scan_t.__getitem__)
         self.scan_t = [self.scan_t[i] for i in order]
@@ -351,6 +363,7 @@ class _Collector:
         return MissionRecord(path=path, counts=self.counts, truth=Poses.from_rows(self.truth),
                              odom=Poses.from_rows(self.odom), scans=scans,
                              cmd=np.asarray(self.cmd, dtype=np.float64).reshape(-1, 3), trees=self.trees,
+                             announcements=self.announcements,
                              events=self.events, collisions=self.collisions, walkers=self.walkers,
                              mission=self.mission,
                              start=self.t_min if self.counts else 0.0, end=self.t_max if self.counts else 0.0,

@@ -17,6 +17,7 @@ import numpy as np
 from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, box_corners
 
+from bt_nav.mission.maneuver_spec import tips as maneuver_tips
 from bt_nav.mission.resources import written_whole
 
 #: Branch labels, in legend order.
@@ -30,8 +31,6 @@ BRANCH_COLOURS = {
     "Maneuver": "#9467bd",
     "Stopped": "#7f7f7f",
 }
-#: Tips of the mission tree that belong to the maneuver branch (the leaves of ManeuverA/B/C).
-MANEUVER_TIPS = frozenset({"Randomizer", "Retreat", "SmartPivot"})
 
 
 def frame_axes(ax: Any, world: World) -> None:
@@ -69,7 +68,7 @@ def branch_of_tip(tip: str) -> str:
     name = tip.rsplit(".", 1)[-1]
     if name in ("FullSpeed", "TurnAway", "RotateInPlace", "Creep", "AEB"):
         return name
-    if name in MANEUVER_TIPS or name.startswith("Maneuver"):
+    if name in maneuver_tips() or name.startswith("Maneuver"):  # the maneuvers' leaves, by the maneuver spec
         return "Maneuver"
     return "Stopped"
 

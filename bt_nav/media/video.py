@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from bt_nav.media.bagread import MissionRecord
-from bt_nav.media.treetext import TreeRow, active_path, parse_snapshot
+from bt_nav.mission.snapshot import SnapshotNode, snapshot_nodes
 
 WIDTH, HEIGHT = 1280, 720
 MAP_W, MAP_H = 720, 560  # map panel (top left); the tree panel fills the rest of the top
@@ -47,6 +47,11 @@ BG, INK, GRID, WALL = (250, 250, 247), (30, 30, 30), (228, 228, 222), (70, 70, 7
 PANEL_BG, CONSOLE_BG, CONSOLE_INK = (244, 244, 250), (22, 24, 28), (210, 215, 220)
 STATUS_COLOURS = {"SUCCESS": (30, 140, 50), "FAILURE": (200, 40, 40), "RUNNING": (30, 90, 220),
                   "INVALID": (150, 150, 150)}
+
+
+def status_colour(status: str) -> tuple[int, int, int]:
+    """A status's colour; a status this module does not know (a py_trees newer than the film) is drawn in ink."""
+    return STATUS_COLOURS.get(status, INK)
 
 
 def _hex(colour: str) -> tuple[int, int, int]:
@@ -149,7 +154,7 @@ def live_feedback(feedback: str, elapsed: float, turned: float) -> str:
     return f"{n - turned:+.0f} deg to go"
 
 
-def shown_feedback(row: TreeRow) -> str:
+def shown_feedback(row: SnapshotNode) -> str:
     """A row's feedback if that node was ticked in the snapshot's tick (RUNNING, SUCCESS or FAILURE), else "".
 
     Why: py_trees keeps a node's last feedback after it stops being ticked ("+158 deg to go" of a finished
@@ -160,31 +165,31 @@ def shown_feedback(row: TreeRow) -> str:
 
 @dataclass(frozen=True)
 class Snapshot:
-    """One tree snapshot of the bag, parsed once: its rows, the running path, the branch and the tip."""
+    """One tree snapshot of the bag, read once: its rows, the running path, the branch and the tip."""
 
     t: float  # sim time of the snapshot (absolute, as in the bag)
-    rows: list[TreeRow]
+    rows: list[SnapshotNode]
     path: list[int]
     branch: str  # the tree's branch: the child of the first selector on the running path ("Lab", "Disarmed")
     label: str  # the trajectory's colour label (:func:`bt_nav.media.plot.branch_of_tip`)
     running_since: float  # since when the tip has been running without a break (``t`` when it is not running)
 
     @property
-    def tip(self) -> TreeRow | None:
-        """The last node of the running path (None for a foreign text)."""
+    def tip(self) -> SnapshotNode | None:
+        """The last node of the running path (None for a snapshot without one)."""
         return self.rows[self.path[-1]] if self.path else None
 
 
 def snapshots(record: MissionRecord) -> list[Snapshot]:
-    """The bag's tree snapshots, parsed (see :class:`Snapshot`)."""
+    """The bag's tree snapshots (:mod:`bt_nav.mission.snapshot` documents), read (see :class:`Snapshot`)."""
     from bt_nav.media.plot import branch_of_tip
 
     out: list[Snapshot] = []
-    for t, text in record.trees:
-        rows = parse_snapshot(text)
-        path = active_path(rows)
+    for t, document in record.trees:
+        rows = snapshot_nodes(document)
+        path = [i for i in document.get("path", ()) if 0 <= i < len(rows)]
         tip = rows[path[-1]] if path else None
-        chosen = next((path[n + 1] for n, i in enumerate(path[:-1]) if rows[i].marker == "[o]"), None)
+        chosen = next((path[n + 1] for n, i in enumerate(path[:-1]) if rows[i].kind == "selector"), None)
         branch = rows[chosen].name if chosen is not None else (tip.name if tip else "")
         since = t
         if tip is not None and tip.status == "RUNNING" and out:
@@ -297,7 +302,7 @@ class Track:
         return FrameText(t - origin, travelled, snap.branch, tip.name if tip else "", feedback,
                          _deadline(snap, elapsed, since_snap), turned, snap.t - origin)
 
-    def panel_rows(self, t: float) -> list[tuple[TreeRow, str, bool]]:
+    def panel_rows(self, t: float) -> list[tuple[SnapshotNode, str, bool]]:
         """The tree at ``t``: each row with the feedback the frame shows and whether it is on the running path."""
         k = self.snapshot(t)
         if k < 0:
@@ -551,7 +556,7 @@ class VideoRenderer:
     def _panel_step(n_rows: int) -> int:
         return min(15, (MAP_H - 30) // max(n_rows, 1))
 
-    def _draw_panel(self, k: int, rows: list[tuple[TreeRow, str, bool]]) -> Any:
+    def _draw_panel(self, k: int, rows: list[tuple[SnapshotNode, str, bool]]) -> Any:
         """The panel of snapshot ``k``: title with the snapshot's time, highlights of the running path, rows."""
         img = self._Image.new("RGB", (WIDTH - MAP_W - 2, MAP_H), PANEL_BG)
         d = self._Draw.Draw(img)
@@ -565,8 +570,8 @@ class VideoRenderer:
             self._panel_row(d, 28 + n * step, row, shown_feedback(row))
         return img
 
-    def _panel_row(self, d: Any, y: int, row: TreeRow, feedback: str) -> None:
-        colour = STATUS_COLOURS[row.status]
+    def _panel_row(self, d: Any, y: int, row: SnapshotNode, feedback: str) -> None:
+        colour = status_colour(row.status)
         x = 8 + 14 * row.depth
         d.rectangle([x, y + 3, x + 7, y + 10], fill=colour)
         label = row.name + (f" - {feedback}" if feedback else "")
@@ -801,9 +806,9 @@ class TracksRenderer(VideoRenderer):
             y += 20
             for row, feedback in rows:
                 x = 8 + 10 * row.depth
-                d.rectangle([x, y + 3, x + 7, y + 10], fill=STATUS_COLOURS[row.status])
+                d.rectangle([x, y + 3, x + 7, y + 10], fill=status_colour(row.status))
                 label = row.name + (f" - {feedback}" if feedback else "")
-                d.text((x + 12, y), label[:66 - row.depth], font=self.mono, fill=STATUS_COLOURS[row.status])
+                d.text((x + 12, y), label[:66 - row.depth], font=self.mono, fill=status_colour(row.status))
                 y += 15
             y += 10
         self._paths_cache = (key, img)

@@ -32,20 +32,22 @@ from bt_nav.media.bag import CMD, EVENTS, MISSION, ODOM, SCAN, TREE, TRUTH, WALK
 from bt_nav.media.bagread import MissionRecord
 from bt_nav.media.page import PAGE
 from bt_nav.media.plot import start_circle
-from bt_nav.media.treetext import active_path, parse_snapshot
 from bt_nav.mission.geometry import yaw_from_quaternion
+from bt_nav.mission.snapshot import read_snapshot, snapshot_nodes
 
 MAX_BODY = 4096  # bytes a /control request may carry
 TRAIL_STEP = 0.02  # m between two kept trail points
 EVENT_LINES = 12
 
 
-def tree_json(text: str) -> list[dict[str, Any]]:
-    """The rows of a ``~/tree`` snapshot for the page, the running path flagged ``active``."""
-    rows = parse_snapshot(text)
-    on_path = set(active_path(rows))
+def tree_json(snapshot: dict[str, Any] | None) -> list[dict[str, Any]]:
+    """The rows of a ``~/tree`` snapshot (:mod:`bt_nav.mission.snapshot`) for the page, the running path flagged
+    ``active`` (no rows for anything that is not a snapshot)."""
+    if not snapshot:
+        return []
+    on_path = set(snapshot.get("path", ()))
     return [{"depth": r.depth, "name": r.name, "status": r.status, "feedback": r.feedback, "active": i in on_path}
-            for i, r in enumerate(rows)]
+            for i, r in enumerate(snapshot_nodes(snapshot))]
 
 
 def world_json(world: Any) -> dict[str, Any]:
@@ -129,7 +131,7 @@ class LiveScene(Scene):
             angles = msg.angle_min + msg.angle_increment * np.arange(len(msg.ranges))
             self.scan = (angles, np.asarray(msg.ranges, dtype=np.float32), float(msg.range_max))
         elif topic == TREE:
-            self.tree = tree_json(msg.data)
+            self.tree = tree_json(read_snapshot(msg.data))
         elif topic == EVENTS:
             self.events.append(f"[{self.t:7.2f}] {msg.data}")
         elif topic == CMD:

@@ -29,6 +29,7 @@ from bt_nav.mission.behaviours.control import compile_tick
 from bt_nav.mission.boards import OwnBoard
 from bt_nav.mission.datatypes import STOP, Clock, Command, OdomSample, keep_wheels_within
 from bt_nav.mission.scan import Scan
+from bt_nav.mission.snapshot import SNAPSHOT_KEYS, jsonable, tree_snapshot
 from bt_nav.mission.tree import load_tree
 
 Status = py_trees.common.Status
@@ -102,8 +103,10 @@ class MissionCore:
                 self.board.set(f"/{spec.name}", self.params[spec.name])
         self.board.set("/odom", OdomSample())
         seed = int(self.params["random_seed"])
+        self.announcements: list[dict[str, Any]] = []  # the leaves' events since the driver last took them
         self.tree.setup(node=node, clock=clock, events=self.events, evaluation_client=evaluation_client,
-                        random_seed=None if seed < 0 else seed, arm_service=str(self.params["arm_service"]))
+                        random_seed=None if seed < 0 else seed, arm_service=str(self.params["arm_service"]),
+                        announce=self._announce)
         self._fast_tick = compile_tick(self.root)
         self.nodes: list[py_trees.behaviour.Behaviour] = list(self.root.iterate())  # the shape is fixed from here on
         self.arm_leaf: ArmService = find_leaf(self.root, ArmService)
@@ -111,6 +114,7 @@ class MissionCore:
         self.ticks = 0
         self.faults = 0
         self.last_command: Command = STOP
+        self._snapshot_key: tuple[Any, ...] | None = None
 
     # ------------------------------------------------------------------ inputs
     def _put(self, key: str, value: Any) -> None:
@@ -250,9 +254,33 @@ class MissionCore:
         :meth:`statuses` or :attr:`tip` does (for deciding whether a new snapshot is worth making)."""
         return (*(node.status for node in self.nodes), self.root.tip())
 
-    def snapshot(self, show_status: bool = True) -> str:
-        """The tree as unicode art, without colour codes (for logs, ``~/tree`` and golden tests)."""
-        return strip_ansi(py_trees.display.unicode_tree(self.root, show_status=show_status))
+    def snapshot(self) -> dict[str, Any]:
+        """The tree after the last tick as a structured document (:func:`bt_nav.mission.snapshot.tree_snapshot`):
+        what ``~/tree`` carries and a lock-step bag holds; :func:`~bt_nav.mission.snapshot.render_art` draws it."""
+        board = {key: jsonable(self.value(key)) for key in SNAPSHOT_KEYS}
+        return tree_snapshot(self.root, tick=self.ticks, t=round(float(self.clock()), 6),
+                             maneuver=str(self.params["maneuver"]), board=board)
+
+    def changed_snapshot(self) -> dict[str, Any] | None:
+        """:meth:`snapshot` when a status or the tip changed since the last call, else None: the one rule of when
+        the tree is worth sending (``~/tree`` over DDS, a lock-step bag), so both hold the same snapshots."""
+        key = self.status_key()
+        if key == self._snapshot_key:
+            return None
+        self._snapshot_key = key
+        return self.snapshot()
+
+    def _announce(self, record: dict[str, Any]) -> None:
+        """A leaf's event (:meth:`~bt_nav.mission.behaviours.base.Leaf.announce`), kept for the driver; a maneuver's
+        is stamped with the maneuver this tree was built for (one maneuver per tree)."""
+        if record.get("event") == "maneuver":
+            record = {**record, "maneuver": str(self.params["maneuver"])}
+        self.announcements.append(record)
+
+    def take_announcements(self) -> list[dict[str, Any]]:
+        """The events since the last call, oldest first (the driver publishes or keeps them)."""
+        taken, self.announcements = self.announcements, []
+        return taken
 
     @property
     def mission_over(self) -> bool:

@@ -11,47 +11,36 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from bt_nav.mission.maneuver_spec import MANEUVER_SPECS, NONE, LiveLetters, LiveMap
+from bt_nav.mission.maneuver_spec import aliases as maneuver_aliases
+from bt_nav.mission.maneuver_spec import titles as maneuver_titles
+
 Value = bool | int | float | str
 
-#: The lab's evasive maneuvers, and with "none" every value of the ``maneuver`` parameter: the one home of the set
-#: (the worlds' ``checkoff_maneuvers``, the check-off judge, the grids and the benchmarks read it from here).
-LAB_MANEUVERS: tuple[str, ...] = ("A", "B", "C")
-MANEUVERS: tuple[str, ...] = ("none", *LAB_MANEUVERS)
-
-MANEUVER_ALIASES: dict[str, str] = {
-    "none": "none",
-    "a": "A",
-    "randomizer": "A",
-    "b": "B",
-    "retreat": "B",
-    "c": "C",
-    "smart_pivot": "C",
-    "smartpivot": "C",
-    "pivot": "C",
-}
-MANEUVER_TITLES: dict[str, str] = {
-    "none": "none",
-    "A": "A Randomizer",
-    "B": "B Retreat",
-    "C": "C Smart Pivot",
-}
+#: The lab's evasive maneuvers, and with "none" every value of the ``maneuver`` parameter, with their spellings
+#: and titles: live views of :data:`bt_nav.mission.maneuver_spec.MANEUVER_SPECS`, the one home of the maneuvers (the
+#: worlds' ``checkoff_maneuvers``, the check-off judge, the grids and the benchmarks read them from here).
+LAB_MANEUVERS: Sequence[str] = LiveLetters()
+MANEUVERS: Sequence[str] = LiveLetters(prefix=(NONE,))
+MANEUVER_ALIASES: Mapping[str, str] = LiveMap(maneuver_aliases)
+MANEUVER_TITLES: Mapping[str, str] = LiveMap(maneuver_titles)
 
 
 def normalise_maneuver(value: str) -> str:
-    """Map a user's maneuver spelling (``a``, ``Randomizer``, ``smart_pivot``...) to none|A|B|C.
+    """Map a user's maneuver spelling (a letter in any case, a title such as ``Randomizer``...) to none or a letter.
 
     Raises:
         ValueError: for an unknown name, listing the accepted ones.
     """
     key = str(value).strip().lower().replace("-", "_").replace(" ", "_")
     try:
-        return MANEUVER_ALIASES[key]
+        return maneuver_aliases()[key]
     except KeyError:
-        accepted = ", ".join(sorted(set(MANEUVER_ALIASES)))
+        accepted = ", ".join(sorted(maneuver_aliases()))
         raise ValueError(f"unknown maneuver {value!r}; accepted: {accepted}") from None
 
 
@@ -109,10 +98,19 @@ class ParamSpec:
         return f" {self.unit}" if self.unit else ""
 
 
+def _trigger_distance_text(name: str) -> str:
+    """``Trigger distance of maneuvers A (front) and B (left and right).``: the maneuvers whose sheet distance is
+    the parameter ``name``, from the maneuver spec."""
+    users = [f"{m.letter} ({m.trigger.words})" for m in MANEUVER_SPECS.values() if m.trigger.distance == name]
+    listed = users[0] if len(users) == 1 else f"{', '.join(users[:-1])} and {users[-1]}"
+    return f"Trigger distance of maneuver{'s' if len(users) > 1 else ''} {listed}."
+
+
 PARAMS: tuple[ParamSpec, ...] = (
     # --- the mission -------------------------------------------------------------------------------
-    ParamSpec("maneuver", "none", "Evasive rotation maneuver: none, A (Randomizer), B (Retreat), "
-              "C (Smart Pivot); the names are accepted too.", live=False,
+    ParamSpec("maneuver", "none", "Evasive rotation maneuver: none, "
+              + ", ".join(f"{m.letter} ({m.title})" for m in MANEUVER_SPECS.values()) + "; the names are accepted too.",
+              live=False,
               choices=MANEUVERS),
     ParamSpec("mode", "homework", "What the robot does when armed and no maneuver runs: homework (reactive "
               "close / far / none driving at speed) or lab (creep straight ahead at creep_speed, brake before "
@@ -128,9 +126,8 @@ PARAMS: tuple[ParamSpec, ...] = (
               "evaluation call.", "", 0, 100),
     ParamSpec("evaluation_retry_delay", 0.5, "Pause between evaluation attempts.", "s", 0.0, 10.0),
     # --- perception --------------------------------------------------------------------------------
-    ParamSpec("safety_distance", 0.5, "Trigger distance of maneuvers A (front) and B (left and right).",
-              "m", 0.05, 10.0),
-    ParamSpec("pivot_distance", 0.3, "Trigger distance of maneuver C (front).", "m", 0.05, 10.0),
+    ParamSpec("safety_distance", 0.5, _trigger_distance_text("safety_distance"), "m", 0.05, 10.0),
+    ParamSpec("pivot_distance", 0.3, _trigger_distance_text("pivot_distance"), "m", 0.05, 10.0),
     ParamSpec("trigger_hysteresis", 0.1, "A maneuver fires on the rising edge of its condition; a clearing "
               "re-arms it only once its reading has risen above the trigger distance plus this (see the "
               "tree guide).", "m", 0.0, 5.0),
@@ -287,7 +284,7 @@ def check_changes(current: Mapping[str, Value], changes: Mapping[str, Any], *,
         if reason:
             return candidate, reason
         if name == "maneuver":
-            value = normalise_maneuver(value)  # "randomizer" is the running "A", not a change
+            value = normalise_maneuver(value)  # a maneuver's name is its letter: the running one, not a change
         if running and not spec.live and value != current[name]:
             return candidate, f"{name} cannot change while the executive runs (restart it with the new value)"
         candidate[name] = value

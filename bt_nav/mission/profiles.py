@@ -3,8 +3,8 @@
 A profile names one use: ``homework`` (the course homework in its simulator), ``lab`` (the lab exercise)
 and ``turtlebot3`` (a real or Gazebo TurtleBot3 Burger doing the homework mission). Each maps to the
 params files under ``config/`` that the executive loads in that order (later files win), exactly as
-``ros2 run bt_nav executive --ros-args --params-file A --params-file B`` would. The simulator's side of a
-profile (LiDAR, kinematics) is :data:`bt_nav_sim.core.PROFILES`, under the same names.
+``ros2 run bt_nav executive --ros-args --params-file A --params-file B`` would. The profiles themselves (files,
+simulated robot, assignment) are one record each in :mod:`bt_nav.mission.assignments`.
 """
 
 from __future__ import annotations
@@ -12,17 +12,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from bt_nav.mission.assignments import PROFILES, profile_spec
 from bt_nav.mission.resources import read_yaml, share_dir
 
 #: The executive's node name, the section params files address.
 EXECUTIVE_NAME = "bt_nav_executive"
 
-#: profile -> params files under config/, applied in order.
-PROFILE_FILES: dict[str, tuple[str, ...]] = {
-    "homework": ("homework.yaml",),
-    "lab": ("lab.yaml",),
-    "turtlebot3": ("homework.yaml", "turtlebot3.yaml"),
-}
+#: profile -> params files under config/, applied in order (read from :data:`bt_nav.mission.assignments.PROFILES`).
+PROFILE_FILES: dict[str, tuple[str, ...]] = {name: spec.files for name, spec in PROFILES.items()}
 
 
 def config_file(name: str) -> Path | None:
@@ -53,10 +50,7 @@ def file_parameters(path: str | Path, node_name: str = EXECUTIVE_NAME) -> dict[s
 
 def profile_files(profile: str) -> list[Path]:
     """The params files of ``profile`` that exist, in load order (ValueError for an unknown profile)."""
-    try:
-        names = PROFILE_FILES[profile]
-    except KeyError:
-        raise ValueError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILE_FILES)}") from None
+    names = profile_spec(profile).files
     return [path for path in (config_file(name) for name in names) if path is not None]
 
 

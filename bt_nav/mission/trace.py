@@ -9,25 +9,16 @@ commanded twist. Both the ROS executive and the lock-step runner write the same 
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import IO, Any
 
 from bt_nav.mission.core import OUTPUT_KEYS, MissionCore
 from bt_nav.mission.datatypes import Command
+from bt_nav.mission.snapshot import jsonable
+
+__all__ = ["TRACED_KEYS", "TraceRecorder", "jsonable", "read_trace"]
 
 TRACED_KEYS = (*OUTPUT_KEYS, "scan_stamp")
-
-
-def jsonable(value: Any) -> Any:
-    """A JSON-friendly form of a blackboard value (numbers stay numbers; NaN/inf become strings)."""
-    if isinstance(value, bool) or value is None or isinstance(value, int | str):
-        return value
-    if isinstance(value, float):
-        return round(value, 6) if math.isfinite(value) else str(value)
-    if isinstance(value, Command):
-        return {"linear": jsonable(value.linear), "angular": jsonable(value.angular), "source": value.source}
-    return repr(value)
 
 
 class TraceRecorder:

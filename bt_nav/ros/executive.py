@@ -17,8 +17,12 @@ subscription    ``scan``              sensor_msgs/LaserScan           sensor-dat
 subscription    ``odom``              nav_msgs/Odometry               optional: closes the maneuvers' loop
 publisher       ``cmd_vel``           geometry_msgs/Twist             one command per tick (TwistStamped with
                                                                       ``cmd_vel_stamped:=true``)
-publisher       ``~/tree``            std_msgs/String                 the tree as text when a status or the tip
-                                                                      changes (transient local, depth 1)
+publisher       ``~/tree``            std_msgs/String                 the tree as a JSON document when a status
+                                                                      or the tip changes (transient local, depth
+                                                                      1; :mod:`bt_nav.mission.snapshot`)
+publisher       ``~/events``          std_msgs/String                 the leaves' announcements as JSON, e.g. a
+                                                                      maneuver's side and angle (reliable,
+                                                                      transient local, depth 100)
 ==============  ====================  ==============================  ==================================================
 
 Parameters: every entry of :data:`bt_nav.mission.params.PARAMS`, with its description, unit and range
@@ -59,9 +63,11 @@ from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.profiles import params_files_note
 from bt_nav.mission.resources import tree_file
 from bt_nav.mission.scan import Scan, ScanError
+from bt_nav.mission.snapshot import snapshot_json
 from bt_nav.mission.trace import TraceRecorder
 from bt_nav.ros.param_gate import ParameterGate
 from bt_nav.ros.rosutil import (
+    EVENTS_QOS,
     LATCHED,
     CommandPublisher,
     ConfigError,
@@ -113,7 +119,6 @@ class Executive:
         self.stats = TickStats(self.period)
         self.watchdog = ClockWatchdog(float(params["clock_watchdog"]))
         self.scans = self.bad_scans = self.bad_odom = 0
-        self._tree_key: tuple[Any, ...] | None = None
         self._wire(node, params)
         self.log.info(self.describe(tree_path))
 
@@ -127,6 +132,7 @@ class Executive:
         self.cmd = CommandPublisher(node, "cmd_vel", stamped=bool(params["cmd_vel_stamped"]),
                                     frame_id=str(params["frame_id"]))
         self.tree_publisher = node.create_publisher(String, "~/tree", LATCHED)
+        self.events_publisher = node.create_publisher(String, "~/events", EVENTS_QOS)
         # rclpy's QoS warnings on the inputs a robot's driver may offer otherwise, on a QuietNode too (QuietQosEvents)
         self.scan_subscription = node.create_subscription(LaserScan, "scan", self._on_scan, qos_profile_sensor_data,
                                                           event_callbacks=SubscriptionEventCallbacks())
@@ -192,7 +198,7 @@ class Executive:
             command = self.vet(self.core.tick())
             self.cmd.publish(command)
             self.watchdog.moving = not command.is_zero
-            self._publish_tree()
+            self._publish_state()
         except Exception as exc:  # the node must outlive any bug at its edge, and stop the robot
             self.stats.exceptions += 1
             self.watchdog.moving = False
@@ -242,12 +248,14 @@ class Executive:
                        f"publishing a stop ({self.stats.vetoed} vetoed so far)", throttle_duration_sec=1.0)
         return Command(0.0, 0.0, f"vetoed: {why}")
 
-    def _publish_tree(self) -> None:
-        """``~/tree`` when a status or the tip changed (not every tick: the text is large)."""
-        key = self.core.status_key()
-        if key != self._tree_key:
-            self._tree_key = key
-            self.tree_publisher.publish(self._string(data=self.core.snapshot()))
+    def _publish_state(self) -> None:
+        """The tick's events on ``~/events``, then ``~/tree`` when a status or the tip changed (not every tick:
+        the document is large); the lock-step engine takes the same two from the core."""
+        for record in self.core.take_announcements():
+            self.events_publisher.publish(self._string(data=snapshot_json(record)))
+        snapshot = self.core.changed_snapshot()
+        if snapshot is not None:
+            self.tree_publisher.publish(self._string(data=snapshot_json(snapshot)))
 
     # ------------------------------------------------------------------ shutdown
     def close(self) -> None:

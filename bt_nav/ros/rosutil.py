@@ -25,6 +25,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from bt_nav.mission import params as P
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.geometry import yaw_from_quaternion  # noqa: F401 - re-exported for the commands
+from bt_nav.mission.maneuver_spec import names_text
 
 # DDS environment and domains: one home, bt_nav.ros.supervise (no rclpy); re-exported for nodes, tests, bench.
 from bt_nav.ros.supervise import claim_domain_id, dds_env, domain_id_for  # noqa: F401
@@ -36,6 +37,8 @@ ROS_OWN_PARAMETERS = ("use_sim_time", "start_type_description_service")
 
 #: ``~/tree``: late joiners (``bt-nav watch``) get the current tree at once.
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: ``~/events``: every announcement reaches a reader, a late recorder gets the last 100 too.
+EVENTS_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 class ConfigError(ValueError):
@@ -65,7 +68,7 @@ def parameter_descriptor(spec: P.ParamSpec) -> ParameterDescriptor:
     description = spec.description + (f" [{spec.unit}]" if spec.unit else "")
     constraints: list[str] = []
     if spec.choices:
-        extra = " (names such as randomizer, retreat, smart_pivot are accepted)" if spec.name == "maneuver" else ""
+        extra = f" (names such as {names_text()} are accepted)" if spec.name == "maneuver" else ""
         constraints.append(f"one of {', '.join(spec.choices)}{extra}")
     if not spec.live:
         constraints.append("read-only: set it at start-up (-p or a params file)")

@@ -43,6 +43,7 @@ from bt_nav_sim.referee_core import Referee, RefereeConfig
 from bt_nav_sim.world import World, load_world
 
 from bt_nav.media.plot import Trajectory, branch_of_tip
+from bt_nav.mission.assignments import LAB, assignment_of
 from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.local_services import LocalTriggerClient, TriggerRequest, TriggerResponse
@@ -135,6 +136,7 @@ class Robot:
         self.active_ticks = 0
         self.command = Command(0.0, 0.0)
         self.recorder: TraceRecorder | None = None
+        self.announcements: list[dict[str, Any]] = []  # the tree's events (:mod:`bt_nav.mission.snapshot`)
 
     def _evaluate(self, _request: TriggerRequest) -> TriggerResponse:
         ok, message = self.referee.on_evaluate(self.clock.now)
@@ -192,9 +194,15 @@ class Robot:
         if branch == "Maneuver" and self.branch != "Maneuver":
             self.maneuvers += 1
         self.branch = branch
-        if self.sink is not None:
+        announced = self.core.take_announcements()
+        self.announcements += announced
+        if self.sink is not None:  # what the executive publishes after a tick: cmd_vel, ~/events, ~/tree on change
             self.sink.cmd(t, command.linear, command.angular)
-            self.sink.tree(t, self.core.snapshot(show_status=True))
+            for record in announced:
+                self.sink.announce(t, record)
+            snapshot = self.core.changed_snapshot()
+            if snapshot is not None:
+                self.sink.tree(t, snapshot)
         if self._on_command is not None:
             self._on_command(t, command.linear, command.angular)
         self.command = command
@@ -215,6 +223,7 @@ class Robot:
             branch_ticks=dict(self.branch_ticks), maneuvers=self.maneuvers,
             report_lines=list(self.referee.report_lines()), trajectory=self.samples.trajectory(),
             faults=self.core.faults, world_model=self.sim.world, events=list(self.events.lines),
+            announcements=list(self.announcements),
             parameters=effective_parameters(dict(self.core.params)), robot=self.name,
         )
 
@@ -228,8 +237,8 @@ class Lockstep:
             None: the profile's (``config/homework.yaml`` says C).
         seed: LiDAR noise, odometry slip, spawn perturbation and maneuver A's randomness.
         overrides: parameter values over the profile's (``random_seed`` defaults to ``seed``).
-        profile_name: homework, lab or turtlebot3: the params files (:mod:`bt_nav.mission.profiles`) and the
-            simulated robot (:data:`bt_nav_sim.core.PROFILES`).
+        profile_name: homework, lab or turtlebot3 (:data:`bt_nav.mission.assignments.PROFILES`): the params
+            files, the simulated robot and the judge (the assignment's: the referee, or the lab's check-off).
         robots: how many robots (robot1, robot2, ...), or ``names``; ``starts``: their poses (x, y, yaw).
         kinematics: ideal or burger (empty: the profile's). ``noise``: LiDAR noise and odometry slip.
         jitter: spawn perturbation (metres, degrees); None for the exact spawn.
@@ -261,7 +270,8 @@ class Lockstep:
         self.clock = SimClock()
         self.sink = sink
         self.merge_steps = merge_steps
-        make_referee = referee or (lab_judge(self.maneuver, self.sim.world, lidar=config.lidar) if profile_name == "lab"
+        checkoff = assignment_of(profile_name).judge == LAB.judge  # the assignment's judge: the lab's, or the referee
+        make_referee = referee or (lab_judge(self.maneuver, self.sim.world, lidar=config.lidar) if checkoff
                                    else homework_referee(referee_config))
         self.robots: list[Robot] = []
         for i, (name, body) in enumerate(zip(self.sim.names, self.sim.cores, strict=True)):

@@ -13,7 +13,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from bt_nav.media.treetext import tip_name
+from bt_nav.mission.snapshot import read_snapshot
 from bt_nav.ros.bringup import EXECUTIVE_NAME
 from bt_nav.ros.simclock import SimClock
 
@@ -124,7 +124,8 @@ class Recorder:
     def _on_tree(self, msg: Any) -> None:
         from bt_nav.media.plot import branch_of_tip
 
-        tip = tip_name(msg.data)
+        snapshot = read_snapshot(msg.data)
+        tip = str(snapshot.get("tip", "")) if snapshot is not None else ""
         with self.lock:
             d = self.data
             if branch_of_tip(tip) == "Maneuver" and branch_of_tip(d.current_tip) != "Maneuver":

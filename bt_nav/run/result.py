@@ -40,6 +40,7 @@ class MissionResult:
     faults: int = 0  # ticks that raised inside a leaf
     world_model: World | None = field(default=None, repr=False)  # the world as simulated (for plots)
     events: list[tuple[float, str, str]] = field(default_factory=list, repr=False)  # (sim t, level, line)
+    announcements: list[dict[str, Any]] = field(default_factory=list, repr=False)  # the tree's events (fields)
     parameters: dict[str, Any] = field(default_factory=dict, repr=False)  # every parameter's effective value
     robot: str = "robot1"
 
@@ -59,7 +60,8 @@ class MissionResult:
             "failed_checks": self.failed_checks, "wall_time": round(self.wall_time, 4),
             "sim_time": round(self.sim_time, 4), "branch_ticks": dict(self.branch_ticks),
             "maneuvers": self.maneuvers, "faults": self.faults,
-            **({"checkoff": checkoff_summary(self.results, self.events)} if "recovery_turns" in self.results else {}),
+            **({"checkoff": checkoff_summary(self.results, self.announcements)}
+               if "recovery_turns" in self.results else {}),
         }
 
     def to_dict(self, trajectory: bool = False) -> dict[str, Any]:

@@ -7,7 +7,10 @@ and referee alone); it starts with the graph, and its t0 waits for this process'
 
 ``bt-nav demo`` and the ROS benchmark (:mod:`bench.ros_mission`) both run a mission through
 :class:`RosMission`, so "start the graph, wait for the recorder, start the referee, wait for the verdict"
-is written once. One robot is the graph of :func:`bt_nav.ros.bringup.nodes` (the homework's root topics);
+is written once; ``bt-nav sim-run`` starts a graph without recorders and watches it until a node ends
+(:func:`run_graph`); ``bt-nav grade --exe`` runs a foreign node in a run of its own
+(:mod:`bt_nav.grading.node_run`), reading its verdict with the same :func:`read_verdict`. One robot is the
+graph of :func:`bt_nav.ros.bringup.nodes` (the homework's root topics);
 several are :func:`bt_nav.ros.bringup.robot_nodes` (one simulator, per robot an executive and a referee
 in the robot's namespace). The referees start last, once every recorder sees its robot's ground truth and
 commands, so each recording covers the whole schedule.
@@ -23,8 +26,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bt_nav.ros.bringup import JUDGES, NodeSpec, host_judge, nodes, robot_nodes
-from bt_nav.ros.supervise import Child, Launcher, LineSink, StopRequest
+from bt_nav.ros.bringup import JUDGES, NodeSpec, cmd_vel_stamped, host_judge, nodes, robot_nodes
+from bt_nav.ros.supervise import Child, Launcher, LineSink, StopRequest, child_env, publish_zero_twist
 from bt_nav.run.recorder import Recorder, Recording, rec_ready
 
 #: Extra wall time allowed beyond the referees' own timeout before the run gives up itself.
@@ -193,6 +196,38 @@ class RosMission:
         finally:
             recordings = {name: rec.close() for name, rec in self.recorders.items()}
         return recordings
+
+
+def run_graph(specs: list[NodeSpec], domain: int, stop: StopRequest,
+              on_early_exit: Callable[[Child], None] | None = None) -> int:
+    """Start ``specs`` in ``domain`` and watch them until one ends or ``stop`` is requested (``bt-nav sim-run``);
+    then stop every node, the executive's robot left with a zero twist. The exit code: the judge's when it ended
+    (or the first node's to end, without a judge), that of a node that ended before the judge (1 for 0, after
+    ``on_early_exit`` is told of it). The caller installs and restores ``stop`` and says what a stop means."""
+    stamped = cmd_vel_stamped(specs)
+    launcher = Launcher(child_env(domain), stop=stop, last_word=lambda: publish_zero_twist(domain, stamped=stamped))
+    code = 0
+    try:
+        for spec in specs:
+            launcher.start(spec)
+        judge = next((c for c in launcher.children if c.spec.executable in JUDGES), None)
+        while not stop.requested:
+            ended = launcher.wait_any(timeout=0.5)
+            if ended is None:
+                continue
+            if judge is not None and ended is not judge:
+                if on_early_exit is not None:
+                    on_early_exit(ended)
+                code = ended.poll() or 1
+            else:
+                code = ended.poll() or 0
+            break
+    except KeyboardInterrupt:
+        stop.signum = stop.signum or 2
+    finally:
+        stop.closing = True
+        launcher.shutdown()
+    return code
 
 
 def read_verdict(path: Path) -> dict[str, Any] | None:

@@ -22,7 +22,8 @@ class MissionSink(Protocol):
     def odom(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None: ...  # noqa: D102
     def ground_truth(self, t: float, x: float, y: float, yaw: float, v: float, w: float) -> None: ...  # noqa: D102
     def cmd(self, t: float, v: float, w: float) -> None: ...  # noqa: D102
-    def tree(self, t: float, snapshot: str) -> None: ...  # noqa: D102
+    def tree(self, t: float, snapshot: dict[str, Any]) -> None: ...  # noqa: D102
+    def announce(self, t: float, record: dict[str, Any]) -> None: ...  # noqa: D102
     def event(self, t: float, text: str) -> None: ...  # noqa: D102
     def walkers(self, t: float, circles: Any) -> None: ...  # noqa: D102
 

@@ -31,12 +31,13 @@ from collections.abc import Callable
 from typing import Any
 
 from bt_nav.media.bag import EVENTS
-from bt_nav.media.plot import MANEUVER_TIPS
+from bt_nav.mission.maneuver_spec import tips as maneuver_tips
 from bt_nav.ros.bringup import EXECUTIVE_NAME
 from bt_nav.run.rundir import Logs, judge_line, split_stamp
 
-#: The executive's lines the terminal shows, by the label they start with: the maneuvers' and the brake's.
-SHOWN_LABELS = frozenset(MANEUVER_TIPS | {"AEB"})
+#: The executive's lines the terminal shows, by the label they start with: the maneuvers' (the maneuver spec's
+#: tips, looked up on each line) and the brake's.
+SHOWN_LABELS = frozenset({"AEB"})
 #: An rcutils line in the run's format (:data:`bt_nav.run.rundir.LOG_FORMAT`).
 LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
 #: The judge's call and reply lines (:class:`bt_nav.ros.nodes.judging.JudgeNode`).
@@ -149,7 +150,7 @@ class LabTerminal:
             message = match["msg"]
             if message.startswith(f"{EXECUTIVE_NAME} up:"):
                 self.show(self.launch_line, when)
-            elif message.split(":", 1)[0] in SHOWN_LABELS:
+            elif message.split(":", 1)[0] in SHOWN_LABELS | maneuver_tips():
                 self.show(f"[{match['level']}] [{match['node']}]: {message}", when)
 
     def _judge_line(self, message: str) -> None:

@@ -86,7 +86,7 @@ def _header(path: Path) -> str:
 
 def worlds_page() -> str:
     import yaml
-    from bt_nav_sim.world import WORLDS_DIR, list_worlds
+    from bt_nav_sim.world import WORLDS_DIR, list_worlds, load_world
 
     out = ["# Worlds and arenas", "", GENERATED, "",
            "The bundled worlds (`--world NAME`, `--worlds a,b`), from their files in `sim/bt_nav_sim/worlds/`. "
@@ -98,8 +98,9 @@ def worlds_page() -> str:
             path = WORLDS_DIR / f"{name}.yaml"
             doc: dict[str, Any] = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
             keys = []
-            if doc.get("checkoff_maneuvers"):
-                keys.append("checks off " + ", ".join(doc["checkoff_maneuvers"]))
+            checked_off = load_world(name).checkoff_maneuvers  # the file's and the maneuver spec's arenas
+            if checked_off:
+                keys.append("checks off " + ", ".join(checked_off))
             if doc.get("lidar"):
                 keys.append(f"LiDAR `{doc['lidar']}`")
             if doc.get("walkers"):
@@ -135,10 +136,10 @@ def checks_page() -> str:
     for maneuver, name in MANEUVER_NAMES.items():
         cfg = CheckoffConfig(maneuver=maneuver)
         near = cfg.limits()[0] + cfg.trigger_margin
-        trigger = {"A": f"front 0.84 m < {near:.2f} m", "B": f"left 0.84 m and right 0.40 m < {near:.2f} m",
-                   "C": f"front 0.84 m < {near:.2f} m"}
+        trigger = (f"left 0.84 m and right 0.40 m < {near:.2f} m" if cfg.spec.trigger.reads == "sides"
+                   else f"front 0.84 m < {near:.2f} m")
         out += [f"### {maneuver}: {name}", "", f"The trigger, read every reasonable way: {cfg.trigger_rule()}.", ""]
-        event = {**example, "rule": cfg.angle_rule("right"), "trigger_detail": trigger[maneuver]}
+        event = {**example, "rule": cfg.angle_rule("right"), "trigger_detail": trigger}
         out += [f"- {line}" for line in maneuver_problems(maneuver, event)]
         out += [""]
     return "\n".join(out)

@@ -2,10 +2,10 @@
 :class:`bt_nav_sim.referee_core.Referee` and driven the same way.
 
 The lab is checked off by watching the robot: after ``toggle_navigation`` (std_srvs/SetBool) true it
-creeps ahead, and when its maneuver's trigger holds it rotates in place (A Randomizer: front <
-safety_distance, 90-180 deg either side; B Retreat: left AND right < safety_distance, 180 deg; C Smart
-Pivot: front < pivot_distance, 90 deg towards the side with more room) without driving forward and without
-hitting anything, then moves on. This judge automates that look from ground truth and from the commands
+creeps ahead, and when its maneuver's trigger holds it rotates in place (each maneuver's trigger, angle and
+side rules are its record in :mod:`bt_nav.mission.maneuver_spec`: e.g. the Randomizer, front <
+safety_distance, 90-180 deg either side) without driving forward and without hitting anything, then moves on.
+This judge automates that look from ground truth and from the commands
 the robot's node publishes, so any node can be judged, not only bt_nav.
 
 Driver protocol (the referee's, so one driver runs either): :meth:`CheckoffJudge.start` once the
@@ -47,7 +47,9 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be
+from bt_nav.mission.maneuver_spec import LiveMap, ManeuverSpec, judge_names, maneuver_spec
+from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
+from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
@@ -63,7 +65,7 @@ INTERRUPT_SLACK = 0.3
 class CheckoffConfig:
     """Schedule and rules of the lab's check-off (seconds are relative to t0, distances in metres)."""
 
-    maneuver: str = "A"
+    maneuver: str = MANEUVERS[0]  # the first lab maneuver (the spec's order)
     activate_at: float = 5.0  # static before; then toggle_navigation(true) until success
     armed_for: float = 60.0  # toggle_navigation(false) at activate_at + armed_for
     grace: float = 1.0  # braking time after the disarm request
@@ -71,8 +73,9 @@ class CheckoffConfig:
     rate_hz: float = 2.0  # how often the driver calls step()
     moving_linear: float = 0.01  # m/s, as the homework referee
     moving_angular: float = 0.01  # rad/s
-    safety_distance: float = 0.5  # A and B trigger; C's too for a node that brakes there and pivots
-    pivot_distance: float = 0.3  # C trigger (the sheet's)
+    # A and B trigger; C's too for a node that brakes there and pivots (the parameter table's default)
+    safety_distance: float = float(SPECS["safety_distance"].default)
+    pivot_distance: float = float(SPECS["pivot_distance"].default)  # C trigger (the sheet's; the table's default)
     trigger_margin: float = 0.05  # the trigger reading may exceed its threshold by this much (sensor noise)
     # The reasonable sector readings (bt_nav_sim.readings.SectorFamily): "did not hold" only when none held,
     # "late" only when every one held
@@ -97,12 +100,12 @@ class CheckoffConfig:
     forward_motion_max: float = 0.01  # m of true displacement allowed after the brake allowance
     move_on_within: float = 10.0  # s after settling in which the robot must move on ...
     move_on_distance: float = 0.02  # ... by this much (or start another episode)
-    side_tie: float = 0.15  # C: left and right closer than this count as a tie (either side passes)
+    side_tie: float = 0.15  # a clearer-side rule: left and right closer than this count as a tie (either passes)
     # s: among people walking, the robot decided on a scan up to this old (LDS-01: a 0.2 s period, a 0.05 s
     # tick, up to 0.05 s of DDS delay in sim time, and slack): the trigger holds if it held at any sample this
     # long before the episode's start
     scan_age: float = 0.4
-    open_space: float = 3.0  # C: both sides beyond this count as a tie too
+    open_space: float = 3.0  # a clearer-side rule: both sides beyond this count as a tie too
     aeb_distance: float = 0.35  # an obstacle this close in the swept path may make a turn an AEB recovery ...
     aeb_stop: float = 0.5  # s: ... when the robot stood at least this long before it (braked, then turned), not
     # every reading held its trigger, and it does not pass as the maneuver
@@ -114,7 +117,7 @@ class CheckoffConfig:
 
     def __post_init__(self) -> None:
         self.family()  # refuses an empty or inverted sector family
-        if self.maneuver not in MANEUVERS:
+        if self.maneuver not in MANEUVERS:  # an unknown maneuver is an error, never judged by another's rules
             raise ValueError(f"maneuver must be one of {', '.join(MANEUVERS)}, got {self.maneuver!r}")
         if not (self.armed_for > 0 and self.rate_hz > 0 and self.grace >= 0 and self.static_after > 0):
             raise ValueError("need armed_for > 0, rate_hz > 0, grace >= 0 and static_after > 0")
@@ -124,32 +127,40 @@ class CheckoffConfig:
         return SectorFamily(self.front_min_half_deg, self.front_max_half_deg, self.side_centre_min_deg,
                             self.side_centre_max_deg, self.side_min_half_deg, self.side_max_half_deg)
 
+    @property
+    def spec(self) -> ManeuverSpec:
+        """The maneuver's record: its trigger, angle and side rules (ValueError for an unknown maneuver)."""
+        return maneuver_spec(self.maneuver)
+
+    def distance(self, parameter: str) -> float:
+        """This config's value of a trigger distance parameter (``safety_distance``, ``pivot_distance``)."""
+        value = getattr(self, parameter, None)
+        if isinstance(value, bool) or not isinstance(value, float | int):
+            raise ValueError(f"the check-off has no trigger distance {parameter!r} (maneuver {self.maneuver})")
+        return float(value)
+
     def limits(self) -> tuple[float, float]:
         """The maneuver's trigger distance as the loosest and as the tightest reasonable reading (m, no margin):
-        C's is the sheet's ``pivot_distance`` or, for a node that brakes at ``safety_distance`` and pivots there,
-        that; A's and B's is ``safety_distance``."""
-        if self.maneuver == "C":
-            return max(self.pivot_distance, self.safety_distance), min(self.pivot_distance, self.safety_distance)
-        return self.safety_distance, self.safety_distance
+        the sheet's distance or, when the spec allows one (the Smart Pivot's ``safety_distance``), that of a node
+        that brakes there and turns there."""
+        values = [self.distance(p) for p in self.spec.trigger.distances]
+        if len(values) == 1:
+            return values[0], values[0]
+        return max(values), min(values)
 
     def trigger_rule(self) -> str:
         """Which readings the trigger was judged by, in words (the maneuver lines and the docs say it)."""
         loose, tight = self.limits()
-        what = "left and right" if self.maneuver == "B" else "front"
-        c = (f" (the sheet's pivot_distance {self.pivot_distance:.2f} m or safety_distance "
-             f"{self.safety_distance:.2f} m)" if self.maneuver == "C" else "")
-        return (f"held: {what} < {loose:.2f} m{c} + {self.trigger_margin:.2f} m by any of the "
+        trigger = self.spec.trigger
+        also = (f" (the sheet's {trigger.distance} {self.distance(trigger.distance):.2f} m or {trigger.or_braked_at} "
+                f"{self.distance(trigger.or_braked_at):.2f} m)" if trigger.or_braked_at else "")
+        return (f"held: {trigger.words} < {loose:.2f} m{also} + {self.trigger_margin:.2f} m by any of the "
                 f"{self.family().describe()}; late: only once every one of them read < {tight:.2f} m")
 
     def angle_rule(self, side: str = "either side") -> str:
         """The maneuver's angle rule in words, as a maneuver line and the rules page (bt-nav rules) say it; ``side``
-        is C's (where its readings put the clearer side), A and B turn either way."""
-        tol = self.angle_tolerance_deg
-        if self.maneuver == "A":
-            return f"{90 - tol:.0f}-{180 + tol:.0f} deg either side"
-        if self.maneuver == "B":
-            return f"180 +- {tol:.0f} deg either side"
-        return f"90 +- {tol:.0f} deg {side}"
+        is where its readings put the clearer side, used by a maneuver whose spec turns towards it."""
+        return self.spec.angle.words(self.angle_tolerance_deg, side)
 
 
 #: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
@@ -564,7 +575,7 @@ class CheckoffJudge(Verdict):
         if r is None:
             return False, "no ground truth at the start"
         limit = cfg.limits()[0] + cfg.trigger_margin
-        if cfg.maneuver == "B":
+        if cfg.spec.trigger.reads == "sides":
             return (r.left < limit and r.right < limit,
                     f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")
         return r.front < limit, f"front {r.front:.2f} m < {limit:.2f} m"
@@ -575,25 +586,25 @@ class CheckoffJudge(Verdict):
         if r is None:
             return False
         tight = self.config.limits()[1]
-        if self.config.maneuver == "B":
+        if self.config.spec.trigger.reads == "sides":
             return r.left_all < tight and r.right_all < tight
         return r.front_all < tight
 
     def _angle_rule(self, angle: float, r: Reading | None) -> tuple[bool, str]:
         """Whether ``angle`` (deg, + = left) obeys the maneuver's rule; the rule in words."""
         cfg = self.config
-        tol, size = cfg.angle_tolerance_deg, abs(angle)
-        if cfg.maneuver == "A":
-            return 90 - tol <= size <= 180 + tol, cfg.angle_rule()
-        if cfg.maneuver == "B":
-            return abs(size - 180) <= tol, cfg.angle_rule()
+        rule = cfg.spec.angle
+        size_ok = rule.holds(abs(angle), cfg.angle_tolerance_deg)
+        if rule.side == "either":
+            return size_ok, cfg.angle_rule()
         side = self._clearer_side(r)
         side_ok = side == "either side" or (side == "left") == (angle > 0)
-        return abs(size - 90) <= tol and side_ok, cfg.angle_rule(side)
+        return size_ok and side_ok, cfg.angle_rule(side)
 
     def _clearer_side(self, r: Reading | None) -> str:
-        """C's side: "left" or "right" where every reasonable reading of the two sides (:class:`Reading`'s
-        ``sides``) finds that side clearer by ``side_tie`` or more (and not both in open space); else "either side"."""
+        """A clearer-side rule's side: "left" or "right" where every reasonable reading of the two sides
+        (:class:`Reading`'s ``sides``) finds that side clearer by ``side_tie`` or more (and not both in open space);
+        else "either side"."""
         cfg = self.config
         if r is None:
             return "either side"
@@ -603,9 +614,9 @@ class CheckoffJudge(Verdict):
         return verdicts.pop() if len(verdicts) == 1 and "tie" not in verdicts else "either side"
 
     def _within_max(self, angle: float) -> bool:
-        """Whether ``angle`` (deg) is no larger than the maneuver's largest (A and B 180, C 90, plus the tolerance)."""
+        """Whether ``angle`` (deg) is no larger than the maneuver's largest (its spec's, plus the tolerance)."""
         cfg = self.config
-        return abs(angle) <= (90.0 if cfg.maneuver == "C" else 180.0) + cfg.angle_tolerance_deg
+        return abs(angle) <= cfg.spec.angle.high_deg + cfg.angle_tolerance_deg
 
     def _moved_on(self, settle: float, next_start: float, now: float) -> tuple[bool, str]:
         """Within ``move_on_within`` of settling: travelled ``move_on_distance`` or another episode began
@@ -691,8 +702,8 @@ class CheckoffJudge(Verdict):
         return lines
 
 
-#: The lab's names of the maneuvers.
-MANEUVER_NAMES = {"A": "the Randomizer", "B": "the Retreat", "C": "the Smart Pivot"}
+#: The lab's names of the maneuvers (``the Randomizer``), a live view of the maneuver spec.
+MANEUVER_NAMES = LiveMap(judge_names)
 
 
 def _forward_text(e: dict[str, Any]) -> str:
@@ -708,10 +719,11 @@ def _forward_text(e: dict[str, Any]) -> str:
 
 def _readings_text(e: dict[str, Any], maneuver: str = "") -> str:
     """The judge's readings at a turn's start, as the failing line shows them: the front and the nearest of any
-    side sector (what A's and B's triggers read); for C the sides beside the robot (60-120 deg), as it compares
-    them (a wide side sector also sees the obstacle ahead)."""
+    side sector (what the triggers read); for a maneuver that turns towards the clearer side the sides beside the
+    robot (60-120 deg), as it compares them (a wide side sector also sees the obstacle ahead)."""
     r = e.get("readings") or {}
-    keys = (("front", "front"), ("left", "left_abeam"), ("right", "right_abeam")) if maneuver == "C" else \
+    clearer = bool(maneuver) and maneuver_spec(maneuver).angle.side == "clearer"
+    keys = (("front", "front"), ("left", "left_abeam"), ("right", "right_abeam")) if clearer else \
         (("front", "front"), ("left", "left"), ("right", "right"))
     parts = [f"{name} {r[k]:.2f} m" if r.get(k) is not None else f"{name} nothing" for name, k in keys if k in r]
     return "readings at the start: " + ", ".join(parts) if parts else "no readings at the start"

@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from bt_nav.mission.assignments import PROFILES as ASSIGNMENT_PROFILES  # the one table of profiles (pure, no ROS)
 from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, ScanLayout, lidar_model
 from bt_nav_sim.physics import KINEMATICS, ClearanceMemo, RobotParams, RobotState, step, target_twist, wrap_angle
 from bt_nav_sim.world import World, load_world
@@ -32,14 +33,13 @@ class SimProfile:
     description: str
 
 
-#: The one table of simulator profiles (``--profile`` everywhere a profile is chosen).
-PROFILES: dict[str, SimProfile] = {
-    "homework": SimProfile(HOMEWORK_LIDAR, "ideal",
-                           "the course homework's simulator: 360-beam LiDAR to 10 m at 10 Hz, ideal unicycle"),
-    "lab": SimProfile(LDS01, "ideal", "the lab's LDS-01 LiDAR (3.5 m, 5 Hz), ideal unicycle"),
-    "turtlebot3": SimProfile(LDS01, "burger",
-                             "a real TurtleBot3 Burger: LDS-01 LiDAR (3.5 m, 5 Hz), per-wheel speed limits"),
-}
+#: The idealised LiDARs a profile's simulated robot carries, by the name its record gives
+#: (:attr:`bt_nav.mission.assignments.Profile.lidar`).
+PROFILE_LIDARS: dict[str, LidarModel] = {"homework": HOMEWORK_LIDAR, "lds01": LDS01}
+#: The simulator's side of every profile (``--profile`` everywhere a profile is chosen), read from the one table of
+#: profiles, :data:`bt_nav.mission.assignments.PROFILES`.
+PROFILES: dict[str, SimProfile] = {name: SimProfile(PROFILE_LIDARS[spec.lidar], spec.kinematics, spec.description)
+                                   for name, spec in ASSIGNMENT_PROFILES.items()}
 
 # Light wheel-odometry error (relative, per step) when noise is on: odometry drifts a little, the way
 # wheel slip makes it drift on the real base, while ground truth stays exact.

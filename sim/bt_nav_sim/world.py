@@ -15,7 +15,8 @@ World YAML schema (``sim/bt_nav_sim/worlds/<name>.yaml`` or any path)::
       # robot's centre comes within that distance of the object's centre, then it stays (see below)
     walkers:                           # optional, people pacing a path there and back (bt_nav_sim.walkers)
       - {path: [[1, 0], [1, 4]], r: 0.2, speed: 1.0, pause: 1.0}   # phase: s into the walk (default: seeded)
-    checkoff_maneuvers: [A, C]         # optional, lab arenas: the lab maneuvers this world can check off
+    checkoff_maneuvers: [A, C]         # optional, lab arenas: the lab maneuvers this world can check off (with
+                                       # those whose record in bt_nav.mission.maneuver_spec names this world)
     lidar: lds02                       # optional: the real LiDAR of bt_nav_sim.lidar.LIDARS the robot carries
     bounds: [xmin, ymin, xmax, ymax]   # optional, plotting extent; default: obstacles + margin
     generator:                         # optional, random clutter drawn from a seed
@@ -78,6 +79,7 @@ from typing import Any
 
 import numpy as np
 
+from bt_nav.mission.maneuver_spec import checked_off_in  # the arenas the maneuver spec gives each maneuver
 from bt_nav.mission.params import LAB_MANEUVERS  # the lab maneuvers a world may list in checkoff_maneuvers
 from bt_nav.mission.resources import read_yaml  # parsed once per file version: a grid loads its worlds often
 from bt_nav_sim.walkers import SPAWN_CLEARANCE, WalkerSpec, walker_from_dict
@@ -555,6 +557,8 @@ def world_from_dict(d: dict, seed: int | None = None) -> World:
     maneuvers = tuple(str(m) for m in d.get("checkoff_maneuvers") or ())
     if not set(maneuvers) <= set(LAB_MANEUVERS):
         raise ValueError(f"{where}: checkoff_maneuvers must be among {', '.join(LAB_MANEUVERS)}, got {maneuvers}")
+    spec = checked_off_in(name)  # and every maneuver whose spec names this arena (one added to the spec alone)
+    maneuvers = tuple(m for m in LAB_MANEUVERS if m in maneuvers or m in spec)
     world = World(name=name, segments=segments, circles=circles, spawn=spawn, bounds=bounds, boxes=tuple(boxes),
                   appearing=tuple(appearing), checkoff_maneuvers=maneuvers, walkers=walkers, lidar=_lidar_key(d, where))
     _check_walkers_clear(world)

@@ -12,7 +12,6 @@ import pytest
 from bt_nav.cli.video import main as video_main
 from bt_nav.media.bag import MissionBag
 from bt_nav.media.bagread import MissionRecord, read_bag
-from bt_nav.media.treetext import active_path, parse_snapshot
 from bt_nav.media.video import (
     MAP_W,
     TIME_BASE,
@@ -22,6 +21,7 @@ from bt_nav.media.video import (
     shown_feedback,
     world_of,
 )
+from bt_nav.mission.snapshot import SnapshotNode, snapshot_nodes
 from bt_nav.run.lockstep import run_mission
 
 LAB = {"world": "lab_object", "maneuver": "C", "seed": 0, "profile": "lab"}
@@ -42,7 +42,8 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict:
 
 def _maneuver(rec: MissionRecord) -> tuple[float, float]:
     """Start and end (bag time) of the first maneuver, from the tree snapshots: SmartPivot RUNNING."""
-    running = [t for t, text in rec.trees if "SmartPivot [*]" in text]
+    running = [t for t, snap in rec.trees if any(n.name == "SmartPivot" and n.status == "RUNNING"
+                                                 for n in snapshot_nodes(snap))]
     assert running, "maneuver C never ran in the lab run"
     after = [t for t, _ in rec.trees if t > running[0] and t not in running]
     return running[0], after[0] if after else rec.end
@@ -50,9 +51,8 @@ def _maneuver(rec: MissionRecord) -> tuple[float, float]:
 
 def _expected(rec: MissionRecord, t: float) -> tuple[str, str, str]:
     """(branch, tip, tip's feedback as written) of the bag's last snapshot at or before ``t``, read directly."""
-    text = [s for st, s in rec.trees if st <= t][-1]
-    rows = parse_snapshot(text)
-    path = active_path(rows)
+    snapshot = [s for st, s in rec.trees if st <= t][-1]
+    rows, path = snapshot_nodes(snapshot), snapshot["path"]
     priorities = next(i for i in path if rows[i].name == "Priorities")
     branch = rows[path[path.index(priorities) + 1]].name
     tip = rows[path[-1]]
@@ -178,14 +178,21 @@ def test_the_lab_console_keeps_the_terminals_lines(lab: dict) -> None:
 
 
 def test_feedback_rules() -> None:
-    from bt_nav.media.treetext import TreeRow
-
     assert live_feedback("16.2 s left", 0.5, 0.0) == "15.7 s left"
     assert live_feedback("3.0 s left", 5.0, 0.0) == "0.0 s left"
     assert live_feedback("+158 deg to go", 0.5, 60.0) == "+98 deg to go"
     assert live_feedback("-90 deg to go", 0.5, -30.0) == "-60 deg to go"
     assert live_feedback("creeping at 0.05 m/s", 9.0, 40.0) == "creeping at 0.05 m/s"
-    finished = TreeRow(3, "-->", "SmartPivot", "INVALID", "+158 deg to go")
+    finished = SnapshotNode("SmartPivot", "leaf", "INVALID", "+158 deg to go", 3, 2)
     assert shown_feedback(finished) == ""
-    assert shown_feedback(TreeRow(3, "-->", "SmartPivot", "RUNNING", "+158 deg to go")) == "+158 deg to go"
-    assert shown_feedback(TreeRow(3, "-->", "DeadlineReached?", "FAILURE", "16.2 s left")) == "16.2 s left"
+    assert shown_feedback(SnapshotNode("SmartPivot", "leaf", "RUNNING", "+158 deg to go", 3, 2)) == "+158 deg to go"
+    assert shown_feedback(SnapshotNode("DeadlineReached?", "leaf", "FAILURE", "16.2 s left", 3, 2)) == "16.2 s left"
+
+
+def test_a_lockstep_bag_holds_the_maneuvers_events(lab: dict) -> None:
+    """The engine writes the executive's ``~/events`` too: each maneuver with its fields, at its sim time."""
+    rec: MissionRecord = lab["rec"]
+    assert rec.announcements, "maneuver C ran: its event is in the bag"
+    for t, record in rec.announcements:
+        assert record["event"] == "maneuver" and record["leaf"] == "SmartPivot" and record["maneuver"] == "C"
+        assert record["angle_deg"] == 90.0 and record["side"] in ("left", "right") and t == pytest.approx(record["t"])

@@ -54,6 +54,7 @@ PERIOD = 0.05
 #: exactly on the grid).
 T0 = 1.0 + PERIOD / 2
 from bt_nav.mission.params import SPECS as _SPECS  # noqa: E402 - after the DDS environment is set
+from bt_nav.mission.snapshot import read_event, read_snapshot  # noqa: E402
 from bt_nav.testing import wait_until  # noqa: E402
 
 # default limits: max_linear_speed, max(angular_speed, maneuver_angular_speed)
@@ -172,7 +173,8 @@ class Harness:
         self.process: ExecutiveProcess | None = None
         self.sim_time = 0.0
         self.samples: list[Sample] = []
-        self.trees: list[str] = []
+        self.trees: list[dict[str, Any]] = []  # ~/tree snapshots, read (bt_nav.mission.snapshot)
+        self.events: list[dict[str, Any]] = []  # ~/events
         self.calls: list[EvaluationCall] = []
         self.answers: list[bool] = [True]
         self._scan: Any = None
@@ -188,8 +190,11 @@ class Harness:
 
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.tree_sub = self.node.create_subscription(String, f"{NODE}/tree", lambda m: self.trees.append(m.data),
-                                                      latched)
+        self.tree_sub = self.node.create_subscription(
+            String, f"{NODE}/tree", lambda m: self.trees.append(read_snapshot(m.data)), latched)
+        self.events_sub = self.node.create_subscription(
+            String, f"{NODE}/events", lambda m: self.events.append(read_event(m.data)),
+            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.arm_client = self.node.create_client(SetBool, arm_service)
 
     # ------------------------------------------------------------------ plumbing

@@ -126,7 +126,13 @@ def test_lab_demo_checks_off_maneuver_c_and_bags_the_terminal(tmp_path: Path) ->
     results = json.loads((tmp_path / "run" / "results.json").read_text())
     assert results["passed"] and len(results["maneuvers"]) == int(fired[1])
     assert (tmp_path / "run" / "trajectory.png").is_file()
-    events = [text for _, text in read_bag(bag).events]
+    record = read_bag(bag)
+    events = [text for _, text in record.events]
+    # The executive's ~/events over DDS: each maneuver as fields (what the grid's angle check reads), in the bag.
+    maneuvers = [e for _, e in record.announcements if e["event"] == "maneuver"]
+    assert len(maneuvers) >= int(fired[1]), record.announcements
+    assert all((e["leaf"], e["maneuver"], e["angle_deg"]) == ("SmartPivot", "C", 90.0) for e in maneuvers), maneuvers
+    assert record.trees and record.trees[-1][1]["format"] == "bt_nav.tree/1"
     shown = [line.split("] ", 1)[1] for line in demo.stdout if line.startswith("[sim ")]
     assert events[:len(shown)] == shown, (events, shown)
     assert events[len(shown):] == [line for line in demo.stdout if not line.startswith(("[sim ", "bt-nav demo:", "$"))

@@ -11,7 +11,7 @@ from collections.abc import Callable
 import pytest
 from ros_harness import REPO, ExecutiveProcess, Harness
 
-from bt_nav.testing import front_scan, laserscan_msg, wait_until
+from bt_nav.testing import TickHarness, front_scan, laserscan_msg, wait_until
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
@@ -22,7 +22,20 @@ def test_signal_mid_maneuver_publishes_zero_and_exits_0(executive: Callable[...,
     assert h.arm(True).success
     turning = h.ticks(3, scan=laserscan_msg(front_scan(front=0.4)))  # within safety_distance: maneuver A rotates
     assert all(s.linear == 0.0 and s.angular != 0.0 for s in turning), turning
-    h.wait(lambda: bool(h.trees) and "Randomizer [*]" in h.trees[-1], "the tree showing the maneuver running")
+    h.wait(lambda: bool(h.trees) and h.trees[-1]["tip"] == "Randomizer", "the tree showing the maneuver running")
+    assert h.trees[-1]["nodes"][h.trees[-1]["path"][-1]]["status"] == "RUNNING"
+    h.wait(lambda: any(e["event"] == "maneuver" for e in h.events), "the maneuver's event on ~/events")
+    # The lock-step path runs the same tree code: its event for the same maneuver and seed has the same fields.
+    lockstep = TickHarness("A", {"trigger_at_arming": True, "random_seed": 7, "safety_distance": 0.5})
+    lockstep.tick()
+    assert lockstep.arm()[0]
+    lockstep.see((0.0, 0.4))
+    lockstep.tick(3)
+    (mine,) = [e for e in lockstep.core.take_announcements() if e["event"] == "maneuver"]
+    (theirs,) = [e for e in h.events if e["event"] == "maneuver"]
+    assert {k: theirs[k] for k in ("leaf", "maneuver", "side", "angle_deg")} == \
+        {k: mine[k] for k in ("leaf", "maneuver", "side", "angle_deg")}
+    assert theirs["readings"]["front"] == pytest.approx(0.4, abs=0.02)
 
     count = len(h.samples)
     h.process.proc.send_signal(signum)

@@ -13,6 +13,8 @@ import pytest
 from ros_harness import PERIOD, REPO, V_MAX, Harness
 from std_msgs.msg import String
 
+from bt_nav.mission.params import SPECS
+from bt_nav.mission.snapshot import read_snapshot
 from bt_nav.ros.rosutil import LATCHED
 from bt_nav.testing import front_scan, laserscan_msg
 
@@ -112,23 +114,23 @@ def test_twist_stamped_with_the_turtlebot3_params_file(executive: Callable[..., 
 def test_tree_topic_follows_the_tip(executive: Callable[..., Harness]) -> None:
     h = executive()
     h.wait(lambda: bool(h.trees), "the first ~/tree message (transient local)")
-    assert "Disarmed" in h.trees[-1]
+    assert h.trees[-1]["tip"] == "StopDisarmed"
     h.arm(True)
     count = len(h.trees)
     h.tick(scan=FREE)
     h.wait(lambda: len(h.trees) > count, "a ~/tree message after arming")
-    assert "FullSpeed" in h.trees[-1] and "\x1b[" not in h.trees[-1]
+    assert h.trees[-1]["tip"] == "FullSpeed" and h.trees[-1]["format"] == "bt_nav.tree/1"
     count = len(h.trees)
     h.ticks(3, scan=FREE)  # nothing changes: no new snapshot
     h.tick(scan=laserscan_msg(front_scan(front=0.2)))
     h.wait(lambda: len(h.trees) > count, "a ~/tree message after the tip changed")
-    assert len(h.trees) == count + 1 and "RotateInPlace" in h.trees[-1]
+    assert len(h.trees) == count + 1 and h.trees[-1]["tip"] == "RotateInPlace"
 
     # Transient local, depth 1: a late joiner (bt-nav watch) gets the current tree at once, and only it.
     late: list[str] = []
     h.node.create_subscription(String, "/bt_nav_executive/tree", late.append, LATCHED)
     h.wait(lambda: bool(late), "the latched tree for a late subscriber")
-    assert [m.data for m in late] == [h.trees[-1]]
+    assert [read_snapshot(m.data) for m in late] == [h.trees[-1]]
 
 
 def test_remapped_service_names(executive: Callable[..., Harness]) -> None:
@@ -138,7 +140,7 @@ def test_remapped_service_names(executive: Callable[..., Harness]) -> None:
     assert h.arm(True).success
     armed_at = h.sim_time
     assert h.tick(scan=FREE).linear > 0.0
-    h.tick(armed_at + 4.5 + PERIOD)  # past the deadline (5 s - 0.5 s margin): stop and call
+    h.tick(armed_at + 5.0 - float(SPECS["stop_margin"].default) + PERIOD)  # past the deadline: stop and call
     h.wait(lambda: len(h.calls) == 1, "the evaluation call on the remapped name")
     assert h.samples[-1].is_zero
     assert h.process.has_line(r"arm server /reactive_control/activate")

@@ -35,4 +35,5 @@ def test_a_bad_entry_fails_its_student_and_the_class_is_graded(tmp_path: Path,
     assert (page["ann"]["passed"], page["ann"]["runs"]) == (1, 1), page["ann"]
     assert page["bob"]["refused"] == f"{tmp_path / 'bob.py'} does not exist", page["bob"]
     assert page["cy"]["refused"].startswith(f"{plain} declares no maneuver"), page["cy"]
-    assert not (out / "bob").exists() and not (out / "cy").exists()
+    assert not (out / "bob" / "grade.json").exists() and not (out / "cy" / "grade.json").exists()
+    assert "Not run: " in (out / "bob" / "feedback.md").read_text()  # a refused student hears why

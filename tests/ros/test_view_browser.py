@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from simtools import REPO, Proc
 
-from bt_nav.media.bag import COLLISIONS, TOPICS, WALKERS
+from bt_nav.media.bag import ANNOUNCEMENTS, COLLISIONS, TOPICS, WALKERS
 from bt_nav.media.bagread import read_bag
 from bt_nav.testing import wait_until
 
@@ -81,8 +81,9 @@ def test_record_writes_every_topic_of_the_live_graph(live: dict) -> None:
     assert live["recorder"].wait(RECORD_S + 60) == 0, live["recorder"].output()
     rec = read_bag(live["out"] / "bag")
     for topic in TOPICS:
-        if topic not in (COLLISIONS, WALKERS):  # stage_4: no collision, no people
+        if topic not in (COLLISIONS, WALKERS, ANNOUNCEMENTS):  # stage_4: no collision, no people, no maneuver yet
             assert rec.counts.get(topic, 0) > 0, f"{topic}: {rec.counts}\n{live['recorder'].output()}"
+    assert rec.trees and all(snapshot["format"] == "bt_nav.tree/1" for _, snapshot in rec.trees)
     assert rec.mission.get("world") == "stage_4"  # asked from the simulator's parameters
     # sim-time stamps, not wall time (0 is sim time too: the first /clock, and what came before it)
     assert not rec.truncated and 0 <= rec.start < rec.end < 200

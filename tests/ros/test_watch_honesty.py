@@ -25,6 +25,8 @@ def test_snapshot_age_and_the_executive_going_away(start_executive: Callable) ->
     try:
         wait_until(lambda: any("(snapshot 1, " in line for line in watch.stdout), 40, "the first snapshot",
                    lambda: watch.output() + executive.tail())
+        wait_until(lambda: any(line.strip().startswith("[o] Priorities [") for line in watch.stdout), 10,
+                   "the snapshot drawn as py_trees' tree", watch.output)  # the art, drawn from the JSON document
         wait_until(lambda: any("last snapshot" in line and "ago" in line for line in watch.stdout), 20,
                    "a status line with the snapshot's age", watch.output)
         executive.stop()

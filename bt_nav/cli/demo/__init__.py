@@ -32,7 +32,7 @@ from bt_nav.cli import plain
 from bt_nav.cli.options import add_mission_options, bag_truth_readers
 from bt_nav.mission.params import parse_assignments
 from bt_nav.run.recorder import Recording, speed_line
-from bt_nav.run.rosmission import GRACE, RosMission, mission_graph
+from bt_nav.run.rosmission import GRACE, RosMission, mission_graph, read_verdict
 from bt_nav.run.rundir import LOG_FORMAT, Logs, make_run_dir
 from bt_nav.run.settings import effective_parameters, profile_maneuver, tree_settings
 
@@ -145,12 +145,12 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
 def trigger_words(maneuver: str, parameters: dict[str, Any]) -> str:
     """The executive's trigger of ``maneuver`` in words, from the run's parameter values: a demo whose count is 0
     says what never happened (C's trigger is nearer than the close / far driving usually lets the robot get)."""
-    front = f"the front (+-{float(parameters['front_half_angle_deg']):g} deg)"
-    if maneuver == "A":
-        return f"{front} nearer than safety_distance {float(parameters['safety_distance']):.2f} m"
-    if maneuver == "B":
-        return f"left and right both nearer than safety_distance {float(parameters['safety_distance']):.2f} m"
-    return f"{front} nearer than pivot_distance {float(parameters['pivot_distance']):.2f} m"
+    from bt_nav.mission.maneuver_spec import maneuver_spec
+
+    trigger = maneuver_spec(maneuver).trigger  # what the executive's trigger reads, and at which parameter
+    what = (f"the front (+-{float(parameters['front_half_angle_deg']):g} deg)" if trigger.reads == "front"
+            else f"{trigger.words} both")
+    return f"{what} nearer than {trigger.distance} {float(parameters[trigger.distance]):.2f} m"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -218,7 +218,7 @@ def _robot_files(run: dict[str, Any], name: str, rec: Recording) -> tuple[dict[s
     """One robot's verdict (read), trajectory (written) and the files; prints its maneuver count."""
     several = len(run["names"]) > 1
     path = Path(run["results"][name])
-    verdict = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
+    verdict = read_verdict(path) or {}
     traj, data = rec.mission_trajectory(verdict)
     out = run["run_dir"] / (f"trajectory_{name}.json" if several else "trajectory.json")
     out.write_text(json.dumps(data) + "\n", encoding="utf-8")

@@ -48,6 +48,7 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
     from bt_nav.grading.grid import Job
     from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.node_run import ExeSettings
+    from bt_nav.mission.maneuver_spec import letters_text
     from bt_nav.ros.bringup import CHECKOFF_WORLDS
 
     if opts.profile not in ("homework", "lab"):
@@ -61,7 +62,7 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
     lab = opts.profile == "lab"
     maneuver, note = exe_maneuver(opts)
     if lab and maneuver not in CHECKOFF_WORLDS:
-        raise ValueError(f"--profile lab checks off maneuver A, B or C, not {maneuver!r}")
+        raise ValueError(f"--profile lab checks off maneuver {letters_text()}, not {maneuver!r}")
     world = opts.world or (CHECKOFF_WORLDS[maneuver] if lab else "stage_4")
     name = opts.name or f"{time.strftime('%Y%m%d-%H%M%S')}_exe"
     settings = ExeSettings(resolve_program(opts.exe), opts.profile, Path(opts.out) / name,

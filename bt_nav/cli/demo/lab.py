@@ -22,6 +22,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from bt_nav.mission.assignments import LAB
+from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import MANEUVER_TITLES, parse_assignments
 from bt_nav.ros.bringup import CHECKOFF_WORLDS
 from bt_nav.run.settings import effective_parameters, profile_maneuver, tree_settings
@@ -41,7 +43,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
         raise ValueError("--profile lab checks off one robot (--robots 1)")
     maneuver = profile_maneuver("lab", opts.maneuver)
     if maneuver not in CHECKOFF_WORLDS:
-        raise ValueError(f"--profile lab checks off maneuver A, B or C, not {maneuver!r}")
+        raise ValueError(f"--profile lab checks off maneuver {letters_text()}, not {maneuver!r}")
     world = opts.world or CHECKOFF_WORLDS[maneuver]
     overrides = parse_assignments(opts.overrides)
     parameters = effective_parameters(tree_settings("lab", maneuver, opts.seed, overrides))
@@ -50,7 +52,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     run_dir = make_run_dir(Path(opts.out), opts.name or
                            f"{time.strftime('%Y%m%d-%H%M%S')}_{label}_{maneuver}_seed{opts.seed}_lab")
     results = str((run_dir / "results.json").resolve())
-    judge = {"timeout": float(opts.timeout), **{k: parameters[k] for k in ("safety_distance", "pivot_distance")},
+    judge = {"timeout": float(opts.timeout), **LAB.judge.given(parameters),  # its triggers: the executive's
              **bag_truth_readers(opts.bag, opts.video)}
     specs = mission_graph(["robot1"], {"robot1": results}, "checkoff", world=world, maneuver=maneuver,
                           seed=opts.seed, rtf=opts.rtf, referee=judge, sim=parse_assignments(opts.sim_param),
@@ -143,8 +145,10 @@ def _bag_topics() -> list[str]:
 
 
 def _verdict(run: dict[str, Any]) -> dict[str, Any]:
-    path = Path(run["results"])
-    return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
+    """The judge's verdict (empty: none was written, or it cannot be read)."""
+    from bt_nav.run.rosmission import read_verdict
+
+    return read_verdict(Path(run["results"])) or {}
 
 
 def _fired_line(run: dict[str, Any], verdict: dict[str, Any]) -> str:

@@ -19,11 +19,12 @@ from typing import Any
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.physics import KINEMATICS
 
+from bt_nav.cli.grade.formats import add_format_options, check_format_options
 from bt_nav.cli.options import add_mission_options, jobs_arg
 from bt_nav.grading.grid import Job, format_lidars, run_grid, summarize
 from bt_nav.grading.grid import overall as overall
 from bt_nav.grading.plan import EXE_LIDARS, build_jobs, grid_axes
-from bt_nav.mission.params import parse_assignments
+from bt_nav.mission.params import LAB_MANEUVERS, MANEUVERS, parse_assignments
 from bt_nav.run.settings import effective_parameters, tree_settings
 
 
@@ -68,8 +69,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--worlds", default=None, help="comma-separated world names, or 'all' (the bundled "
                         "worlds of the profile: the homework's, or with --profile lab the lab's check-off arenas); "
                         "default stage_4, or all for lab")
-    parser.add_argument("--maneuvers", default=None, help="comma-separated: none, A, B, C (default none,A,B,C; "
-                        "lab: A,B,C, each in the arenas that can check it off)")
+    parser.add_argument("--maneuvers", default=None, help=f"comma-separated: {', '.join(MANEUVERS)} (default "
+                        f"{','.join(MANEUVERS)}; lab: {','.join(LAB_MANEUVERS)}, each in the arenas that can check it "
+                        "off)")
     parser.add_argument("--seeds", type=int, default=None, help="seeds 0..N-1 (default 20; --exe: 2)")
     parser.add_argument("--lidars", default=None, metavar="NAME,...",
                         help="a grid axis of real LiDARs (" + ", ".join(("profile", *LIDARS)) + "; profile: the "
@@ -113,6 +115,7 @@ def _parser() -> argparse.ArgumentParser:
                         help="--exe: the runs report.html shows as videos (default failures)")
     parser.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                         help="progress bar on stderr (auto: when stderr is a terminal)")
+    add_format_options(parser)
     return parser
 
 
@@ -142,6 +145,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     lab = args.profile == "lab"
+    try:
+        check_format_options(args)  # a bad weights file refuses the grade before any run
+    except ValueError as exc:
+        parser.error(str(exc))
     if args.klass is not None:
         from bt_nav.cli.grade.exe import grade_class
 

@@ -91,9 +91,16 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         drawn = drawer.finish(wait=not stop.requested, figures=(ended, settings.out) if ended else None)
     print(format_exe_table(summarize_exe(ended)))
     json_path, md_path = write_exe_report(ended, settings, drawn=drawn)
+    from bt_nav.grading.feedback import write_grid_feedback
+
+    write_grid_feedback(settings.out)
     if args.json:  # the grid's JSON results there too: --json means the same with and without --exe
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json_path.read_text(encoding="utf-8"), encoding="utf-8")
+    from bt_nav.cli.grade.formats import write_exe_formats
+
+    for path in write_exe_formats(args, settings.out):  # --gradescope, --junit
+        print(f"wrote {path}")
     from bt_nav.grading.grid import format_lidars
 
     for line in format_lidars(ended):
@@ -132,7 +139,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     extra = f", {len(errors)} bt_nav error(s) apart (not the node's; tracebacks in " \
             f"{settings.out / 'bt_nav_errors'})" if errors else ""
     print(f"{passed}/{len(judged)} passed{extra} in {wall:.1f} s wall; wrote {written[0]}, {written[1]}, "
-          f"{settings.out / 'report.html'}" + (f", {args.json}" if args.json else ""))
+          f"{settings.out / 'report.html'}, {settings.out / 'feedback.md'}" + (f", {args.json}" if args.json else ""))
     if len(ended) < planned or errors:
         print(f"bt-nav grade: {planned - len(judged)} of {planned} runs without a verdict (not in the pass rate): "
               f"bt-nav grade ... --out {settings.out} --resume runs them", file=sys.stderr)
@@ -148,12 +155,62 @@ def _runs(count: int) -> str:
     return f"{count} run{'' if count == 1 else 's'}"
 
 
+def _read_class(path: Path) -> tuple[list[Any], dict[str, str], dict[str, Any]]:
+    """(the students, those failed before admission with their reason, the hand-ins by name) of ``--class``: a
+    manifest file, or a folder of hand-ins (:mod:`bt_nav.grading.handins`). ValueError refuses the class."""
+    from bt_nav.grading.classroom import read_manifest
+    from bt_nav.grading.handins import read_handins
+
+    if not path.is_dir():
+        return read_manifest(path), {}, {}
+    handins = read_handins(path)
+    return ([h.student() for h in handins], {h.name: h.problem for h in handins if h.problem},
+            {h.name: h for h in handins})
+
+
+def _show_handins(handins: dict[str, Any]) -> None:
+    """Each hand-in's node file and launch-file lines, before any run."""
+    for name, handin in handins.items():
+        if handin.node is not None:
+            print(f"  {name}: node {handin.node}", flush=True)
+        for line in [*handin.launch.lines(), *(f"note: {n}" for n in handin.launch.notes)]:
+            print(f"  {name}: {line}", flush=True)
+
+
+def _class_verdicts(out: Path, handins: dict[str, Any]) -> bool:
+    """Every student's ``feedback.md``; for a folder of hand-ins a verdict line per student (runs and launch file
+    together). Whether every student passed."""
+    from bt_nav.grading.feedback import write_feedback
+    from bt_nav.grading.handins import load_class
+
+    if not (out / "class.json").is_file():
+        return False
+    results = load_class(out)
+    for result in results:
+        write_feedback(result)
+        if handins:
+            print(f"  {result.name}: hand-in {'PASSED' if result.passed else 'FAILED'}"
+                  + (f" ({'; '.join(result.reasons)})" if result.reasons else ""), flush=True)
+    print(f"wrote {len(results)} feedback.md: {out}/<student>/feedback.md", flush=True)
+    return all(r.passed for r in results)
+
+
+def _drop_stale_feedback(out: Path, names: Sequence[str]) -> None:
+    """A feedback.md left in the directory of a student who ran nothing then (refused): their grid starts there
+    now, and a grid's directory must hold a grade or nothing (it is written again at the end)."""
+    for name in names:
+        stale = out / name / "feedback.md"
+        if stale.is_file() and not (out / name / "grid.json").exists() and len(list(stale.parent.iterdir())) == 1:
+            stale.unlink()
+
+
 def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    """``bt-nav grade --class MANIFEST``: every student's grid (:func:`bt_nav.grading.classroom.run_class`), each
-    written as ``--exe`` writes one, then the class page. Exit codes as for one grid, over the whole class."""
+    """``bt-nav grade --class MANIFEST|DIR``: every student's grid (:func:`bt_nav.grading.classroom.run_class`), each
+    written as ``--exe`` writes one, then the class page and each student's ``feedback.md``. Exit codes as for one
+    grid, over the whole class (a hand-in whose launch file fails a check fails too)."""
     import copy
 
-    from bt_nav.grading.classroom import admit, read_manifest, run_class, write_class_page
+    from bt_nav.grading.classroom import admit, run_class, write_class_page
     from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.plan import build_jobs, grid_axes
     from bt_nav.ros.supervise import StopRequest
@@ -161,11 +218,14 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if args.exe is not None:
         parser.error("--class grades the manifest's commands: leave --exe out")
     try:
-        students = read_manifest(Path(args.klass))
+        students, failed, handins = _read_class(Path(args.klass))
         out = Path(args.out or f"runs/grade-class-{time.strftime('%Y%m%d-%H%M%S')}").absolute()
         worlds, seeds = grid_axes(args)
         # A bad entry fails its student; options that do not fit refuse the class, every plan before the first run.
-        commands, refused = admit(students, args.profile == "lab" and not args.maneuvers, resolve_program)
+        commands, refused = admit([s for s in students if s.name not in failed],
+                                  args.profile == "lab" and not args.maneuvers, resolve_program)
+        refused = {s.name: failed.get(s.name) or refused[s.name] for s in students
+                   if s.name in failed or s.name in refused}
         plans, left_out = {}, set()
         for student in (s for s in students if s.name in commands):
             own = copy.copy(args)
@@ -182,6 +242,8 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
         for s in students), flush=True)
     for name, reason in refused.items():
         print(f"  {name}: FAILED (not run: {reason})", flush=True)
+    _show_handins(handins)
+    _drop_stale_feedback(out, list(plans))
     stop = StopRequest().install()
     started = time.perf_counter()
     try:
@@ -192,10 +254,18 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     finally:
         stop.closing = True
         stop.restore()
-    paths = write_class_page(out, students, f"Class grade ({args.profile} profile)", refused)
+    from bt_nav.grading.handins import add_verdicts
+
+    records = {name: h.record() for name, h in handins.items()}
+    paths = write_class_page(out, students, f"Class grade ({args.profile} profile)", refused,
+                             (lambda rows: add_verdicts(rows, records)) if records else None)
+    from bt_nav.cli.grade.formats import write_class_formats
+
+    paths = [*paths, *write_class_formats(args, out)]  # --gradescope, --junit
     wall = time.perf_counter() - started
     print(f"class of {len(students)} in {wall:.1f} s wall; wrote " + ", ".join(map(str, paths)))
+    handed_in = _class_verdicts(out, handins)
     if stop.requested:
         return 128 + int(stop.signum or 2)
     rows = [row for student_rows in done.values() for row in student_rows]
-    return 0 if len(done) == len(students) and rows and all(r["passed"] for r in rows) else 1
+    return 0 if len(done) == len(students) and rows and all(r["passed"] for r in rows) and handed_in else 1

@@ -8,7 +8,7 @@
 | ``triggers`` | FrontTrigger, SqueezeTrigger (the maneuvers' conditions, on their rising edge) |
 | ``motion`` | Stop, DriveForward, TurnAway, RotateInPlace |
 | ``lab`` | InMode, Creep, PathBlocked, EmergencyStop (lab mode: the creep and its emergency braking) |
-| ``maneuvers`` | ManeuverActive, RandomizerManeuver (A), RetreatManeuver (B), SmartPivotManeuver (C), AlwaysFailure |
+| ``maneuvers`` | ManeuverActive, the lab maneuvers' leaves (named in ``bt_nav.mission.maneuver_spec``), AlwaysFailure |
 
 To add a leaf: subclass :class:`~bt_nav.mission.behaviours.base.Leaf` (or ``Condition``), declare
 ``INPUT_PORTS`` / ``OUTPUT_PORTS``, add it to :data:`REGISTRY` and declare it in the tree file's
@@ -17,22 +17,28 @@ To add a leaf: subclass :class:`~bt_nav.mission.behaviours.base.Leaf` (or ``Cond
 
 from __future__ import annotations
 
-from py_trees.ports import PortsMixin
+from py_trees.ports import PortsMixin, get_ports_registry
 
+from bt_nav.mission.behaviours import maneuvers as _maneuvers
 from bt_nav.mission.behaviours.control import ForceSuccess, ReactiveFallback, ReactiveSequence
 from bt_nav.mission.behaviours.lab import Creep, EmergencyStop, InMode, PathBlocked
-from bt_nav.mission.behaviours.maneuvers import (
-    AlwaysFailure,
-    ManeuverActive,
-    RandomizerManeuver,
-    RetreatManeuver,
-    RotationManeuver,
-    SmartPivotManeuver,
-)
+from bt_nav.mission.behaviours.maneuvers import AlwaysFailure, ManeuverActive, RotationManeuver
 from bt_nav.mission.behaviours.mission import ArmService, EvaluateMission, IsArmed, MissionDeadline
 from bt_nav.mission.behaviours.motion import DriveForward, RotateInPlace, Stop, TurnAway
 from bt_nav.mission.behaviours.perception import ObstacleClose, ObstacleFar, ProcessScan, ScanHealthy
 from bt_nav.mission.behaviours.triggers import FrontTrigger, SqueezeTrigger
+from bt_nav.mission.maneuver_spec import MANEUVER_SPECS
+
+
+def maneuver_leaf(name: str) -> type[RotationManeuver]:
+    """The maneuver leaf class a maneuver spec names: bt_nav's own (``behaviours.maneuvers``), else any concrete
+    :class:`RotationManeuver` subclass defined elsewhere (py_trees registers those by class name), so a maneuver
+    added to the spec needs no entry here. Raises ValueError when no such class exists."""
+    cls = getattr(_maneuvers, name, None) or get_ports_registry().get(name)
+    if not (isinstance(cls, type) and issubclass(cls, RotationManeuver)):
+        raise ValueError(f"maneuver leaf {name!r} is no RotationManeuver subclass defined anywhere")
+    return cls
+
 
 _CLASSES: tuple[type[PortsMixin], ...] = (
     ReactiveSequence, ReactiveFallback, ForceSuccess,
@@ -40,7 +46,7 @@ _CLASSES: tuple[type[PortsMixin], ...] = (
     ProcessScan, ScanHealthy, ObstacleClose, ObstacleFar, FrontTrigger, SqueezeTrigger,
     Stop, DriveForward, TurnAway, RotateInPlace,
     InMode, Creep, PathBlocked, EmergencyStop,
-    ManeuverActive, RandomizerManeuver, RetreatManeuver, SmartPivotManeuver, AlwaysFailure,
+    ManeuverActive, *(maneuver_leaf(spec.leaf) for spec in MANEUVER_SPECS.values()), AlwaysFailure,
 )
 
 REGISTRY: dict[str, type[PortsMixin]] = {cls.__name__: cls for cls in _CLASSES}
@@ -49,4 +55,4 @@ REGISTRY: dict[str, type[PortsMixin]] = {cls.__name__: cls for cls in _CLASSES}
 LEAF_CLASSES = {name: cls for name, cls in REGISTRY.items() if cls not in (ReactiveSequence, ReactiveFallback,
                                                                            ForceSuccess)}
 
-__all__ = ["REGISTRY", "LEAF_CLASSES", "RotationManeuver", *REGISTRY]
+__all__ = ["REGISTRY", "LEAF_CLASSES", "RotationManeuver", "maneuver_leaf", *(n for n in REGISTRY if n in globals())]

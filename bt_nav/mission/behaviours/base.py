@@ -16,6 +16,7 @@ import py_trees
 from py_trees.ports import BehaviourWithPorts, PortInformation
 
 from bt_nav.mission.datatypes import Clock, Command
+from bt_nav.mission.snapshot import event
 
 _DEFAULT_EVENTS = logging.getLogger("bt_nav")
 _BLACKBOARD = py_trees.blackboard.Blackboard
@@ -52,6 +53,7 @@ class Leaf(BehaviourWithPorts):
         self.clock: Clock = _no_clock
         self.events: EventLogger = _DEFAULT_EVENTS
         self.node: Any = None
+        self._announce: Any = None  # the driver's sink for structured events (MissionCore's), None: nobody listens
         self._port_keys: dict[str, str] = {}
         self._output_keys: dict[str, tuple[str, type]] = {}
         self._read_back_keys: dict[str, str] = {}  # last_output's resolved keys
@@ -117,6 +119,13 @@ class Leaf(BehaviourWithPorts):
         self.clock = kwargs.get("clock") or self.clock
         self.events = kwargs.get("events") or self.events
         self.node = kwargs.get("node")
+        self._announce = kwargs.get("announce")
+
+    def announce(self, kind: str, **fields: Any) -> None:
+        """Tell the drivers about a decision as an event with fields (:func:`bt_nav.mission.snapshot.event`),
+        beside its log line: readers (the lab's angle check, the terminal, bags) take the fields, never the text."""
+        if self._announce is not None:
+            self._announce(event(kind, self.clock(), self.label, **fields))
 
     @property
     def label(self) -> str:

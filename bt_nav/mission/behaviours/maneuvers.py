@@ -123,9 +123,9 @@ class RotationManeuver(Leaf, register=False):
         self.rotation = self.choose_rotation(sectors)
         self._open_loop_logged = False
         self._set_output("active", True)
-        side = "left" if self.rotation > 0 else "right"
-        self.events.info(f"{self.label}: {self.reading(sectors)}: turning {side} "
-                         f"{abs(math.degrees(self.rotation)):.0f} deg")
+        side, degrees = "left" if self.rotation > 0 else "right", f"{abs(math.degrees(self.rotation)):.0f}"
+        self.events.info(f"{self.label}: {self.reading(sectors)}: turning {side} {degrees} deg")
+        self.announce("maneuver", side=side, angle_deg=float(degrees), readings=sector_readings(sectors))
         latency = float(self.get_input("latency"))
         moving = not self.last_output("cmd_vel", Command()).is_zero
         if latency > 0.0 and moving:
@@ -200,6 +200,12 @@ class RotationManeuver(Leaf, register=False):
             self.command(0.0, 0.0)
             self._set_output("active", False)
             self.events.info(f"{self.label}: preempted, stopped")
+
+
+def sector_readings(sectors: Sectors) -> dict[str, float | None]:
+    """The nearest return of the front and each side (m, None when unknown): a maneuver event's trigger readings."""
+    return {name: round(float(reading.min_range), 4) if reading.known else None
+            for name, reading in (("front", sectors.front), ("left", sectors.left), ("right", sectors.right))}
 
 
 def _range_text(name: str, reading: SectorReading) -> str:

@@ -189,7 +189,8 @@ class _EdgeTrigger(Condition, register=False):
 
 
 class FrontTrigger(_EdgeTrigger):
-    """Front sector nearer than ``distance`` (or unknown), on its rising edge: maneuvers A and C."""
+    """Front sector nearer than ``distance`` (or unknown), on its rising edge: the trigger of every maneuver whose
+    spec's trigger reads ``front`` (:mod:`bt_nav.mission.maneuver_spec`; A and C)."""
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
         """Front near."""
@@ -201,7 +202,8 @@ class FrontTrigger(_EdgeTrigger):
 
 
 class SqueezeTrigger(_EdgeTrigger):
-    """Left AND right sectors nearer than ``distance`` (or unknown), on its rising edge: maneuver B."""
+    """Left AND right sectors nearer than ``distance`` (or unknown), on its rising edge: the trigger of every maneuver
+    whose spec's trigger reads ``sides`` (B)."""
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
         """Both sides near."""

@@ -30,11 +30,13 @@ from typing import Any
 from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import load_world
 
+from bt_nav.mission.assignments import LAB
+from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver
 from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode
 from bt_nav.ros.runner import param_args, run_node
 
-NODE_NAME = "bt_nav_checkoff"
+NODE_NAME = LAB.judge.node_name
 
 _DEFAULTS = CheckoffConfig()
 
@@ -49,7 +51,7 @@ class CheckoffNode(JudgeNode):
 
     PARAMETERS: dict[str, tuple[Any, str]] = {
         **DRIVER_PARAMETERS,
-        "activate_service": ("toggle_navigation", "the robot's SetBool service that starts (true) and stops it"),
+        "activate_service": (LAB.arm_service, "the robot's SetBool service that starts (true) and stops it"),
         "world": ("lab_object", "the simulator's world (name or YAML path), for the judge's own ray casts"),
         "seed": (0, "the simulator's seed (generated worlds); -1: random, refused for a generated world"),
         **_config_parameters(),
@@ -90,7 +92,7 @@ def make_node(wall_start: float | None = None) -> CheckoffNode:
 def parse_args(argv: list[str]) -> argparse.Namespace:
     """Our own options (ROS arguments removed first): shorthands for parameters."""
     parser = argparse.ArgumentParser(prog="bt-nav checkoff", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--maneuver", help="the maneuver to check off: A, B or C (parameter maneuver)")
+    parser.add_argument("--maneuver", help=f"the maneuver to check off: {letters_text()} (parameter maneuver)")
     parser.add_argument("--world", help="the simulator's world (parameter world)")
     parser.add_argument("--seed", type=int, help="the simulator's seed (parameter seed)")
     parser.add_argument("--json", help="results file (parameter json)")

@@ -31,10 +31,11 @@ from typing import Any
 from bt_nav_sim.referee_core import Referee, RefereeConfig, scaled
 from std_srvs.srv import Trigger
 
+from bt_nav.mission.assignments import HOMEWORK
 from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode, locked
 from bt_nav.ros.runner import param_args, run_node
 
-NODE_NAME = "bt_nav_referee"
+NODE_NAME = HOMEWORK.judge.node_name
 
 _DEFAULTS = RefereeConfig()
 
@@ -49,8 +50,8 @@ class RefereeNode(JudgeNode):
     PARAMETERS: dict[str, tuple[Any, str]] = {
         **DRIVER_PARAMETERS,
         "time_scale": (1.0, "multiplies every duration of the schedule (tests use < 1)"),
-        "activate_service": ("/reactive_control/activate", "the robot's SetBool activate service"),
-        "evaluate_service": ("/reactive_control/evaluate_mission", "the Trigger service served here"),
+        "activate_service": (HOMEWORK.arm_service, "the robot's SetBool activate service"),
+        "evaluate_service": (HOMEWORK.evaluate_service, "the Trigger service served here"),
         **{f.name: (float(getattr(_DEFAULTS, f.name)), f"RefereeConfig.{f.name}") for f in fields(_DEFAULTS)},
     }
 

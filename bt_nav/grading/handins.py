@@ -1,0 +1,268 @@
+"""A folder of hand-ins as a class (``bt-nav grade --class DIR``), each student's whole hand-in judged (the node's
+runs and the launch file), and one ``feedback.md`` per student.
+
+Why a folder: a learning platform's download is a folder per student (a Moodle or GitHub Classroom export), or for
+Gradescope one submission folder (``/autograder/submission``); writing a manifest by hand for it is the step that
+goes wrong. Why the launch file counts: the lab sheet's hand-in is the node *and* ``turtlebot_bringup.launch.py``
+(Task 3), so a student whose launch file does not pass the argument fails the hand-in even when every run passed;
+the runs' own verdicts stay as they are (the node did what it did).
+
+Layout (:func:`read_handins`): ``DIR`` is one student's submission when it holds a ``.py`` file, a ``package.xml``
+or a ``setup.py`` at its top or is named ``submission`` (Gradescope's); otherwise each visible subfolder is a
+student, named after it (characters a directory name may not hold become ``_``). In a student's folder (searched
+to any depth, ``build``/``install``/``log`` and hidden folders skipped) the node is the lab's
+``reactive_navigator.py``, else the one Python file defining a subclass of rclpy's ``Node``; the launch file is
+``turtlebot_bringup.launch.py``, else the one ``*.launch.py``. Anything else is a reason naming the student and
+what was found, and that student fails; the others are graded.
+
+The API other formats build on (Gradescope, JUnit): :class:`StudentResult` and :func:`load_class` /
+:func:`load_grid`, which read what a grade wrote (``class.json``, each student's ``grade.json``).
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+import shlex
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from bt_nav.grading.classroom import NAME, Student
+from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
+from bt_nav.grading.node_grid import declared_choice
+
+#: The lab sheet's name for the node file.
+NODE_NAME = "reactive_navigator.py"
+#: Folders never searched: a colcon workspace's outputs, caches.
+SKIPPED = {"build", "install", "log", "__pycache__", "node_modules"}
+#: Files that make a folder one submission rather than a folder of students.
+SUBMISSION_MARKS = ("package.xml", "setup.py", "setup.cfg")
+FEEDBACK = "feedback.md"
+
+
+@dataclass(frozen=True)
+class HandIn:
+    """One student's folder: the node file found (None: ``problem`` says why), and the launch file's checks."""
+
+    name: str
+    folder: Path
+    node: Path | None
+    launch: LaunchReport
+    problem: str | None = None
+
+    def command(self, python: str = sys.executable) -> str:
+        """How the node is started: this grader's Python (it has rclpy) on the node file; '' without one."""
+        return shlex.join([python, str(self.node)]) if self.node is not None else ""
+
+    def student(self) -> Student:
+        return Student(self.name, self.command())
+
+    def record(self) -> dict[str, Any]:
+        """The hand-in as ``class.json`` holds it (``"handin"`` of the student's row)."""
+        return {"folder": str(self.folder), "node": None if self.node is None else str(self.node),
+                "launch": self.launch.to_dict(), "problem": self.problem}
+
+
+def _visible(path: Path, top: Path) -> bool:
+    return not any(part.startswith(".") or part in SKIPPED for part in path.relative_to(top).parts[:-1])
+
+
+def _files(folder: Path, pattern: str) -> list[Path]:
+    return sorted(p for p in folder.rglob(pattern) if p.is_file() and _visible(p, folder))
+
+
+def defines_node(path: Path) -> bool | None:
+    """Whether ``path`` defines a class deriving from rclpy's ``Node`` (None: not parseable Python)."""
+    try:
+        tree = ast.parse(path.read_bytes())
+    except (OSError, SyntaxError, ValueError):
+        return None
+    names = {"rclpy.node.Node"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module in ("rclpy.node", "rclpy"):
+            names |= {a.asname or a.name for a in node.names if a.name == "Node"}
+            names |= {f"{a.asname or a.name}.Node" for a in node.names if a.name == "node"}
+        elif isinstance(node, ast.Import):
+            names |= {f"{a.asname}.Node" for a in node.names if a.name == "rclpy.node" and a.asname}
+    return any(isinstance(n, ast.ClassDef) and any(ast.unparse(b) in names for b in n.bases) for n in ast.walk(tree))
+
+
+def find_node(folder: Path) -> tuple[Path | None, str | None]:
+    """(the student's node file, None) or (None, why none: what was found instead)."""
+    named = _files(folder, NODE_NAME)
+    if len(named) == 1:
+        return named[0], None
+    if named:
+        return None, f"{len(named)} files named {NODE_NAME}: " + ", ".join(str(p.relative_to(folder)) for p in named)
+    sources = [p for p in _files(folder, "*.py") if not p.name.endswith("launch.py") and p.name != "setup.py"]
+    verdicts = {p: defines_node(p) for p in sources}
+    nodes = [p for p, v in verdicts.items() if v]
+    if len(nodes) == 1:
+        return nodes[0], None
+    rel = [str(p.relative_to(folder)) for p in sources]
+    if nodes:
+        return None, (f"no {NODE_NAME}, and {len(nodes)} Python files define an rclpy Node ("
+                      + ", ".join(str(p.relative_to(folder)) for p in nodes) + f"): name the node's {NODE_NAME}")
+    broken = [str(p.relative_to(folder)) for p, v in verdicts.items() if v is None]
+    found = f"Python files: {', '.join(rel)}" if rel else "no Python file"
+    extra = f"; not valid Python: {', '.join(broken)}" if broken else ""
+    return None, f"no {NODE_NAME} and no Python file defining an rclpy Node ({found}{extra})"
+
+
+def find_launch(folder: Path) -> Path | None:
+    """The student's launch file: the sheet's name, else the one ``*.launch.py`` / ``*_launch.py`` (None: none)."""
+    named = _files(folder, LAUNCH_NAME)
+    if named:
+        return named[0]
+    others = [p for p in _files(folder, "*.py") if p.name.endswith(("launch.py", "_launch.py"))]
+    return others[0] if len(others) == 1 else None
+
+
+def is_submission(folder: Path) -> bool:
+    """Whether ``folder`` is one student's submission (module docstring) rather than a folder of students."""
+    if folder.name == "submission":
+        return True
+    return any(p.is_file() and (p.suffix == ".py" or p.name in SUBMISSION_MARKS) for p in folder.iterdir())
+
+
+def student_name(raw: str, taken: set[str]) -> str:
+    """A directory-safe, unique name for a student's folder (``Ann Lee_123`` -> ``Ann_Lee_123``)."""
+    name = re.sub(r"[^A-Za-z0-9._-]", "_", raw).lstrip("._-")[:60] or "student"
+    base, k = name, 2
+    while name in taken or not NAME.match(name):
+        name, k = f"{base}_{k}", k + 1
+    taken.add(name)
+    return name
+
+
+def read_handin(name: str, folder: Path) -> HandIn:
+    """One student's hand-in: the node found (or why not), the launch file checked against it."""
+    node, problem = find_node(folder)
+    launch_path = find_launch(folder)
+    report = check_launch(launch_path, node)
+    notes = list(report.notes)
+    if launch_path is not None and launch_path.name != LAUNCH_NAME:
+        notes.append(f"read {launch_path.relative_to(folder)} (the sheet names it {LAUNCH_NAME})")
+    if node is not None:
+        notes.append(started_note(node.relative_to(folder)))
+    report = LaunchReport(report.file, report.checks, tuple(notes))
+    return HandIn(name, folder, node, report, None if problem is None else f"{problem} in {folder}")
+
+
+def started_note(node: Path) -> str:
+    """How the node was started, said in every hand-in's verdict (the launch file itself was not run)."""
+    how = f"the node was started as `{Path(sys.executable).name} {node}` (this grader's Python)"
+    if launch_ros_installed():
+        return f"launch file read statically; launch_ros is installed but bt_nav does not start launch files yet: {how}"
+    return f"launch file read statically; launch_ros not installed, {how}"
+
+
+def read_handins(folder: Path) -> list[HandIn]:
+    """The class a folder of hand-ins is (module docstring). ValueError: not a folder, or no student in it."""
+    folder = Path(folder).absolute()
+    if not folder.is_dir():
+        raise ValueError(f"--class {folder}: neither a manifest file nor a folder of hand-ins")
+    taken: set[str] = set()
+    if is_submission(folder):
+        return [read_handin(student_name(folder.name, taken), folder)]
+    subs = sorted(p for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".") and p.name not in SKIPPED)
+    if not subs:
+        raise ValueError(f"--class {folder}: no hand-ins (no subfolder per student, no Python file)")
+    return [read_handin(student_name(p.name, taken), p) for p in subs]
+
+
+# ---------------------------------------------------------------------------------------------- the verdicts
+def verdict(row: dict[str, Any], launch: LaunchReport | None) -> tuple[bool, list[str]]:
+    """A student's overall verdict from their class row and launch checks: (passed, why not). Passed only when
+    graded, every run passed, none is left without a verdict, and (for a hand-in) every launch check passed."""
+    why: list[str] = []
+    if row.get("refused"):
+        why.append(f"not run: {row['refused']}")
+    elif not row.get("graded") or not row.get("runs"):
+        why.append("no run ended")
+    else:
+        if row["passed"] < row["runs"]:
+            why.append(f"{row['runs'] - row['passed']} of {row['runs']} runs failed")
+        if row.get("errors"):
+            why.append(f"{row['errors']} runs without a verdict (bt_nav errors: --resume runs them)")
+    if launch is not None and not launch.passed:
+        failed = [c.name for c in launch.checks if not c.passed]
+        why.append("launch file: " + ", ".join(failed) + " failed")
+    return not why, why
+
+
+def add_verdicts(rows: list[dict[str, Any]], handins: dict[str, dict[str, Any]]) -> None:
+    """Each class row of a hand-in gets its hand-in record, its launch lines and its overall verdict."""
+    for row in rows:
+        record = handins.get(row["name"])
+        if record is None:
+            continue
+        launch = LaunchReport.from_dict(record["launch"])
+        passed, why = verdict(row, launch)
+        row["handin"] = {**record, "lines": [*launch.lines(), *(f"note: {n}" for n in launch.notes)]}
+        row["verdict"], row["verdict_reasons"] = "PASSED" if passed else "FAILED", why
+
+
+@dataclass
+class StudentResult:
+    """One student's result as a grade wrote it: what other report formats (Gradescope, JUnit) are built from.
+
+    ``runs`` are the rows of the student's ``grade.json`` (each with ``world``, ``maneuver``, ``lidar``, ``seed``,
+    ``passed``, ``reason``, ``run_dir``, ``verdict`` with ``report_lines``, ``media``); ``launch`` is None when the
+    launch file was not part of the grade (``--exe``, a YAML manifest)."""
+
+    name: str
+    directory: Path
+    node: str | None
+    choice: str | None
+    launch: LaunchReport | None
+    runs: list[dict[str, Any]]
+    refused: str | None
+    passed: bool
+    reasons: list[str] = field(default_factory=list)
+
+
+def _runs(grid: Path) -> list[dict[str, Any]]:
+    try:
+        return list(json.loads((grid / "grade.json").read_text(encoding="utf-8")).get("runs", []))
+    except (OSError, json.JSONDecodeError):
+        return []
+
+
+def _choice(runs: Sequence[dict[str, Any]]) -> str | None:
+    maneuvers = sorted({str(r.get("maneuver")) for r in runs if r.get("maneuver") not in (None, "none")})
+    return ",".join(maneuvers) or None
+
+
+def load_class(out: Path) -> list[StudentResult]:
+    """Every student of the class graded into ``out`` (its ``class.json`` and each student's ``grade.json``)."""
+    doc = json.loads((Path(out) / "class.json").read_text(encoding="utf-8"))
+    results = []
+    for row in doc["students"]:
+        handin = row.get("handin")
+        launch = LaunchReport.from_dict(handin["launch"]) if handin else None
+        runs = _runs(Path(out) / row["dir"])
+        passed, why = verdict(row, launch)
+        node = handin["node"] if handin else doc.get("commands", {}).get(row["name"])
+        choice = _choice(runs) or (declared_choice(shlex.join(["python3", node]) if handin else node) if node
+                                   else None)
+        results.append(StudentResult(row["name"], Path(out) / row["dir"], node, choice, launch, runs,
+                                     row.get("refused"), passed, why))
+    return results
+
+
+def load_grid(out: Path, name: str = "student") -> StudentResult:
+    """One ``--exe`` grade in ``out`` as a student's result (no launch file: ``--exe`` grades a command)."""
+    runs = [r for r in _runs(Path(out)) if r.get("outcome") != "stopped"]
+    judged = [r for r in runs if r.get("outcome") != "bt_nav error"]
+    row = {"graded": bool(runs), "runs": len(judged), "passed": sum(1 for r in judged if r.get("passed")),
+           "errors": len(runs) - len(judged)}
+    passed, why = verdict(row, None)
+    doc = json.loads((Path(out) / "grade.json").read_text(encoding="utf-8")) if (Path(out) / "grade.json").is_file() \
+        else {}
+    return StudentResult(name, Path(out), doc.get("settings", {}).get("command"), _choice(runs), None, runs, None,
+                         passed, why)

@@ -1,0 +1,103 @@
+"""The Gradescope autograder's ``run_autograder`` (``autograder/``, docs/autograder.md) run as Gradescope runs it,
+against a submission folder (the right lab node as ``reactive_navigator.py`` with ``# CHOICE: C``, and its launch
+file), every path redirected to a temporary directory, this venv's bt-nav instead of setup.sh's, the grid kept to one
+run; the results.json it writes must validate against Gradescope's documented keys and score the hand-in. And one
+node graded with ``bt-nav grade --exe ... --gradescope ... --junit ...``."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from bt_nav.cli import grade
+from tests.gradescope_schema import gradescope_problems
+
+REPO = Path(__file__).resolve().parents[2]
+FIXTURES = REPO / "tests" / "fixtures"
+
+
+def _submission(folder: Path) -> Path:
+    folder.mkdir(parents=True)
+    source = (FIXTURES / "lab_student_node.py").read_text()
+    (folder / "reactive_navigator.py").write_text(
+        re.sub(r"^# CHOICE: given on the command line.*$", "# CHOICE: C", source, count=1, flags=re.M))
+    shutil.copy(FIXTURES / "autograder_submission" / "turtlebot_bringup.launch.py", folder)
+    return folder
+
+
+ONE_RUN = "--worlds lab_object --lidars lds01 --seeds 1 --record off --jobs 1"
+
+
+def _run_autograder(tmp_path: Path, submission: Path, args: str = ONE_RUN) -> tuple[subprocess.CompletedProcess, Path]:
+    source = tmp_path / "source"  # the autograder zip's folder: an instructor's weights.yaml
+    source.mkdir()
+    (source / "weights.yaml").write_text("total: 10\nlaunch_share: 0.3\n")
+    env = {**os.environ, "BT_NAV_AUTOGRADER_SUBMISSION": str(submission),
+           "BT_NAV_AUTOGRADER_RESULTS": str(tmp_path / "results"), "BT_NAV_AUTOGRADER_WORK": str(tmp_path / "work"),
+           "BT_NAV_AUTOGRADER_SOURCE": str(source), "BT_NAV_AUTOGRADER_BT_NAV": str(Path(sys.executable).parent
+                                                                                    / "bt-nav"),
+           "BT_NAV_AUTOGRADER_ARGS": args}
+    env.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)  # the script sets it itself
+    done = subprocess.run(["bash", str(REPO / "autograder" / "run_autograder")], env=env, capture_output=True,
+                          text=True, timeout=400, cwd=tmp_path)
+    return done, tmp_path / "results" / "results.json"
+
+
+def test_run_autograder_grades_a_submission_into_results_json(tmp_path: Path) -> None:
+    done, results = _run_autograder(tmp_path, _submission(tmp_path / "submission"))
+    said = done.stdout + done.stderr
+    assert done.returncode == 0, said
+    assert "run_autograder: bt-nav grade exited 0" in done.stdout, said
+    doc = json.loads(results.read_text())
+    assert gradescope_problems(doc) == [], doc
+    names = [t["name"] for t in doc["tests"]]
+    assert names == ["run lab_object C lds01 seed 0", "launch file: starts the node",
+                     "launch file: declares safety_distance (default 0.5)",
+                     "launch file: passes safety_distance to the node"], doc
+    assert all(t["status"] == "passed" for t in doc["tests"]), doc
+    assert doc["score"] == 10 and doc["tests"][0]["max_score"] == 7, doc  # the zip's weights.yaml: 10 points, 0.3
+    assert (tmp_path / "work" / "submission" / "grade.json").is_file(), said
+
+
+def test_run_autograder_says_why_when_nothing_could_be_graded(tmp_path: Path) -> None:
+    """A submission without any Python file: no DDS run; Gradescope still gets a results.json, scored 0, saying why."""
+    empty = tmp_path / "submission"
+    empty.mkdir()
+    (empty / "notes.txt").write_text("forgot the code\n")
+    done, results = _run_autograder(tmp_path, empty)
+    assert done.returncode == 0, done.stdout + done.stderr
+    doc = json.loads(results.read_text())
+    assert gradescope_problems(doc) == [] and doc["score"] == 0, doc
+    assert doc["output"].startswith("Not run: no reactive_navigator.py"), doc
+    assert "Launch file: 0/3 checks passed." in doc["output"], doc
+
+
+def test_run_autograder_writes_a_result_when_bt_nav_grade_refuses(tmp_path: Path) -> None:
+    """bt-nav grade refusing its options (exit 2, nothing graded): the results.json says so with bt-nav's words."""
+    done, results = _run_autograder(tmp_path, _submission(tmp_path / "submission"), "--worlds nowhere")
+    assert done.returncode == 0 and "bt-nav grade exited 2" in done.stdout, done.stdout + done.stderr
+    doc = json.loads(results.read_text())
+    assert gradescope_problems(doc) == [] and doc["score"] == 0 and doc["tests"] == [], doc
+    assert doc["output"].startswith("The autograder could not grade this submission (bt-nav grade exited 2)"), doc
+    assert "bt-nav grade: error: unknown world 'nowhere'" in doc["output"] and "usage:" not in doc["output"], doc
+
+
+def test_grade_exe_writes_results_json_and_junit(tmp_path: Path) -> None:
+    """One node graded with ``--exe``: its results.json validates, the JUnit XML has its one run as one testcase."""
+    node = _submission(tmp_path / "hand-in") / "reactive_navigator.py"
+    code = grade.main(["--exe", f"{sys.executable} {node}", "--profile", "lab", *ONE_RUN.split(), "--progress", "off",
+                       "--out", str(tmp_path / "grade"), "--gradescope", str(tmp_path / "results.json"),
+                       "--junit", str(tmp_path / "report.xml")])
+    assert code == 0
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert gradescope_problems(doc) == [] and doc["score"] == 100, doc
+    assert [t["name"] for t in doc["tests"]] == ["run lab_object C lds01 seed 0"], doc  # no launch file with --exe
+    (suite,) = ET.parse(tmp_path / "report.xml").getroot().findall("testsuite")
+    assert [c.get("name") for c in suite.findall("testcase")] == ["lab_object C lds01 seed 0"]
+    assert suite.get("failures") == "0" and suite.get("name") == f"{sys.executable} {node}"

@@ -1,0 +1,185 @@
+"""Gradescope's results.json and JUnit XML written from real grades (``tests/fixtures/grades/lab_class``: a class of
+three graded over DDS with ``bt-nav grade --class`` on lab_object, LDS-01, one seed: ann right, bob turning half
+the angle, cy refused; trimmed of the verdicts' samples) and from the real launch-file checker.
+
+The results.json is checked against Gradescope's documented keys and types (:mod:`tests.gradescope_schema`), the XML
+parsed with ``xml.etree``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import shutil
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bt_nav.cli import grade
+from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
+from bt_nav.grading.formats import (
+    WEIGHTS_FILE,
+    Weights,
+    class_records,
+    gradescope_results,
+    junit_xml,
+    load_weights,
+    read_record,
+)
+from bt_nav.grading.grid import Job
+from bt_nav.grading.launchfile import check_launch
+from bt_nav.grading.node_grid import error_row
+from tests.gradescope_schema import gradescope_problems
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+CLASS = FIXTURES / "grades" / "lab_class"
+def record(name: str) -> dict[str, Any]:
+    return read_record(CLASS / name)
+
+
+def launch(file: str) -> dict[str, Any]:
+    return check_launch(FIXTURES / "launch" / file, Path("reactive_navigator.py")).to_dict()
+
+
+def test_one_node_s_results_json_validates_and_scores_its_runs() -> None:
+    right, wrong = gradescope_results(record("ann")), gradescope_results(record("bob"))
+    for doc in (right, wrong):
+        assert gradescope_problems(doc) == [], doc
+        assert len(doc["tests"]) == 1 and sum(t["max_score"] for t in doc["tests"]) == 100, doc
+    assert right["score"] == 100 and right["tests"][0]["status"] == "passed", right
+    assert wrong["score"] == 0 and wrong["tests"][0]["status"] == "failed", wrong
+    reason = record("bob")["runs"][0]["reason"]
+    assert wrong["tests"][0]["name"] == "run lab_object C lds01 seed 0", wrong
+    assert wrong["tests"][0]["output"].startswith(f"FAILED: {reason.removeprefix('failed: ')}\n"), wrong
+    assert reason in wrong["output"] and right["tests"][0]["output"].startswith("PASSED\n"), (wrong, right)
+    assert "lab_object_C_lds01_seed0/video.mp4" in wrong["tests"][0]["output"], wrong  # where to look
+    assert "checked again at 1x real time" in wrong["tests"][0]["output"], wrong
+
+
+def test_the_launch_file_checks_take_their_share() -> None:
+    """A right node whose launch file forgets safety_distance: the runs' 80 points, and one of the three checks'
+    20/3 (it starts the node); a check is a test that says why it failed and on which line."""
+    doc = gradescope_results({**record("ann"), "launch": launch("forgets_safety.launch.py")})
+    assert gradescope_problems(doc) == [], doc
+    checks = [t for t in doc["tests"] if t["name"].startswith("launch file: ")]
+    assert [t["status"] for t in checks] == ["passed", "failed", "failed"], checks
+    assert sum(t["max_score"] for t in checks) == pytest.approx(20) and doc["score"] == pytest.approx(80 + 20 / 3)
+    assert "Launch file: 1/3 checks passed." in doc["output"], doc["output"]
+    assert all(t["output"].startswith("FAILED: ") for t in checks[1:]), checks
+
+
+def test_a_bt_nav_error_is_not_the_node_s_and_scores_nothing() -> None:
+    doc = record("ann")
+    doc["runs"].append(error_row(Job("lab_object", "C", 1, "lab"), "disk full"))
+    out = gradescope_results(doc)
+    assert gradescope_problems(out) == [], out
+    run, error = out["tests"]
+    assert (run["score"], run["max_score"]) == (100, 100) and (error["score"], error["max_score"]) == (0, 0), out
+    assert "status" not in error and "not your node's failure" in error["output"], error
+
+
+def test_the_weights_file_an_instructor_changes() -> None:
+    assert load_weights() == Weights()  # the shipped file says what the code's defaults say
+    assert WEIGHTS_FILE.is_file()
+
+
+def test_an_instructor_s_weights(tmp_path: Path) -> None:
+    mine = tmp_path / "weights.yaml"
+    mine.write_text("total: 10\nworlds: {lab_object: 3}\nvisibility: after_published\n")
+    weights = load_weights(mine)
+    assert (weights.total, weights.launch_share, weights.worlds) == (10, 0.2, {"lab_object": 3.0})
+    doc = record("ann")
+    doc["runs"] = [doc["runs"][0], {**doc["runs"][0], "world": "lab_side", "passed": False, "reason": "failed: x"}]
+    out = gradescope_results(doc, weights)
+    assert [t["max_score"] for t in out["tests"]] == [7.5, 2.5] and out["score"] == 7.5, out
+    assert out["visibility"] == "after_published" and gradescope_problems(out) == [], out
+    for bad, said in (("totl: 3\n", "unknown key(s) totl"), ("visibility: students\n", "visibility is 'students'"),
+                      ("launch_share: 2\n", "launch_share within 0..1"), ("- 1\n", "a YAML mapping")):
+        mine.write_text(bad)
+        with pytest.raises(ValueError, match=said.replace("(", r"\(").replace(")", r"\)")):
+            load_weights(mine)
+
+
+def junit_cases(xml: str) -> dict[str, list[ET.Element]]:
+    root = ET.fromstring(xml)
+    assert root.tag == "testsuites"
+    return {suite.get("name"): suite.findall("testcase") for suite in root.findall("testsuite")}
+
+
+def test_junit_has_a_testcase_per_run_and_the_reason_as_failure_message() -> None:
+    doc = record("bob")
+    doc["runs"] = [doc["runs"][0], {**record("ann")["runs"][0], "seed": 1}]
+    xml = junit_xml([("bob", doc)])
+    (cases,) = junit_cases(xml).values()
+    assert [c.get("name") for c in cases] == ["lab_object C lds01 seed 0", "lab_object C lds01 seed 1"]
+    assert cases[0].find("failure").get("message") == doc["runs"][0]["reason"] and cases[1].find("failure") is None
+    suite = ET.fromstring(xml).find("testsuite")
+    assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("2", "1", "0")
+
+
+def test_a_class_as_junit_and_gradescope(tmp_path: Path) -> None:
+    """The class: a testsuite per student (a refused one fails with its reason), each student's results.json in the
+    class directory, and the launch-file checks a folder of hand-ins puts on each student's class.json line."""
+    out = tmp_path / "class"
+    shutil.copytree(CLASS, out)
+    page = json.loads((out / "class.json").read_text())
+    page["students"][0]["handin"] = {"launch": launch("sheet.launch.py")}
+    (out / "class.json").write_text(json.dumps(page))
+    args = argparse.Namespace(gradescope=str(tmp_path / "results.json"), junit=str(tmp_path / "report.xml"),
+                              weights=None, exe=None, klass=str(out))
+    written = write_class_formats(args, out)
+    assert [p.relative_to(tmp_path).as_posix() for p in written] == [
+        "class/_gradescope/ann/results.json", "class/_gradescope/bob/results.json", "class/_gradescope/cy/results.json",
+        "results.json", "report.xml"]
+    results = {n: json.loads((out / "_gradescope" / n / "results.json").read_text()) for n in ("ann", "bob", "cy")}
+    assert json.loads((tmp_path / "results.json").read_text()) == results  # several students: name -> results
+    assert all(gradescope_problems(doc) == [] for doc in results.values()), results
+    assert [results[n]["score"] for n in ("ann", "bob", "cy")] == [100, 0, 0], results
+    assert len(results["ann"]["tests"]) == 4 and results["cy"]["output"].startswith("Not run: nothere.py"), results
+    cases = junit_cases((tmp_path / "report.xml").read_text())
+    assert list(cases) == ["ann", "bob", "cy"]
+    assert [c.get("classname") for c in cases["ann"]] == ["ann.lab_object.C.lds01", *["ann.launch_file"] * 3]
+    assert len(cases["bob"]) == 1 and cases["bob"][0].find("failure") is not None
+    assert cases["cy"][0].find("failure").get("message") == "nothere.py does not exist"
+
+
+def test_a_class_of_one_writes_its_results_json_where_the_option_says(tmp_path: Path) -> None:
+    out = tmp_path / "class"
+    shutil.copytree(CLASS / "ann", out / "ann")
+    page = json.loads((CLASS / "class.json").read_text())
+    page["students"] = page["students"][:1]
+    (out / "class.json").write_text(json.dumps(page))
+    args = argparse.Namespace(gradescope=str(tmp_path / "r.json"), junit=None, weights=None, exe=None, klass="x")
+    write_class_formats(args, out)
+    assert json.loads((tmp_path / "r.json").read_text()) == gradescope_results(class_records(out)[0][1])
+
+
+def test_one_node_s_formats_from_its_grade_directory(tmp_path: Path) -> None:
+    args = argparse.Namespace(gradescope=str(tmp_path / "g" / "results.json"), junit=str(tmp_path / "r.xml"),
+                              weights=None, exe="python3 ann.py", klass=None)
+    assert write_exe_formats(args, CLASS / "bob") == [tmp_path / "g" / "results.json", tmp_path / "r.xml"]
+    assert gradescope_problems(json.loads((tmp_path / "g" / "results.json").read_text())) == []
+    assert list(junit_cases((tmp_path / "r.xml").read_text())) == ["python3 ann.py --mistake half_angle"]
+
+
+def test_bad_format_options_refuse_the_grade_before_any_run(tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture) -> None:
+    bad = tmp_path / "w.yaml"
+    bad.write_text("totl: 3\n")
+    for argv, said in ((["--exe", "python3 x.py", "--gradescope", "r.json", "--weights", str(bad)], "unknown key"),
+                       (["--junit", "r.xml"], "written for --exe or --class"),
+                       (["--exe", "python3 x.py", "--weights", str(bad)], "give --gradescope FILE too")):
+        with pytest.raises(SystemExit) as exit_:
+            grade.main(argv)
+        assert exit_.value.code == 2 and said in capsys.readouterr().err, argv
+
+
+def test_records_are_not_changed_by_writing_them() -> None:
+    doc = {**record("bob"), "launch": launch("sheet.launch.py")}
+    before = copy.deepcopy(doc)
+    gradescope_results(doc)
+    junit_xml([("bob", doc)])
+    assert doc == before
