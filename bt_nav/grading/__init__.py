@@ -15,4 +15,6 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
 - :mod:`bt_nav.grading.realtime`: a failure at ``--rtf`` > 1 checked at 1x before it stands.
 - :mod:`bt_nav.grading.report`, :mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`: the grid's report
   (``grade.json``, ``summary.md``, ``report.html``) with its pictures and videos.
+- :mod:`bt_nav.grading.formats`: a finished grade in the formats platforms and CI read (Gradescope's
+  ``results.json``, JUnit XML), from its ``grade.json`` / ``class.json``.
 """

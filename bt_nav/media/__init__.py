@@ -8,5 +8,7 @@
 - :mod:`bt_nav.media.video`: the mission video (H.264 MP4 through imageio-ffmpeg's bundled ffmpeg).
 - :mod:`bt_nav.media.view`: the browser view's HTTP + server-sent-events server.
 
-Nothing here imports rclpy; the ROS edges are the commands in :mod:`bt_nav.cli`.
+Nothing here imports rclpy. What the live graph holds reaches these modules as raw CDR through one ROS edge,
+``bt_nav.ros.graphtap.GraphTap``: a recording (``bt_nav.run.bagrecorder``, ``bt-nav record``) and the live view
+(``bt-nav view``) both subscribe through it; a lock-step run hands its data in directly (``bt_nav.run.sinks``).
 """

@@ -1,6 +1,6 @@
 """The mission deadline and the evaluation call, in simulated time.
 
-``mission_duration`` 50 s and ``stop_margin`` 0.5 s: the stop and the call are due 49.5 s of
+``mission_duration`` 50 s and ``stop_margin`` (its default): the stop and the call are due 50 s less it, in
 simulated time after the first arming. The harness moves ``/clock`` there in a few jumps, so each
 test takes a second or two of wall time and proves the deadline follows ``/clock``, not the wall.
 """
@@ -12,10 +12,11 @@ from collections.abc import Callable
 
 from ros_harness import PERIOD, Harness
 
+from bt_nav.mission.params import SPECS
 from bt_nav.testing import front_scan, laserscan_msg
 
 FREE = laserscan_msg(front_scan())
-DUE = 49.5  # mission_duration - stop_margin
+DUE = 50.0 - float(SPECS["stop_margin"].default)  # mission_duration - stop_margin (the defaults)
 
 
 def arm_and_drive(h: Harness) -> float:
@@ -28,7 +29,7 @@ def arm_and_drive(h: Harness) -> float:
 
 
 def test_deadline_follows_sim_time_and_calls_exactly_once(executive: Callable[..., Harness]) -> None:
-    h = executive("-p", "mission_duration:=50.0", "-p", "stop_margin:=0.5")
+    h = executive("-p", "mission_duration:=50.0", "-p", f"stop_margin:={50.0 - DUE}")
     h.serve_evaluation()
     wall_start = time.monotonic()
     armed_at = arm_and_drive(h)
@@ -38,14 +39,14 @@ def test_deadline_follows_sim_time_and_calls_exactly_once(executive: Callable[..
     assert h.tick(scan=FREE).linear > 0.0
     assert h.calls == []
 
-    # The tick at the deadline (or the next one: float rounding of 49.5 s) stops and sends the request.
+    # The tick at the deadline (or the next one: float rounding of the due time) stops and sends the request.
     latch = h.tick(scan=FREE)
     if not latch.is_zero:
         latch = h.tick(scan=FREE)
     assert latch.is_zero
     h.wait(lambda: len(h.calls) == 1, "the evaluation call")  # simulated time stands still meanwhile
     assert armed_at + DUE - 1e-6 <= h.calls[0].sim_time <= armed_at + DUE + PERIOD + 1e-6
-    assert h.tick(armed_at + 49.6, scan=FREE).is_zero  # /clock at 49.6 s after the arming
+    assert h.tick(armed_at + DUE + 0.1, scan=FREE).is_zero  # /clock on past the deadline: still stopped
     assert time.monotonic() - wall_start < 20.0  # nowhere near 50 s of wall time
 
     # Long after: still stopped, still exactly one call; arming again is refused.

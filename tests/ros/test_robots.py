@@ -22,6 +22,7 @@ from typing import Any
 import pytest
 from simtools import Proc
 
+from bt_nav.mission.params import SPECS
 from bt_nav.ros.bringup import robot_nodes
 from bt_nav.ros.rosutil import ThreadedNode
 from bt_nav.testing import wait_until
@@ -29,7 +30,7 @@ from bt_nav.testing import wait_until
 ROBOTS = ["robot1", "robot2"]
 SCALE = 0.2
 MISSION = 10.0  # s, the executives' mission_duration
-STOP_MARGIN = 0.5
+STOP_MARGIN = float(SPECS["stop_margin"].default)
 #: Nodes that may touch a robot's topics besides its own executive, referee and the simulator.
 OBSERVERS = {"/multi_probe"}
 
