@@ -31,8 +31,7 @@ find_links=()
 [ -d "$SOURCE/wheels" ] && find_links=(--find-links "$SOURCE/wheels")
 python3 -m venv "$VENV"
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
-# [plot]: matplotlib, which bt-nav grade draws each run's picture with (not among bt_nav's required dependencies)
-"$VENV/bin/python" -m pip install --quiet "${find_links[@]}" "${wheels[0]}[plot]" \
+"$VENV/bin/python" -m pip install --quiet "${find_links[@]}" "${wheels[0]}" \
     "ros-jazzy-rclpy[fastrtps]" ros-jazzy-common-interfaces
 "$VENV/bin/bt-nav" grade --help >/dev/null
 echo "setup.sh: bt_nav installed in $VENV ($("$VENV/bin/python" --version))"

@@ -2,7 +2,8 @@
 
 The ``eval`` graph of :func:`bt_nav.run.rosmission.mission_graph` (the simulator with ``real_time_factor`` 0
 hosting the referee in its process, the executive with ``config/homework.yaml``) runs as subprocesses in a domain
-of its own, through :class:`~bt_nav.run.rosmission.RosMission` (as ``bt-nav demo`` does), whose recorder node in
+of its own, through :class:`~bt_nav.run.rosmission.RosMission` on a :class:`~bt_nav.run.session.MissionSession`
+(as ``bt-nav demo`` does, with the one verdict wait), whose recorder node in
 this process records ground truth with its wall arrival time, which gives the real-time factor over exactly the
 referee's mission (from its t0 to its report): simulated seconds / wall seconds. Start-up (Python imports, DDS
 discovery) is reported apart, because it is a fixed cost, not a speed.
@@ -31,8 +32,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.ros.bringup import Launcher, NodeSpec, child_env
+from bt_nav.ros.bringup import NodeSpec
 from bt_nav.ros.rosutil import dds_env
+from bt_nav.run.session import VERDICT, MissionSession, files_written
 
 #: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
 REFEREE_TIMEOUT = 120.0
@@ -96,32 +98,28 @@ def _mission_window(t: list[float], wall: list[float], results: dict[str, Any]) 
     return t[last] - t[first], wall[last] - wall[first]
 
 
-def _wait_verdict(launcher: Launcher, verdict: Path) -> Any:
-    """Wait for the hosted judge's verdict file (True), or the first child to exit (that child; None: timeout)."""
-    deadline = time.monotonic() + REFEREE_TIMEOUT + GRACE
-    while time.monotonic() < deadline:
-        if verdict.is_file():
-            return True
-        for child in launcher.children:
-            if child.poll() is not None:
-                return child
-        time.sleep(0.02)
-    return None
+def _wait_verdict(session: MissionSession, verdict: Path) -> Any:
+    """Wait for the hosted judge's verdict file (True), or the first child to exit (that child; None: timeout):
+    :meth:`bt_nav.run.session.MissionSession.wait`, polled every 20 ms."""
+    outcome, child = session.wait(REFEREE_TIMEOUT + GRACE, files_written([verdict]), interval=0.02)
+    return True if outcome == VERDICT else child
 
 
-def _measure_verdict(launcher: Launcher, verdict: Path, out: dict[str, Any]) -> tuple[Any, dict[str, dict[str, int]]]:
+def _measure_verdict(session: MissionSession, verdict: Path, out: dict[str, Any]
+                     ) -> tuple[Any, dict[str, dict[str, int]]]:
     """Wait for the verdict (:func:`_wait_verdict`), measuring each process's CPU over that span into ``out``.
 
     Returns what :func:`_wait_verdict` returned and the memory of the processes still running.
     """
+    children = session.children
     span_start = time.monotonic()
-    cpu_start = {c.name: proc_cpu(c.popen.pid) for c in launcher.children}
+    cpu_start = {c.name: proc_cpu(c.popen.pid) for c in children}
     self_start = _self_cpu()
-    ended = _wait_verdict(launcher, verdict)
+    ended = _wait_verdict(session, verdict)
     span = time.monotonic() - span_start
-    memory = {c.name: proc_status(c.popen.pid) for c in launcher.children if c.poll() is None}
+    memory = {c.name: proc_status(c.popen.pid) for c in children if c.poll() is None}
     cpu: dict[str, float | None] = {}
-    for c in launcher.children:
+    for c in children:
         now, before = proc_cpu(c.popen.pid), cpu_start.get(c.name)
         cpu[c.name] = None if now is None or before is None else round(now - before, 3)
     cpu["recorder"] = round(_self_cpu() - self_start, 3)
@@ -155,11 +153,11 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     The DDS environment of this process is set to ``domain`` (the recorder node lives here).
     """
-    from bt_nav.run.rosmission import RosMission, mission_graph, read_verdict
+    from bt_nav.run.rosmission import RosMission, mission_graph
+    from bt_nav.run.session import read_verdict
     from bt_nav.run.settings import profile_maneuver
 
     os.environ.update(dds_env(domain))
-    env = child_env(domain)
     logs: dict[str, deque[str]] = {}
 
     def sink(name: str, line: str) -> None:
@@ -175,15 +173,15 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
         out: dict[str, Any] = {"world": world, "maneuver": profile_maneuver("homework"), "seed": seed,
                                "domain": domain}
         wall0 = time.monotonic()
-        mission = RosMission(specs, ["robot1"], env, sink=sink, verdicts=[str(results_path)])
-        launcher = mission.launcher
+        session = MissionSession(domain, sink=sink)
+        mission = RosMission(specs, ["robot1"], session, verdicts=[str(results_path)])
         referee_code: int | None = None
         memory: dict[str, dict[str, int]] = {}
         try:
             mission.start_graph()
             mission.wait_ready(STARTUP)
             out["startup_wall_s"] = round(time.monotonic() - wall0, 3)
-            ended, memory = _measure_verdict(launcher, results_path, out)
+            ended, memory = _measure_verdict(session, results_path, out)
             if ended is True:
                 referee_code = mission.referee_code()
             elif ended is not None:

@@ -2,7 +2,9 @@
 
 A trace (see :mod:`bt_nav.mission.trace`) stores statuses by node name; replay rebuilds the same tree from
 the tree file (the header names the maneuver), sets every node's status and feedback as recorded
-and prints it with py_trees' own unicode display, so a replayed tick looks exactly like the live one.
+and prints it with py_trees' own unicode display, so a replayed tick looks exactly like the live one. The leaves'
+announcements (a maneuver's start and end, the emergency brake) come before the tick they happened in, at their
+time: ``  [   12.30] [INFO] SmartPivot: front 0.47 m: turning left 90 deg``.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from bt_nav.cli import plain
 from bt_nav.media.bagreplay import is_bag, replay_bag
 from bt_nav.media.treedot import GraphvizMissingError, graphviz, tree_to_dot
 from bt_nav.mission.core import strip_ansi
+from bt_nav.mission.snapshot import event_line
 from bt_nav.mission.trace import read_trace
 from bt_nav.mission.tree import load_tree
 
@@ -106,9 +109,11 @@ def main(argv: list[str] | None = None) -> int:
         if line["tick"] < args.first or (args.last is not None and line["tick"] > args.last):
             continue
         key = (line["tip"], line.get("cmd"))
-        if args.changes_only and key == previous:
+        if args.changes_only and key == previous and not line.get("events"):
             continue
         previous = key
+        for record in line.get("events", ()):  # the leaves' announcements since the previous tick
+            print(f"  [{float(record.get('t', line['time'])):8.2f}] {event_line(record)}")
         print(summary(line))
         if not args.compact:
             print(strip_ansi(py_trees.display.unicode_tree(root, show_status=True)))

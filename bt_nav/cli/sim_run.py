@@ -2,7 +2,8 @@
 check-off judge) as subprocesses over DDS on this machine, without ``ros2 launch``; Ctrl-C stops them all.
 
 The graph is :func:`bt_nav.ros.bringup.nodes` (the table the launch files read); starting, watching and stopping it
-is :func:`bt_nav.run.rosmission.run_graph`. This module parses the options and prints.
+is :func:`bt_nav.run.rosmission.run_graph` (on a :class:`bt_nav.run.session.MissionSession`, in the domain of a
+:class:`bt_nav.run.session.DomainLease`). This module parses the options and prints.
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ from pathlib import Path
 from bt_nav.mission.maneuver_spec import choices_text, names_text
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.ros.bringup import JUDGES, PROFILES, NodeSpec, nodes
-from bt_nav.ros.supervise import Child, StopRequest, choose_domain_id
+from bt_nav.ros.supervise import Child, StopRequest
 from bt_nav.run.rosmission import run_graph
+from bt_nav.run.session import DomainLease
 
 
 def build_parser(prog: str = "bt-nav sim-run") -> argparse.ArgumentParser:
@@ -79,22 +81,24 @@ def main(argv: list[str] | None = None) -> int:
     """``bt-nav sim-run``: exit code of the referee when there is one, else of the first node to exit;
     128 + the signal number after SIGINT/SIGTERM/SIGHUP."""
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
+    lease = DomainLease(opts.domain_id)
     try:
         if opts.maneuver is not None:
             opts.maneuver = normalise_maneuver(opts.maneuver)
         specs = nodes(opts.profile, world=opts.world, maneuver=opts.maneuver, seed=opts.seed, rtf=opts.rtf,
                       with_referee=True if opts.with_referee else None, results_json=opts.json,
                       executive=parse_assignments(opts.set), sim=parse_assignments(opts.sim_param))
-        domain = choose_domain_id(opts.domain_id)
+        domain = lease.claim()
     except ValueError as exc:
         print(f"bt-nav sim-run: {exc}", file=sys.stderr)
         return 2
-    if opts.print_only:
-        print(f"export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_DOMAIN_ID={domain}")
-        for spec in specs:
-            print(" ".join(shlex.quote(a) for a in spec.command()))
-        return 0
-    return _run(specs, domain, opts.profile)
+    with lease:
+        if opts.print_only:
+            print(f"export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST ROS_DOMAIN_ID={domain}")
+            for spec in specs:
+                print(" ".join(shlex.quote(a) for a in spec.command()))
+            return 0
+        return _run(specs, domain, opts.profile)
 
 
 def _run(specs: list[NodeSpec], domain: int, profile: str) -> int:

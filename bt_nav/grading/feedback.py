@@ -8,6 +8,7 @@ report pages stay for the instructor (``report.html``, ``class.html``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -120,3 +121,11 @@ def write_grid_feedback(out: Path) -> Path:
     """The ``feedback.md`` of one ``--exe`` grade in ``out``."""
     return write_feedback(load_grid(out))
 
+
+def drop_stale_feedback(out: Path, names: Sequence[str]) -> None:
+    """A feedback.md left in the directory of a student who ran nothing then (refused): their grid starts there
+    now, and a grid's directory must hold a grade or nothing (it is written again at the end)."""
+    for name in names:
+        stale = out / name / FEEDBACK
+        if stale.is_file() and not (out / name / "grid.json").exists() and len(list(stale.parent.iterdir())) == 1:
+            stale.unlink()

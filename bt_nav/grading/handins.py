@@ -266,3 +266,15 @@ def load_grid(out: Path, name: str = "student") -> StudentResult:
         else {}
     return StudentResult(name, Path(out), doc.get("settings", {}).get("command"), _choice(runs), None, runs, None,
                          passed, why)
+
+
+def read_class(path: Path) -> tuple[list[Any], dict[str, str], dict[str, Any]]:
+    """(the students, those failed before admission with their reason, the hand-ins by name) of ``--class``: a
+    manifest file, or a folder of hand-ins (:mod:`bt_nav.grading.handins`). ValueError refuses the class."""
+    from bt_nav.grading.classroom import read_manifest
+
+    if not path.is_dir():
+        return read_manifest(path), {}, {}
+    handins = read_handins(path)
+    return ([h.student() for h in handins], {h.name: h.problem for h in handins if h.problem},
+            {h.name: h for h in handins})

@@ -113,12 +113,12 @@ class RecorderWatch:
         threading.Thread(target=kill_late, name="recorder-stop", daemon=True).start()
 
 
-def start_recorder(launcher: Any, sink: Callable[[str, str], None], run_dir: Path, world: str,
+def start_recorder(session: Any, sink: Callable[[str, str], None], run_dir: Path, world: str,
                    seed: int, profile: str = "homework") -> RecorderWatch:
-    """Start the run's recorder (``run_dir/bag``) on ``launcher`` (with the run's other processes: see the module
-    docstring)."""
+    """Start the run's recorder (``run_dir/bag``) in ``session`` (the run's :class:`bt_nav.run.session.MissionSession`,
+    with the run's other processes: see the module docstring)."""
     watch = RecorderWatch(sink)
-    watch.child = launcher.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
+    watch.child = session.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
     return watch
 
 

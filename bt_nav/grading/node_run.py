@@ -1,8 +1,9 @@
 """Grading any robot node over DDS (``bt-nav grade --exe 'CMD ...'``): the simulator and the profile's judge
 around a command that is not bt_nav's, once per world x maneuver x seed, each run isolated.
 
-Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (handed back at its end), a run
-directory of its own, and three process groups started by one :class:`bt_nav.ros.supervise.Launcher`:
+Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (a :class:`bt_nav.run.session.DomainLease`,
+handed back at its end), a run directory of its own, and three process groups started by one
+:class:`bt_nav.run.session.MissionSession` (the one layer ``bt-nav demo``, ``sim-run`` and the bench run theirs on):
 
 - the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
   truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second (the node's sim-time
@@ -56,17 +57,9 @@ from bt_nav.grading.node_bag import bag_row, start_recorder
 from bt_nav.grading.node_log import Crash, import_findings, node_crash, rclpy_shutdown_race
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
-from bt_nav.ros.supervise import (
-    Child,
-    Launcher,
-    StopRequest,
-    child_env,
-    claim_domain_id,
-    launcher_domains,
-    release_domain_id,
-)
-from bt_nav.run.rosmission import read_verdict
-from bt_nav.run.rundir import LogFiles, make_run_dir
+from bt_nav.ros.supervise import Child, StopRequest
+from bt_nav.run.rundir import make_run_dir
+from bt_nav.run.session import EXITED, STOPPED, VERDICT, DomainLease, MissionSession, files_written, read_verdict
 from bt_nav.run.settings import DEFAULT_JITTER
 
 #: Seconds a stopped process group gets for SIGINT before SIGTERM (then 2 s before SIGKILL); the node gets two SIGINTs
@@ -165,32 +158,32 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     return host_judge([spec for spec in specs if spec.executable != "executive"])[0]
 
 
-def _wait(sim: Child, node: Child, limit: float, stop: StopRequest | None, started: float,
+def _wait(session: MissionSession, sim: Child, node: Child, limit: float, started: float,
           results_json: Path) -> tuple[str, str, Crash | None]:
     """Wait for the judge's verdict file (``("verdict", "", None)``), or why there is none: ``(outcome, reason
-    line, the node's crash)``.
+    line, the node's crash)`` (:meth:`bt_nav.run.session.MissionSession.wait`, until ``started + limit``).
 
     A node that exits with 0 ended by itself (some call ``rclpy.shutdown()`` after their mission): the judge
     still judges what the robot did; any other exit code is a crash and ends the run now (:func:`_exit_reason`).
     """
-    end = started + limit
-    while time.monotonic() < end:
-        if results_json.is_file():
-            return "verdict", "", None
-        code = node.poll()
-        if code is not None and code != 0:
-            wall = time.monotonic() - started
-            node.thread.join(LOG_DRAIN)  # the traceback's last lines may still be in the pipe
-            log = results_json.parent / f"{node.name}.log"
-            crash = node_crash(log.read_text(errors="replace")) if log.is_file() else None
-            return "node exited", _exit_reason(code, wall, crash), crash
-        if sim.poll() is not None:
-            if results_json.is_file():
-                return "verdict", "", None
-            return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)", None
-        if stop is not None and stop.requested:
-            return "stopped", f"stopped by {stop.name or 'a stop request'}", None
-        time.sleep(0.05)
+    def watched(child: Child) -> bool:
+        return child is sim or (child is node and node.poll() != 0)
+
+    left = max(0.0, started + limit - time.monotonic())
+    outcome, ended = session.wait(left, files_written([results_json]), watched=watched)
+    if outcome == VERDICT:
+        return "verdict", "", None
+    if outcome == STOPPED:
+        stop = session.stop
+        return "stopped", f"stopped by {(stop.name if stop else '') or 'a stop request'}", None
+    if outcome == EXITED and ended is node:
+        code, wall = node.poll(), time.monotonic() - started
+        node.thread.join(LOG_DRAIN)  # the traceback's last lines may still be in the pipe
+        log = results_json.parent / f"{node.name}.log"
+        crash = node_crash(log.read_text(errors="replace")) if log.is_file() else None
+        return "node exited", _exit_reason(int(code or 0), wall, crash), crash
+    if outcome == EXITED:
+        return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)", None
     return "timeout", f"no verdict within {limit:g} s wall", None
 
 
@@ -287,21 +280,15 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     verdict; the run starts again on another domain (the shared one held until the job ends, so no attempt picks it
     again), up to :data:`DOMAIN_MOVES` times, and its row's ``notes`` say so.
     """
-    low, high = launcher_domains()
-    shared: list[int] = []  # the domains claimed: the last the run's, the others found shared
     moves: list[str] = []
-    try:
+    # the domains claimed, held until the job ends: the last the run's, the others found shared
+    with DomainLease(start=hash(job.key), user_env=False) as lease:
         while True:
-            domain = claim_domain_id(low, high, start=hash(job.key) + len(moves))
-            shared.append(domain)  # held until the job ends
-            row = _attempt(job, settings, domain, stop, sink, on_start, on_verdict)
+            row = _attempt(job, settings, lease.claim(), stop, sink, on_start, on_verdict)
             if row["outcome"] != SHARED_DOMAIN or len(moves) >= DOMAIN_MOVES:
                 break
             aside = _set_aside(Path(row["run_dir"]))
             moves.append(f"{row['reason']}: the run started again on another domain (that attempt: {aside})")
-    finally:
-        for domain in shared:
-            release_domain_id(domain)
     if moves:
         row["notes"] = [*moves, *row.get("notes", [])]
         (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
@@ -323,9 +310,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
     lidar = f"_{job.lidar}" if job.lidar else ""
     run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}{lidar}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
-    logs = LogFiles(run_dir)
-    tee = logs.sink if sink is None else (lambda name, line: (logs.sink(name, line), sink(name, line)))
-    launcher = Launcher(child_env(domain), sink=tee, stop=stop, driver="node")
+    session = MissionSession(domain, run_dir=run_dir, tee=sink, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                                   settings.profile, settings.node_params))
     started = time.monotonic()
@@ -336,15 +321,15 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
             on_start(domain, run_dir)
         sim_spec = exe_graph(job, settings, results_json)
         if settings.record != "off":  # with the others (bt_nav.grading.node_bag says why)
-            recorder = start_recorder(launcher, tee, run_dir, job.world, job.seed, settings.profile)
+            recorder = start_recorder(session, session.sink, run_dir, job.world, job.seed, settings.profile)
         try:
-            node = launcher.start(ExeSpec(argv), cwd=settings.cwd)
+            node = session.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
         else:
-            sim = launcher.start(sim_spec)
-            outcome, reason, crash = _wait(sim, node, settings.limit, stop, started, results_json)
+            sim = session.start(sim_spec)
+            outcome, reason, crash = _wait(session, sim, node, settings.limit, started, results_json)
             row = _verdict_row(outcome, reason, sim, results_json)
             if crash is not None:  # what the 1x re-run is decided on (bt_nav.grading.realtime)
                 row["crash"] = asdict(crash)
@@ -353,9 +338,8 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
     finally:
         # the verdict is in (or never will be): the node first, while its world and its recorder run on (the bag
         # holds what the node sends on its way out); then the rest at once
-        launcher.shutdown(grace=STOP_GRACE, together=True, first=node,
-                          after_first=recorder.stop if recorder is not None else None)
-        logs.close()
+        session.close(STOP_GRACE, together=True, first=node,
+                      after_first=recorder.stop if recorder is not None else None)
     if row["outcome"] not in ("stopped", SHARED_DOMAIN):  # how its node ended is not the node's to answer for
         findings, notes = _ending_findings(node, run_dir / "node.log")
         _with_findings(row, findings)

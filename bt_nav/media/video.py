@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from bt_nav.media.bagread import MissionRecord
-from bt_nav.mission.snapshot import SnapshotNode, snapshot_nodes
+from bt_nav.mission.snapshot import DEADLINE, DEADLINE_LEFT, TO_GO, SnapshotNode, snapshot_nodes
 
 WIDTH, HEIGHT = 1280, 720
 MAP_W, MAP_H = 720, 560  # map panel (top left); the tree panel fills the rest of the top
@@ -135,23 +135,30 @@ def console_shows(line: str) -> bool:
 
 #: s: a tip's feedback older than this is shown with its time (snapshots come only when a status changes).
 STALE_AFTER = 0.5
-_COUNTDOWN = re.compile(r"^(?P<n>[+-]?\d+(?:\.\d+)?) (?P<unit>s left|deg to go)$")
+#: What a snapshot's deadline node says in the caption, by its state (:data:`DEADLINE` of its ``data``; counting: the
+#: seconds left, :func:`live_feedback`; not armed yet: nothing).
+_DEADLINE_WORDS = {"none": "no deadline", "reached": "deadline reached"}
 
 
-def live_feedback(feedback: str, elapsed: float, turned: float) -> str:
-    """A snapshot's feedback as of the frame: ``elapsed`` s and ``turned`` deg after the snapshot.
+def live_feedback(row: SnapshotNode, elapsed: float, turned: float) -> str:
+    """A row's feedback as of the frame (:func:`shown_feedback`): ``elapsed`` s and ``turned`` deg after the snapshot.
 
     Why: the executive publishes its tree only when a status changes, so a snapshot's countdowns ("16.2 s
     left", "+158 deg to go") are as old as the snapshot. They are counted down by the sim time and by the
-    ground-truth heading change since; any other feedback is shown as the snapshot says it.
+    ground-truth heading change since, from the figures the leaf put in the snapshot (its ``data``:
+    :data:`DEADLINE_LEFT`, :data:`TO_GO`); any other feedback is shown as the snapshot says it.
     """
-    match = _COUNTDOWN.match(feedback)
-    if match is None:
+    feedback = shown_feedback(row)
+    if not feedback or not is_countdown(row):
         return feedback
-    n = float(match["n"])
-    if match["unit"] == "s left":
-        return f"{max(0.0, n - elapsed):.1f} s left"
-    return f"{n - turned:+.0f} deg to go"
+    if row.data.get(DEADLINE_LEFT) is not None:
+        return f"{max(0.0, float(row.data[DEADLINE_LEFT]) - elapsed):.1f} s left"
+    return f"{float(row.data[TO_GO]) - turned:+.0f} deg to go"
+
+
+def is_countdown(row: SnapshotNode) -> bool:
+    """Whether the row's feedback counts down (its leaf gave the figure): a frame shows it live, never as old."""
+    return row.data.get(DEADLINE_LEFT) is not None or row.data.get(TO_GO) is not None
 
 
 def shown_feedback(row: SnapshotNode) -> str:
@@ -224,6 +231,7 @@ class FrameText:
     deadline: str  # "no deadline", "12.3 s left", "deadline reached", "" (no such node in the tree)
     turned: float | None  # deg turned since the running maneuver began (ground truth); None when none runs
     snapshot: float | None  # the snapshot's time, s since the origin (None before the first)
+    live: bool = False  # the feedback is a countdown counted to the frame (:func:`is_countdown`): never "as of"
 
     def lines(self) -> tuple[str, str]:
         """The caption's two lines: time (and its base), distance and deadline; then branch, tip, the turn so far
@@ -240,17 +248,22 @@ class FrameText:
         if self.feedback:
             detail += f": {self.feedback}"
             stale = self.snapshot is not None and self.clock - self.snapshot > STALE_AFTER
-            if stale and not _COUNTDOWN.match(self.feedback):  # a countdown is live; other text says its age
+            if stale and not self.live:  # a countdown is live; other text says its age
                 detail += f" (as of {self.snapshot:.2f} s)"
         return head, detail
 
 
 def _deadline(snap: Snapshot, elapsed: float, turned: float) -> str:
-    """The deadline as that snapshot's ticked nodes say it, counted down to the frame ("" when none says)."""
+    """The deadline as that snapshot's ticked deadline node says it (its ``data``), counted down to the frame ("" when
+    none says: no such node, not ticked, or not armed yet)."""
     for row in snap.rows:
-        feedback = live_feedback(shown_feedback(row), elapsed, turned)
-        if feedback == "no deadline" or feedback == "deadline reached" or feedback.endswith(" s left"):
-            return feedback
+        state = row.data.get(DEADLINE)
+        if state is None or not shown_feedback(row):
+            continue
+        if state == "counting":
+            return live_feedback(row, elapsed, turned)
+        if state in _DEADLINE_WORDS:
+            return _DEADLINE_WORDS[state]
     return ""
 
 
@@ -296,11 +309,12 @@ class Track:
         snap, truth = self.snaps[k], self.rec.truth
         elapsed, since_snap = t - snap.t, truth.turned(snap.t, t)
         tip = snap.tip
-        feedback = live_feedback(shown_feedback(tip), elapsed, since_snap) if tip else ""
+        feedback = live_feedback(tip, elapsed, since_snap) if tip else ""
         turning = tip is not None and tip.status == "RUNNING" and snap.label == "Maneuver"
         turned = truth.turned(snap.running_since, t) if turning else None
         return FrameText(t - origin, travelled, snap.branch, tip.name if tip else "", feedback,
-                         _deadline(snap, elapsed, since_snap), turned, snap.t - origin)
+                         _deadline(snap, elapsed, since_snap), turned, snap.t - origin,
+                         tip is not None and is_countdown(tip))
 
     def panel_rows(self, t: float) -> list[tuple[SnapshotNode, str, bool]]:
         """The tree at ``t``: each row with the feedback the frame shows and whether it is on the running path."""
@@ -310,7 +324,7 @@ class Track:
         snap = self.snaps[k]
         elapsed, turned = t - snap.t, self.rec.truth.turned(snap.t, t)
         on_path = set(snap.path)
-        return [(row, live_feedback(shown_feedback(row), elapsed, turned), n in on_path)
+        return [(row, live_feedback(row, elapsed, turned), n in on_path)
                 for n, row in enumerate(snap.rows)]
 
 

@@ -104,6 +104,9 @@ class MissionCore:
         self.board.set("/odom", OdomSample())
         seed = int(self.params["random_seed"])
         self.announcements: list[dict[str, Any]] = []  # the leaves' events since the driver last took them
+        #: The leaves' events since the trace's last line (:class:`bt_nav.mission.trace.TraceRecorder` sets it to a
+        #: list and takes from it; None: no trace, nothing kept)
+        self.traced_announcements: list[dict[str, Any]] | None = None
         self.tree.setup(node=node, clock=clock, events=self.events, evaluation_client=evaluation_client,
                         random_seed=None if seed < 0 else seed, arm_service=str(self.params["arm_service"]),
                         announce=self._announce)
@@ -276,6 +279,8 @@ class MissionCore:
         if record.get("event") == "maneuver":
             record = {**record, "maneuver": str(self.params["maneuver"])}
         self.announcements.append(record)
+        if self.traced_announcements is not None:
+            self.traced_announcements.append(record)
 
     def take_announcements(self) -> list[dict[str, Any]]:
         """The events since the last call, oldest first (the driver publishes or keeps them)."""

@@ -16,7 +16,10 @@ A snapshot (``format`` :data:`SNAPSHOT_FORMAT`)::
 
 ``nodes`` are in display order (pre-order: a node, then its children); ``kind`` is ``sequence``, ``selector``,
 ``parallel``, ``decorator`` or ``leaf`` (composites also say ``memory``); ``status`` is py_trees' status name;
-``path`` lists the indices from the root to the tip (the nodes the last tick ended on).
+``path`` lists the indices from the root to the tip (the nodes the last tick ended on). A leaf whose feedback is a
+figure the readers count on also gives it as ``data`` (:data:`DEADLINE_LEFT`: the deadline leaf's seconds left;
+:data:`TO_GO`: a turning maneuver's degrees to go; :data:`DEADLINE`: the deadline's state), so a video counts
+down from the number, never from the feedback's words.
 
 An event (``format`` :data:`EVENT_FORMAT`), one per announcement of a leaf (:meth:`~bt_nav.mission.behaviours.base.
 Leaf.announce`); a maneuver's::
@@ -25,14 +28,30 @@ Leaf.announce`); a maneuver's::
      "side": "right", "angle_deg": 143.0, "readings": {"front": 0.49, "left": 1.2, "right": null}}
 
 ``angle_deg`` is the announced angle in whole degrees (as the log line says it), ``side`` left or right; the
-readings are the sectors' nearest returns (m, null when unknown) when the maneuver started. Pure: py_trees only.
+readings are the sectors' nearest returns (m, null when unknown) when the maneuver started. Every event a leaf
+announces beside a log line (:meth:`~bt_nav.mission.behaviours.base.Leaf.tell`) also carries that line as
+``text`` with its ``level`` (``INFO``, ``WARN``): the lab's terminal shows it as it is, without reading the log.
+The leaves' events: ``maneuver`` (a maneuver starts), ``maneuver_end`` (``status`` SUCCESS or FAILURE,
+``turned_deg``), ``maneuver_preempted``, ``open_loop`` (a maneuver lost its odometry), ``brake`` (the emergency
+brake stops, ``ahead_m``), ``brake_turn`` (it turns away, ``side``), ``brake_clear`` (the path is clear,
+``ahead_m``).
+
+A judge's events (:class:`bt_nav.ros.nodes.judging.JudgeNode` on its ``~/events``, :func:`call_event`) say what it
+asked of the robot and what came back, at the judge's sim time::
+
+    {"format": "bt_nav.event/1", "event": "call", "t": 9.0, "call": "toggle_navigation", "data": true}
+    {"format": "bt_nav.event/1", "event": "reply", "t": 9.01, "call": "toggle_navigation", "data": true,
+     "answered": true, "success": true, "message": "armed at 9.01 s"}
+
+(``unanswered``: the request was given up after ``attempts`` sends.) Pure: py_trees only.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import py_trees
@@ -41,6 +60,9 @@ from bt_nav.mission.datatypes import Command
 
 SNAPSHOT_FORMAT = "bt_nav.tree/1"
 EVENT_FORMAT = "bt_nav.event/1"
+#: A node's ``data`` keys: the deadline's state (``none``, ``unarmed``, ``counting``, ``reached``), its seconds left
+#: while counting, and a turning maneuver's signed degrees to go.
+DEADLINE, DEADLINE_LEFT, TO_GO = "deadline", "deadline_left_s", "to_go_deg"
 #: The blackboard keys a snapshot carries: the command and the mission's and the maneuver's state.
 SNAPSHOT_KEYS = ("armed", "mission_over", "scan_ok", "scan_status", "maneuver_active", "cmd_vel", "evaluation_result")
 #: py_trees' status names (``Status.value``).
@@ -91,6 +113,9 @@ def tree_snapshot(root: py_trees.behaviour.Behaviour, *, tick: int, t: float, ma
                  "feedback": node.feedback_message or "", "depth": depth, "parent": parent}
         if kind in ("sequence", "selector"):
             entry["memory"] = bool(getattr(node, "memory", False))
+        data = getattr(node, "snapshot_data", None)  # a bt_nav leaf's (Leaf.snapshot_data)
+        if data:
+            entry["data"] = {key: jsonable(value) for key, value in data.items()}
         nodes.append(entry)
         stack.extend((child, depth + 1, index[id(node)]) for child in reversed(node.children))
     tip = root.tip()
@@ -136,12 +161,14 @@ class SnapshotNode:
     feedback: str
     depth: int
     parent: int  # index of the parent node, -1 for the root
+    data: Mapping[str, Any] = field(default_factory=dict, hash=False, compare=False)  # the leaf's figures
 
 
 def snapshot_nodes(snapshot: dict[str, Any]) -> list[SnapshotNode]:
     """The nodes of a snapshot in display order (unknown fields are ignored, missing ones get neutral values)."""
     return [SnapshotNode(str(n.get("name", "")), str(n.get("kind", "leaf")), str(n.get("status", "INVALID")),
-                         str(n.get("feedback", "")), int(n.get("depth", 0)), int(n.get("parent", -1)))
+                         str(n.get("feedback", "")), int(n.get("depth", 0)), int(n.get("parent", -1)),
+                         dict(n["data"]) if isinstance(n.get("data"), dict) else {})
             for n in snapshot.get("nodes", ())]
 
 
@@ -161,3 +188,19 @@ def render_art(snapshot: dict[str, Any]) -> str:
 def event(kind: str, t: float, leaf: str, **fields: Any) -> dict[str, Any]:
     """An event record (see the module docstring)."""
     return {"format": EVENT_FORMAT, "event": kind, "t": t, "leaf": leaf, **fields}
+
+
+def event_line(record: dict[str, Any]) -> str:
+    """An event as one line for a human (``bt-nav replay``): its own line (``text``) when it has one, else its kind,
+    source and fields."""
+    if record.get("text"):
+        return f"[{record.get('level', 'INFO')}] {record['text']}"
+    fields = ", ".join(f"{k}={v}" for k, v in record.items() if k not in ("format", "event", "t", "leaf", "call"))
+    source = record.get("leaf") or record.get("call", "")
+    return f"{source}: {record.get('event', '')}" + (f" ({fields})" if fields else "")
+
+
+def call_event(kind: str, t: float, call: str, data: bool, **fields: Any) -> dict[str, Any]:
+    """A judge's event about its service call ``call`` (``call``, ``reply`` or ``unanswered``; see the module
+    docstring): what it asked (``data``) at sim time ``t``, and with a reply what came back."""
+    return {"format": EVENT_FORMAT, "event": kind, "t": t, "call": call, "data": data, **fields}

@@ -1,8 +1,10 @@
 """Per-tick traces: one JSON object per line, enough to replay what the tree decided and why.
 
 Each line holds the tick number, the mission-clock time, every node's status (and feedback message
-where it changed), the tip, the blackboard values that changed since the previous line, and the
-commanded twist. Both the ROS executive and the lock-step runner write the same format;
+where it changed), the tip, the blackboard values that changed since the previous line, the
+commanded twist, and (``events``, only when there were some) the leaves' announcements since the previous line as
+``~/events`` carries them (:mod:`bt_nav.mission.snapshot`: a maneuver's start with its side and angle, its end,
+the emergency brake). Both the ROS executive and the lock-step runner write the same format;
 ``bt-nav replay`` reads it.
 """
 
@@ -33,6 +35,7 @@ class TraceRecorder:
         self._last_values: dict[str, Any] = {}
         self._last_feedback: dict[str, str] = {}
         self.lines = 0
+        core.traced_announcements = []  # the leaves' events from now on, for the next line's "events"
         self._write({"header": {"tree": core.root.name, "maneuver": core.params["maneuver"],
                                 "params": {k: jsonable(v) for k, v in core.params.items()}}})
 
@@ -59,6 +62,8 @@ class TraceRecorder:
             "changed": changed,
             "cmd": jsonable(command),
         }
+        if self.core.traced_announcements:
+            line["events"], self.core.traced_announcements = self.core.traced_announcements, []
         if extra:
             line.update(extra)
         self._write(line)

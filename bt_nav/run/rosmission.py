@@ -9,7 +9,9 @@ and referee alone); it starts with the graph, and its t0 waits for this process'
 :class:`RosMission`, so "start the graph, wait for the recorder, start the referee, wait for the verdict"
 is written once; ``bt-nav sim-run`` starts a graph without recorders and watches it until a node ends
 (:func:`run_graph`); ``bt-nav grade --exe`` runs a foreign node in a run of its own
-(:mod:`bt_nav.grading.node_run`), reading its verdict with the same :func:`read_verdict`. One robot is the
+(:mod:`bt_nav.grading.node_run`). All of them start, watch and stop their processes through one
+:class:`bt_nav.run.session.MissionSession` (domain, log files, launcher, the verdict wait) and read a verdict with
+its :func:`~bt_nav.run.session.read_verdict`. One robot is the
 graph of :func:`bt_nav.ros.bringup.nodes` (the homework's root topics);
 several are :func:`bt_nav.ros.bringup.robot_nodes` (one simulator, per robot an executive and a referee
 in the robot's namespace). The referees start last, once every recorder sees its robot's ground truth and
@@ -18,7 +20,6 @@ commands, so each recording covers the whole schedule.
 
 from __future__ import annotations
 
-import json
 import sys
 import threading
 import time
@@ -27,8 +28,9 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.ros.bringup import JUDGES, NodeSpec, cmd_vel_stamped, host_judge, nodes, robot_nodes
-from bt_nav.ros.supervise import Child, Launcher, LineSink, StopRequest, child_env, publish_zero_twist
+from bt_nav.ros.supervise import Child, StopRequest, publish_zero_twist
 from bt_nav.run.recorder import Recorder, Recording, rec_ready
+from bt_nav.run.session import EXITED, STOPPED, VERDICT, MissionSession, read_verdict
 
 #: Extra wall time allowed beyond the referees' own timeout before the run gives up itself.
 GRACE = 15.0
@@ -57,16 +59,15 @@ class RosMission:
         specs: the graph (:func:`mission_graph`); its referees are the nodes whose executable is a judge
             (``referee`` or ``checkoff``).
         names: the robots' names; with one robot its recorder listens at the root topics.
-        env: the children's environment (their ROS domain). ``sink``: where node output lines go (a node
-            in a robot's namespace is named ``<robot>_<node>``, its report lines prefixed ``<robot>: ``).
-        stop, last_word: as :class:`bt_nav.ros.supervise.Launcher`'s.
+        session: the run's processes (:class:`bt_nav.run.session.MissionSession`: its domain, its sink, its stop
+            request); a node in a robot's namespace is named ``<robot>_<node>`` in the session's sink, its report
+            lines prefixed ``<robot>: ``.
         verdicts: the judges' JSON files (:func:`mission_graph`'s ``results`` values): a graph whose judge is hosted
             by the simulator (no judge process) has its verdicts when they are all written.
     """
 
-    def __init__(self, specs: list[NodeSpec], names: list[str], env: dict[str, str], *,
-                 sink: LineSink | None = None, stop: StopRequest | None = None,
-                 last_word: Callable[[], Any] | None = None, verdicts: list[str] | None = None) -> None:
+    def __init__(self, specs: list[NodeSpec], names: list[str], session: MissionSession, *,
+                 verdicts: list[str] | None = None) -> None:
         self.specs = specs
         self.hosted = not any(spec.executable in JUDGES for spec in specs)
         self.verdicts = [Path(v) for v in verdicts or ()]
@@ -77,8 +78,9 @@ class RosMission:
         self._written_at: float | None = None
         self.names = names
         self.recorders = {name: Recorder(name if len(names) > 1 else "") for name in names}
-        self.launcher = Launcher(env, sink=sink, stop=stop, last_word=last_word)
-        self.stop = stop
+        self.session = session
+        self.launcher = session.launcher
+        self.stop = session.stop
         self.referees: list[Child] = []
 
     def _start(self, spec: NodeSpec) -> Child:
@@ -98,7 +100,7 @@ class RosMission:
         return self.launcher.start(spec, sink=sink)
 
     def _stopped(self) -> bool:
-        return self.stop is not None and self.stop.requested
+        return self.session.stopped()
 
     def start_graph(self) -> None:
         """Every node but the referees."""
@@ -122,25 +124,17 @@ class RosMission:
 
     def exited(self) -> Child | None:
         """A node other than a referee that has exited (None: all running)."""
-        return next((c for c in self.launcher.children if c not in self.referees and c.poll() is not None), None)
+        return self.session.ended(self._watched)
+
+    def _watched(self, child: Child) -> bool:
+        """Whose end, before the verdict, ends the run: every node but a referee (whose end is its verdict)."""
+        return child not in self.referees
 
     def wait_verdicts(self, timeout: float, poll: Callable[[], None] | None = None) -> tuple[str, Child | None]:
         """Wait until every referee has exited (hosted: every verdict file is written): ``("verdict", None)``;
-        or ``("exited", child)`` when another node exited first, ``("timeout", None)``, ``("stopped", None)``.
-        ``poll`` runs every 50 ms."""
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if self._stopped():
-                return "stopped", None
-            if self._judged():
-                return "verdict", None
-            other = self.exited()
-            if other is not None:
-                return "exited", other
-            if poll is not None:
-                poll()
-            time.sleep(0.05)
-        return "timeout", None
+        or ``("exited", child)`` when another node exited first, ``("timeout", None)``, ``("stopped", None)``
+        (:meth:`bt_nav.run.session.MissionSession.wait`). ``poll`` runs every 50 ms."""
+        return self.session.wait(timeout, self._judged, watched=self._watched, poll=poll)
 
     def _judged(self) -> bool:
         """Every referee has exited; hosted: every verdict file is written and its report read from the simulator's
@@ -166,11 +160,11 @@ class RosMission:
             return self._stop_code()
         self.start_referees()
         outcome, child = self.wait_verdicts(timeout)
-        if outcome == "verdict":
+        if outcome == VERDICT:
             return self.referee_code()
-        if outcome == "stopped":
+        if outcome == STOPPED:
             return self._stop_code()
-        if outcome == "exited" and child is not None:
+        if outcome == EXITED and child is not None:
             where = f"{child.spec.namespace}_{child.name}" if child.spec.namespace else child.name
             print(f"bt-nav demo: {where} exited with {child.poll()} before the verdict; see "
                   f"{run_dir / (where + '.log')}", file=sys.stderr)
@@ -190,9 +184,9 @@ class RosMission:
         return max((int(r.poll() or 0) for r in self.referees), default=2)
 
     def close(self) -> dict[str, Recording]:
-        """Stop every node, then the recorders; each robot's recording."""
+        """Stop every node (and close the session's log files), then the recorders; each robot's recording."""
         try:
-            self.launcher.shutdown()
+            self.session.close()
         finally:
             recordings = {name: rec.close() for name, rec in self.recorders.items()}
         return recordings
@@ -205,38 +199,28 @@ def run_graph(specs: list[NodeSpec], domain: int, stop: StopRequest,
     (or the first node's to end, without a judge), that of a node that ended before the judge (1 for 0, after
     ``on_early_exit`` is told of it). The caller installs and restores ``stop`` and says what a stop means."""
     stamped = cmd_vel_stamped(specs)
-    launcher = Launcher(child_env(domain), stop=stop, last_word=lambda: publish_zero_twist(domain, stamped=stamped))
+    session = MissionSession(domain, stop=stop, last_word=lambda: publish_zero_twist(domain, stamped=stamped))
     code = 0
     try:
         for spec in specs:
-            launcher.start(spec)
-        judge = next((c for c in launcher.children if c.spec.executable in JUDGES), None)
-        while not stop.requested:
-            ended = launcher.wait_any(timeout=0.5)
-            if ended is None:
-                continue
-            if judge is not None and ended is not judge:
+            session.start(spec)
+        judge = next((c for c in session.children if c.spec.executable in JUDGES), None)
+        outcome, ended = session.wait(None, lambda: judge is not None and judge.poll() is not None)
+        if outcome == VERDICT and judge is not None:
+            code = judge.poll() or 0
+        elif outcome == EXITED and ended is not None:
+            if judge is not None:
                 if on_early_exit is not None:
                     on_early_exit(ended)
                 code = ended.poll() or 1
             else:
                 code = ended.poll() or 0
-            break
     except KeyboardInterrupt:
         stop.signum = stop.signum or 2
     finally:
         stop.closing = True
-        launcher.shutdown()
+        session.close()
     return code
-
-
-def read_verdict(path: Path) -> dict[str, Any] | None:
-    """A judge's verdict file (its JSON object); None while there is none or it cannot be read."""
-    try:
-        verdict = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return verdict if isinstance(verdict, dict) else None
 
 
 def _last_report_line(path: Path) -> str | None:

@@ -21,7 +21,7 @@ from bt_nav.media.video import (
     shown_feedback,
     world_of,
 )
-from bt_nav.mission.snapshot import SnapshotNode, snapshot_nodes
+from bt_nav.mission.snapshot import DEADLINE_LEFT, TO_GO, SnapshotNode, snapshot_nodes
 from bt_nav.run.lockstep import run_mission
 
 LAB = {"world": "lab_object", "maneuver": "C", "seed": 0, "profile": "lab"}
@@ -177,12 +177,19 @@ def test_the_lab_console_keeps_the_terminals_lines(lab: dict) -> None:
     assert not any("ProcessScan" in line for line in shown)
 
 
+def _row(feedback: str, data: dict | None = None, status: str = "RUNNING") -> SnapshotNode:
+    return SnapshotNode("Leaf", "leaf", status, feedback, 3, 2, data or {})
+
+
 def test_feedback_rules() -> None:
-    assert live_feedback("16.2 s left", 0.5, 0.0) == "15.7 s left"
-    assert live_feedback("3.0 s left", 5.0, 0.0) == "0.0 s left"
-    assert live_feedback("+158 deg to go", 0.5, 60.0) == "+98 deg to go"
-    assert live_feedback("-90 deg to go", 0.5, -30.0) == "-60 deg to go"
-    assert live_feedback("creeping at 0.05 m/s", 9.0, 40.0) == "creeping at 0.05 m/s"
+    """Countdowns are counted from the figures the leaf put in the snapshot (``data``), never from the words."""
+    assert live_feedback(_row("16.2 s left", {DEADLINE_LEFT: 16.2}), 0.5, 0.0) == "15.7 s left"
+    assert live_feedback(_row("3.0 s left", {DEADLINE_LEFT: 3.0}), 5.0, 0.0) == "0.0 s left"
+    assert live_feedback(_row("+158 deg to go", {TO_GO: 158.0}), 0.5, 60.0) == "+98 deg to go"
+    assert live_feedback(_row("-90 deg to go", {TO_GO: -90.0}), 0.5, -30.0) == "-60 deg to go"
+    assert live_feedback(_row("creeping at 0.05 m/s"), 9.0, 40.0) == "creeping at 0.05 m/s"
+    assert live_feedback(_row("+158 deg to go"), 0.5, 60.0) == "+158 deg to go", "words alone are not a figure"
+    assert live_feedback(_row("+158 deg to go", {TO_GO: 158.0}, "INVALID"), 0.5, 60.0) == ""
     finished = SnapshotNode("SmartPivot", "leaf", "INVALID", "+158 deg to go", 3, 2)
     assert shown_feedback(finished) == ""
     assert shown_feedback(SnapshotNode("SmartPivot", "leaf", "RUNNING", "+158 deg to go", 3, 2)) == "+158 deg to go"

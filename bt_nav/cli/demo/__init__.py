@@ -32,8 +32,9 @@ from bt_nav.cli import plain
 from bt_nav.cli.options import add_mission_options, bag_truth_readers
 from bt_nav.mission.params import parse_assignments
 from bt_nav.run.recorder import Recording, speed_line
-from bt_nav.run.rosmission import GRACE, RosMission, mission_graph, read_verdict
+from bt_nav.run.rosmission import GRACE, RosMission, mission_graph
 from bt_nav.run.rundir import LOG_FORMAT, Logs, make_run_dir
+from bt_nav.run.session import DomainLease, MissionSession, read_verdict
 from bt_nav.run.settings import effective_parameters, profile_maneuver, tree_settings
 
 
@@ -111,10 +112,9 @@ def _bag_topics(names: list[str]) -> list[str]:
 
 
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
-    """Names, maneuver, domain, run directory, overrides and the graph (ValueError on a bad option)."""
+    """Names, maneuver, domain (its lease, released by the caller), run directory, overrides and the graph
+    (ValueError on a bad option)."""
     from bt_nav_sim.multi import robot_names
-
-    from bt_nav.ros.supervise import choose_domain_id
 
     if opts.profile != "homework":
         raise ValueError(f"--profile {opts.profile}: the demo runs the homework (its referee) or the lab (its "
@@ -124,7 +124,8 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     maneuver = effective_maneuver(opts.maneuver)
     overrides = parse_assignments(opts.overrides)
     parameters = effective_parameters(tree_settings(opts.profile, maneuver, opts.seed, overrides))
-    domain = choose_domain_id(opts.domain_id)
+    lease = DomainLease(opts.domain_id)
+    domain = lease.claim()
     label = Path(opts.world).stem if opts.world.endswith((".yaml", ".yml")) else opts.world
     several = f"_{len(names)}robots" if len(names) > 1 else ""
     run_dir = make_run_dir(Path(opts.out), opts.name or
@@ -138,7 +139,8 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                 "robots": names, "overrides": overrides, "parameters": parameters,
                 "time_base": "logs: sim time (executive clock) [wall]; referee results: seconds from its t0"}
     (run_dir / "run.json").write_text(json.dumps(run_info, indent=1) + "\n", encoding="utf-8")
-    return {"names": names, "maneuver": maneuver, "domain": domain, "run_dir": run_dir, "specs": specs,
+    return {"names": names, "maneuver": maneuver, "domain": domain, "lease": lease, "run_dir": run_dir,
+            "specs": specs,
             "results": results, "label": label, "parameters": parameters}
 
 
@@ -157,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     """``bt-nav demo``; returns 0 (every robot PASSED), 1 (one FAILED) or 2 (no verdict)."""
     from bt_nav.cli.options import bag_for, film
     from bt_nav.ros.bringup import cmd_vel_stamped
-    from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
+    from bt_nav.ros.supervise import StopRequest, publish_zero_twist, use_domain_here
     from bt_nav.run.bagrecorder import start_process, stop_process
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
@@ -187,14 +189,15 @@ def main(argv: list[str] | None = None) -> int:
           f"(localhost only)\nbt-nav demo: run directory {run_dir}/", flush=True)
     wall0 = time.monotonic()
     use_domain_here(domain)  # the recorder nodes in this process too
-    env = {**child_env(domain), "RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}
     stop = StopRequest().install()
     logs = Logs(run_dir, echo_logs=not opts.quiet)
     stamped = cmd_vel_stamped(run["specs"])
     topics = [f"/{n}/cmd_vel" for n in names] if len(names) > 1 else ["/cmd_vel"]
-    mission = RosMission(run["specs"], names, env, sink=logs.sink, stop=stop, verdicts=list(run["results"].values()),
-                         last_word=lambda: [
+    session = MissionSession(domain, run_dir=run_dir, logs=logs, env={"RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT},
+                             stop=stop, last_word=lambda: [
         publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
+    env = session.env
+    mission = RosMission(run["specs"], names, session, verdicts=list(run["results"].values()))
     logs.sim_time = mission.recorders[names[0]].sim_time
     logs.clock = mission.recorders[names[0]].clock
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if bag_dir \
@@ -207,8 +210,8 @@ def main(argv: list[str] | None = None) -> int:
         recs = mission.close()
         if bag is not None:
             print(f"bt-nav demo: bag {bag_dir}: {stop_process(bag)}", flush=True)
-        logs.close()
         stop.restore()
+        run["lease"].release()
     if opts.video and bag_dir:
         film(bag_dir, opts.video, 10.0)
     return _report(run, opts, recs, code, time.monotonic() - wall0)

@@ -33,11 +33,12 @@ SHOWN_PARAMETERS = (("safety_distance", "m"), ("pivot_distance", "m"), ("creep_s
 
 
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
-    """Maneuver, world, domain, run directory, parameters and the graph (ValueError on a bad option)."""
+    """Maneuver, world, domain (its lease, released by the caller), run directory, parameters and the graph
+    (ValueError on a bad option)."""
     from bt_nav.cli.options import bag_truth_readers
-    from bt_nav.ros.supervise import choose_domain_id
     from bt_nav.run.rosmission import mission_graph
     from bt_nav.run.rundir import make_run_dir
+    from bt_nav.run.session import DomainLease
 
     if opts.robots != 1:
         raise ValueError("--profile lab checks off one robot (--robots 1)")
@@ -47,7 +48,8 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     world = opts.world or CHECKOFF_WORLDS[maneuver]
     overrides = parse_assignments(opts.overrides)
     parameters = effective_parameters(tree_settings("lab", maneuver, opts.seed, overrides))
-    domain = choose_domain_id(opts.domain_id)
+    lease = DomainLease(opts.domain_id)
+    domain = lease.claim()
     label = Path(world).stem if world.endswith((".yaml", ".yml")) else world
     run_dir = make_run_dir(Path(opts.out), opts.name or
                            f"{time.strftime('%Y%m%d-%H%M%S')}_{label}_{maneuver}_seed{opts.seed}_lab")
@@ -61,7 +63,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                 "overrides": overrides, "parameters": parameters, "judge": "bt_nav_checkoff",
                 "time_base": "logs and terminal: sim time [wall]; judge results: seconds from its t0 (t0_sim)"}
     (run_dir / "run.json").write_text(json.dumps(run_info, indent=1) + "\n", encoding="utf-8")
-    return {"maneuver": maneuver, "world": world, "label": label, "domain": domain, "run_dir": run_dir,
+    return {"maneuver": maneuver, "world": world, "label": label, "domain": domain, "lease": lease, "run_dir": run_dir,
             "specs": specs, "results": results, "parameters": parameters}
 
 
@@ -80,10 +82,11 @@ def run_lab(opts: argparse.Namespace) -> int:
     """The lab demo; 0 PASSED, 1 FAILED, 2 no verdict (or a bad option)."""
     from bt_nav.cli.options import bag_for
     from bt_nav.ros.bringup import cmd_vel_stamped
-    from bt_nav.ros.supervise import StopRequest, child_env, publish_zero_twist, use_domain_here
+    from bt_nav.ros.supervise import StopRequest, publish_zero_twist, use_domain_here
     from bt_nav.run.bagrecorder import start_process, stop_process
     from bt_nav.run.rosmission import GRACE, RosMission
     from bt_nav.run.rundir import LOG_FORMAT, Logs
+    from bt_nav.run.session import MissionSession
     from bt_nav.run.terminal import EventPublisher, LabTerminal
 
     try:
@@ -100,14 +103,16 @@ def run_lab(opts: argparse.Namespace) -> int:
           "(simulator, executive, check-off judge)", flush=True)
     wall0 = time.monotonic()
     use_domain_here(domain)  # the recorder and event nodes in this process too
-    env = {**child_env(domain), "RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}
     stop = StopRequest().install()
     logs = Logs(run_dir, echo_logs=False)
     events = EventPublisher() if bag_dir else None
     terminal = LabTerminal(logs, launch_line(run), events)
     stamped = cmd_vel_stamped(run["specs"])
-    mission = RosMission(run["specs"], ["robot1"], env, sink=terminal.sink, stop=stop, verdicts=[run["results"]],
-                         last_word=lambda: publish_zero_twist(domain, topic="/cmd_vel", stamped=stamped))
+    session = MissionSession(domain, run_dir=run_dir, logs=logs, sink=terminal.sink,
+                             env={"RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}, stop=stop,
+                             last_word=lambda: publish_zero_twist(domain, topic="/cmd_vel", stamped=stamped))
+    env = session.env
+    mission = RosMission(run["specs"], ["robot1"], session, verdicts=[run["results"]])
     logs.sim_time = mission.recorders["robot1"].sim_time
     logs.clock = mission.recorders["robot1"].clock
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics()) if bag_dir else None
@@ -128,8 +133,8 @@ def run_lab(opts: argparse.Namespace) -> int:
             events.close()
         if bag is not None:
             print(f"bt-nav demo: bag {bag_dir}: {stop_process(bag)}", flush=True)
-        logs.close()
         stop.restore()
+        run["lease"].release()
     if not verdict.get("done") or verdict.get("timed_out"):
         code = 2 if code in (0, 1) else code
     _finish(run, opts, recs["robot1"], verdict, bag_dir, time.monotonic() - wall0)
@@ -146,7 +151,7 @@ def _bag_topics() -> list[str]:
 
 def _verdict(run: dict[str, Any]) -> dict[str, Any]:
     """The judge's verdict (empty: none was written, or it cannot be read)."""
-    from bt_nav.run.rosmission import read_verdict
+    from bt_nav.run.session import read_verdict
 
     return read_verdict(Path(run["results"])) or {}
 

@@ -17,6 +17,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.run.settings import DEFAULT_JITTER
 
@@ -97,10 +98,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     if args.json:  # the grid's JSON results there too: --json means the same with and without --exe
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json_path.read_text(encoding="utf-8"), encoding="utf-8")
-    from bt_nav.cli.grade.formats import write_exe_formats
-
-    for path in write_exe_formats(args, settings.out):  # --gradescope, --junit
-        print(f"wrote {path}")
+    print("".join(f"wrote {path}\n" for path in write_exe_formats(args, settings.out)), end="")  # --gradescope, --junit
     from bt_nav.grading.grid import format_lidars
 
     for line in format_lidars(ended):
@@ -155,19 +153,6 @@ def _runs(count: int) -> str:
     return f"{count} run{'' if count == 1 else 's'}"
 
 
-def _read_class(path: Path) -> tuple[list[Any], dict[str, str], dict[str, Any]]:
-    """(the students, those failed before admission with their reason, the hand-ins by name) of ``--class``: a
-    manifest file, or a folder of hand-ins (:mod:`bt_nav.grading.handins`). ValueError refuses the class."""
-    from bt_nav.grading.classroom import read_manifest
-    from bt_nav.grading.handins import read_handins
-
-    if not path.is_dir():
-        return read_manifest(path), {}, {}
-    handins = read_handins(path)
-    return ([h.student() for h in handins], {h.name: h.problem for h in handins if h.problem},
-            {h.name: h for h in handins})
-
-
 def _show_handins(handins: dict[str, Any]) -> None:
     """Each hand-in's node file and launch-file lines, before any run."""
     for name, handin in handins.items():
@@ -195,15 +180,6 @@ def _class_verdicts(out: Path, handins: dict[str, Any]) -> bool:
     return all(r.passed for r in results)
 
 
-def _drop_stale_feedback(out: Path, names: Sequence[str]) -> None:
-    """A feedback.md left in the directory of a student who ran nothing then (refused): their grid starts there
-    now, and a grid's directory must hold a grade or nothing (it is written again at the end)."""
-    for name in names:
-        stale = out / name / "feedback.md"
-        if stale.is_file() and not (out / name / "grid.json").exists() and len(list(stale.parent.iterdir())) == 1:
-            stale.unlink()
-
-
 def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     """``bt-nav grade --class MANIFEST|DIR``: every student's grid (:func:`bt_nav.grading.classroom.run_class`), each
     written as ``--exe`` writes one, then the class page and each student's ``feedback.md``. Exit codes as for one
@@ -211,6 +187,8 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     import copy
 
     from bt_nav.grading.classroom import admit, run_class, write_class_page
+    from bt_nav.grading.feedback import drop_stale_feedback
+    from bt_nav.grading.handins import read_class
     from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.plan import build_jobs, grid_axes
     from bt_nav.ros.supervise import StopRequest
@@ -218,7 +196,7 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     if args.exe is not None:
         parser.error("--class grades the manifest's commands: leave --exe out")
     try:
-        students, failed, handins = _read_class(Path(args.klass))
+        students, failed, handins = read_class(Path(args.klass))
         out = Path(args.out or f"runs/grade-class-{time.strftime('%Y%m%d-%H%M%S')}").absolute()
         worlds, seeds = grid_axes(args)
         # A bad entry fails its student; options that do not fit refuse the class, every plan before the first run.
@@ -243,7 +221,7 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     for name, reason in refused.items():
         print(f"  {name}: FAILED (not run: {reason})", flush=True)
     _show_handins(handins)
-    _drop_stale_feedback(out, list(plans))
+    drop_stale_feedback(out, list(plans))
     stop = StopRequest().install()
     started = time.perf_counter()
     try:
@@ -259,8 +237,6 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     records = {name: h.record() for name, h in handins.items()}
     paths = write_class_page(out, students, f"Class grade ({args.profile} profile)", refused,
                              (lambda rows: add_verdicts(rows, records)) if records else None)
-    from bt_nav.cli.grade.formats import write_class_formats
-
     paths = [*paths, *write_class_formats(args, out)]  # --gradescope, --junit
     wall = time.perf_counter() - started
     print(f"class of {len(students)} in {wall:.1f} s wall; wrote " + ", ".join(map(str, paths)))

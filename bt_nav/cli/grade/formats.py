@@ -50,6 +50,8 @@ def _json(doc: Any) -> str:
 
 def write_exe_formats(args: argparse.Namespace, grade_dir: Path) -> list[Path]:
     """One node's grade (``grade_dir/grade.json``) as ``--gradescope`` and ``--junit`` ask; the paths written."""
+    if not (args.gradescope or args.junit):
+        return []
     record = read_record(grade_dir)
     written = []
     if args.gradescope:
@@ -66,6 +68,8 @@ def write_class_formats(args: argparse.Namespace, class_dir: Path) -> list[Path]
     ``class_dir/_gradescope/<name>/`` (no student's name begins with _, so no student's grid is there),
     ``--gradescope``'s path (a class of one: that student's results.json; more: a JSON object name: results) and
     ``--junit``'s (a testsuite per student); the paths written."""
+    if not (args.gradescope or args.junit):
+        return []
     records = class_records(class_dir)
     written = []
     if args.gradescope:

@@ -16,7 +16,7 @@ import py_trees
 from py_trees.ports import BehaviourWithPorts, PortInformation
 
 from bt_nav.mission.datatypes import Clock, Command
-from bt_nav.mission.snapshot import event
+from bt_nav.mission.snapshot import event, jsonable
 
 _DEFAULT_EVENTS = logging.getLogger("bt_nav")
 _BLACKBOARD = py_trees.blackboard.Blackboard
@@ -54,6 +54,8 @@ class Leaf(BehaviourWithPorts):
         self.events: EventLogger = _DEFAULT_EVENTS
         self.node: Any = None
         self._announce: Any = None  # the driver's sink for structured events (MissionCore's), None: nobody listens
+        #: The figures behind the feedback a snapshot carries as the node's ``data`` (:mod:`bt_nav.mission.snapshot`)
+        self.snapshot_data: dict[str, Any] = {}
         self._port_keys: dict[str, str] = {}
         self._output_keys: dict[str, tuple[str, type]] = {}
         self._read_back_keys: dict[str, str] = {}  # last_output's resolved keys
@@ -126,6 +128,17 @@ class Leaf(BehaviourWithPorts):
         beside its log line: readers (the lab's angle check, the terminal, bags) take the fields, never the text."""
         if self._announce is not None:
             self._announce(event(kind, self.clock(), self.label, **fields))
+
+    def tell(self, kind: str, message: str, *, warn: bool = False, **fields: Any) -> None:
+        """Log ``<label>: <message>`` (a warning with ``warn``) and announce it as an event ``kind`` with
+        ``fields``, the line (``text``) and its level: the lab's terminal shows the event's line, never the log's."""
+        line = f"{self.label}: {message}"
+        if warn:  # two call sites: rclpy refuses one call site with two severities
+            self.events.warning(line)
+        else:
+            self.events.info(line)
+        figures = {key: jsonable(value) if isinstance(value, float) else value for key, value in fields.items()}
+        self.announce(kind, **figures, level="WARN" if warn else "INFO", text=line)
 
     @property
     def label(self) -> str:

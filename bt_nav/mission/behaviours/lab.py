@@ -100,7 +100,7 @@ class EmergencyStop(Leaf):
         self._side = 0.0
         self._set_output("active", True)
         ahead = self.get_input("paths").ahead
-        self.events.warning(f"{self.label}: path blocked {ahead:.2f} m ahead: emergency stop")
+        self.tell("brake", f"path blocked {ahead:.2f} m ahead: emergency stop", warn=True, ahead_m=ahead)
 
     def update(self) -> Status:
         """Stand, then turn until clear."""
@@ -109,7 +109,7 @@ class EmergencyStop(Leaf):
             self.command(0.0, 0.0)
             self._set_output("active", False)
             self.feedback_message = f"path clear for {paths.ahead:.2f} m"
-            self.events.info(f"{self.label}: path clear again ({paths.ahead:.2f} m): creeping on")
+            self.tell("brake_clear", f"path clear again ({paths.ahead:.2f} m): creeping on", ahead_m=paths.ahead)
             return Status.SUCCESS
         if self.clock() - self._braked_at < float(self.get_input("hold")):
             self.command(0.0, 0.0)
@@ -117,8 +117,9 @@ class EmergencyStop(Leaf):
             return Status.RUNNING
         if not self._side:
             self._side = initial_side(paths, float(self.get_input("distance")) + self.CLEAR_MARGIN)
-            self.events.info(f"{self.label}: still blocked after {float(self.get_input('hold')):.1f} s: turning "
-                             f"{'left' if self._side > 0 else 'right'} until the path is clear")
+            side = "left" if self._side > 0 else "right"
+            self.tell("brake_turn", f"still blocked after {float(self.get_input('hold')):.1f} s: turning {side} "
+                      "until the path is clear", side=side)
         self.command(0.0, self._side * float(self.get_input("angular_speed")))
         self.feedback_message = f"turning {'left' if self._side > 0 else 'right'} until clear"
         return Status.RUNNING

@@ -21,6 +21,7 @@ from bt_nav.mission.behaviours.perception import PATHS_PORT, SECTORS_PORT
 from bt_nav.mission.datatypes import NO_ODOM, Command, OdomSample
 from bt_nav.mission.paths import FreePaths
 from bt_nav.mission.scan import SectorReading, Sectors, clearer_side
+from bt_nav.mission.snapshot import TO_GO
 from bt_nav.mission.turning import TurnMeter, approach_rate
 
 Status = py_trees.common.Status
@@ -124,8 +125,8 @@ class RotationManeuver(Leaf, register=False):
         self._open_loop_logged = False
         self._set_output("active", True)
         side, degrees = "left" if self.rotation > 0 else "right", f"{abs(math.degrees(self.rotation)):.0f}"
-        self.events.info(f"{self.label}: {self.reading(sectors)}: turning {side} {degrees} deg")
-        self.announce("maneuver", side=side, angle_deg=float(degrees), readings=sector_readings(sectors))
+        self.tell("maneuver", f"{self.reading(sectors)}: turning {side} {degrees} deg", side=side,
+                  angle_deg=float(degrees), readings=sector_readings(sectors))
         latency = float(self.get_input("latency"))
         moving = not self.last_output("cmd_vel", Command()).is_zero
         if latency > 0.0 and moving:
@@ -156,8 +157,8 @@ class RotationManeuver(Leaf, register=False):
             return self._finish(Status.SUCCESS, f"done: turned {math.degrees(self.turned):+.1f} deg")
         if self.meter.open_loop and not self._open_loop_logged:
             self._open_loop_logged = True
-            self.events.warning(f"{self.label}: no fresh odometry — continuing open loop "
-                                "(integrating the commanded turn rate)")
+            self.tell("open_loop", "no fresh odometry — continuing open loop (integrating the commanded turn rate)",
+                      warn=True)
         remaining = self.rotation - self.turned - self.meter.pending(now)
         if abs(remaining) <= math.radians(self.get_input("tolerance_deg")):
             latency = float(self.get_input("latency"))
@@ -173,12 +174,14 @@ class RotationManeuver(Leaf, register=False):
         self.meter.command(now, approach_rate(remaining, self.get_input("angular_speed"), decel, self.MIN_RATE))
         self.command(0.0, self.meter.rate)
         self.feedback_message = f"{math.degrees(remaining):+.0f} deg to go"
+        self.snapshot_data = {TO_GO: math.degrees(remaining)}
         return Status.RUNNING
 
     def _hold(self, message: str) -> Status:
         """A still tick inside the maneuver (before or after the turn)."""
         self.command(0.0, 0.0)
         self.feedback_message = message
+        self.snapshot_data = {}
         return Status.RUNNING
 
     def _finish(self, status: Status, message: str) -> Status:
@@ -188,10 +191,9 @@ class RotationManeuver(Leaf, register=False):
         if self.rotation and self.HANDS_OVER_SIDE:
             self._set_output("turn_side", TurnSide(math.copysign(1.0, self.rotation), self.clock(), in_place=True))
         self.feedback_message = message
-        if status == Status.SUCCESS:  # two call sites: rclpy refuses one call site with two severities
-            self.events.info(f"{self.label}: {message}")
-        else:
-            self.events.warning(f"{self.label}: {message}")
+        self.snapshot_data = {}
+        self.tell("maneuver_end", message, warn=status != Status.SUCCESS, status=status.value,
+                  turned_deg=math.degrees(self.turned))
         return status
 
     def terminate(self, new_status: Status) -> None:
@@ -199,7 +201,7 @@ class RotationManeuver(Leaf, register=False):
         if new_status == Status.INVALID and self.status == Status.RUNNING:
             self.command(0.0, 0.0)
             self._set_output("active", False)
-            self.events.info(f"{self.label}: preempted, stopped")
+            self.tell("maneuver_preempted", "preempted, stopped")
 
 
 def sector_readings(sectors: Sectors) -> dict[str, float | None]:

@@ -13,6 +13,7 @@ from typing import Any
 import py_trees
 
 from bt_nav.mission.behaviours.base import Condition, Leaf, port
+from bt_nav.mission.snapshot import DEADLINE, DEADLINE_LEFT
 
 Status = py_trees.common.Status
 
@@ -149,19 +150,20 @@ class MissionDeadline(Condition):
             return True
         duration = self.get_input("mission_duration")
         if duration <= 0.0:
-            self.feedback_message = "no deadline"
+            self.feedback_message, self.snapshot_data = "no deadline", {DEADLINE: "none"}
             return False
         first = self.get_input("first_armed_at")
         if math.isnan(first):
-            self.feedback_message = "not armed yet"
+            self.feedback_message, self.snapshot_data = "not armed yet", {DEADLINE: "unarmed"}
             return False
         limit = first + duration - self.get_input("stop_margin")
         now = self.clock()
         if now < limit:
             self.feedback_message = f"{limit - now:.1f} s left"
+            self.snapshot_data = {DEADLINE: "counting", DEADLINE_LEFT: limit - now}
             return False
         self._set_output("mission_over", True)
-        self.feedback_message = "deadline reached"
+        self.feedback_message, self.snapshot_data = "deadline reached", {DEADLINE: "reached"}
         self.events.info(f"{self.label}: deadline reached at t={now:.2f} s ({now - first:.2f} s after the "
                          "first arming): stopping and asking for evaluation")
         return True

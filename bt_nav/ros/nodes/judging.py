@@ -22,6 +22,10 @@ calls, ``on_activate_result``, ``observe``, ``on_collision``, ``results``, ``rep
    results (with the run's facts) go to ``json`` and the process exits 0 when every check passed, 1 when
    one failed, 2 on timeout or when stopped first.
 
+Events (``~/events``, std_msgs/String, reliable, transient local): each activate call, its reply and a request given
+up, as JSON with fields (:func:`bt_nav.mission.snapshot.call_event`: t, call, data, answered, success, message), beside
+their log lines. The lab's terminal (:mod:`bt_nav.run.terminal`) shows the calls from these, never from the log.
+
 What the robot node did wrong that no check can see (``audit``, on by default): a
 :class:`bt_nav.ros.nodes.audit.GraphAudit` samples the ROS graph about once per wall second and reads
 ``cmd_vel`` (no subscription to ``scan`` or ``/clock``, no publisher on ``cmd_vel``, the arm service never
@@ -83,8 +87,9 @@ from std_srvs.srv import SetBool
 
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.resources import written_whole
+from bt_nav.mission.snapshot import call_event, snapshot_json
 from bt_nav.ros.nodes.audit import GraphAudit, is_ours
-from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
+from bt_nav.ros.rosutil import EVENTS_QOS, QuietQosEvents, declare_node_parameters
 
 EXIT_PASSED, EXIT_FAILED, EXIT_TIMEOUT = 0, 1, 2
 #: After the verdict, wait at most this long (wall) for the final deactivation to be answered.
@@ -232,6 +237,7 @@ class JudgeNode(QuietQosEvents, Node):
         """The activate client, the inputs, and the sim_sync heartbeat if ``sync`` (hosted: the world's inputs and
         the heartbeat come from the host)."""
         self.activate_client = self.create_client(SetBool, self.activate_name)
+        self.events_pub = self.create_publisher(String, "~/events", EVENTS_QOS)
         self.wait_for_cmd_vel = bool(p["wait_for_cmd_vel"])
         self._cmd_vel_seen = not self.wait_for_cmd_vel
         self._cmd_type = "TwistStamped" if bool(p["cmd_vel_stamped"]) else str(p["cmd_vel_type"])
@@ -443,7 +449,13 @@ class JudgeNode(QuietQosEvents, Node):
             self.judge.on_activate_result(now, data, False, UNAVAILABLE)
             return
         self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) sent")
+        self._tell("call", now, data)
         self._send(data, attempt=1)
+
+    def _tell(self, kind: str, now: float, data: bool, **fields: Any) -> None:
+        """One event about an activate call on ``~/events`` (:func:`bt_nav.mission.snapshot.call_event`): what
+        the lab's terminal shows as ``ros2 service call`` prints it, without reading this node's log."""
+        self.events_pub.publish(String(data=snapshot_json(call_event(kind, now, self.call_name, data, **fields))))
 
     def _send(self, data: bool, attempt: int) -> None:
         """One request; sim time is held (heartbeat) before it leaves, so its latency costs no sim time."""
@@ -471,6 +483,7 @@ class JudgeNode(QuietQosEvents, Node):
         message = "" if response is None else str(response.message)
         self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) -> "
                                f"{'success' if success else 'failure'}: {message}")
+        self._tell("reply", now, data, answered=response is not None, success=success, message=message)
         self.judge.on_activate_result(now, data, success, ANSWERED if response is not None else UNANSWERED, message)
 
     def _expire_calls(self) -> None:
@@ -493,6 +506,7 @@ class JudgeNode(QuietQosEvents, Node):
                 continue
             self._heartbeat()
             self.get_logger().warning(f"{self.call_name}({data}) unanswered after {attempt} attempts")
+            self._tell("unanswered", self.now(), data, attempts=attempt)
             self.judge.on_activate_result(self.now(), data, False, UNANSWERED)
 
     def _heartbeat(self) -> None:
