@@ -31,8 +31,9 @@ import random
 import time
 from typing import Any
 
-from bt_nav.ros.bringup import EXECUTIVE_NAME, Launcher, NodeSpec, child_env
+from bt_nav.ros.bringup import EXECUTIVE_NAME, NodeSpec
 from bt_nav.ros.rosutil import ThreadedNode, dds_env
+from bt_nav.run.session import MissionSession
 from bt_nav.testing import front_scan, laserscan_msg, wait_until
 
 from .common import Target, at_most, percentiles
@@ -162,12 +163,12 @@ def run(domain: int, switches: int = 400, seed: int = 1) -> dict[str, Any]:
                     {"use_sim_time": False, "maneuver": "none", "mission_duration": 3600.0,
                      "tick_rate_hz": TICK_HZ})
     probe = Probe(domain)
-    launcher = Launcher(child_env(domain), sink=lambda _name, line: lines.append(line))
+    session = MissionSession(domain, sink=lambda _name, line: lines.append(line))  # the executive, in the domain
     events: list[tuple[int, str]] = []
     memory: dict[str, int] = {}
     started = time.monotonic()
     try:
-        child = launcher.start(spec)
+        child = session.start(spec)
         wait_until(probe.matched, STARTUP_TIMEOUT, "the executive's endpoints", interval=0.02)
         wait_until(lambda: len(probe.commands) > 0, STARTUP_TIMEOUT, "the executive's first command",
                    step=lambda: probe.publish(clear), interval=0.02)
@@ -203,7 +204,7 @@ def run(domain: int, switches: int = 400, seed: int = 1) -> dict[str, Any]:
         end_ns = time.time_ns()
         memory = proc_status(child.popen.pid)
     finally:
-        launcher.shutdown()
+        session.close()
         probe.close()
     out = analyse(events, list(probe.commands), end_ns)
     stats = [line.split("final stats: ", 1)[1].split(";")[0] for line in lines if "final stats: " in line]

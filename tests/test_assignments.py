@@ -9,7 +9,7 @@ import pytest
 from bt_nav_sim import core as sim_core
 from bt_nav_sim.checkoff_core import CheckoffConfig
 
-from bt_nav.grading import node_run
+from bt_nav.grading.exe import run as exe_run
 from bt_nav.mission import assignments as A
 from bt_nav.mission import profiles
 from bt_nav.mission.params import SPECS
@@ -61,9 +61,9 @@ def test_every_profile_table_is_read_from_the_records() -> None:
         assert (judge.executable, judge.name) == (assignment.judge.executable, assignment.judge.node_name)
         executive = next(s for s in specs if s.executable == "executive")
         assert tuple(executive.remappings) == assignment.remaps()
-    assert node_run.profile_remaps("lab") == (("arm", "/toggle_navigation"),)
-    assert node_run.profile_remaps("homework") == A.HOMEWORK.remaps()
-    assert node_run.profile_remaps("turtlebot3") == ()  # as before: only an assignment's own profile remaps
+    assert exe_run.profile_remaps("lab") == (("arm", "/toggle_navigation"),)
+    assert exe_run.profile_remaps("homework") == A.HOMEWORK.remaps()
+    assert exe_run.profile_remaps("turtlebot3") == ()  # as before: only an assignment's own profile remaps
 
 
 def test_a_changed_record_changes_every_table(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -75,7 +75,7 @@ def test_a_changed_record_changes_every_table(monkeypatch: pytest.MonkeyPatch) -
     specs = bringup.nodes("checkoff", maneuver="B")
     assert dict(specs[1].remappings)["arm"] == "start_stop"
     assert specs[-1].parameters["activate_service"] == "start_stop"
-    assert node_run.exe_ros_args(None, "lab")[-2:] == ["-r", "arm:=/start_stop"]
+    assert exe_run.exe_ros_args(None, "lab")[-2:] == ["-r", "arm:=/start_stop"]
 
 
 def test_a_graded_lab_node_is_judged_by_its_given_safety_distance() -> None:

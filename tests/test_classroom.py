@@ -11,8 +11,9 @@ from typing import Any
 
 import pytest
 
-from bt_nav.grading import classroom, node_grid, report
+from bt_nav.grading import classroom, report
 from bt_nav.grading.classroom import Student, read_manifest, run_class
+from bt_nav.grading.exe import grid as exe_grid
 
 
 @dataclass(frozen=True)
@@ -54,8 +55,8 @@ class Recorder:
 @pytest.fixture
 def recorder(monkeypatch: pytest.MonkeyPatch) -> Recorder:
     rec = Recorder()
-    monkeypatch.setattr(node_grid, "run_unless_stopped", rec.run)  # what run_pool calls
-    monkeypatch.setattr(node_grid, "prepare_out", lambda settings, jobs, resume: {})
+    monkeypatch.setattr(exe_grid, "run_unless_stopped", rec.run)  # what run_pool calls
+    monkeypatch.setattr(exe_grid, "prepare_out", lambda settings, jobs, resume: {})
     monkeypatch.setattr(report, "write_exe_report", rec.report)
     return rec
 
@@ -188,7 +189,7 @@ def test_a_class_with_bad_entries_grades_the_others_and_shows_each_reason(
 
 
 def test_the_choice_is_read_from_the_file_the_command_runs(tmp_path: Path) -> None:
-    from bt_nav.grading.node_grid import declared_choice, node_file
+    from bt_nav.grading.exe.grid import declared_choice, node_file
 
     node = tmp_path / "node"  # no .py: python runs it all the same
     node.write_text("#  CHOICE:  C  (Smart Pivot)\n")

@@ -20,6 +20,7 @@ import pytest
 
 from bt_nav.cli import grade
 from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
+from bt_nav.grading.exe.grid import error_row
 from bt_nav.grading.formats import (
     WEIGHTS_FILE,
     Weights,
@@ -31,7 +32,6 @@ from bt_nav.grading.formats import (
 )
 from bt_nav.grading.grid import Job
 from bt_nav.grading.launchfile import check_launch
-from bt_nav.grading.node_grid import error_row
 from tests.gradescope_schema import gradescope_problems
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"

@@ -1,5 +1,5 @@
 """The ``--exe`` grid without DDS: the up-front checks, resume, stops and where runs go, with a stand-in for the
-run (:func:`bt_nav.grading.node_run.run_exe_job` replaced).
+run (:func:`bt_nav.grading.exe.run.run_exe_job` replaced).
 The runs over real DDS: tests/ros/test_grade_exe_grid_dds.py."""
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ from typing import Any
 import pytest
 
 from bt_nav.cli import grade
-from bt_nav.grading import node_grid
+from bt_nav.grading.exe import grid as exe_grid
+from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, make_jobs
-from bt_nav.grading.node_run import ExeSettings
 from bt_nav.ros.supervise import StopRequest
 from bt_nav.run.rundir import make_run_dir
 
@@ -69,34 +69,34 @@ def test_a_python_without_rclpy_is_refused_before_any_run(tmp_path: Path) -> Non
     bare.write_text("#!/bin/sh\nexit 1\n")
     bare.chmod(0o755)
     with pytest.raises(ValueError, match=r"cannot import rclpy .* run the node with .*python"):
-        node_grid.resolve_program(f"{bare} node.py")
-    assert node_grid.resolve_program(f"{sys.executable} -c pass").startswith(sys.executable)
+        exe_grid.resolve_program(f"{bare} node.py")
+    assert exe_grid.resolve_program(f"{sys.executable} -c pass").startswith(sys.executable)
 
 
 def test_a_bare_name_is_found_on_path_then_next_to_this_python(monkeypatch: pytest.MonkeyPatch) -> None:
     venv_bin = Path(sys.executable).parent
     monkeypatch.setenv("PATH", "/nonexistent")  # the venv not activated
-    resolved = node_grid.resolve_program("bt-nav executive --x 'a b'")
+    resolved = exe_grid.resolve_program("bt-nav executive --x 'a b'")
     assert resolved == f"{venv_bin.absolute() / 'bt-nav'} executive --x 'a b'"
     monkeypatch.setenv("PATH", str(venv_bin))
-    assert node_grid.resolve_program("python -c pass").startswith(str(venv_bin.absolute() / "python") + " ")
+    assert exe_grid.resolve_program("python -c pass").startswith(str(venv_bin.absolute() / "python") + " ")
 
 
 def test_a_missing_or_unusable_program_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(ValueError, match="'no-such-node-xyz' not found on PATH nor in"):
-        node_grid.resolve_program("no-such-node-xyz --ros-args")
+        exe_grid.resolve_program("no-such-node-xyz --ros-args")
     with pytest.raises(ValueError, match="not found"):
-        node_grid.resolve_program(str(tmp_path / "missing.py"))
+        exe_grid.resolve_program(str(tmp_path / "missing.py"))
     script = tmp_path / "node.sh"
     script.write_text("#!/bin/sh\n")
     with pytest.raises(ValueError, match="not executable"):
-        node_grid.resolve_program(str(script))
+        exe_grid.resolve_program(str(script))
     script.chmod(script.stat().st_mode | stat.S_IXUSR)
     monkeypatch.chdir(tmp_path)
-    assert node_grid.resolve_program("./node.sh 1") == f"{script} 1"  # a relative path made absolute
+    assert exe_grid.resolve_program("./node.sh 1") == f"{script} 1"  # a relative path made absolute
     for bad in ("", "   ", "'unbalanced"):
         with pytest.raises(ValueError):
-            node_grid.resolve_program(bad)
+            exe_grid.resolve_program(bad)
 
 
 def test_the_cli_refuses_a_missing_program_before_any_run(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -124,39 +124,39 @@ def test_an_unknown_world_is_refused_before_any_run(mode: list[str], tmp_path: P
 # ---------------------------------------------------------------------------------------------- the directory
 def test_an_out_holding_anything_is_refused_without_resume(tmp_path: Path) -> None:
     out = tmp_path / "g"
-    assert node_grid.prepare_out(_settings(out), JOBS, resume=False) == {}
+    assert exe_grid.prepare_out(_settings(out), JOBS, resume=False) == {}
     assert json.loads((out / "grid.json").read_text())["jobs"] == [job.key for job in JOBS]
     with pytest.raises(ValueError, match="holds a grade already: add --resume"):
-        node_grid.prepare_out(_settings(out), JOBS, resume=False)
+        exe_grid.prepare_out(_settings(out), JOBS, resume=False)
     other = tmp_path / "other"
     other.mkdir()
     (other / "notes.txt").write_text("mine")
     with pytest.raises(ValueError, match="holds files already"):
-        node_grid.prepare_out(_settings(other), JOBS, resume=False)
+        exe_grid.prepare_out(_settings(other), JOBS, resume=False)
     with pytest.raises(ValueError, match="holds no grade to continue"):
-        node_grid.prepare_out(_settings(other), JOBS, resume=True)
+        exe_grid.prepare_out(_settings(other), JOBS, resume=True)
     empty = tmp_path / "empty"
     empty.mkdir()
-    assert node_grid.prepare_out(_settings(empty), JOBS, resume=False) == {}
+    assert exe_grid.prepare_out(_settings(empty), JOBS, resume=False) == {}
 
 
 def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Path) -> None:
     out = tmp_path / "g"
     settings = _settings(out)
-    node_grid.prepare_out(settings, JOBS, resume=False)
+    exe_grid.prepare_out(settings, JOBS, resume=False)
     with pytest.raises(ValueError, match="rtf 5.0 there, 8.0 now"):
-        node_grid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
+        exe_grid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
     with pytest.raises(ValueError, match="command"):
-        node_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
+        exe_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
     fake = FakeRuns()
     kept = fake(JOBS[0], settings)
-    for job, outcome in ((JOBS[1], "stopped"), (JOBS[2], node_grid.ERROR)):
+    for job, outcome in ((JOBS[1], "stopped"), (JOBS[2], exe_grid.ERROR)):
         row = dict(fake(job, settings), outcome=outcome)
         (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row))
     stray = dict(kept, job="maze|none|0|homework|-|0.05m10deg")  # another grid's job
     (make_run_dir(out, "stray") / "result.json").write_text(json.dumps(stray))
     (make_run_dir(out, "torn") / "result.json").write_text('{"passed": tr')  # killed mid-write
-    done = node_grid.prepare_out(settings, JOBS, resume=True)
+    done = exe_grid.prepare_out(settings, JOBS, resume=True)
     assert done == {JOBS[0].key: kept}
 
 
@@ -164,20 +164,20 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
 def test_local_runs_keep_done_rows_and_a_raising_run_is_a_failed_row(tmp_path: Path,
                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     fake = FakeRuns(raise_for=(1,))
-    monkeypatch.setattr(node_grid, "run_exe_job", fake)
+    monkeypatch.setattr(exe_grid, "run_exe_job", fake)
     settings = _settings(tmp_path / "g")
     done = {JOBS[0].key: fake(JOBS[0], settings)}
     fake.ran.clear()
     seen: list[str] = []
-    rows = node_grid.run_exe_grid(JOBS, settings, 2, on_row=lambda row: seen.append(row["job"]), done=done)
+    rows = exe_grid.run_exe_grid(JOBS, settings, 2, on_row=lambda row: seen.append(row["job"]), done=done)
     assert [row["job"] for row in rows] == [job.key for job in JOBS]
     retried = [job.key for job in JOBS if job.seed == 1]  # the raising runs are tried twice, the others once
     assert sorted(fake.ran) == sorted([*(job.key for job in JOBS[1:]), *retried]), "a done run ran again"
     assert sorted(seen) == sorted(job.key for job in JOBS[1:])
-    errors = [row for row in rows if row["outcome"] == node_grid.ERROR]
+    errors = [row for row in rows if row["outcome"] == exe_grid.ERROR]
     assert [row["seed"] for row in errors] == [1, 1] and "bt_nav broke" in errors[0]["reason"]
     assert errors[0]["reason"].startswith("bt_nav error (not the node's)")
-    assert not any(node_grid.finished(row) for row in errors)
+    assert not any(exe_grid.finished(row) for row in errors)
     for row in errors:  # tried twice, each traceback kept
         kept = Path(row["traceback"])
         assert kept.name.endswith("_attempt2.txt") and "bt_nav broke" in kept.read_text()
@@ -186,10 +186,10 @@ def test_local_runs_keep_done_rows_and_a_raising_run_is_a_failed_row(tmp_path: P
 
 def test_a_local_stop_stops_running_runs_and_starts_no_other(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     fake = FakeRuns(hold_for=(0, 1))
-    monkeypatch.setattr(node_grid, "run_exe_job", fake)
+    monkeypatch.setattr(exe_grid, "run_exe_job", fake)
     stop = StopRequest()
     threading.Timer(0.5, lambda: setattr(stop, "signum", 15)).start()
-    rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "g"), 2, stop)
+    rows = exe_grid.run_exe_grid(JOBS, _settings(tmp_path / "g"), 2, stop)
     assert [row["outcome"] for row in rows] == ["stopped", "stopped"]
     assert len(fake.ran) == 2, "runs started after the stop"
 
@@ -200,20 +200,20 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
     from distributed import LocalCluster
 
     fake = FakeRuns(raise_for=(1,))
-    monkeypatch.setattr(node_grid, "run_exe_job", fake)
+    monkeypatch.setattr(exe_grid, "run_exe_job", fake)
     with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
-        rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "a"), scheduler=cluster.scheduler_address)
+        rows = exe_grid.run_exe_grid(JOBS, _settings(tmp_path / "a"), scheduler=cluster.scheduler_address)
         assert [row["job"] for row in rows] == [job.key for job in JOBS]
         retried = [job.key for job in JOBS if job.seed == 1]  # a raising run is tried once more, no other twice
         assert sorted(fake.ran) == sorted([*(job.key for job in JOBS), *retried]), "a job ran twice"
-        assert [row["outcome"] for row in rows] == ["verdict", node_grid.ERROR, "verdict", node_grid.ERROR]
+        assert [row["outcome"] for row in rows] == ["verdict", exe_grid.ERROR, "verdict", exe_grid.ERROR]
 
         fake.hold_for, fake.raise_for = (0, 1), ()
         fake.ran.clear()
         stop = StopRequest()
         threading.Timer(2.0, lambda: setattr(stop, "signum", 15)).start()
         started = time.monotonic()
-        rows = node_grid.run_exe_grid(JOBS, _settings(tmp_path / "b"), stop=stop, scheduler=cluster.scheduler_address)
+        rows = exe_grid.run_exe_grid(JOBS, _settings(tmp_path / "b"), stop=stop, scheduler=cluster.scheduler_address)
     assert time.monotonic() - started < 25, "the stop did not reach the running tasks"
     assert [row["outcome"] for row in rows] == ["stopped", "stopped"]
     assert all(row["reason"] == "stopped" for row in rows) and len(fake.ran) == 2
@@ -222,7 +222,7 @@ def test_dask_runs_each_job_once_and_a_stop_reaches_the_workers(tmp_path: Path,
 def test_the_cli_shows_progress_and_resumes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                             capsys: pytest.CaptureFixture) -> None:
     fake = FakeRuns()
-    monkeypatch.setattr(node_grid, "run_exe_job", fake)
+    monkeypatch.setattr(exe_grid, "run_exe_job", fake)
     out = tmp_path / "g"
     argv = ["--exe", f"{sys.executable} -c pass", "--worlds", "stage_4,corridor", "--seeds", "2", "--out", str(out),
             "--lidars", "profile"]
@@ -245,7 +245,7 @@ def test_the_simulator_is_paced_to_the_graded_node(tmp_path: Path) -> None:
     """A graded run's simulator follows the node's cmd_vel (read best effort, so any writer is heard), leading its
     latest command by at most 0.05 s (or its own command period) beyond the next scan it answers: a node starved of
     CPU is waited for instead of left behind, and one that times its turns on the ROS clock turns what it meant."""
-    from bt_nav.grading.node_run import exe_graph
+    from bt_nav.grading.exe.run import exe_graph
 
     job = Job("lab_object", "C", 0, "lab", sim_params=(("lidar", "rplidar"),))
     spec = exe_graph(job, ExeSettings("python3 node.py", "lab", tmp_path), tmp_path / "verdict.json")

@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 
 from bt_nav.grading.classroom import Student, write_class_page
+from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import lidar_findings, run_label
-from bt_nav.grading.node_run import ExeSettings
 from bt_nav.grading.report import write_exe_report
 
 CRASH = "the node exited with code 1 after 3.9 s wall, before the verdict (see node.log)"

@@ -11,8 +11,8 @@ from typing import Any
 import pytest
 
 from bt_nav.grading import realtime
+from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job
-from bt_nav.grading.node_run import ExeSettings
 
 
 def _job(seed: int) -> Job:

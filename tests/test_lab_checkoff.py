@@ -47,11 +47,16 @@ def test_a_check_off_passes_and_its_report_reads_like_the_homeworks() -> None:
     assert lines[-2].startswith("static after deactivation")
     assert result.sim_time > 60.0  # the lab runs 60 s armed, beyond the homework's hard stop
     turns = announced_turns(result.announcements)
-    for record in result.announcements:  # each event says what its log line says, at the same instant
+    for record in result.announcements:  # each event carries its log line (what the lab's terminal shows), logged
+        assert any(t == record["t"] and line == record["text"] for t, _level, line in result.events), record
+    starts = [record for record in result.announcements if record["event"] == "maneuver"]
+    for record in starts:  # ... and says in fields what the line says in words
         said = f"{record['leaf']}: ", f": turning {record['side']} {record['angle_deg']:.0f} deg"
-        assert any(t == record["t"] and line.startswith(said[0]) and line.endswith(said[1])
-                   for t, _level, line in result.events), record
+        assert record["text"].startswith(said[0]) and record["text"].endswith(said[1]) and record["level"] == "INFO"
         assert record["maneuver"] == "C" and set(record["readings"]) == {"front", "left", "right"}
+    ends = [record for record in result.announcements if record["event"] == "maneuver_end"]
+    assert len(ends) == len(starts) and all(r["status"] == "SUCCESS" and r["text"].startswith("SmartPivot: done: ")
+                                            for r in ends), ends
     assert turns and all(abs(abs(deg) - 90.0) < 1e-9 for _, deg in turns)
     assert len(angle_errors(result.announcements, result.results["maneuvers"])) == len(result.results["maneuvers"])
 

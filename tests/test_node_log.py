@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.node_log import (
+from bt_nav.grading.exe.log import (
     Crash,
     import_findings,
     is_nodes_own,
@@ -245,9 +245,9 @@ def test_a_long_message_is_cut() -> None:
 
 
 def test_the_reason_of_a_node_that_exited_with_an_error() -> None:
-    """The grade's reason for a run whose node exited first (bt_nav.grading.node_run): its crash quoted, else only
+    """The grade's reason for a run whose node exited first (bt_nav.grading.exe.run): its crash quoted, else only
     its exit code; an exit code other than Python's 1 for an uncaught exception is named too."""
-    from bt_nav.grading.node_run import _exit_reason
+    from bt_nav.grading.exe.run import _exit_reason
 
     assert _exit_reason(1, 12.34, node_crash(SCAN_CALLBACK)) == (
         "the node crashed after 12.3 s wall: ValueError: min() arg is an empty sequence (reactive_navigator.py:30 in "

@@ -15,8 +15,8 @@ from bt_nav_sim.checkoff_core import CheckoffConfig
 from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
 from bt_nav_sim.referee_core import RefereeConfig
 
+from bt_nav.grading.exe.run import ExeSettings, exe_graph
 from bt_nav.grading.grid import Job
-from bt_nav.grading.node_run import ExeSettings, exe_graph
 from bt_nav.grading.rules import RULES_FILE, GradeSetup, grader_checkoff, rules_markdown
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM
 

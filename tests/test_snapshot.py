@@ -4,10 +4,16 @@ readers."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
+
+import pytest
 
 from bt_nav.mission.snapshot import (
+    DEADLINE,
+    DEADLINE_LEFT,
     EVENT_FORMAT,
     SNAPSHOT_FORMAT,
+    TO_GO,
     read_event,
     read_snapshot,
     render_art,
@@ -82,3 +88,41 @@ def test_watch_draws_the_document_and_says_when_a_message_is_not_one() -> None:
     assert shown(snapshot_json(snapshot), as_json=False) == render_art(snapshot).rstrip("\n")
     assert shown(snapshot_json(snapshot), as_json=True) == snapshot_json(snapshot)
     assert shown("[-] Mission [*]", as_json=False).startswith("(not a bt_nav tree snapshot; printed as received)")
+
+
+def test_countdowns_are_figures_in_the_snapshot() -> None:
+    """The deadline leaf and a turning maneuver put the numbers behind their feedback into the snapshot (``data``), so
+    a video counts down from figures, never from the words."""
+    h = maneuver_a_running()
+    h.tick(2)
+    nodes = snapshot_nodes(h.core.snapshot())
+    (deadline,) = [n for n in nodes if n.data.get(DEADLINE)]
+    assert deadline.data[DEADLINE] == "counting" and deadline.feedback.endswith(" s left")
+    assert abs(deadline.data[DEADLINE_LEFT] - float(deadline.feedback.split()[0])) <= 0.05 + 1e-6
+    (turning,) = [n for n in nodes if TO_GO in n.data]
+    assert turning.name == "Randomizer" and turning.feedback == f"{turning.data[TO_GO]:+.0f} deg to go"
+    h.run_until(lambda r: r.tip != "Randomizer")
+    assert not [n for n in snapshot_nodes(h.core.snapshot()) if n.name == "Randomizer" and n.data], "done: no figure"
+
+
+def test_the_trace_carries_the_events_and_replay_shows_them(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """Each trace line holds the leaves' announcements since the previous line; ``bt-nav replay`` prints their lines."""
+    from bt_nav.cli.replay import main as replay
+    from bt_nav.mission.trace import TraceRecorder, read_trace
+
+    h = TickHarness("A")
+    trace = TraceRecorder(h.core, tmp_path / "trace.jsonl")
+    h.tick()
+    h.arm()
+    h.tick()
+    h.see((0.0, 0.45))
+    for _ in range(200):
+        trace.record(h.tick().command)
+    trace.close()
+    _, ticks = read_trace(tmp_path / "trace.jsonl")
+    events = [e for line in ticks for e in line.get("events", ())]
+    assert [e["event"] for e in events][:2] == ["maneuver", "maneuver_end"], events
+    assert events == [e for e in h.core.take_announcements()], "the trace holds what ~/events carried"
+    assert replay([str(tmp_path / "trace.jsonl"), "--compact"]) == 0
+    out = capsys.readouterr().out
+    assert f"[INFO] {events[0]['text']}" in out and events[0]["text"].startswith("Randomizer: front 0.4")

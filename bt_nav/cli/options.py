@@ -84,3 +84,33 @@ def jobs_arg(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be >= 1 or auto, got {value}")
     return value
+
+
+def check_mission_options(opts: argparse.Namespace) -> None:
+    """Refuse, before any process or run directory exists, what the graph would refuse only once started: a world
+    neither bundled nor a file (the simulator's refusal would be buried in its log, behind a run directory), a
+    maneuver no tree knows, a simulator setting the simulator does not have (it would be ignored) or a LiDAR it
+    does not know, a negative pace, a limit that is no time, a ROS domain DDS cannot open. ValueError: one line,
+    naming what is known (``bt-nav demo``'s options; its ``--exe`` and lab runs too)."""
+    from bt_nav_sim.lidar import lidar_model
+
+    from bt_nav.grading.plan import check_worlds
+    from bt_nav.mission.params import normalise_maneuver, parse_assignments
+    from bt_nav.ros.nodes.simulator import SimulatorNode
+
+    if opts.rtf < 0:
+        raise ValueError(f"--rtf {opts.rtf:g}: sim seconds per wall second, >= 0 (0: as fast as possible)")
+    if opts.timeout <= 0:
+        raise ValueError(f"--timeout {opts.timeout:g}: the judge's wall-clock limit, > 0 s")
+    if opts.domain_id is not None and not 0 <= opts.domain_id <= 232:
+        raise ValueError(f"--domain-id {opts.domain_id}: a ROS_DOMAIN_ID is 0 to 232")
+    sim = parse_assignments(opts.sim_param)
+    check_worlds([w for w in (opts.world, sim.get("world")) if w])
+    if opts.maneuver is not None:
+        normalise_maneuver(opts.maneuver)
+    unknown = sorted(set(sim) - set(SimulatorNode.PARAMETERS))
+    if unknown:
+        raise ValueError(f"--sim-param {unknown[0]}: the simulator has no such setting; it has "
+                         + ", ".join(sorted(SimulatorNode.PARAMETERS)))
+    if sim.get("lidar"):
+        lidar_model(str(sim["lidar"]))

@@ -5,10 +5,10 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
 
 - :mod:`bt_nav.grading.grid`: lock-step grids (worlds x maneuvers x seeds) in local processes or on Dask,
   their summary figures.
-- :mod:`bt_nav.grading.node_run`: one run of any robot node over DDS (``bt-nav grade --exe``): the simulator
+- :mod:`bt_nav.grading.exe.run`: one run of any robot node over DDS (``bt-nav grade --exe``): the simulator
   and the profile's judge around a foreign command, isolated in a ROS domain and a directory of its own.
-- :mod:`bt_nav.grading.node_bag`: that run's bag (``bt-nav record`` as one more child of the run).
-- :mod:`bt_nav.grading.node_grid`: a grid of such runs, here or on Dask, resumable;
+- :mod:`bt_nav.grading.exe.bag`: that run's bag (``bt-nav record`` as one more child of the run).
+- :mod:`bt_nav.grading.exe.grid`: a grid of such runs, here or on Dask, resumable;
   :mod:`bt_nav.grading.admission`: how many of them run at once with ``--jobs auto``.
 - :mod:`bt_nav.grading.plan`: a grid's worlds, seeds, maneuvers and LiDARs from the options (defaults per kind).
 - :mod:`bt_nav.grading.classroom`: a class in one command (a manifest, one pool, the class page).

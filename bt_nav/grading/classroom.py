@@ -101,7 +101,7 @@ def file_problem(path: Path) -> str | None:
 
 def entry_problem(student: Student) -> str | None:
     """Why ``student``'s entry cannot be run, naming the file (None: it can)."""
-    from bt_nav.grading.node_grid import node_file
+    from bt_nav.grading.exe.grid import node_file
 
     command = student.command
     if not command:
@@ -116,7 +116,7 @@ def entry_problem(student: Student) -> str | None:
 
 def choice_problem(command: str) -> str | None:
     """Why a lab node graded without ``--maneuvers`` has no maneuver (None: its file declares one)."""
-    from bt_nav.grading.node_grid import declared_choice, node_file
+    from bt_nav.grading.exe.grid import declared_choice, node_file
 
     if declared_choice(command) is not None:
         return None
@@ -130,7 +130,7 @@ def admit(students: Sequence[Student], needs_choice: bool, resolve: Callable[[st
           ) -> tuple[dict[str, str], dict[str, str]]:
     """(each admitted student's command as ``resolve`` gives it, each refused student's reason): a bad entry fails
     its student, so the rest of the class is graded. Bad: :func:`entry_problem`, a program ``resolve`` refuses with
-    ValueError (:func:`~bt_nav.grading.node_grid.resolve_program`: not found, or a Python without rclpy), and with
+    ValueError (:func:`~bt_nav.grading.exe.grid.resolve_program`: not found, or a Python without rclpy), and with
     ``needs_choice`` (a lab class without ``--maneuvers``) a node that declares no maneuver (:func:`choice_problem`)."""
     admitted: dict[str, str] = {}
     refused: dict[str, str] = {}
@@ -289,13 +289,13 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
     runs than workers leaves no slot idle), each grid's report written as ``bt-nav grade --exe`` writes it as soon
     as its last run ends. Returns the rows that ended, per student reached.
 
-    ``plan(student)`` gives the student's :class:`bt_nav.grading.node_run.ExeSettings` (its command, its
+    ``plan(student)`` gives the student's :class:`bt_nav.grading.exe.run.ExeSettings` (its command, its
     directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
     each student's finished runs (a student whose grid is complete runs nothing). Runs start student by student
     in the manifest's order. A stop request ends the class after the runs under way; the runs not started are
     left for ``--resume``.
     """
-    from bt_nav.grading.node_grid import prepare_out
+    from bt_nav.grading.exe.grid import prepare_out
 
     grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]] = {}
     todo: list[tuple[str, Any, Any]] = []
@@ -335,7 +335,7 @@ def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dic
 
 def _ended(jobs: Sequence[Any], rows: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
     """A student's rows that ended (not stopped), in the jobs' order."""
-    from bt_nav.grading.node_grid import STOPPED
+    from bt_nav.grading.exe.grid import STOPPED
 
     return [rows[job.key] for job in jobs if job.key in rows and rows[job.key]["outcome"] != STOPPED]
 
@@ -350,7 +350,7 @@ def _run_pooled(todo: list[tuple[str, Any, Any]], grids: dict[str, tuple[Any, Se
                 workers: int, stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
     """Every (student, settings, job) of ``todo`` in one thread pool; a student's report when their last run ends,
     and for every student with a run left when the class stops."""
-    from bt_nav.grading.node_grid import run_pool
+    from bt_nav.grading.exe.grid import run_pool
 
     left = Counter(name for name, _, _ in todo)
     for i, row in run_pool([(job, settings) for _, settings, job in todo], workers, stop):

@@ -39,7 +39,7 @@ from bt_nav.grading.grid import cell_label, failure_groups, run_label, runs_labe
 WEIGHTS_FILE = Path(__file__).with_name("gradescope_weights.yaml")
 #: Gradescope's visibility values (results.json's ``visibility`` and each test's).
 VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
-#: A run whose outcome is this is bt_nav's failure, not the node's (:data:`bt_nav.grading.node_grid.ERROR`).
+#: A run whose outcome is this is bt_nav's failure, not the node's (:data:`bt_nav.grading.exe.grid.ERROR`).
 ERROR = "bt_nav error"
 #: How many failed checks of a run its test's output lists before "and N more".
 CHECKS_SHOWN = 5

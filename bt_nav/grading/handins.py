@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.classroom import NAME, Student
+from bt_nav.grading.exe.grid import declared_choice
 from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
-from bt_nav.grading.node_grid import declared_choice
 
 #: The lab sheet's name for the node file.
 NODE_NAME = "reactive_navigator.py"

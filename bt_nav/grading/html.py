@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
+from bt_nav.grading.exe.run import ExeSettings, exe_ros_args
 from bt_nav.grading.grid import (
     cell_label,
     failure_groups,
@@ -34,7 +35,6 @@ from bt_nav.grading.grid import (
     rate_table,
     run_label,
 )
-from bt_nav.grading.node_run import ExeSettings, exe_ros_args
 from bt_nav.grading.rules import RULES_LINE_HTML
 
 STYLE = """

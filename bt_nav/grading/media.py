@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.grading.node_bag import BAG
+from bt_nav.grading.exe.bag import BAG
 
 PICTURE = "trajectory.png"
 VIDEO = "video.mp4"

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 
 from bt_nav_sim.world import list_worlds, world_file
 
+from bt_nav.grading.exe.grid import declared_choice, node_file
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
-from bt_nav.grading.node_grid import declared_choice, node_file
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
@@ -76,7 +76,7 @@ def no_choice(option: str) -> str:
 
 def lab_maneuver(command: str, given: str | None, option: str) -> tuple[str, str]:
     """The maneuver(s) a lab node is run on: ``given`` (the command line's ``option``) when there is one, else the
-    ``# CHOICE: X`` its file declares (:func:`~bt_nav.grading.node_grid.declared_choice`), and a line to say when
+    ``# CHOICE: X`` its file declares (:func:`~bt_nav.grading.exe.grid.declared_choice`), and a line to say when
     the two differ (empty when they agree or the file declares none): a node is judged on one maneuver, so the
     one that wins must be said.
 

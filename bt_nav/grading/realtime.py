@@ -23,9 +23,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
 
+from bt_nav.grading.exe.grid import ERROR, STOPPED, finished_runs, run_pool
+from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
-from bt_nav.grading.node_grid import ERROR, STOPPED, finished_runs, run_pool
-from bt_nav.grading.node_run import ExeSettings
 from bt_nav.ros.supervise import StopRequest
 
 Row = dict[str, Any]
@@ -51,7 +51,7 @@ _CUT_OFF = re.compile(r"^no node subscribed to |^no node published on |: not one
 def speed_cannot_matter(row: Row) -> str | None:
     """Why no speed of the simulation can change this failed run's verdict (a clause), or None when one can (the
     run then goes again at 1x). Only what is settled before the simulation moves: a crash while starting
-    (:func:`bt_nav.grading.node_log.node_crash`: importing or in an ``__init__``), the arm service never offered,
+    (:func:`bt_nav.grading.exe.log.node_crash`: importing or in an ``__init__``), the arm service never offered,
     ``parameters declared`` the only failed check, or scans or commands that no message could carry. A crash in a
     callback, a timeout and every other check may depend on time (a callback racing the first scan, a turn timed by
     the wall clock), so they do not count here."""

@@ -10,11 +10,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from bt_nav.grading.exe.grid import ERROR
+from bt_nav.grading.exe.run import ExeSettings, exe_ros_args
 from bt_nav.grading.grid import failure_groups, lidar_findings, lidar_label, per_lidar, rate_table, runs_label
 from bt_nav.grading.html import report_html
 from bt_nav.grading.media import grid_figures, render_runs
-from bt_nav.grading.node_grid import ERROR
-from bt_nav.grading.node_run import ExeSettings, exe_ros_args
 from bt_nav.grading.rules import RULES_FILE, RULES_LINE_MD, grade_rules
 
 

@@ -6,7 +6,7 @@ what the judges do (the Smart Pivot's 0.3 m sat inside one bullet of the lab's p
 only in remap strings). Here every value is read where the judges and the grader hold it: the lab's
 :class:`~bt_nav_sim.checkoff_core.CheckoffConfig` (``trigger_rule``, ``angle_rule``, its tolerances and schedule),
 the homework's :class:`~bt_nav_sim.referee_core.RefereeConfig`, the checks' words (``CHECK_WORDS``), the service
-names of :mod:`bt_nav.ros.bringup`, what ``bt-nav grade --exe`` appends and runs (:mod:`bt_nav.grading.node_run`,
+names of :mod:`bt_nav.ros.bringup`, what ``bt-nav grade --exe`` appends and runs (:mod:`bt_nav.grading.exe.run`,
 :mod:`bt_nav.grading.plan`). What only the ROS edge holds (the simulator's QoS, the graph audit's topics: rclpy
 modules, which this pure module does not import) is a constant here, and ``tests/ros/test_node_rules.py`` checks
 each against its source.
@@ -29,7 +29,7 @@ from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
 from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
 
-from bt_nav.grading.node_run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
+from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
 from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
 from bt_nav.mission.params import LAB_MANEUVERS
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, param_arg
@@ -109,7 +109,7 @@ class GradeSetup:
 def grader_checkoff(maneuver: str, node_params: Mapping[str, Any] | None = None,
                     base: CheckoffConfig | None = None) -> CheckoffConfig:
     """The check-off config a grade judges ``maneuver`` by: ``base`` (the judge's defaults) with the
-    ``safety_distance`` the node was given (``--node-param``), as :func:`bt_nav.grading.node_run.exe_graph` passes
+    ``safety_distance`` the node was given (``--node-param``), as :func:`bt_nav.grading.exe.run.exe_graph` passes
     it to the judge: the trigger the node was given is the one it is judged by."""
     config = replace(base or CheckoffConfig(), maneuver=maneuver)
     given = dict(node_params or {})

@@ -5,7 +5,7 @@ Why one record: an assignment used to be four tables keyed by the same names (th
 robot, the service remaps of a graded node, the judge of a run), and a judge's defaults repeated the parameter
 table's. Here each fact is written once and every consumer reads it: the params files
 (:mod:`bt_nav.mission.profiles`), the simulated robot (:data:`bt_nav_sim.core.PROFILES`), the node graphs and the
-remaps of a graded node (:mod:`bt_nav.ros.bringup`, :mod:`bt_nav.grading.node_run`), which judge a run gets
+remaps of a graded node (:mod:`bt_nav.ros.bringup`, :mod:`bt_nav.grading.exe.run`), which judge a run gets
 (:mod:`bt_nav.run.lockstep`), the grids' defaults (:mod:`bt_nav.grading.plan`). The distances a judge judges the
 robot by are the executive's parameters: their defaults are :data:`bt_nav.mission.params.SPECS`', never copies.
 

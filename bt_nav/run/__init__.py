@@ -9,6 +9,8 @@ core, the ROS edge, the simulator): every command that runs a mission calls this
   of robots (one robot is a list of one), with a pluggable referee.
 - :mod:`bt_nav.run.result`: what a lock-step run produced, per robot and for the run.
 - :mod:`bt_nav.run.sinks`: the sink protocol a recorder of the run implements (the rosbag2 writer does).
+- :mod:`bt_nav.run.session`: the one DDS mission runner every ROS path goes through (``grade --exe``, ``demo``,
+  ``sim-run``, the bench): the run's domain lease, its log files, its launcher, the verdict wait and reader.
 - :mod:`bt_nav.run.recorder`, :mod:`bt_nav.run.rosmission`, :mod:`bt_nav.run.rundir`: a mission over DDS
   (start the graph, a recorder and a referee per robot, wait, collect) and where it writes its files;
   :mod:`bt_nav.run.bagrecorder`: ``bt-nav record`` in a process of its own, started and stopped by a run.

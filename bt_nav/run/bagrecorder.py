@@ -21,6 +21,17 @@ DEFAULT_TOPICS = [t for t in TOPICS if t not in (EVENTS, MISSION)] + ["/rosout"]
 SIM_NODE = "/bt_nav_sim"
 
 
+def mission_topics(names: list[str]) -> list[str]:
+    """What a mission's bag records (``bt-nav demo --bag``): :data:`DEFAULT_TOPICS`, each robot's under its
+    namespace when there are several."""
+    from bt_nav.media.bag import ROBOT_TOPICS
+
+    if len(names) == 1:
+        return list(DEFAULT_TOPICS)
+    shared = [t for t in DEFAULT_TOPICS if t not in ROBOT_TOPICS]
+    return shared + [f"/{n}{t}" for n in names for t in DEFAULT_TOPICS if t in ROBOT_TOPICS]
+
+
 def ask_simulator(node: Any, timeout: float = 3.0) -> dict[str, Any]:
     """The simulator's world, seed and profile from its parameters ({} when no simulator answers)."""
     from rclpy.parameter_client import AsyncParameterClient
@@ -75,7 +86,7 @@ class BagRecorder:
             if not self.bag.closed:
                 first = topic not in self.bag.counts
                 self.bag.write_raw(topic, t_ns, data, msgtype, qos)
-        if first:  # a launcher waits for the line of the topic it needs (bt_nav.grading.node_bag)
+        if first:  # a launcher waits for the line of the topic it needs (bt_nav.grading.exe.bag)
             print(f"first {topic} at sim {t_ns * 1e-9:.2f} s", flush=True)
 
     def _flush(self) -> None:

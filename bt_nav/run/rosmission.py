@@ -9,7 +9,7 @@ and referee alone); it starts with the graph, and its t0 waits for this process'
 :class:`RosMission`, so "start the graph, wait for the recorder, start the referee, wait for the verdict"
 is written once; ``bt-nav sim-run`` starts a graph without recorders and watches it until a node ends
 (:func:`run_graph`); ``bt-nav grade --exe`` runs a foreign node in a run of its own
-(:mod:`bt_nav.grading.node_run`). All of them start, watch and stop their processes through one
+(:mod:`bt_nav.grading.exe.run`). All of them start, watch and stop their processes through one
 :class:`bt_nav.run.session.MissionSession` (domain, log files, launcher, the verdict wait) and read a verdict with
 its :func:`~bt_nav.run.session.read_verdict`. One robot is the
 graph of :func:`bt_nav.ros.bringup.nodes` (the homework's root topics);
@@ -28,9 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.ros.bringup import JUDGES, NodeSpec, cmd_vel_stamped, host_judge, nodes, robot_nodes
-from bt_nav.ros.supervise import Child, StopRequest, publish_zero_twist
+from bt_nav.ros.supervise import Child, LineSink, StopRequest, publish_zero_twist, use_domain_here
 from bt_nav.run.recorder import Recorder, Recording, rec_ready
-from bt_nav.run.session import EXITED, STOPPED, VERDICT, MissionSession, read_verdict
+from bt_nav.run.rundir import LOG_FORMAT, Logs
+from bt_nav.run.session import EXITED, STOPPED, VERDICT, MissionSession, files_written, read_verdict
 
 #: Extra wall time allowed beyond the referees' own timeout before the run gives up itself.
 GRACE = 15.0
@@ -110,12 +111,9 @@ class RosMission:
 
     def wait_ready(self, timeout: float = STARTUP) -> bool:
         """Wait until every recorder sees its robot (False: timed out, a node exited, or a stop request)."""
-        deadline = time.monotonic() + timeout
-        while not all(rec_ready(r) for r in self.recorders.values()):
-            if time.monotonic() > deadline or self._stopped() or self.exited() is not None:
-                return False
-            time.sleep(0.02)
-        return True
+        seen = self.session.wait(timeout, lambda: all(rec_ready(r) for r in self.recorders.values()),
+                                 watched=self._watched, interval=0.02)
+        return seen[0] == VERDICT
 
     def start_referees(self) -> list[Child]:
         """The referees (their clocks start once they see their robot)."""
@@ -142,7 +140,7 @@ class RosMission:
         of ours printed after the verdict must come after the report), or ``REPORT_WAIT`` s have passed."""
         if not self.hosted:
             return all(r.poll() is not None for r in self.referees)
-        if not all(path.is_file() for path in self.verdicts):
+        if not files_written(self.verdicts)():
             return False
         now = time.monotonic()
         self._written_at = self._written_at or now
@@ -190,6 +188,25 @@ class RosMission:
         finally:
             recordings = {name: rec.close() for name, rec in self.recorders.items()}
         return recordings
+
+
+def demo_mission(specs: list[NodeSpec], names: list[str], verdicts: list[str], domain: int, logs: Logs, *,
+                 sink: LineSink | None = None) -> RosMission:
+    """The mission of ``bt-nav demo`` (and of its lab check-off) in ``domain``: this process joins the domain (its
+    recorders), the nodes log with the wall time of each line (:data:`~bt_nav.run.rundir.LOG_FORMAT`, which ``logs``
+    maps to sim time by the first robot's recorder), a stop request is installed (the caller restores
+    ``mission.stop``), and each robot whose executive did not end cleanly is left with a zero twist. ``sink``: where
+    the lines go instead of ``logs`` (the lab's terminal)."""
+    use_domain_here(domain)
+    stamped = cmd_vel_stamped(specs)
+    topics = [f"/{n}/cmd_vel" for n in names] if len(names) > 1 else ["/cmd_vel"]
+    session = MissionSession(domain, run_dir=logs.directory, logs=logs, sink=sink,
+                             env={"RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}, stop=StopRequest().install(),
+                             last_word=lambda: [publish_zero_twist(domain, topic=t, stamped=stamped) for t in topics])
+    mission = RosMission(specs, names, session, verdicts=verdicts)
+    logs.sim_time = mission.recorders[names[0]].sim_time
+    logs.clock = mission.recorders[names[0]].clock
+    return mission
 
 
 def run_graph(specs: list[NodeSpec], domain: int, stop: StopRequest,

@@ -138,6 +138,7 @@ class MissionSession:
         """The one verdict wait: until ``verdict()`` (``(VERDICT, None)``), a stop request (``(STOPPED, None)``), a
         ``watched`` process's end (``(EXITED, child)``; a verdict written just before a process ended still counts)
         or ``timeout`` wall seconds (``(TIMEOUT, None)``; None: no limit). ``poll`` runs every ``interval`` s.
+        ``verdict`` may be any condition the run waits for the same way (the demo's recorders seeing the robot).
 
         A verdict already in wins over a stop request: it is the run's answer; the stop only ends the wait."""
         end = None if timeout is None else time.monotonic() + timeout

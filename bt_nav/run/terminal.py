@@ -1,23 +1,31 @@
-"""The lab's terminal: what a student's screen shows during a check-off, picked from the nodes' output.
+"""The lab's terminal: what a student's screen shows during a check-off, from the nodes' events.
 
 The lab hands in a video of "the terminal output of starting the launch file and calling the service" and
-of the robot reacting. ``bt-nav demo --profile lab`` runs the check-off over DDS; :class:`LabTerminal` is its
-line sink: every node line still goes to the run's log files (:class:`bt_nav.run.rundir.Logs`, which also
-prints the judge's report lines), and the terminal shows, stamped with sim time,
+of the robot reacting. ``bt-nav demo --profile lab`` runs the check-off over DDS; :class:`LabTerminal` shows,
+stamped with sim time,
 
 - the launch: the executive's start-up line, as the lab asks to verify it (node name, params file,
-  maneuver, ``safety_distance``);
+  maneuver, ``safety_distance``), once the executive's tree arrives (its first snapshot on ``~/tree``: the node
+  is up and ticking), at the snapshot's sim time;
 - each ``toggle_navigation`` call the judge makes and its reply, as ``ros2 service call`` prints them;
-- the executive's maneuver and emergency-brake lines (``Randomizer: ...``, ``AEB: ...``) as they happen;
+- the executive's maneuver and emergency-brake lines (``SmartPivot: ...``, ``AEB: ...``) as they happen;
   not tick statistics, not the scan checker's chatter.
 
-Each line is stamped with the sim time it happened at its source: a node's line with the sim time of its log
-call (the line's own wall stamp mapped by ``/clock``: :meth:`bt_nav.run.rundir.Logs.line_time`), a judge's call
-with the sim time the judge wrote into it; never the time this process read it, which at 22x real time lagged
-by seconds.
+Where each comes from: structured data, never the nodes' log lines. The judge publishes every call and reply on its
+``~/events`` (:class:`bt_nav.ros.nodes.judging.JudgeNode`, :func:`bt_nav.mission.snapshot.call_event`: t, call,
+data, success, message), the executive its leaves' announcements on ``~/events`` (each with its line, ``text``, and
+``level``) and its tree on ``~/tree`` (:mod:`bt_nav.mission.snapshot`); this process's :class:`TerminalNode`
+subscribes to them. Each line is stamped with the sim time its source gave it (the event's or snapshot's ``t``),
+never the time this process read it, which at 22x real time lagged by seconds.
+
+The nodes' raw output still goes to the run's log files (:class:`bt_nav.run.rundir.Logs`, the launcher's sink,
+which also prints the judge's report lines): that is a terminal, not a data interface. The one exception is a
+student's node (:class:`NodeTerminal`, ``bt-nav demo --exe``): a foreign node publishes no events, so its own lines
+are shown from its log output (:data:`DEFAULT_LOG_LINE`: rcutils' default format, whose wall stamp gives the
+sim time); the judge's calls come from the judge's events there too.
 
 With a bag (``--bag``/``--video``) every shown line and every report line is also published on
-``/bt_nav/events`` (:data:`bt_nav.media.bag.EVENTS`, latched) by :class:`EventPublisher`; ``bt-nav record``
+``/bt_nav/events`` (:data:`bt_nav.media.bag.EVENTS`, latched) by :class:`TerminalNode`; ``bt-nav record``
 records that topic instead of turning ``/rosout`` into events, so the bag's events, and the video's console
 strip, are exactly the terminal's lines, stamped with the sim time at which this process published them.
 """
@@ -30,19 +38,15 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from bt_nav.media.bag import EVENTS
-from bt_nav.mission.maneuver_spec import tips as maneuver_tips
-from bt_nav.ros.bringup import EXECUTIVE_NAME
+from bt_nav.media.bag import ANNOUNCEMENTS, EVENTS, TREE
+from bt_nav.mission.snapshot import read_event, read_snapshot
+from bt_nav.ros.bringup import EXECUTIVE_NAME, JUDGE_NODE_NAMES
 from bt_nav.run.rundir import Logs, judge_line, split_stamp
 
-#: The executive's lines the terminal shows, by the label they start with: the maneuvers' (the maneuver spec's
-#: tips, looked up on each line) and the brake's.
-SHOWN_LABELS = frozenset({"AEB"})
-#: An rcutils line in the run's format (:data:`bt_nav.run.rundir.LOG_FORMAT`).
-LOG_LINE = re.compile(r"^\[(?P<level>[A-Z]+)\] \[(?P<node>[^\]]+)\]: (?P<msg>.*)$")
-#: The judge's call and reply lines (:class:`bt_nav.ros.nodes.judging.JudgeNode`).
-CALL_LINE = re.compile(r"^sim (?P<t>-?[\d.]+) s(?: \(t0 \+ [-\d.]+ s\))?: (?P<call>\w+)\((?P<data>true|false)\) "
-                       r"(?:sent|-> (?P<ok>success|failure): (?P<message>.*))$")
+
+def judge_event_topics() -> list[str]:
+    """The judges' ``~/events`` at the root namespace (one robot): whichever judge the run has publishes on its own."""
+    return [f"/{name}/events" for name in JUDGE_NODE_NAMES]
 
 
 def service_call_lines(service: str, data: bool) -> list[str]:
@@ -57,11 +61,30 @@ def service_reply_lines(success: bool, message: str) -> list[str]:
     return ["response:", f"std_srvs.srv.SetBool_Response(success={success}, message={message!r})"]
 
 
-class EventPublisher:
-    """``/bt_nav/events`` (std_msgs/String, reliable, transient local: a recorder that subscribes late still
-    gets the launch lines) from a node of this process's own."""
+def call_lines(record: dict[str, Any]) -> list[str]:
+    """The terminal lines of a judge's event (:func:`bt_nav.mission.snapshot.call_event`): a call or its reply as
+    ``ros2 service call`` prints them; none for any other event (a request given up is in the judge's log)."""
+    if record.get("event") == "call":
+        return service_call_lines(f"/{record['call']}", bool(record["data"]))
+    if record.get("event") == "reply":
+        return service_reply_lines(bool(record.get("success")), str(record.get("message", "")))
+    return []
 
-    def __init__(self) -> None:
+
+def show_judge_event(show: Callable[[str, float], Any], text: str) -> None:
+    """A judge's event on the wire (``~/events``): ``show`` each of its terminal lines (:func:`call_lines`) at the
+    event's sim time."""
+    record = read_event(text)
+    for line in call_lines(record) if record is not None else ():
+        show(line, float(record["t"]))
+
+
+class TerminalNode:
+    """This process's node of the terminal: it subscribes to the nodes' events and tree (std_msgs/String, JSON) and,
+    with ``publish``, publishes the shown lines on ``/bt_nav/events`` (reliable, transient local: a recorder that
+    subscribes late still gets the launch lines). Subscribe (:meth:`subscribe`), then :meth:`start`."""
+
+    def __init__(self, publish: bool = True) -> None:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from std_msgs.msg import String
 
@@ -69,13 +92,25 @@ class EventPublisher:
 
         self.ros = ThreadedNode("bt_nav_demo_terminal")
         qos = QoSProfile(depth=500, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.publisher = self.ros.node.create_publisher(String, EVENTS, qos)
+        self.publisher = self.ros.node.create_publisher(String, EVENTS, qos) if publish else None
         self._string = String
+
+    def subscribe(self, topic: str, callback: Callable[[str], Any], latched: bool = False) -> None:
+        """Hand each message's text on ``topic`` to ``callback`` (QoS as the publisher's: ``~/tree``'s latched depth
+        1, an events topic's depth 100)."""
+        from bt_nav.ros.rosutil import EVENTS_QOS, LATCHED
+
+        self.ros.node.create_subscription(self._string, topic, lambda msg: callback(msg.data),
+                                          LATCHED if latched else EVENTS_QOS)
+
+    def start(self) -> None:
+        """Start spinning (the subscriptions' callbacks run on this node's thread)."""
         self.ros.start()
 
     def publish(self, text: str) -> None:
-        """One event line."""
-        self.publisher.publish(self._string(data=text))
+        """One event line (nothing without ``publish``)."""
+        if self.publisher is not None:
+            self.publisher.publish(self._string(data=text))
 
     def wait_for_reader(self, timeout: float = 20.0) -> bool:
         """Wait (``timeout`` wall s at most) until a recorder subscribes; True if one did.
@@ -84,7 +119,7 @@ class EventPublisher:
         hand over after the first live line; a recorder that is there from the first line gets them in order.
         """
         deadline = time.monotonic() + timeout
-        while self.publisher.get_subscription_count() == 0:
+        while self.publisher is not None and self.publisher.get_subscription_count() == 0:
             if time.monotonic() > deadline:
                 return False
             time.sleep(0.05)
@@ -95,29 +130,38 @@ class EventPublisher:
         from rclpy.duration import Duration
 
         try:
-            self.publisher.wait_for_all_acked(Duration(nanoseconds=int(wait * 1e9)))
+            if self.publisher is not None:
+                self.publisher.wait_for_all_acked(Duration(nanoseconds=int(wait * 1e9)))
         finally:
             self.ros.close()
 
 
 class LabTerminal:
-    """The line sink of a lab check-off over DDS (see the module docstring).
+    """What the lab's terminal shows of a check-off over DDS (see the module docstring).
 
     Args:
         logs: the run's log files (and the judge's report lines on stdout).
         launch_line: the executive's start-up line as the terminal shows it (made by the command).
-        events: where shown lines also go (None: no bag).
+        node: this process's node: the terminal subscribes to the events and the tree on it and starts it; it
+            publishes the shown lines when made with ``publish`` (a bag). None: no ROS (the sink alone).
         out: prints one terminal line (default ``print``).
     """
 
-    def __init__(self, logs: Logs, launch_line: str, events: EventPublisher | None = None,
+    def __init__(self, logs: Logs, launch_line: str, node: TerminalNode | None = None,
                  out: Callable[[str], Any] | None = None) -> None:
         self.logs = logs
         self.launch_line = launch_line
-        self.events = events
+        self.node = node
         self.out = out or (lambda text: print(text, flush=True))
         self.lines: list[tuple[float | None, str]] = []  # everything shown, with its sim time
+        self._up = False
         self._lock = threading.Lock()
+        if node is not None:
+            node.subscribe(TREE, self.on_tree, latched=True)
+            node.subscribe(ANNOUNCEMENTS, self.on_announcement)
+            for topic in judge_event_topics():
+                node.subscribe(topic, self.on_judge_event)
+            node.start()
 
     def show(self, text: str, t: float | None = None) -> None:
         """One terminal line at sim time ``t`` (default: the newest ground truth), published as an event."""
@@ -125,50 +169,39 @@ class LabTerminal:
         with self._lock:
             self.lines.append((t, text))
             self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
-            if self.events is not None:
-                self.events.publish(text)
+            if self.node is not None:
+                self.node.publish(text)
 
     def event(self, text: str) -> None:
         """A line that is printed elsewhere (the report) but belongs in the bag's events."""
-        if self.events is not None:
+        if self.node is not None:
             with self._lock:
-                self.events.publish(text)
+                self.node.publish(text)
 
     def sink(self, name: str, line: str) -> None:
-        """Launcher sink: the log files, then what the lab's terminal shows of ``line``."""
+        """Launcher sink: the log files (which print the judge's report lines); a report line also goes to the bag."""
         self.logs.sink(name, line)
-        wall_ns, line = split_stamp(line)
-        when = self.logs.line_time(wall_ns) if wall_ns is not None else None
-        match = LOG_LINE.match(line)
-        judge = judge_line(name, line)
-        if judge is not None:
-            if judge == "report":
-                self.event(line)  # a report line (Logs printed it)
-            elif match is not None:
-                self._judge_line(match["msg"])
-        elif name.endswith("executive") and match is not None:
-            message = match["msg"]
-            if message.startswith(f"{EXECUTIVE_NAME} up:"):
-                self.show(self.launch_line, when)
-            elif message.split(":", 1)[0] in SHOWN_LABELS | maneuver_tips():
-                self.show(f"[{match['level']}] [{match['node']}]: {message}", when)
+        line = split_stamp(line)[1]
+        if judge_line(name, line) == "report":
+            self.event(line)
 
-    def _judge_line(self, message: str) -> None:
-        """The judge's toggle_navigation calls and replies, as ``ros2 service call`` shows them."""
-        call = judge_call(message)
-        for text in call[1] if call else ():
-            self.show(text, call[0])
+    def on_tree(self, text: str) -> None:
+        """The executive's tree: its first snapshot says the node is up (the launch line, at the snapshot's time)."""
+        snapshot = read_snapshot(text)
+        if snapshot is None or self._up:
+            return
+        self._up = True
+        self.show(self.launch_line, float(snapshot["t"]))
 
+    def on_announcement(self, text: str) -> None:
+        """An executive's event: its line (``text``) as the executive logged it, at the event's time."""
+        record = read_event(text)
+        if record is not None and record.get("text"):
+            self.show(f"[{record.get('level', 'INFO')}] [{EXECUTIVE_NAME}]: {record['text']}", float(record["t"]))
 
-def judge_call(message: str) -> tuple[float, list[str]] | None:
-    """A judge's log message about its service call or the reply (:data:`CALL_LINE`): its sim time and the
-    terminal lines ``ros2 service call`` prints for it; None for any other message."""
-    call = CALL_LINE.match(message)
-    if call is None:
-        return None
-    if call["ok"] is None:
-        return float(call["t"]), service_call_lines(f"/{call['call']}", call["data"] == "true")
-    return float(call["t"]), service_reply_lines(call["ok"] == "success", call["message"])
+    def on_judge_event(self, text: str) -> None:
+        """A judge's call or reply, as ``ros2 service call`` shows it, at the judge's sim time."""
+        show_judge_event(self.show, text)
 
 
 #: A line in rcutils' default console format, ``[INFO] [1712345678.123456789] [node]: text`` (a student's node
@@ -184,9 +217,10 @@ class NodeTerminal:
     """The terminal of ``bt-nav demo --exe``: a student's own node in place of bt_nav's executive.
 
     Shows, stamped with the sim time each happened (:class:`bt_nav.ros.simclock.SimClock`): every line the node
-    prints (its log lines at their log call; a plain ``print`` when it is read), the judge's service calls and
-    replies as ``ros2 service call`` prints them, and the judge's report lines as they are. Not the simulator's
-    or the recorder's lines (they are in the run's log files).
+    prints (its log lines at their log call; a plain ``print`` when it is read: a foreign node has only its text),
+    the judge's service calls and replies as ``ros2 service call`` prints them (from the judge's events, at the
+    judge's sim time: :meth:`listen`), and the judge's report lines as they are. Not the simulator's or the
+    recorder's lines (they are in the run's log files).
 
     Args:
         clock: the map from wall to sim time (the demo's recorder node's).
@@ -197,6 +231,7 @@ class NodeTerminal:
         self.clock = clock
         self.out = out or (lambda text: print(text, flush=True))
         self.lines: list[tuple[float | None, str]] = []
+        self.node: TerminalNode | None = None  # the judge's events (:meth:`listen`)
         self._lock = threading.Lock()
 
     def show(self, text: str, t: float | None) -> None:
@@ -219,13 +254,27 @@ class NodeTerminal:
                 self.show(line, self._sim())
             else:
                 self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
-        elif judge_line(name, line) is not None:  # a judge's, of its own process or hosted by the simulator's
-            log = DEFAULT_LOG_LINE.match(line)
-            if log is None:
-                if not PYTHON_ERROR.match(line):  # a judge stopped early says so in its log file, not here
-                    with self._lock:
-                        self.out(line)  # a report line: its times are the judge's own
-                return
-            call = judge_call(log["msg"])
-            for text in call[1] if call else ():
-                self.show(text, call[0])
+        elif judge_line(name, line) == "report" and not PYTHON_ERROR.match(line):
+            # a judge's report line (of its own process or hosted by the simulator's): its times are the judge's own;
+            # a judge stopped early says so in its log file, not here
+            with self._lock:
+                self.out(line)
+
+    def listen(self) -> None:
+        """Show the judge's calls and replies from its events (call once this process is on the run's domain; again
+        for a run again on another domain)."""
+        self.close()
+        self.node = TerminalNode(publish=False)
+        for topic in judge_event_topics():
+            self.node.subscribe(topic, self.on_judge_event)
+        self.node.start()
+
+    def on_judge_event(self, text: str) -> None:
+        """A judge's call or reply, as ``ros2 service call`` shows it, at the judge's sim time."""
+        show_judge_event(self.show, text)
+
+    def close(self) -> None:
+        """Stop listening."""
+        if self.node is not None:
+            self.node.close(wait=0.0)
+            self.node = None

@@ -15,9 +15,9 @@ from typing import Any
 
 import pytest
 
+from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.html import rate_colour
 from bt_nav.grading.media import FPS, balanced, distance_histogram, travelled_requirement, turns_figure
-from bt_nav.grading.node_run import ExeSettings
 from bt_nav.grading.report import write_exe_report
 from bt_nav.media.bagread import read_bag
 from tests.media.reportkit import broken_links, mp4_frames, page_links

@@ -10,7 +10,7 @@ import psutil
 import pytest
 
 from bt_nav.cli import grade
-from bt_nav.grading.node_run import exe_ros_args
+from bt_nav.grading.exe.run import exe_ros_args
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -69,7 +69,7 @@ def test_a_node_crashing_at_start_is_a_verdict(tmp_path: Path, profile: str) -> 
     assert row["reason"].startswith("the node crashed after ") and row["reason"].endswith(
         " s wall: RuntimeError: this node crashes at start (crash_node.py:10 in main; see node.log)"), row["reason"]
     assert row["crash"] == {"exception": "RuntimeError: this node crashes at start",
-                            "where": "crash_node.py:10 in main", "starting": False}  # not in an __init__: see node_log
+                            "where": "crash_node.py:10 in main", "starting": False}  # not in an __init__: see exe/log
     assert row["wall_time"] < 40.0
     assert "this node crashes at start" in (Path(row["run_dir"]) / "node.log").read_text()
     _no_children_left(before)

@@ -14,7 +14,7 @@ from typing import Any
 import psutil
 
 from bt_nav.cli import grade
-from bt_nav.grading.node_run import _ending_findings, _with_findings
+from bt_nav.grading.exe.run import _ending_findings, _with_findings
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 

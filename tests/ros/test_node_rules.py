@@ -9,7 +9,7 @@ import inspect
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
 from bt_nav.grading import rules
-from bt_nav.grading.node_run import FOLLOW_NODE
+from bt_nav.grading.exe.run import FOLLOW_NODE
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM
 from bt_nav.ros.nodes import audit, referee
 from bt_nav.ros.nodes.checkoff import CheckoffNode

@@ -29,12 +29,12 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.cli import plain
-from bt_nav.cli.options import add_mission_options, bag_truth_readers
+from bt_nav.cli.options import add_mission_options, bag_truth_readers, check_mission_options
 from bt_nav.mission.params import parse_assignments
 from bt_nav.run.recorder import Recording, speed_line
-from bt_nav.run.rosmission import GRACE, RosMission, mission_graph
-from bt_nav.run.rundir import LOG_FORMAT, Logs, make_run_dir
-from bt_nav.run.session import DomainLease, MissionSession, read_verdict
+from bt_nav.run.rosmission import GRACE, demo_mission, mission_graph
+from bt_nav.run.rundir import Logs, make_run_dir
+from bt_nav.run.session import DomainLease, read_verdict
 from bt_nav.run.settings import effective_parameters, profile_maneuver, tree_settings
 
 
@@ -65,52 +65,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def check_options(opts: argparse.Namespace) -> None:
-    """Refuse, before any process or run directory exists, what the graph would refuse only once started: a world
-    neither bundled nor a file (the simulator's refusal would be buried in its log, behind a run directory), a
-    maneuver no tree knows, a simulator setting the simulator does not have (it would be ignored) or a LiDAR it
-    does not know, a negative pace, a limit that is no time, a ROS domain DDS cannot open. ValueError: one line,
-    naming what is known."""
-    from bt_nav_sim.lidar import lidar_model
-
-    from bt_nav.grading.plan import check_worlds
-    from bt_nav.mission.params import normalise_maneuver
-    from bt_nav.ros.nodes.simulator import SimulatorNode
-
-    if opts.rtf < 0:
-        raise ValueError(f"--rtf {opts.rtf:g}: sim seconds per wall second, >= 0 (0: as fast as possible)")
-    if opts.timeout <= 0:
-        raise ValueError(f"--timeout {opts.timeout:g}: the judge's wall-clock limit, > 0 s")
-    if opts.domain_id is not None and not 0 <= opts.domain_id <= 232:
-        raise ValueError(f"--domain-id {opts.domain_id}: a ROS_DOMAIN_ID is 0 to 232")
-    sim = parse_assignments(opts.sim_param)
-    check_worlds([w for w in (opts.world, sim.get("world")) if w])
-    if opts.maneuver is not None:
-        normalise_maneuver(opts.maneuver)
-    unknown = sorted(set(sim) - set(SimulatorNode.PARAMETERS))
-    if unknown:
-        raise ValueError(f"--sim-param {unknown[0]}: the simulator has no such setting; it has "
-                         + ", ".join(sorted(SimulatorNode.PARAMETERS)))
-    if sim.get("lidar"):
-        lidar_model(str(sim["lidar"]))
-
-
-def effective_maneuver(requested: str | None) -> str:
-    """The maneuver the executive will run: the requested one, else the homework params file's, else none."""
-    return profile_maneuver("homework", requested)
-
-
-def _bag_topics(names: list[str]) -> list[str]:
-    """What ``--bag`` records: the mission bag's topics, each robot's under its namespace when several."""
-    from bt_nav.media.bag import ROBOT_TOPICS
-    from bt_nav.run.bagrecorder import DEFAULT_TOPICS
-
-    if len(names) == 1:
-        return list(DEFAULT_TOPICS)
-    shared = [t for t in DEFAULT_TOPICS if t not in ROBOT_TOPICS]
-    return shared + [f"/{n}{t}" for n in names for t in DEFAULT_TOPICS if t in ROBOT_TOPICS]
-
-
 def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
     """Names, maneuver, domain (its lease, released by the caller), run directory, overrides and the graph
     (ValueError on a bad option)."""
@@ -121,7 +75,7 @@ def _prepare(opts: argparse.Namespace) -> dict[str, Any]:
                          "check-off judge), not this profile (lockstep and grade run every profile)")
     opts.world = opts.world or "stage_4"
     names = robot_names(opts.robots)
-    maneuver = effective_maneuver(opts.maneuver)
+    maneuver = profile_maneuver("homework", opts.maneuver)  # the requested one, else the homework's
     overrides = parse_assignments(opts.overrides)
     parameters = effective_parameters(tree_settings(opts.profile, maneuver, opts.seed, overrides))
     lease = DomainLease(opts.domain_id)
@@ -158,13 +112,11 @@ def trigger_words(maneuver: str, parameters: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     """``bt-nav demo``; returns 0 (every robot PASSED), 1 (one FAILED) or 2 (no verdict)."""
     from bt_nav.cli.options import bag_for, film
-    from bt_nav.ros.bringup import cmd_vel_stamped
-    from bt_nav.ros.supervise import StopRequest, publish_zero_twist, use_domain_here
-    from bt_nav.run.bagrecorder import start_process, stop_process
+    from bt_nav.run.bagrecorder import mission_topics, start_process, stop_process
 
     opts = build_parser().parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        check_options(opts)
+        check_mission_options(opts)
     except ValueError as exc:
         print(f"bt-nav demo: {exc}", file=sys.stderr)
         return 2
@@ -188,19 +140,10 @@ def main(argv: list[str] | None = None) -> int:
           f"{'as fast as possible' if opts.rtf == 0 else f'{opts.rtf:g}x real time'}, ROS_DOMAIN_ID={domain} "
           f"(localhost only)\nbt-nav demo: run directory {run_dir}/", flush=True)
     wall0 = time.monotonic()
-    use_domain_here(domain)  # the recorder nodes in this process too
-    stop = StopRequest().install()
     logs = Logs(run_dir, echo_logs=not opts.quiet)
-    stamped = cmd_vel_stamped(run["specs"])
-    topics = [f"/{n}/cmd_vel" for n in names] if len(names) > 1 else ["/cmd_vel"]
-    session = MissionSession(domain, run_dir=run_dir, logs=logs, env={"RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT},
-                             stop=stop, last_word=lambda: [
-        publish_zero_twist(domain, topic=topic, stamped=stamped) for topic in topics])
-    env = session.env
-    mission = RosMission(run["specs"], names, session, verdicts=list(run["results"].values()))
-    logs.sim_time = mission.recorders[names[0]].sim_time
-    logs.clock = mission.recorders[names[0]].clock
-    bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics(names)) if bag_dir \
+    mission = demo_mission(run["specs"], names, list(run["results"].values()), domain, logs)
+    stop, env = mission.session.stop, mission.session.env
+    bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *mission_topics(names)) if bag_dir \
         else None
     try:
         code = mission.supervise(opts.timeout + GRACE, run_dir)

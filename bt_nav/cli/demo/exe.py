@@ -1,6 +1,6 @@
 """``bt-nav demo --exe 'CMD'``: a student's own robot node filmed for the hand-in, in place of bt_nav's executive.
 
-One run of ``bt-nav grade --exe``'s machinery (:func:`bt_nav.grading.node_run.run_exe_job`: the simulator, the
+One run of ``bt-nav grade --exe``'s machinery (:func:`bt_nav.grading.exe.run.run_exe_job`: the simulator, the
 profile's judge, the node with ``use_sim_time`` and the profile's remaps, the recorder) with a terminal: the node's
 log lines with the sim time each was logged at, the judge's service calls and replies and its report
 (:class:`bt_nav.run.terminal.NodeTerminal`), then the verdict. The bag is recorded into the run directory
@@ -43,11 +43,11 @@ def exe_maneuver(opts: argparse.Namespace) -> tuple[str, str]:
 
 
 def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
-    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.node_run.ExeSettings`, and a note on
+    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.exe.run.ExeSettings`, and a note on
     its maneuver (:func:`exe_maneuver`; ValueError on a bad option)."""
+    from bt_nav.grading.exe.grid import resolve_program
+    from bt_nav.grading.exe.run import ExeSettings
     from bt_nav.grading.grid import Job
-    from bt_nav.grading.node_grid import resolve_program
-    from bt_nav.grading.node_run import ExeSettings
     from bt_nav.mission.maneuver_spec import letters_text
     from bt_nav.ros.bringup import CHECKOFF_WORLDS
 
@@ -74,8 +74,8 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
 def run_exe_demo(opts: argparse.Namespace) -> int:
     """The demo of ``--exe``; 0 PASSED, 1 FAILED, 2 no verdict (or a bad option)."""
     from bt_nav.cli.options import film
-    from bt_nav.grading.node_bag import BAG
-    from bt_nav.grading.node_run import run_exe_job
+    from bt_nav.grading.exe.bag import BAG
+    from bt_nav.grading.exe.run import run_exe_job
     from bt_nav.ros.simclock import SimClock
     from bt_nav.ros.supervise import StopRequest, use_domain_here
     from bt_nav.run.terminal import NodeTerminal
@@ -100,12 +100,14 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
         use_domain_here(domain)  # the clock node of this process too
         recorder.append(Recorder())
         terminal.clock = recorder[0].clock
+        terminal.listen()  # the judge's calls, from its events
 
     stop = StopRequest().install()
     try:
         row = run_exe_job(job, settings, stop, sink=terminal.sink, on_start=on_start)
     finally:
         stop.restore()
+        terminal.close()
         if recorder:
             recorder[0].close()
     print(f"bt-nav demo: {'PASSED' if row['passed'] else 'FAILED'}: {row['reason']}", flush=True)

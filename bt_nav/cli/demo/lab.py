@@ -81,13 +81,11 @@ def launch_line(run: dict[str, Any]) -> str:
 def run_lab(opts: argparse.Namespace) -> int:
     """The lab demo; 0 PASSED, 1 FAILED, 2 no verdict (or a bad option)."""
     from bt_nav.cli.options import bag_for
-    from bt_nav.ros.bringup import cmd_vel_stamped
-    from bt_nav.ros.supervise import StopRequest, publish_zero_twist, use_domain_here
+    from bt_nav.ros.supervise import use_domain_here
     from bt_nav.run.bagrecorder import start_process, stop_process
-    from bt_nav.run.rosmission import GRACE, RosMission
-    from bt_nav.run.rundir import LOG_FORMAT, Logs
-    from bt_nav.run.session import MissionSession
-    from bt_nav.run.terminal import EventPublisher, LabTerminal
+    from bt_nav.run.rosmission import GRACE, demo_mission
+    from bt_nav.run.rundir import Logs
+    from bt_nav.run.terminal import LabTerminal, TerminalNode
 
     try:
         bag_dir = bag_for(opts.bag, opts.video)
@@ -102,21 +100,14 @@ def run_lab(opts: argparse.Namespace) -> int:
           f"$ ros2 launch bt_nav lab_checkoff.launch.py maneuver:={run['maneuver']} world:={run['world']} "
           "(simulator, executive, check-off judge)", flush=True)
     wall0 = time.monotonic()
-    use_domain_here(domain)  # the recorder and event nodes in this process too
-    stop = StopRequest().install()
+    use_domain_here(domain)  # the event node in this process too (and the recorder: demo_mission)
     logs = Logs(run_dir, echo_logs=False)
-    events = EventPublisher() if bag_dir else None
+    events = TerminalNode(publish=bool(bag_dir))  # the nodes' events and tree in; with a bag, the lines out
     terminal = LabTerminal(logs, launch_line(run), events)
-    stamped = cmd_vel_stamped(run["specs"])
-    session = MissionSession(domain, run_dir=run_dir, logs=logs, sink=terminal.sink,
-                             env={"RCUTILS_CONSOLE_OUTPUT_FORMAT": LOG_FORMAT}, stop=stop,
-                             last_word=lambda: publish_zero_twist(domain, topic="/cmd_vel", stamped=stamped))
-    env = session.env
-    mission = RosMission(run["specs"], ["robot1"], session, verdicts=[run["results"]])
-    logs.sim_time = mission.recorders["robot1"].sim_time
-    logs.clock = mission.recorders["robot1"].clock
+    mission = demo_mission(run["specs"], ["robot1"], [run["results"]], domain, logs, sink=terminal.sink)
+    stop, env = mission.session.stop, mission.session.env
     bag = start_process(bag_dir, env, "--seed", str(opts.seed), "--topics", *_bag_topics()) if bag_dir else None
-    if events is not None and not events.wait_for_reader():
+    if bag_dir and not events.wait_for_reader():
         print("bt-nav demo: the recorder did not subscribe to the terminal's lines within 20 s; the bag may "
               "miss or reorder the first ones", flush=True)
     try:
@@ -129,8 +120,7 @@ def run_lab(opts: argparse.Namespace) -> int:
         logs.quiet_from_now = True  # the shutdown's lines go to the log files only
         stop.closing = True
         recs = mission.close()
-        if events is not None:
-            events.close()
+        events.close()
         if bag is not None:
             print(f"bt-nav demo: bag {bag_dir}: {stop_process(bag)}", flush=True)
         stop.restore()

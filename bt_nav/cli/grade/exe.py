@@ -1,5 +1,5 @@
 """``bt-nav grade --exe 'CMD ...'``: the options of a DDS grade checked before any run, the runs (here or on a
-Dask cluster, :mod:`bt_nav.grading.node_grid`), a line per run under a progress bar, the report.
+Dask cluster, :mod:`bt_nav.grading.exe.grid`), a line per run under a progress bar, the report.
 
 Why the checks come first: a grid of a command that cannot start, or one that would write into another
 grade's directory, fails every run alike or mixes two grades; both are refused with exit 2 instead.
@@ -26,8 +26,8 @@ def _settings(args: argparse.Namespace, maneuvers: bool, command: str | None = N
     """The grid's :class:`ExeSettings`: the program resolved (``command``: resolved already), the command run in
     this directory, ``--out`` absolute for a cluster (its workers may start elsewhere; both must be on a filesystem
     they share)."""
-    from bt_nav.grading.node_grid import resolve_program
-    from bt_nav.grading.node_run import ExeSettings
+    from bt_nav.grading.exe.grid import resolve_program
+    from bt_nav.grading.exe.run import ExeSettings
 
     if args.resume and not args.out:
         raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
@@ -51,12 +51,12 @@ def _show(row: dict[str, Any]) -> None:
 
 
 def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, parser: argparse.ArgumentParser) -> int:
-    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.grading.node_run`); exit 0 only if every run passed,
+    """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.grading.exe.run`); exit 0 only if every run passed,
     2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
     from bt_nav.grading.admission import describe
+    from bt_nav.grading.exe.grid import STOPPED, prepare_out, run_exe_grid
     from bt_nav.grading.media import Drawer
-    from bt_nav.grading.node_grid import STOPPED, prepare_out, run_exe_grid
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
 
@@ -129,7 +129,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
              wall: float, stop: Any, written: tuple[Path, Path]) -> int:
     """The grid's last lines and exit code: 0 every run passed; 1 a run failed; 3 no run failed but some hit a
     bt_nav error (not the node's: ``--resume`` reruns them); 128 + the signal after a stop."""
-    from bt_nav.grading.node_grid import ERROR
+    from bt_nav.grading.exe.grid import ERROR
 
     errors = [r for r in ended if r["outcome"] == ERROR]
     judged = [r for r in ended if r["outcome"] != ERROR]
@@ -187,9 +187,9 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     import copy
 
     from bt_nav.grading.classroom import admit, run_class, write_class_page
+    from bt_nav.grading.exe.grid import resolve_program
     from bt_nav.grading.feedback import drop_stale_feedback
     from bt_nav.grading.handins import read_class
-    from bt_nav.grading.node_grid import resolve_program
     from bt_nav.grading.plan import build_jobs, grid_axes
     from bt_nav.ros.supervise import StopRequest
 

@@ -12,7 +12,7 @@ evaluation service the judge serves, the log lines on ``/rosout`` under the judg
 The judge node gets its own ROS arguments (``--judge-args``: a JSON list, what its
 :class:`bt_nav.ros.bringup.NodeSpec` would be started with) and none of the process's, which are the simulator's. The
 process does not end at the verdict: the world runs on until the process is stopped, so a graded node is stopped while
-its clock still runs (:mod:`bt_nav.grading.node_run` stops the node first). The verdict is the judge's JSON file
+its clock still runs (:mod:`bt_nav.grading.exe.run` stops the node first). The verdict is the judge's JSON file
 (written whole: it appears complete or not at all) and its report lines on stdout; the exit code is the simulator's.
 """
 

@@ -1,5 +1,5 @@
 """Running an ``--exe`` grid: every :class:`bt_nav.grading.grid.Job` through
-:func:`bt_nav.grading.node_run.run_exe_job`, here or on a Dask cluster, resumable, with the checks that refuse
+:func:`bt_nav.grading.exe.run.run_exe_job`, here or on a Dask cluster, resumable, with the checks that refuse
 a grid before any run starts.
 
 Where runs go: ``workers`` threads of this process (each thread only supervises its run's three process
@@ -38,8 +38,8 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.admission import Admission
+from bt_nav.grading.exe.run import ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
-from bt_nav.grading.node_run import ExeSettings, run_exe_job
 from bt_nav.mission.maneuver_spec import choice_pattern
 from bt_nav.ros.supervise import StopRequest
 

@@ -27,7 +27,7 @@ handed back at its end), a run directory of its own, and three process groups st
   (:mod:`bt_nav.ros.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
   flood ...);
 - unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started with them and stopped first
-  when the run ends (:mod:`bt_nav.grading.node_bag`); the report draws each run's picture and
+  when the run ends (:mod:`bt_nav.grading.exe.bag`); the report draws each run's picture and
   films the failed runs from it.
 
 The run ends when the judge's JSON (the verdict) appears, when the node exits first with an error (the
@@ -36,7 +36,7 @@ that ends by itself with 0 still gets its verdict), at the wall-time limit, or o
 gets SIGINT, SIGTERM, SIGKILL. The row's ``findings`` are the audit's plus how the node ended (it ignored SIGINT,
 it ended before the verdict), each also appended to its ``reason``. The output of each process (stdout and
 stderr, merged in order) is ``<name>.log`` in the run directory, the row ``result.json``. Grids:
-:mod:`bt_nav.grading.node_grid`; reports: :mod:`bt_nav.grading.report`.
+:mod:`bt_nav.grading.exe.grid`; reports: :mod:`bt_nav.grading.report`.
 """
 
 from __future__ import annotations
@@ -52,9 +52,9 @@ from typing import Any
 
 from bt_nav_sim.referee_core import failure_reason
 
+from bt_nav.grading.exe.bag import bag_row, start_recorder
+from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shutdown_race
 from bt_nav.grading.grid import Job
-from bt_nav.grading.node_bag import bag_row, start_recorder
-from bt_nav.grading.node_log import Crash, import_findings, node_crash, rclpy_shutdown_race
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
 from bt_nav.ros.supervise import Child, StopRequest
@@ -86,7 +86,7 @@ class ExeSettings:
     rtf: float = 5.0  # sim seconds per wall second
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
-    record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.node_bag.RECORD_MODES)
+    record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.exe.bag.RECORD_MODES)
     videos: str = "failures"  # failures, all or off: which runs the report films from their bags
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
     # Parameters given to the node as a TA's launch file would (-p NAME:=VALUE); safety_distance is the judge's too
@@ -193,7 +193,7 @@ LOG_DRAIN = 2.0
 
 def _exit_reason(code: int, wall: float, crash: Crash | None) -> str:
     """Why a node that exited with ``code`` after ``wall`` seconds has no verdict: the exception that ended it and
-    where its code raised it, from its traceback (:func:`bt_nav.grading.node_log.node_crash`); without one (no
+    where its code raised it, from its traceback (:func:`bt_nav.grading.exe.log.node_crash`); without one (no
     traceback, or one that is not a crash of the node's), only the exit code."""
     if crash is None:
         return f"the node exited with code {code} after {wall:.1f} s wall, before the verdict (see node.log)"
@@ -241,7 +241,7 @@ SIGINT_EXITS = (0, -int(signal.SIGINT), 128 + int(signal.SIGINT))
 def _ending_findings(node: Child | None, log: Path | None = None) -> tuple[list[str], list[str]]:
     """How the node ended, when the judge cannot see it: by itself before the run was over, not on SIGINT, or
     crashing on the way out; and an import its interpreter could not make (``log``: its output). Second, the
-    notes: what is not the node's to fix (rclpy's own shutdown race, :mod:`.node_log`; a first SIGINT lost)."""
+    notes: what is not the node's to fix (rclpy's own shutdown race, :mod:`.log`; a first SIGINT lost)."""
     text = log.read_text(errors="replace") if log is not None and log.is_file() else ""
     found = import_findings(text)
     if node is None:
@@ -320,7 +320,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         if on_start is not None:
             on_start(domain, run_dir)
         sim_spec = exe_graph(job, settings, results_json)
-        if settings.record != "off":  # with the others (bt_nav.grading.node_bag says why)
+        if settings.record != "off":  # with the others (bt_nav.grading.exe.bag says why)
             recorder = start_recorder(session, session.sink, run_dir, job.world, job.seed, settings.profile)
         try:
             node = session.start(ExeSpec(argv), cwd=settings.cwd)
