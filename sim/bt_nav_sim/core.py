@@ -246,7 +246,7 @@ class SimCore:
         Several steps under one command are integrated in one go once the twist has settled at the
         command: the physics is exact for a constant twist (closed-form arcs; contacts are found to
         1e-7 m), so a caller that knows nothing falls due in between (lock-step) gets the same trajectory
-        as stepping one at a time (tests/test_lockstep.py). A robot at rest under a zero command cannot
+        as stepping one at a time (tests/run/test_lockstep.py). A robot at rest under a zero command cannot
         move, so the physics is skipped then (before arming and after the deadline).
         """
         steps = max(1, int(steps))

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from dask_cluster import REPO, DaskProcesses
+from tests.dask_cluster import REPO, DaskProcesses
 
 from bt_nav.grading.grid import make_jobs, run_grid
 from bt_nav.testing import wait_until

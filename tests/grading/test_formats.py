@@ -34,7 +34,7 @@ from bt_nav.grading.grid import Job
 from bt_nav.grading.launchfile import check_launch
 from tests.gradescope_schema import gradescope_problems
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 CLASS = FIXTURES / "grades" / "lab_class"
 def record(name: str) -> dict[str, Any]:
     return read_record(CLASS / name)

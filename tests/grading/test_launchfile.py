@@ -9,7 +9,7 @@ import pytest
 
 from bt_nav.grading.launchfile import DECLARES, PASSES, STARTS, LaunchReport, check_launch
 
-LAUNCH = Path(__file__).resolve().parent / "fixtures" / "launch"
+LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
 NODE = Path("reactive_navigator.py")
 
 #: fixture -> (starts the node, declares safety_distance 0.5, passes it to the node)

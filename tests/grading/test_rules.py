@@ -20,7 +20,7 @@ from bt_nav.grading.grid import Job
 from bt_nav.grading.rules import RULES_FILE, GradeSetup, grader_checkoff, rules_markdown
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _section(page: str, heading: str) -> str:

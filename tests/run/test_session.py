@@ -14,7 +14,7 @@ import pytest
 from bt_nav.ros.supervise import StopRequest
 from bt_nav.run.session import EXITED, STOPPED, TIMEOUT, VERDICT, DomainLease, MissionSession, files_written
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @dataclass(frozen=True)

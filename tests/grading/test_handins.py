@@ -15,7 +15,7 @@ import pytest
 from bt_nav.grading import classroom
 from bt_nav.grading.handins import find_node, is_submission, read_handins, student_name
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 LAUNCH = FIXTURES / "launch"
 NODE_SOURCE = "import rclpy\nfrom rclpy.node import Node\n\n# CHOICE: C\nclass Nav(Node):\n    pass\n"
 

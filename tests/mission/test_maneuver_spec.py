@@ -26,7 +26,7 @@ from bt_nav.ros.bringup import CHECKOFF_WORLDS
 from bt_nav.run.lockstep import run_mission
 from bt_nav.testing import TickHarness
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "docs" / "_ext"))
 import bt_nav_reference  # noqa: E402 - the docs' generator lives with the docs
 
