@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from tests.dask_cluster import REPO, DaskProcesses
 
 from bt_nav.grading.grid import make_jobs, run_grid
 from bt_nav.testing import wait_until
+from tests.dask_cluster import REPO, DaskProcesses
 
 WORLDS, MANEUVERS = ("stage_4", "corridor"), ("none", "B")
 
