@@ -25,6 +25,7 @@ from typing import Any
 
 from bt_nav.mission import params as P
 from bt_nav.mission.scan import Scan
+from bt_nav.run.settings import profile_maneuver
 from bt_nav.testing import Layout, TickHarness, laserscan_msg, synthetic_scan
 
 from .baseline import IfElseController
@@ -55,6 +56,9 @@ AREAS = (
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core"),
 )
+
+#: The maneuver benchmarked: the homework profile's (config/homework.yaml), so the bench measures what runs.
+HOMEWORK_MANEUVER = profile_maneuver("homework")
 
 
 def _layout(beams: int) -> Layout:
@@ -130,7 +134,7 @@ def _round(beams: int, ticks: int, maneuver: str, into: _Samples) -> None:
             into.tips[h.core.tip] = into.tips.get(h.core.tip, 0) + 1
 
 
-def measure_all(ticks: int = 5000, rounds: int = 5, maneuver: str = "C",
+def measure_all(ticks: int = 5000, rounds: int = 5, maneuver: str = HOMEWORK_MANEUVER,
                 sizes: tuple[int, ...] = BEAMS) -> list[dict[str, Any]]:
     """Every scan size, ``ticks`` timed ticks each, gathered in ``rounds`` rounds that visit the sizes in
     turn: a burst of load from another process then spreads over the sizes instead of landing on one."""
@@ -142,7 +146,7 @@ def measure_all(ticks: int = 5000, rounds: int = 5, maneuver: str = "C",
     return [_summary(beams, samples[beams], rounds, maneuver) for beams in sizes]
 
 
-def measure(beams: int, ticks: int = 5000, maneuver: str = "C") -> dict[str, Any]:
+def measure(beams: int, ticks: int = 5000, maneuver: str = HOMEWORK_MANEUVER) -> dict[str, Any]:
     """Tree, baseline and conversion timings for one scan size (milliseconds), in one round."""
     samples = _Samples()
     _round(beams, ticks, maneuver, samples)
@@ -162,7 +166,7 @@ def _summary(beams: int, s: _Samples, rounds: int, maneuver: str) -> dict[str, A
     }
 
 
-def profile(beams: int = 360, ticks: int = 3000, maneuver: str = "C") -> dict[str, Any]:
+def profile(beams: int = 360, ticks: int = 3000, maneuver: str = HOMEWORK_MANEUVER) -> dict[str, Any]:
     """Where a tick's time goes (cProfile over ``ticks`` ticks of the same stream as :func:`measure`)."""
     layout = _layout(beams)
     scans = _scans(layout)

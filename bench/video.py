@@ -24,16 +24,18 @@ def run(quick: bool = False) -> dict[str, Any]:
     from bt_nav.media.bagread import read_bag
     from bt_nav.media.video import world_of, write_video
     from bt_nav.run.lockstep import run_mission
+    from bt_nav.run.settings import profile_maneuver
 
     duration = 20.0 if quick else None
+    maneuver = profile_maneuver("homework")
     t0 = time.perf_counter()
-    plain = run_mission("stage_4", "C", 1, duration=duration)
+    plain = run_mission("stage_4", maneuver, 1, duration=duration)
     plain_s = time.perf_counter() - t0
     with tempfile.TemporaryDirectory() as tmp:
         bag_dir = Path(tmp) / "bag"
         t0 = time.perf_counter()
-        with MissionBag(bag_dir, mission={"world": "stage_4", "maneuver": "C", "seed": 1}) as bag:
-            run_mission("stage_4", "C", 1, duration=duration, sink=bag)
+        with MissionBag(bag_dir, mission={"world": "stage_4", "maneuver": maneuver, "seed": 1}) as bag:
+            run_mission("stage_4", maneuver, 1, duration=duration, sink=bag)
         recorded_s = time.perf_counter() - t0
         size = sum(f.stat().st_size for f in bag_dir.iterdir())
         t0 = time.perf_counter()
