@@ -284,7 +284,7 @@ def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str)
 
 def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, Sequence[Any]]],
               workers: int, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
-              resume: bool = False) -> dict[str, list[dict[str, Any]]]:
+              resume: bool = False, say: Callable[[str], None] | None = None) -> dict[str, list[dict[str, Any]]]:
     """Every student's grid into ``out/<name>``, all their runs in one pool of ``workers`` (a student with fewer
     runs than workers leaves no slot idle), each grid's report written as ``bt-nav grade --exe`` writes it as soon
     as its last run ends. Returns the rows that ended, per student reached.
@@ -293,7 +293,8 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
     directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
     each student's finished runs (a student whose grid is complete runs nothing). Runs start student by student
     in the manifest's order. A stop request ends the class after the runs under way; the runs not started are
-    left for ``--resume``.
+    left for ``--resume``. ``say`` gets each student's lines about the 1x check (which failed runs go again at 1x,
+    which not and why), as ``--exe`` prints them for one node.
     """
     from bt_nav.grading.exe.grid import prepare_out
 
@@ -308,7 +309,7 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
         if not any(task[0] == name for task in todo):
             _write_student_report(settings, jobs, rows)  # nothing to run: its report as it stands
     _run_pooled(todo, grids, workers, stop, on_row)
-    _check_at_real_time(grids, workers, stop, on_row)
+    _check_at_real_time(grids, workers, stop, on_row, say)
     out: dict[str, list[dict[str, Any]]] = {}
     for name, (_settings, jobs, rows) in grids.items():
         ended = _ended(jobs, rows)
@@ -318,13 +319,17 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
 
 
 def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]], workers: int,
-                        stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
+                        stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None,
+                        say: Callable[[str], None] | None = None) -> None:
     """Every student's failures checked at 1x as ``--exe`` checks one node's (:mod:`bt_nav.grading.realtime`), in one
     pool; the report of each student who had a failure to check written again (with its 1x rows or its probe)."""
-    from bt_nav.grading.realtime import confirm_grids, failed_jobs
+    from bt_nav.grading.realtime import check_plan, confirm_grids, failed_jobs
 
     if stop is not None and stop.requested:
         return
+    for name, (settings, jobs, rows) in grids.items():
+        for line in check_plan(jobs, settings, rows) if say is not None else ():
+            say(f"{name}: {line.removeprefix('bt-nav grade: ')}")
     names = [name for name, (settings, jobs, rows) in grids.items() if failed_jobs(jobs, settings, rows)]
     shown = [None if on_row is None else (lambda row, who=name: on_row(who, row)) for name in names]
     confirm_grids([(grids[n][1], grids[n][0], grids[n][2], show) for n, show in zip(names, shown, strict=True)],

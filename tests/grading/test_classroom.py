@@ -197,3 +197,26 @@ def test_the_choice_is_read_from_the_file_the_command_runs(tmp_path: Path) -> No
     assert declared_choice(f"python3 {node}") == "C"
     assert node_file("python3 -m my_pkg.node") is None and node_file("ros2 run pkg node") is None
     assert node_file(f"./{node.name}.py --ros-args") == Path(f"./{node.name}.py")
+
+
+def test_a_class_says_for_each_student_which_failures_go_again_at_1x(tmp_path: Path,
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """As ``--exe`` does for one node, a class names, per student, the failed run that goes again at 1x; a student
+    without a failure says nothing."""
+    from bt_nav.grading import realtime
+    from bt_nav.grading.exe.run import ExeSettings
+    from bt_nav.grading.grid import Job
+
+    def row(job: Job, passed: bool) -> dict[str, Any]:
+        return {"job": job.key, "passed": passed, "outcome": "verdict", "reason": "failed: angle", "findings": [],
+                "run_dir": f"/r/{job.seed}", "world": job.world, "maneuver": job.maneuver, "lidar": "lds01",
+                "seed": job.seed, "verdict": {"checks": [{"name": "maneuver 1", "passed": passed}]}}
+
+    monkeypatch.setattr(realtime, "run_pool", lambda tasks, workers, stop: iter(()))
+    monkeypatch.setattr(classroom, "_write_student_report", lambda *args: None)
+    job = Job("lab_object", "C", 0, "lab", sim_params=(("lidar", "lds01"),))
+    grids = {"ann": (ExeSettings("python3 a.py", "lab", tmp_path / "ann"), [job], {job.key: row(job, False)}),
+             "bob": (ExeSettings("python3 b.py", "lab", tmp_path / "bob"), [job], {job.key: row(job, True)})}
+    said: list[str] = []
+    classroom._check_at_real_time(grids, 2, None, None, said.append)
+    assert len(said) == 1 and said[0].startswith("ann: lab_object C lds01 seed 0 again at 1x real time"), said

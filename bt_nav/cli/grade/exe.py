@@ -226,7 +226,8 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     started = time.perf_counter()
     try:
         done = run_class([s for s in students if s.name in plans], lambda s: plans[s.name], args.jobs, stop,
-                         lambda name, row: _show({**row, "world": f"{name}: {row['world']}"}), args.resume)
+                         lambda name, row: _show({**row, "world": f"{name}: {row['world']}"}), args.resume,
+                         lambda line: print(f"  {line}", flush=True))
     except ValueError as exc:  # a student's directory holds another grade
         parser.error(str(exc))
     finally:
