@@ -6,9 +6,10 @@ Why: a grade of a foreign node is N missions of three Python processes each (sim
 length over the rtf (about 60 sim s from the judge's t0 to its report), by the processes' start-up and
 shutdown around it, and by the CPU the six processes of two runs need. The section says which.
 
-Per run (from its run directory): start-up (run start to the judge's ``t0`` line: the three processes are up
-and the judge found the node's arm service), the mission (t0 to the verdict file),
-the shutdown (verdict to ``result.json``), and the rtf the simulator reached (its last log line). CPU: every
+Per run (from its run directory): start-up (run start to the judge's t0, ``t0_wall`` in its verdict: the three
+processes are up and the judge found the node's arm service), the mission (t0 to the verdict file),
+the shutdown (verdict to ``result.json``), and the rtf the simulator reached over the mission (the verdict's
+report time, in sim s from t0, over the mission's wall s). CPU: every
 process of the grade, exactly (user + system of the grade's waited-for descendants, ``RUSAGE_CHILDREN``), and
 split by process kind from samples every 0.25 s (a process's last 0.25 s can be missed).
 """
@@ -17,7 +18,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import resource
 import subprocess
 import sys
@@ -30,9 +30,6 @@ from .common import DOMAIN_RANGE, REPO, Target, at_least, median, usable_cores
 
 TARGET_PER_MINUTE = 15.0
 JOBS = "auto"
-#: Log stamps of rcutils' default format: ``[INFO] [1795468726.310777631] [name]: ...``.
-_STAMP = re.compile(r"^\[\w+\] \[(\d+\.\d+)\]")
-_SIM_END = re.compile(r"simulated ([\d.]+) s in ([\d.]+) s wall \(([\d.]+)x real time\)")
 #: Process kinds by their command line, first match wins: the simulator hosting its judge (``--judge``) is one.
 KINDS = ((" --judge ", "sim+judge"), (" sim ", "sim"), ("referee", "referee"), ("checkoff", "judge"),
          ("executive", "node"))
@@ -43,30 +40,23 @@ def _kind(cmdline: list[str]) -> str:
     return next((kind for needle, kind in KINDS if needle in text), "grade")
 
 
-def _stamps(path: Path, needle: str = "") -> list[float]:
-    """The epoch stamps of ``path``'s log lines (those containing ``needle``)."""
-    try:
-        lines = path.read_text(encoding="utf-8", errors="replace").splitlines()
-    except OSError:
-        return []
-    return [float(m.group(1)) for line in lines if needle in line and (m := _STAMP.match(line))]
-
-
 def _phases(row: dict[str, Any]) -> dict[str, Any]:
-    """Where one run's wall time went (see the module docstring); None where a file or line is missing."""
+    """Where one run's wall time went (see the module docstring); None where the verdict does not say."""
+    from bt_nav.run.session import read_verdict
+
     run_dir = Path(row["run_dir"])
     try:
         end = (run_dir / "result.json").stat().st_mtime
-        verdict = (run_dir / "verdict.json").stat().st_mtime
+        written = (run_dir / "verdict.json").stat().st_mtime
     except OSError:
         return {"wall_s": row.get("wall_time")}
     start = end - float(row["wall_time"])
-    t0 = _stamps(run_dir / "sim.log", "t0 = sim") or _stamps(run_dir / "referee.log", "t0 = sim")
-    sim_end = _SIM_END.search((run_dir / "sim.log").read_text(errors="replace")) if (run_dir / "sim.log").exists() \
-        else None
-    return {"wall_s": row["wall_time"], "startup_s": None if not t0 else round(t0[0] - start, 2),
-            "mission_s": None if not t0 else round(verdict - t0[0], 2), "shutdown_s": round(end - verdict, 2),
-            "sim_rtf": float(sim_end.group(3)) if sim_end else None}
+    verdict = read_verdict(run_dir / "verdict.json") or {}
+    t0, report = verdict.get("t0_wall"), (verdict.get("times") or {}).get("report")
+    mission = None if t0 is None else written - t0
+    return {"wall_s": row["wall_time"], "startup_s": None if t0 is None else round(t0 - start, 2),
+            "mission_s": None if mission is None else round(mission, 2), "shutdown_s": round(end - written, 2),
+            "sim_rtf": round(report / mission, 2) if report is not None and mission else None}
 
 
 def _sample(procs: dict[int, tuple[str, float]], root: int) -> None:

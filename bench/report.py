@@ -249,7 +249,7 @@ def exe_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
                      g["cpu_s_per_mission"], cpu,
                      f"{100 * g['cpu_share_of_cores']:.0f} %", "; ".join(g["reasons"]) or "-"])
     lines += _table(["rtf", "passed", "grade wall s", "missions/min", "run wall s (median)", "start-up s",
-                     "mission s", "shutdown s", "sim rtf reached", "bound by the mission /min",
+                     "mission s", "shutdown s", "sim rtf over the mission", "bound by the mission /min",
                      "CPU s per mission", "CPU s per mission by process",
                      "cores busy", "reasons of the failures"], rows)
     lines += ["", f"`bt-nav grade --exe '<venv>/bin/bt-nav executive' --worlds stage_4 --seeds {result['seeds']} "

@@ -10,7 +10,8 @@ discovery) is reported apart, because it is a fixed cost, not a speed.
 
 Memory: ``VmHWM`` (peak resident set) and ``VmRSS`` of the executive and the simulator are read from
 ``/proc/<pid>/status`` once the referee has given its verdict, while both still run, so the peak
-covers the whole mission. The executive's own tick statistics (its exit log line) come along.
+covers the whole mission. The executive's own tick statistics (those of its exit log line, written as JSON to its
+``stats_path``: :func:`executive_stats`) come along.
 
 CPU: what each process spent (user + system, ``/proc/<pid>/stat``) from the moment this process's recorder sees
 the robot to the referee's verdict file, next to the wall time of that span: on a small machine the real-time factor
@@ -22,13 +23,13 @@ profile there; such a run is slower and only says where the executive's time goe
 
 from __future__ import annotations
 
+import json
 import os
-import re
 import resource
 import tempfile
 import time
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +42,18 @@ REFEREE_TIMEOUT = 120.0
 GRACE = 15.0
 #: Wall seconds to wait for ground truth and the executive's first commands before measuring.
 STARTUP = 45.0
-_FINAL_STATS = re.compile(r"final stats: (?P<stats>tick ms [^;]*)")
+#: The executive's exit statistics (its ``stats_path``), in the run's temporary directory.
+EXECUTIVE_STATS = "executive_stats.json"
+
+
+def executive_stats(path: Path) -> dict[str, Any]:
+    """What the executive wrote into its ``stats_path`` on its way out (:meth:`bt_nav.ros.tick_stats.TickStats.
+    final_record` and its counters); empty when it wrote nothing (it was killed) or the file cannot be read."""
+    try:
+        stats = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return stats if isinstance(stats, dict) else {}
 
 
 def proc_status(pid: int) -> dict[str, int]:
@@ -128,9 +140,10 @@ def _measure_verdict(session: MissionSession, verdict: Path, out: dict[str, Any]
     return ended, memory
 
 
-def _summarise(out: dict[str, Any], rec: Any, results: dict[str, Any], logs: dict[str, deque[str]]) -> None:
-    """Add the real-time factor over the referee's mission, the executive's tick statistics and the failed
-    checks to ``out`` (and the logs' tails when something went wrong)."""
+def _summarise(out: dict[str, Any], rec: Any, results: dict[str, Any], logs: dict[str, deque[str]],
+               stats: dict[str, Any]) -> None:
+    """Add the real-time factor over the referee's mission, the executive's tick statistics (``stats``:
+    :func:`executive_stats`) and the failed checks to ``out`` (and the logs' tails when something went wrong)."""
     window = _mission_window(rec.t, rec.wall, results)
     if window is not None:
         sim_s, wall_s = window
@@ -139,8 +152,8 @@ def _summarise(out: dict[str, Any], rec: Any, results: dict[str, Any], logs: dic
     else:
         out.update({"mission_sim_s": None, "mission_wall_s": None, "rtf": None})
         out.setdefault("error", "no mission window (referee results or ground truth missing)")
-    stats = [m["stats"] for line in logs.get("executive", ()) if (m := _FINAL_STATS.search(line))]
-    out["executive_tick_stats"] = stats[-1] if stats else None
+    out["executive_tick_stats"] = stats.get("tick_stats")
+    out["executive_ticks"] = stats.get("durations")
     checks = results.get("checks") or []
     out["failed_checks"] = [c.get("name") for c in checks if not c.get("passed")]
     if "error" in out:
@@ -165,8 +178,11 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
 
     with tempfile.TemporaryDirectory(prefix="bt_nav_bench_") as tmp:
         results_path = Path(tmp) / "results.json"
+        stats_path = Path(tmp) / EXECUTIVE_STATS
         specs = mission_graph(["robot1"], {"robot1": str(results_path)}, world=world, seed=seed, rtf=0.0,
                               referee={"timeout": REFEREE_TIMEOUT})
+        specs = [replace(s, parameters={**s.parameters, "stats_path": str(stats_path)}) if s.executable == "executive"
+                 else s for s in specs]
         if profile_to is not None:
             specs = [ProfiledSpec(**vars(s), profile_out=str(profile_to)) if s.executable == "executive" else s
                      for s in specs]
@@ -192,9 +208,10 @@ def run_mission(domain: int, seed: int = 0, world: str = "stage_4", log_lines: i
             rec = mission.close()["robot1"]
         out["total_wall_s"] = round(time.monotonic() - wall0, 3)
         results = read_verdict(results_path) or {}
+        stats = executive_stats(stats_path)
 
     out["referee_exit"] = referee_code
     out["passed"] = referee_code == 0
     out["memory"] = memory
-    _summarise(out, rec, results, logs)
+    _summarise(out, rec, results, logs, stats)
     return out

@@ -220,16 +220,8 @@ def _profile_executive(run_ros: RosRunner) -> dict[str, Any]:
         summary = summarize_profile(pstats.Stats(str(path)), top=10, areas=EXECUTIVE_AREAS,
                                     cumulative_of=EXECUTIVE_PARTS, idle=("_rclpy_pybind11.wait",))
     summary.update({"rtf_under_profiler": mission.get("rtf"), "passed": mission.get("passed"),
-                    "ticks": _ticks(mission.get("executive_tick_stats"))})
+                    "ticks": mission.get("executive_ticks")})
     return summary
-
-
-def _ticks(stats: str | None) -> int | None:
-    """The tick count of the executive's stats line (``... over N``)."""
-    try:
-        return int(str(stats).rsplit("over", 1)[1].split()[0])
-    except (IndexError, ValueError):
-        return None
 
 
 def run(quick: bool = False, run_ros: RosRunner | None = None) -> dict[str, Any]:

@@ -15,12 +15,12 @@ def _run_dir(tmp_path: Path) -> dict:
     run_dir = tmp_path / "stage_4_none_seed0"
     run_dir.mkdir()
     start = 1_000.0
-    (run_dir / "referee.log").write_text(
-        "[INFO] [1001.500000000] [bt_nav_referee]: waiting for /reactive_control/activate and /clock\n"
-        "[INFO] [1002.750000000] [bt_nav_referee]: t0 = sim 0.01 s: /reactive_control/activate is available\n")
-    (run_dir / "sim.log").write_text("[INFO] [1001.2] [bt_nav_sim]: world stage_4\n[INFO] [1016.0] [bt_nav_sim]: "
-                                     "simulated 72.02 s in 14.67 s wall (4.9x real time): 7202 steps\n")
-    (run_dir / "verdict.json").write_text("{}")
+    # the judge's verdict says when t0 came on the wall clock and how long its mission was in sim s (the logs are
+    # for people: what they say does not count)
+    (run_dir / "verdict.json").write_text(json.dumps({"t0_wall": start + 2.75, "t0_sim": 0.01,
+                                                      "times": {"t0": 0.0, "report": 57.575}}))
+    (run_dir / "sim.log").write_text("[INFO] [1016.0] [bt_nav_sim]: simulated 72.02 s in 24.0 s wall (3.0x real "
+                                     "time): 7202 steps\n")
     (run_dir / "result.json").write_text("{}")
     os.utime(run_dir / "verdict.json", (start + 14.5, start + 14.5))
     os.utime(run_dir / "result.json", (start + 15.5, start + 15.5))
@@ -31,6 +31,16 @@ def test_a_runs_wall_time_splits_into_its_phases(tmp_path: Path) -> None:
     phases = _phases(_run_dir(tmp_path))
     assert phases == {"wall_s": 15.5, "startup_s": 2.75, "mission_s": 11.75, "shutdown_s": 1.0, "sim_rtf": 4.9}
     assert _phases({"run_dir": str(tmp_path / "gone"), "wall_time": 3.0}) == {"wall_s": 3.0}
+    (tmp_path / "stage_4_none_seed0" / "verdict.json").write_text("{}")  # a judge that never reached t0
+    assert _phases(_run_dir_again(tmp_path)) == {"wall_s": 15.5, "startup_s": None, "mission_s": None,
+                                                 "shutdown_s": 1.0, "sim_rtf": None}
+
+
+def _run_dir_again(tmp_path: Path) -> dict:
+    """The run directory of :func:`_run_dir` as it is now (its files' times kept)."""
+    run_dir = tmp_path / "stage_4_none_seed0"
+    os.utime(run_dir / "verdict.json", (1_014.5, 1_014.5))
+    return {"run_dir": str(run_dir), "wall_time": 15.5, "passed": True}
 
 
 def test_processes_are_told_apart_by_their_command_line() -> None:

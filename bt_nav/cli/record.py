@@ -7,8 +7,8 @@ process got round to it, which lags by seconds at 20x on a busy machine) and han
 :class:`bt_nav.media.bag.MissionBag`. The executive's and referee's ``/rosout`` lines become
 ``/bt_nav/events``, and ``/bt_nav/mission`` says which world and seed the simulator runs (asked from its
 parameters), so a DDS bag looks like a lock-step one and ``bt-nav video`` can draw the world. It prints
-``recording ...`` once it listens and ``first TOPIC at sim T s`` when a topic's first message arrives, so a
-launcher can wait until the bag covers what it needs (``bt-nav grade --exe`` does before it starts the judge).
+``recording ...`` once it listens and ``first TOPIC at sim T s`` when a topic's first message arrives, and notes
+those times in the bag (``first_messages.json``: ``bt-nav grade --exe`` says from it how late a run's bag began).
 
 Stops on Ctrl-C / SIGTERM (the bag is closed properly) or after ``--duration`` wall seconds; the bag is
 flushed every second, so even a kill -9 leaves everything up to the last second readable.

@@ -18,7 +18,6 @@ reuses the 1x runs that finished there.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
@@ -26,6 +25,7 @@ from typing import Any
 from bt_nav.grading.exe.grid import ERROR, STOPPED, finished_runs, run_pool
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
+from bt_nav.ros.nodes.findings import CUT_OFF
 from bt_nav.ros.supervise import StopRequest
 
 Row = dict[str, Any]
@@ -43,9 +43,10 @@ def failed_at_speed(row: Row | None) -> bool:
 #: Failed checks no speed can change: what the node declares at start-up (the lab's ``ros2 param list``), not what
 #: it does in time. Every other check can (maneuvers, stops, lateness, collisions, distances, the evaluation call).
 TIMELESS_CHECKS = frozenset({"parameters declared"})
-#: Audit findings after which the node hears no scan or moves no robot at any speed (a wrong topic, type or QoS).
-#: Not ``/clock``: a node off sim time keeps the wall clock, which is right at 1x.
-_CUT_OFF = re.compile(r"^no node subscribed to |^no node published on |: not one message passes$")
+#: The topic whose cut-off audit finding (:data:`bt_nav.ros.nodes.findings.CUT_OFF`: the node hears no scan or moves
+#: no robot at any speed, a wrong topic, type or QoS) does not count: a node off sim time keeps the wall clock,
+#: which is right at 1x.
+WALL_CLOCK_TOPIC = "/clock"
 
 
 def speed_cannot_matter(row: Row) -> str | None:
@@ -67,8 +68,8 @@ def speed_cannot_matter(row: Row) -> str | None:
     failed = [check["name"] for check in verdict.get("checks", []) if not check.get("passed")]
     if failed and set(failed) <= TIMELESS_CHECKS:
         return f"only {', '.join(failed)} failed"
-    cut = [finding.split(": ")[0] for finding in verdict.get("findings") or [] if _CUT_OFF.search(finding)]
-    cut = [finding for finding in cut if "/clock" not in finding]
+    cut = [found["clause"] for found in verdict.get("finding_kinds") or []
+           if found.get("kind") in CUT_OFF and found.get("topic") != WALL_CLOCK_TOPIC]
     return cut[0] if cut else None
 
 

@@ -225,6 +225,8 @@ PARAMS: tuple[ParamSpec, ...] = (
               "and a base keeps its last cmd_vel); 0 disables.", "s", 0.0, 60.0, in_tree=False),
     ParamSpec("trace_path", "", "Write the per-tick JSONL trace (the lock-step format, read by bt-nav replay) to "
               "this file; empty: no trace.", live=False, in_tree=False),
+    ParamSpec("stats_path", "", "Write the exit tick statistics (those of the final stats log line) as JSON to "
+              "this file when the executive stops; empty: none.", live=False, in_tree=False),
 )
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in PARAMS}

@@ -37,6 +37,7 @@ the scan timeout and the maneuvers all follow ``/clock``. Tick statistics (:mod:
 are logged every ``stats_period`` and at exit; ``clock_watchdog`` (:mod:`bt_nav.ros.safety`) publishes
 one zero twist when ``/clock`` stalls while the robot moves. With ``trace_path`` set, every tick is
 written there as the lock-step runner writes it (:mod:`bt_nav.mission.trace`), for ``bt-nav replay``.
+With ``stats_path`` set, the exit statistics are written there as JSON too (a benchmark reads them).
 
 Safety: no motion before the first arming, a stop after a disarm and at the deadline (the tree); every
 command is vetted once more before it is published; SIGINT/SIGTERM publish a zero twist before the ROS
@@ -46,6 +47,7 @@ context goes down and exit with status 0 (:mod:`bt_nav.ros.runner`).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from contextlib import suppress
 from time import monotonic, perf_counter
@@ -61,7 +63,7 @@ from bt_nav.mission.core import MissionCore
 from bt_nav.mission.datatypes import Command
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.profiles import params_files_note
-from bt_nav.mission.resources import tree_file
+from bt_nav.mission.resources import tree_file, written_whole
 from bt_nav.mission.scan import Scan, ScanError
 from bt_nav.mission.snapshot import snapshot_json
 from bt_nav.mission.trace import TraceRecorder
@@ -283,6 +285,21 @@ class Executive:
                 self.trace.close()
         self.log.info(f"{self.stats.final_line(self.core.faults)}; scans {self.scans} (dropped {self.bad_scans}), "
                       f"evaluation calls {self.core.evaluation_calls}, watchdog stops {self.watchdog.stops}")
+        self._write_stats()
+
+    def _write_stats(self) -> None:
+        """The final stats line's figures as JSON into ``stats_path`` (a benchmark's source: the line is for
+        people); a file that cannot be written is logged, never raised (this runs on the way out)."""
+        path = str(self.core.params["stats_path"])
+        if not path:
+            return
+        record = {**self.stats.final_record(self.core.faults), "scans": self.scans, "dropped_scans": self.bad_scans,
+                  "evaluation_calls": self.core.evaluation_calls, "watchdog_stops": self.watchdog.stops}
+        try:
+            with written_whole(path) as stream:
+                stream.write(json.dumps(record) + "\n")
+        except OSError as exc:
+            self.log.error(f"stats {path}: {exc!r}")
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable
+from typing import Any
 
 
 class TickStats:
@@ -72,3 +73,10 @@ class TickStats:
     def final_line(self, faults: int) -> str:
         """The exit line's statistics over the whole (bounded) history."""
         return f"final stats: {self.describe(self.history)}; {self.counters(faults)}"
+
+    def final_record(self, faults: int) -> dict[str, Any]:
+        """The exit line's statistics as data (the executive's ``stats_path``): ``tick_stats`` its words
+        (:meth:`describe` of the history), ``durations`` how many ticks that covers, and the counters."""
+        return {"tick_stats": self.describe(self.history), "durations": len(self.history), "ticks": self.ticks,
+                "overruns": self.overruns, "period_ms": round(self.period * 1e3, 3),
+                "exceptions": faults + self.exceptions, "vetoed_commands": self.vetoed}

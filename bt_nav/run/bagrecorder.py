@@ -4,21 +4,41 @@
 
 The command ``bt-nav record`` (:mod:`bt_nav.cli.record`) and the demos use it; what it records and how it stamps
 messages is said there. It lives in the run layer because how one mission is recorded is part of how it runs.
+
+When each topic's first message arrived (sim s) is written into the bag directory as it happens
+(:data:`FIRST_MESSAGES`, read by :func:`first_messages`): ``bt-nav grade --exe`` says from it how late a run's bag
+began. A file, not the ``first TOPIC at sim T s`` lines (those are for people): it is written whole or not at all,
+outlives a recorder that had to be killed, and needs no reader of the recorder's output while it runs.
 """
 
 from __future__ import annotations
 
+import json
 import signal
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 from bt_nav.media.bag import EVENTS, MISSION, TOPICS, MissionBag
+from bt_nav.mission.resources import written_whole
 
 #: What ``bt-nav record`` records by default: the mission's topics and every node's log lines.
 DEFAULT_TOPICS = [t for t in TOPICS if t not in (EVENTS, MISSION)] + ["/rosout"]
 SIM_NODE = "/bt_nav_sim"
+#: The file in the bag directory that says when each topic's first message arrived: ``{topic: sim s}``.
+FIRST_MESSAGES = "first_messages.json"
+
+
+def first_messages(bag: str | Path) -> dict[str, float]:
+    """When each topic's first message reached the bag ``bag`` (sim s, by topic): what its recorder wrote into
+    :data:`FIRST_MESSAGES`; empty when it wrote nothing (no message yet, another recorder) or it cannot be read."""
+    try:
+        data = json.loads((Path(bag) / FIRST_MESSAGES).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return {str(topic): float(t) for topic, t in data.items()} if isinstance(data, dict) else {}
 
 
 def mission_topics(names: list[str]) -> list[str]:
@@ -72,6 +92,8 @@ class BagRecorder:
             raise
         self.ros.node.create_timer(1.0, self._flush)
         self.mission = mission
+        self.first: dict[str, float] = {}  # topic -> sim s of its first message (FIRST_MESSAGES)
+        self._first_lock = threading.Lock()
 
     def start(self, ask_sim: bool) -> None:
         """Start spinning, then write what the simulator says of the run on /bt_nav/mission."""
@@ -86,8 +108,20 @@ class BagRecorder:
             if not self.bag.closed:
                 first = topic not in self.bag.counts
                 self.bag.write_raw(topic, t_ns, data, msgtype, qos)
-        if first:  # a launcher waits for the line of the topic it needs (bt_nav.grading.exe.bag)
+        if first:
             print(f"first {topic} at sim {t_ns * 1e-9:.2f} s", flush=True)
+            self._note_first(topic, t_ns / 1e9)
+
+    def _note_first(self, topic: str, t: float) -> None:
+        """Add a topic's first message to :data:`FIRST_MESSAGES` (rewritten whole); a file that cannot be written
+        is skipped: the bag matters more than its note."""
+        with self._first_lock:
+            self.first[topic] = t
+            try:
+                with written_whole(self.bag.path / FIRST_MESSAGES) as stream:
+                    json.dump(self.first, stream)
+            except OSError:
+                pass
 
     def _flush(self) -> None:
         with self.lock:

@@ -13,6 +13,8 @@ import pytest
 from bt_nav.grading import realtime
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job
+from bt_nav.ros.nodes import findings as kinds
+from bt_nav.ros.nodes.findings import Finding
 
 
 def _job(seed: int) -> Job:
@@ -127,10 +129,12 @@ def test_a_homework_timer_by_the_wall_clock_shows_in_its_evaluation_call() -> No
     assert realtime.wall_clock_evidence(_verdict([], called=50.1), _verdict([], called=50.3), 5.0) is None
 
 
-def _verdict_row(job: Job, failed: list[str], findings: tuple[str, ...] = (), **verdict: Any) -> dict[str, Any]:
-    """A failed row with a verdict: ``failed`` the names of its failed checks (one passed check besides)."""
+def _verdict_row(job: Job, failed: list[str], findings: tuple[Finding, ...] = (), **verdict: Any) -> dict[str, Any]:
+    """A failed row with a verdict: ``failed`` the names of its failed checks (one passed check besides), the audit's
+    ``findings`` as the judge writes them (their sentences and, in the same order, their kinds)."""
     checks = [{"name": name, "passed": False} for name in failed] + [{"name": "no collision", "passed": True}]
-    return {**_row(job, False), "verdict": {"passed": False, "checks": checks, "findings": list(findings), **verdict}}
+    return {**_row(job, False), "verdict": {"passed": False, "checks": checks, "findings": [f.text for f in findings],
+                                            "finding_kinds": [f.record() for f in findings], **verdict}}
 
 
 def _crashed(job: Job, exception: str | None = None, starting: bool = False) -> dict[str, Any]:
@@ -141,11 +145,14 @@ def _crashed(job: Job, exception: str | None = None, starting: bool = False) -> 
     return row
 
 
-TWIST_STAMPED = ("reactive_navigator publishes /cmd_vel as geometry_msgs/msg/TwistStamped, but bt_nav_sim reads "
-                 "geometry_msgs/msg/Twist: not one message passes")
-NO_SCAN = "no node subscribed to /scan: the node never received one message from it"
-NO_CLOCK = ("no node subscribed to /clock: the node does not run on sim time (use_sim_time:=true was given with "
-            "--ros-args; does it pass its arguments to rclpy.init?)")
+_STAMPED = ("reactive_navigator publishes /cmd_vel as geometry_msgs/msg/TwistStamped, but bt_nav_sim reads "
+            "geometry_msgs/msg/Twist")
+TWIST_STAMPED = Finding(kinds.TYPE_MISMATCH, f"{_STAMPED}: not one message passes", "/cmd_vel", _STAMPED)
+NO_SCAN = Finding(kinds.NO_SUBSCRIBER, "no node subscribed to /scan: the node never received one message from it",
+                  "/scan", "no node subscribed to /scan")
+NO_CLOCK = Finding(kinds.NO_SUBSCRIBER, "no node subscribed to /clock: the node does not run on sim time "
+                   "(use_sim_time:=true was given with --ros-args; does it pass its arguments to rclpy.init?)",
+                   "/clock", "no node subscribed to /clock")
 
 
 def test_which_failures_a_speed_can_change() -> None:
@@ -164,7 +171,7 @@ def test_which_failures_a_speed_can_change() -> None:
     never = "the service /toggle_navigation never appeared within 20 s wall"
     assert cannot(_verdict_row(job, ["/toggle_navigation offered"], not_started=never)) == f"not judged: {never}"
     assert cannot(_verdict_row(job, ["parameters declared"])) == "only parameters declared failed"
-    assert cannot(_verdict_row(job, ["maneuvers performed"], (TWIST_STAMPED,))) == TWIST_STAMPED.split(": ")[0]
+    assert cannot(_verdict_row(job, ["maneuvers performed"], (TWIST_STAMPED,))) == _STAMPED
     assert cannot(_verdict_row(job, ["maneuvers performed"], (NO_SCAN,))) == "no node subscribed to /scan"
     for failed in (["maneuver 1"], ["parameters declared", "maneuver 1"], ["no collision"], ["static at the end"],
                    ["evaluation service called"], ["minimum travelled distance"], ["recovery turns"]):
@@ -172,6 +179,21 @@ def test_which_failures_a_speed_can_change() -> None:
     assert cannot(_verdict_row(job, ["maneuvers performed"], (NO_CLOCK,))) is None  # on the wall clock: right at 1x
     assert cannot(_verdict_row(job, ["parameters declared"], timed_out=True)) is None
     assert cannot({**_row(job, False, "timeout"), "verdict": None}) is None
+
+
+def test_a_cut_off_is_read_from_the_findings_kinds_not_their_words() -> None:
+    """The decision reads ``finding_kinds``: a sentence reworded (or in another language) decides the same, and a
+    sentence alone, without its kind, decides nothing."""
+    job = _job(0)
+    reworded = Finding(kinds.NO_PUBLISHER, "nothing was ever published on /cmd_vel", "/cmd_vel")
+    assert realtime.speed_cannot_matter(_verdict_row(job, ["maneuvers performed"], (reworded,))) == reworded.text
+    flood = Finding(kinds.FLOOD, "no node subscribed to /scan: ...", "/cmd_vel")  # the words of a cut-off, not its kind
+    assert realtime.speed_cannot_matter(_verdict_row(job, ["maneuvers performed"], (flood,))) is None
+    words_only = _verdict_row(job, ["maneuvers performed"])
+    words_only["verdict"]["findings"] = [NO_SCAN.text]
+    assert realtime.speed_cannot_matter(words_only) is None
+    qos = Finding(kinds.QOS_MISMATCH, "incompatible QoS on /clock: ...", "/clock", "incompatible QoS on /clock")
+    assert realtime.speed_cannot_matter(_verdict_row(job, ["maneuvers performed"], (qos,))) is None
 
 
 def test_only_failures_a_speed_can_change_run_at_1x(tmp_path: Path, ran: list) -> None:

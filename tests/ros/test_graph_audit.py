@@ -20,6 +20,7 @@ from sensor_msgs.msg import LaserScan
 from simtools import wait_until
 from std_srvs.srv import SetBool
 
+from bt_nav.ros.nodes import findings as kinds
 from bt_nav.ros.nodes.audit import FLOOD_RATE, GraphAudit, is_ours
 
 BEST_EFFORT = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -160,3 +161,11 @@ def test_every_fault_is_named(graph: tuple[Any, GraphAudit]) -> None:
     words = nan.split()  # "<non-finite> of <received> cmd_vel messages held NaN or inf values ..."
     assert words[0] == words[2] and int(words[0]) > 0, nan  # every one of them was NaN
     assert not any("/scan" in f and "no node subscribed" in f for f in found), "it does subscribe (wrongly)"
+    # the same findings as data, for the grader's decisions (bt_nav.grading.realtime reads the kinds, not the words)
+    records = {(r.kind, r.topic, r.clause) for r in audit.finding_records()}
+    assert {(kinds.QOS_MISMATCH, "/scan", "incompatible QoS on /scan"),
+            (kinds.TYPE_MISMATCH, "/cmd_vel", "reactive_control publishes /cmd_vel as geometry_msgs/msg/TwistStamped, "
+                                              "but bt_nav_sim reads geometry_msgs/msg/Twist"),
+            (kinds.NO_SUBSCRIBER, "/clock", "no node subscribed to /clock"),
+            (kinds.SERVICE, "/reactive_control/activate", ""), (kinds.NON_FINITE, "/cmd_vel", ""),
+            (kinds.FLOOD, "/cmd_vel", "")} <= records, records

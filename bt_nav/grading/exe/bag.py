@@ -14,8 +14,9 @@ the simulator until the recorder printed ``recording ...`` made every run's star
 simulator's, and in a grid the runs start in bursts of two per core, where a Python process takes a wall second or
 two to come up. Started together (measured over 48 runs, four at once on two cores), the bags began 0-2.1 sim s
 after t0, always seconds before the first activation, and an 8-run grid went from 14.0 to 14.6 runs a minute,
-back to back. The recorder's ``first /ground_truth_odom at sim T s`` line goes into the row (``bag_truth_from``,
-``bag_after_t0_s``), so a bag that started late says so. With Fast DDS's default profile two participants that miss
+back to back. When the recorder's first ground truth arrived (its note in the bag,
+:func:`bt_nav.run.bagrecorder.first_messages`) goes into the row (``bag_truth_from``, ``bag_after_t0_s``), so a bag
+that started late says so. With Fast DDS's default profile two participants that miss
 each other's start-up announcements (seen on a loaded 2-core machine) meet only at the next periodic one, 3 s (15 s
 of sim time) later: every process bt_nav starts announces itself every 0.25 s instead
 (:data:`bt_nav.ros.supervise.DISCOVERY_PROFILE`).
@@ -37,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.media.bag import CMD, COLLISIONS, ROSOUT, SCAN, TREE, TRUTH, WALKERS
+from bt_nav.run.bagrecorder import FIRST_MESSAGES, first_messages
 
 #: The bag's directory name inside the run directory.
 BAG = "bag"
@@ -79,22 +81,10 @@ class RecordSpec:
 
 
 class RecorderWatch:
-    """The recorder's line sink: every line to the run's log sink, and the sim time of its first ground truth
-    (``first /ground_truth_odom at sim T s``)."""
+    """The run's recorder process: stopped when the graded node has stopped (:meth:`stop`)."""
 
-    def __init__(self, sink: Callable[[str, str], None]) -> None:
-        self.forward = sink
-        self.truth_from: float | None = None
+    def __init__(self) -> None:
         self.child: Any = None  # the recorder's Child, once started
-
-    def sink(self, name: str, line: str) -> None:
-        """Launcher sink of the recorder process."""
-        if line.startswith(f"first {TRUTH} at sim "):
-            try:
-                self.truth_from = float(line.split()[4])
-            except (IndexError, ValueError):
-                pass
-        self.forward(name, line)
 
     def stop(self, grace: float = RECORDER_GRACE) -> None:
         """SIGINT the recorder now (it closes its bag); one still running ``grace`` s later is killed (its ``.mcap`` is
@@ -117,8 +107,8 @@ def start_recorder(session: Any, sink: Callable[[str, str], None], run_dir: Path
                    seed: int, profile: str = "homework") -> RecorderWatch:
     """Start the run's recorder (``run_dir/bag``) in ``session`` (the run's :class:`bt_nav.run.session.MissionSession`,
     with the run's other processes: see the module docstring)."""
-    watch = RecorderWatch(sink)
-    watch.child = session.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=watch.sink)
+    watch = RecorderWatch()
+    watch.child = session.start(RecordSpec(run_dir / BAG, world, seed, profile), sink=sink)
     return watch
 
 
@@ -128,7 +118,9 @@ def bag_row(run_dir: Path, watch: RecorderWatch | None, t0: float | None) -> dic
     if watch is None:
         return {"bag": None}
     bag = run_dir / BAG
-    size = sum(p.stat().st_size for p in bag.rglob("*") if p.is_file()) if bag.is_dir() else 0
-    late = None if watch.truth_from is None or t0 is None else round(max(0.0, watch.truth_from - t0), 2)
-    return {"bag": BAG if size else None, "bag_bytes": size, "bag_truth_from": watch.truth_from,
-            "bag_after_t0_s": late}
+    size = sum(p.stat().st_size for p in bag.rglob("*") if p.is_file() and p.name != FIRST_MESSAGES) \
+        if bag.is_dir() else 0
+    truth_from = first_messages(bag).get(TRUTH)
+    truth_from = None if truth_from is None else round(truth_from, 2)
+    late = None if truth_from is None or t0 is None else round(max(0.0, truth_from - t0), 2)
+    return {"bag": BAG if size else None, "bag_bytes": size, "bag_truth_from": truth_from, "bag_after_t0_s": late}

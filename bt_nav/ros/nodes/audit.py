@@ -19,7 +19,8 @@ node, about once per wall second (:meth:`GraphAudit.sample`), it looks at
 subscription to ``scan`` or ``/clock`` (not on sim time), no publisher on ``cmd_vel``, the arm service never
 offered or offered with another type, a type or QoS mismatch, non-finite commands, a flood (more than
 :data:`FLOOD_RATE` commands per sim second). An absence is judged over the whole run (a node may subscribe
-late); a mismatch seen once is a finding, and is logged when it is first seen.
+late); a mismatch seen once is a finding, and is logged when it is first seen. :meth:`GraphAudit.finding_records`
+gives each with its kind (:mod:`bt_nav.ros.nodes.findings`), for the programs that decide on one.
 """
 
 from __future__ import annotations
@@ -35,6 +36,17 @@ from rclpy.node import Node
 from rclpy.qos import QoSCompatibility, QoSProfile, ReliabilityPolicy, qos_check_compatible
 
 from bt_nav.ros.domain_guard import DomainGuard
+from bt_nav.ros.nodes.findings import (
+    FLOOD,
+    NO_NODE,
+    NO_PUBLISHER,
+    NO_SUBSCRIBER,
+    NON_FINITE,
+    QOS_MISMATCH,
+    SERVICE,
+    TYPE_MISMATCH,
+    Finding,
+)
 
 #: Commands per sim second beyond any controller (bt_nav's executive sends 20, the homework's suggested 10).
 FLOOD_RATE = 1000.0
@@ -123,7 +135,7 @@ class GraphAudit:
         self.subscribed: dict[str, set[str]] = {}  # topic -> message types foreign nodes subscribe it with
         self.published: dict[str, set[str]] = {}
         self.offered: dict[str, set[str]] = {}  # service -> types foreign nodes offer it with
-        self.problems: dict[str, str] = {}  # mismatches seen, by what they concern (logged when first seen)
+        self.problems: dict[str, Finding] = {}  # mismatches seen, by what they concern (logged when first seen)
         self.commands = CommandStats()
         self._reader: Any = None
         self._reader_failed = False
@@ -205,19 +217,20 @@ class GraphAudit:
         who = theirs.node_name
         if publisher.topic_type != subscription.topic_type:
             key = f"type {topic} {who} {theirs.topic_type}"
-            text = (f"{who} {verb} {topic} as {theirs.topic_type}, but {ours.node_name} {our_verb} "
-                    f"{ours.topic_type}: not one message passes")
+            clause = f"{who} {verb} {topic} as {theirs.topic_type}, but {ours.node_name} {our_verb} {ours.topic_type}"
+            found = Finding(TYPE_MISMATCH, f"{clause}: not one message passes", topic, clause)
         else:
             compatibility, reason = qos_check_compatible(publisher.qos_profile, subscription.qos_profile)
             if compatibility != QoSCompatibility.ERROR:
                 return
             key = f"qos {topic} {who} {describe_qos(theirs.qos_profile)}"
-            text = (f"incompatible QoS on {topic}: {who} {verb} it {describe_qos(theirs.qos_profile)}, "
-                    f"{ours.node_name} {our_verb} it {describe_qos(ours.qos_profile)} "
-                    f"({reason.removeprefix('ERROR: ').rstrip(';')}): not one message passes")
+            clause = f"incompatible QoS on {topic}"
+            found = Finding(QOS_MISMATCH, f"{clause}: {who} {verb} it {describe_qos(theirs.qos_profile)}, "
+                            f"{ours.node_name} {our_verb} it {describe_qos(ours.qos_profile)} "
+                            f"({reason.removeprefix('ERROR: ').rstrip(';')}): not one message passes", topic, clause)
         if key not in self.problems:
-            self.problems[key] = text
-            self.node.get_logger().warning(f"finding: {text}")
+            self.problems[key] = found
+            self.node.get_logger().warning(f"finding: {found.text}")
 
     def _watch_commands(self) -> None:
         """Read ``cmd_vel`` best effort (every writer matches) once a foreign node publishes a command type there."""
@@ -262,19 +275,24 @@ class GraphAudit:
         return f" (the node offers {SET_BOOL} as {', '.join(others)})" if others else ""
 
     def findings(self, exclude: tuple[str, ...] = ()) -> list[str]:
-        """Everything found over the run, after a last look (``exclude``: ``service`` when said elsewhere)."""
+        """Everything found over the run, in words, after a last look (``exclude``: ``service`` when said
+        elsewhere): the sentences of :meth:`finding_records`."""
+        return [found.text for found in self.finding_records(exclude)]
+
+    def finding_records(self, exclude: tuple[str, ...] = ()) -> list[Finding]:
+        """Everything found over the run with its kind, after a last look (``exclude`` as :meth:`findings`)."""
         self.sample(force=True)
         if not self.nodes:
-            return ["no node besides the simulator and the judge ever appeared on the ROS graph (did the command "
-                    "start a ROS 2 node in this ROS_DOMAIN_ID?)"]
+            return [Finding(NO_NODE, "no node besides the simulator and the judge ever appeared on the ROS graph (did "
+                                     "the command start a ROS 2 node in this ROS_DOMAIN_ID?)")]
         found = [self._missing_input(topic, kind) for topic, kind in self.inputs if topic not in self.subscribed]
         if self.command not in self.published:
-            found.append(f"no node published on {self.command}" + self._elsewhere(self.published, set(COMMAND_TYPES),
-                                                                                "publishes"))
+            found.append(Finding(NO_PUBLISHER, f"no node published on {self.command}" + self._elsewhere(
+                self.published, set(COMMAND_TYPES), "publishes"), self.command))
         if "service" not in exclude and SET_BOOL not in self.offered.get(self.service, set()):
-            found.append(f"the service {self.service} " + (
+            found.append(Finding(SERVICE, f"the service {self.service} " + (
                 f"was offered as {', '.join(sorted(self.offered[self.service]))}, not {SET_BOOL}"
-                if self.service in self.offered else f"was never offered{self.service_hint()}"))
+                if self.service in self.offered else f"was never offered{self.service_hint()}"), self.service))
         found += list(self.problems.values())
         found += self._command_findings()
         return found
@@ -290,12 +308,13 @@ class GraphAudit:
                 f"show it; the lab's launch file must pass it)" for name in self.parameters
                 if not any(name in names for names in answered.values())]
 
-    def _missing_input(self, topic: str, kind: str) -> str:
+    def _missing_input(self, topic: str, kind: str) -> Finding:
         hint = self._elsewhere(self.subscribed, {kind}, "subscribes")
+        clause = f"no node subscribed to {topic}"
         if topic.endswith("/clock"):
-            return (f"no node subscribed to {topic}: the node does not run on sim time (use_sim_time:=true was "
-                    f"given with --ros-args; does it pass its arguments to rclpy.init?){hint}")
-        return f"no node subscribed to {topic}: the node never received one message from it{hint}"
+            return Finding(NO_SUBSCRIBER, f"{clause}: the node does not run on sim time (use_sim_time:=true was "
+                           f"given with --ros-args; does it pass its arguments to rclpy.init?){hint}", topic, clause)
+        return Finding(NO_SUBSCRIBER, f"{clause}: the node never received one message from it{hint}", topic, clause)
 
     @staticmethod
     def _elsewhere(endpoints: dict[str, set[str]], kinds: set[str], verb: str) -> str:
@@ -304,14 +323,14 @@ class GraphAudit:
                 if types & kinds]
         return f" (it {verb} {'; '.join(seen)})" if seen else ""
 
-    def _command_findings(self) -> list[str]:
+    def _command_findings(self) -> list[Finding]:
         stats = self.commands
         found = []
         if stats.non_finite:
-            found.append(f"{stats.non_finite} of {stats.received} cmd_vel messages held NaN or inf values "
-                         "(the simulator takes them as a stop)")
+            found.append(Finding(NON_FINITE, f"{stats.non_finite} of {stats.received} cmd_vel messages held NaN or "
+                                 "inf values (the simulator takes them as a stop)", self.command))
         rates = stats.rates()
         if rates is not None and rates[0] > FLOOD_RATE:
-            found.append(f"cmd_vel flood: {rates[0]:.0f} messages per sim s ({rates[1]:.0f} per wall s); "
-                         "a controller sends 10 to 50")
+            found.append(Finding(FLOOD, f"cmd_vel flood: {rates[0]:.0f} messages per sim s ({rates[1]:.0f} per wall "
+                                 "s); a controller sends 10 to 50", self.command))
         return found

@@ -31,7 +31,8 @@ What the robot node did wrong that no check can see (``audit``, on by default): 
 ``cmd_vel`` (no subscription to ``scan`` or ``/clock``, no publisher on ``cmd_vel``, the arm service never
 offered, a message type or QoS that cannot match ours, NaN/inf commands, a command flood). Its findings are
 logged as ``finding: ...`` warnings (stderr, not the report on stdout) and listed under ``findings`` in the
-JSON, in every ending: verdict, timeout, or no start.
+JSON, in every ending: verdict, timeout, or no start; ``finding_kinds`` gives each as data, in the same order
+(:mod:`bt_nav.ros.nodes.findings`: its kind, topic and first clause).
 
 No start (``start_wait`` > 0, what ``bt-nav grade --exe`` sets): when only the robot's part of t0 (its
 service, its first ``cmd_vel``) is still missing after ``start_wait`` wall seconds, the judge does not wait
@@ -47,7 +48,8 @@ provisional report, exit 2).
 
 Time base: every log line says the node clock's sim time and the schedule's time since t0, ``sim 58.50 s
 (t0 + 54.50 s)``: the executive logs sim time too, so the two read side by side. The report lines count
-from t0, as the judges make them; the JSON says so (``time_base``) and gives t0's sim time (``t0_sim``).
+from t0, as the judges make them; the JSON says so (``time_base``) and gives t0's sim time (``t0_sim``)
+and wall time (``t0_wall``, epoch s).
 
 Another run in the same ROS domain (a second simulator publishing ground truth) ends the run without a
 verdict: a judgement over two robots' poses would report distances nobody drove.
@@ -214,6 +216,7 @@ class JudgeNode(QuietQosEvents, Node):
         """Progress of the run: start, pending calls, verdict."""
         self._truth_seen = False
         self.started = False
+        self.t0_wall: float | None = None  # the wall clock (epoch s) at t0: a benchmark splits a run's wall time there
         self._first_clock: float | None = None
         self._clock_wall: float | None = None  # wall time of the first /clock (the simulator may start last)
         self._waiting_line_at = 0.0  # wall time the next "waiting for" line may be logged
@@ -231,6 +234,7 @@ class JudgeNode(QuietQosEvents, Node):
         self.not_started: str | None = None  # why the robot was never judged (start_wait)
         self.free = FreeMotion()  # what the robot did before t0: the account of a run never judged
         self.findings: list[str] = []  # the audit's, at the end
+        self.finding_kinds: list[dict[str, Any]] = []  # the same findings as data (bt_nav.ros.nodes.findings)
         self._cmd_sub: Any = None
 
     def _create_interfaces(self, p: dict[str, Any]) -> None:
@@ -414,6 +418,7 @@ class JudgeNode(QuietQosEvents, Node):
                 self.get_logger().info(f"waiting for {', '.join(missing)}")
             return
         self.started = True
+        self.t0_wall = time.time()
         self.judge.start(now)
         if self._cmd_sub is not None and not self.wants_commands:
             self.destroy_subscription(self._cmd_sub)
@@ -671,7 +676,9 @@ class JudgeNode(QuietQosEvents, Node):
         """The results, the run's facts and the audit's findings (logged here too); ``exclude``: findings the
         ending already states."""
         if self.audit is not None:
-            self.findings = self.audit.findings(exclude)
+            records = self.audit.finding_records(exclude)
+            self.findings = [found.text for found in records]
+            self.finding_kinds = [found.record() for found in records]
             for finding in self.findings:
                 self.get_logger().warning(f"finding: {finding}")
         if not self.json_path:
@@ -693,6 +700,7 @@ class JudgeNode(QuietQosEvents, Node):
         results.update({
             "exit_code": self.exit_code,
             "findings": self.findings,
+            "finding_kinds": self.finding_kinds,
             "not_started": self.not_started,
             "report_lines": lines,
             "timed_out": self.timed_out,
@@ -701,8 +709,9 @@ class JudgeNode(QuietQosEvents, Node):
             "wall_time_s": round(time.monotonic() - self.wall_start, 3),
             "activate_calls": self.calls,
             "t0_sim": self.judge.t0,
-            "time_base": "times and report lines: seconds from t0 (t0_sim: t0 on the sim clock); "
-                         "log lines: sim clock and t0 + seconds",
+            "t0_wall": self.t0_wall,
+            "time_base": "times and report lines: seconds from t0 (t0_sim: t0 on the sim clock, t0_wall: on the "
+                         "wall clock, epoch s); log lines: sim clock and t0 + seconds",
         })
         path = Path(self.json_path)
         try:
