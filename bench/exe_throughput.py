@@ -16,7 +16,6 @@ split by process kind from samples every 0.25 s (a process's last 0.25 s can be 
 
 from __future__ import annotations
 
-import json
 import os
 import resource
 import subprocess
@@ -25,6 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from bt_nav.grading.report import read_grade
 
 from .common import DOMAIN_RANGE, REPO, Target, at_least, median, usable_cores
 
@@ -97,7 +98,7 @@ def grade_once(seeds: int, rtf: float | None = None, jobs: str = JOBS, world: st
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     output = log.read_text(encoding="utf-8", errors="replace")
     try:
-        rows = json.loads((out / "grade.json").read_text(encoding="utf-8"))["runs"]
+        rows = (read_grade(out) or {"runs": []})["runs"]
     except (OSError, ValueError, KeyError):
         return {"error": f"bt-nav grade exited with {proc.returncode}: {output[-2000:]}", "argv": argv}
     by_kind: dict[str, float] = {}

@@ -162,11 +162,12 @@ def cell_key(row: dict[str, Any]) -> str:
 
 def student_summary(name: str, grid_dir: Path) -> dict[str, Any]:
     """One student's line of the class: pass counts per cell, bt_nav errors apart, findings with their counts."""
-    path = grid_dir / "grade.json"
-    if not path.is_file():
+    from bt_nav.grading.report import read_grade
+
+    doc = read_grade(grid_dir)
+    if doc is None:
         return {"name": name, "dir": grid_dir.name, "graded": False, "cells": {}, "findings": {}, "runs": 0,
                 "passed": 0, "errors": 0}
-    doc = json.loads(path.read_text(encoding="utf-8"))
     cells: dict[str, list[int]] = defaultdict(lambda: [0, 0])
     findings: dict[str, int] = defaultdict(int)
     errors = 0
@@ -197,6 +198,19 @@ def _reasons(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
     return dict(out)
 
 
+#: A class's page in its output directory: written by :func:`write_class_page`, read by :func:`read_class_page`.
+CLASS_FILE = "class.json"
+
+
+def read_class_page(out: Path) -> dict[str, Any]:
+    """The class graded into ``out`` (:data:`CLASS_FILE`); ValueError naming the file when it cannot be read."""
+    path = Path(out) / CLASS_FILE
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"cannot read {path}: {exc}") from None
+
+
 def write_class_page(out: Path, students: Sequence[Student], title: str,
                      refused: dict[str, str] | None = None,
                      annotate: Callable[[list[dict[str, Any]]], None] | None = None) -> tuple[Path, Path, Path]:
@@ -213,7 +227,7 @@ def write_class_page(out: Path, students: Sequence[Student], title: str,
     cells = sorted({c for r in rows for c in r["cells"]})
     doc = {"title": title, "cells": cells, "students": rows,
            "commands": {s.name: s.command for s in students}}
-    json_path, md_path, html_path = out / "class.json", out / "class.md", out / "class.html"
+    json_path, md_path, html_path = out / CLASS_FILE, out / "class.md", out / "class.html"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     md_path.write_text(class_markdown(rows, cells, title), encoding="utf-8")
     html_path.write_text(class_html(rows, cells, title), encoding="utf-8")

@@ -23,7 +23,6 @@ Pure: no rclpy; the only files read are the weights (:func:`load_weights`) and a
 
 from __future__ import annotations
 
-import json
 import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
@@ -34,6 +33,7 @@ from typing import Any
 import yaml
 
 from bt_nav.grading.grid import cell_label, failure_groups, run_label, runs_label
+from bt_nav.grading.report import GRADE_FILE, read_grade
 
 #: bt_nav's default weights (installed as package data); ``--weights FILE`` changes some of them.
 WEIGHTS_FILE = Path(__file__).with_name("gradescope_weights.yaml")
@@ -265,11 +265,10 @@ def junit_xml(records: Sequence[tuple[str, dict[str, Any]]]) -> str:
 
 def read_record(grade_dir: Path) -> dict[str, Any]:
     """The record of a node's finished grade: its ``grade.json`` (ValueError when it cannot be read)."""
-    path = Path(grade_dir) / "grade.json"
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise ValueError(f"cannot read {path}: {exc}") from None
+    record = read_grade(Path(grade_dir))
+    if record is None:
+        raise ValueError(f"cannot read {Path(grade_dir) / GRADE_FILE}: no such file")
+    return record
 
 
 def class_records(class_dir: Path) -> list[tuple[str, dict[str, Any]]]:
@@ -277,13 +276,15 @@ def class_records(class_dir: Path) -> list[tuple[str, dict[str, Any]]]:
     student's holds the reason, a student whose grid wrote no grade.json has no runs; the launch-file checks are
     taken from the student's grade.json, else from their line of class.json (a folder of hand-ins:
     ``handin.launch``, :meth:`bt_nav.grading.handins.HandIn.record`)."""
-    doc = json.loads((Path(class_dir) / "class.json").read_text(encoding="utf-8"))
+    from bt_nav.grading.classroom import read_class_page
+
+    doc = read_class_page(Path(class_dir))
     out = []
     for student in doc.get("students", []):
         name = str(student["name"])
         if student.get("refused"):
             record: dict[str, Any] = {"refused": student["refused"], "runs": []}
-        elif (Path(class_dir) / student.get("dir", name) / "grade.json").is_file():
+        elif (Path(class_dir) / student.get("dir", name) / GRADE_FILE).is_file():
             record = read_record(Path(class_dir) / student.get("dir", name))
         else:
             record = {"runs": []}

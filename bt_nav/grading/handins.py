@@ -22,7 +22,6 @@ The API other formats build on (Gradescope, JUnit): :class:`StudentResult` and :
 from __future__ import annotations
 
 import ast
-import json
 import re
 import shlex
 import sys
@@ -31,9 +30,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.classroom import NAME, Student
+from bt_nav.grading.classroom import NAME, Student, read_class_page
 from bt_nav.grading.exe.grid import declared_choice
 from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
+from bt_nav.grading.report import read_grade
 
 #: The lab sheet's name for the node file.
 NODE_NAME = "reactive_navigator.py"
@@ -228,8 +228,8 @@ class StudentResult:
 
 def _runs(grid: Path) -> list[dict[str, Any]]:
     try:
-        return list(json.loads((grid / "grade.json").read_text(encoding="utf-8")).get("runs", []))
-    except (OSError, json.JSONDecodeError):
+        return list((read_grade(grid) or {}).get("runs", []))
+    except ValueError:
         return []
 
 
@@ -240,7 +240,7 @@ def _choice(runs: Sequence[dict[str, Any]]) -> str | None:
 
 def load_class(out: Path) -> list[StudentResult]:
     """Every student of the class graded into ``out`` (its ``class.json`` and each student's ``grade.json``)."""
-    doc = json.loads((Path(out) / "class.json").read_text(encoding="utf-8"))
+    doc = read_class_page(out)
     results = []
     for row in doc["students"]:
         handin = row.get("handin")
@@ -262,8 +262,10 @@ def load_grid(out: Path, name: str = "student") -> StudentResult:
     row = {"graded": bool(runs), "runs": len(judged), "passed": sum(1 for r in judged if r.get("passed")),
            "errors": len(runs) - len(judged)}
     passed, why = verdict(row, None)
-    doc = json.loads((Path(out) / "grade.json").read_text(encoding="utf-8")) if (Path(out) / "grade.json").is_file() \
-        else {}
+    try:
+        doc = read_grade(Path(out)) or {}
+    except ValueError:
+        doc = {}
     return StudentResult(name, Path(out), doc.get("settings", {}).get("command"), _choice(runs), None, runs, None,
                          passed, why)
 

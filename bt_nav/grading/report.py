@@ -83,6 +83,22 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     return "\n".join(lines) + "\n"
 
 
+#: A node's grade in its grid directory: written by :func:`write_exe_report`, read by :func:`read_grade` only.
+GRADE_FILE = "grade.json"
+
+
+def read_grade(grid_dir: Path) -> dict[str, Any] | None:
+    """The grade written in ``grid_dir`` (:data:`GRADE_FILE`): None when there is none (a grid that never ended);
+    ValueError naming the file when it cannot be read."""
+    path = Path(grid_dir) / GRADE_FILE
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ValueError(f"cannot read {path}: {exc}") from None
+
+
 def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings, workers: int | None = None,
                      drawn: dict[str, dict[str, Any]] | None = None) -> tuple[Path, Path]:
     """``grade.json`` (settings, summary, every row with its pictures), ``summary.md`` and ``report.html`` in the
@@ -106,7 +122,7 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings, work
                          for name, (p, n) in per_lidar(rows).items()},
            "findings": lidar_findings(rows), "bt_nav_errors": sum(1 for r in rows if r.get("outcome") == ERROR),
            "runs": [{**row, "media": media.get(row["job"])} for row in rows]}
-    json_path, md_path = settings.out / "grade.json", settings.out / "summary.md"
+    json_path, md_path = settings.out / GRADE_FILE, settings.out / "summary.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     md_path.write_text(summary_markdown(summary, settings, rows), encoding="utf-8")
     (settings.out / RULES_FILE).write_text(grade_rules(settings, rows), encoding="utf-8")  # the failures link it

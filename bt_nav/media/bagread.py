@@ -12,7 +12,8 @@ Either way the CDR payloads are decoded by rosbags' typestore. A file that yield
 :class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
 
 Times: a message's time is its own header stamp where it has one on the bag's clock, else its bag time
-(:func:`bt_nav.media.bag.message_time_ns`, the recorder's rule too), and every series is sorted by it. So a bag
+(:func:`bt_nav.media.bag.message_time_ns`, the recorder's rule too; a tree snapshot's own stamp is its ``t``,
+:func:`tree_time`), and every series is sorted by it. So a bag
 that ``ros2 bag record`` (or an older ``bt-nav record``) wrote with receive times, seconds late when the recorder
 fell behind, still shows the robot where it was at each instant.
 
@@ -55,7 +56,7 @@ from bt_nav.media.bag import (
     typestore,
 )
 from bt_nav.mission.geometry import yaw_from_quaternion
-from bt_nav.mission.snapshot import read_event, read_snapshot
+from bt_nav.mission.snapshot import read_event, read_snapshot, snapshot_time
 
 
 @dataclass
@@ -304,7 +305,7 @@ class _Collector:
         elif topic == TREE:
             snapshot = read_snapshot(msg.data)
             if snapshot is not None:  # not a snapshot document (an older bag's art): no tree
-                self.trees.append((t, snapshot))
+                self.trees.append((tree_time(snapshot, t), snapshot))
         elif topic == ANNOUNCEMENTS:
             record = read_event(msg.data)
             if record is not None:
@@ -368,6 +369,15 @@ class _Collector:
                              mission=self.mission,
                              start=self.t_min if self.counts else 0.0, end=self.t_max if self.counts else 0.0,
                              truncated=truncated, clock_start=self.clock_start)
+
+
+def tree_time(snapshot: dict[str, Any], bag_t: float) -> float:
+    """A tree snapshot's time: when it was taken (:func:`bt_nav.mission.snapshot.snapshot_time`) where that is on
+    the bag's clock (:func:`bt_nav.media.bag.message_time_ns`, the rule of a header stamp), else its bag time. A
+    ``std_msgs/String`` has no header, so a bag that ``ros2 bag record`` wrote holds it at its receive time."""
+    own = snapshot_time(snapshot)
+    own_ns = round(own * 1e9) if own is not None and own > 0 else None
+    return message_time_ns(own_ns, round(bag_t * 1e9)) * 1e-9
 
 
 def _json_or_text(text: str) -> dict[str, Any]:

@@ -146,6 +146,18 @@ def read_snapshot(text: str) -> dict[str, Any] | None:
     return _read(text, SNAPSHOT_FORMAT)
 
 
+def snapshot_time(snapshot: Mapping[str, Any]) -> float | None:
+    """When the snapshot was taken: its ``t`` (the tick's time on the executive's clock, sim time in simulation);
+    None when it has no finite number there. Why a reader takes it rather than the time the message arrived: at
+    10-20x real time a reader's queue of ground truth lags seconds of sim time behind the rare snapshots, and a
+    branch timed by arrival colours the wrong stretch of the path (:mod:`bt_nav.run.recorder`,
+    :func:`bt_nav.media.bagread.read_bag`)."""
+    t = snapshot.get("t")
+    if isinstance(t, bool) or not isinstance(t, int | float) or not math.isfinite(t):
+        return None
+    return float(t)
+
+
 def read_event(text: str) -> dict[str, Any] | None:
     """An event from its wire form; None for anything else."""
     return _read(text, EVENT_FORMAT)

@@ -150,3 +150,20 @@ def test_people_walking_are_recorded_and_filmed(tmp_path: Path) -> None:
     assert record.walkers_at(-1.0) is None
     frame = np.asarray(renderer_for(record).frame(7.0))
     assert np.any(np.all(frame == (240, 170, 215), axis=-1)), "the people are drawn"
+
+
+def test_a_tree_snapshot_is_read_at_the_time_it_was_taken(tmp_path: Path) -> None:
+    """``ros2 bag record`` holds a String at its receive time, seconds late when the recorder lagged; the snapshot's
+    own ``t`` (the executive's tick) times the branch, where it is on the bag's clock (the header-stamp rule)."""
+    def snap(t: float, tip: str) -> dict:
+        return {"format": "bt_nav.tree/1", "tick": 1, "t": t, "maneuver": "C", "tip": tip, "path": [], "nodes": [],
+                "blackboard": {}}
+
+    with MissionBag(tmp_path / "bag") as bag:
+        bag.clock(0.1)
+        bag.tree(8.5, snap(5.0, "FullSpeed"))  # received 3.5 s of sim time after its tick
+        bag.tree(9.0, snap(7.5, "EvaluateMission"))
+        bag.tree(9.5, snap(900.0, "StopDisarmed"))  # not on the bag's clock: its bag time
+    trees = read_bag(tmp_path / "bag").trees
+    assert [doc["tip"] for _, doc in trees] == ["FullSpeed", "EvaluateMission", "StopDisarmed"]
+    assert [t for t, _ in trees] == pytest.approx([5.0, 7.5, 9.5])

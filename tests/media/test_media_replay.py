@@ -53,9 +53,9 @@ def test_every_reader_carries_a_renamed_leaf_and_a_new_status(tmp_path: Path, ca
     with MissionBag(tmp_path / "bag") as bag:
         bag.cmd(1.0, 0.0, 0.5)
         bag.announce(1.0, record)
-        bag.tree(1.0, snapshot)
+        bag.tree(snapshot["t"], snapshot)  # a snapshot is read at its own time (bagread.tree_time)
     rec = read_bag(tmp_path / "bag")
-    assert rec.trees == [(1.0, snapshot)] and rec.announcements == [(1.0, record)]
+    assert rec.trees == [(snapshot["t"], snapshot)] and rec.announcements == [(1.0, record)]
     assert replay_main([str(tmp_path / "bag")]) == 0
     out = capsys.readouterr().out
     assert "tip=Wiggle " in out and "--> Wiggle [?]" in out

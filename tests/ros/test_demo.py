@@ -16,6 +16,7 @@ import pytest
 from simtools import REPO, Proc
 
 WALL_LIMIT = 60.0
+COMMAND_LAG = 0.25  # sim s: a command's source timestamp after its tick's snapshot (see _colour_against_command)
 
 
 @pytest.mark.slow
@@ -43,9 +44,24 @@ def test_demo_passes_and_writes_its_files(tmp_path: Path) -> None:
     assert len(trajectory["t"]) > 1000  # ~57 s of ground truth at 30 Hz
     assert {"FullSpeed", "TurnAway"} <= set(trajectory["branch"])  # the tip was read from ~/tree
     assert trajectory["branch"][-1] == "Stopped"
+    assert not _colour_against_command(trajectory), "the path's colour disagrees with the command it was driven by"
     assert (run / "trajectory.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the demo reports the speed of the mission
     assert any("x real time" in line for line in demo.stdout), demo.output()
+
+
+def _colour_against_command(trajectory: dict) -> list[tuple[float, str, float]]:
+    """Samples coloured Stopped under a forward command, or FullSpeed under none, later than ``COMMAND_LAG`` after
+    the colour changed. The tree's tick and its command are one instant at the executive, but the command is timed
+    by its DDS source timestamp, a few wall ms (so up to ~0.2 s of sim time) after the tick's snapshot. Labelled by
+    arrival, a loaded machine's demo drew the last 6-8 s before the deadline Stopped (and FullSpeed 2 s early)."""
+    wrong, since, last = [], -1.0, None
+    for t, branch, v in zip(trajectory["t"], trajectory["branch"], trajectory["cmd_linear"], strict=True):
+        since = t if branch != last else since
+        last = branch
+        if ((branch == "Stopped" and v > 0) or (branch == "FullSpeed" and v <= 0)) and t - since > COMMAND_LAG:
+            wrong.append((t, branch, v))
+    return wrong
 
 
 def _demo_env(**extra: str) -> dict[str, str]:

@@ -163,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
 def _robot_files(run: dict[str, Any], name: str, rec: Recording) -> tuple[dict[str, Any], Any, list[Path]]:
     """One robot's verdict (read), trajectory (written) and the files; prints its maneuver count."""
     several = len(run["names"]) > 1
-    path = Path(run["results"][name])
+    path = run["run_dir"] / Path(run["results"][name]).name  # as the other files name it (the referee's is absolute)
     verdict = read_verdict(path) or {}
     traj, data = rec.mission_trajectory(verdict)
     out = run["run_dir"] / (f"trajectory_{name}.json" if several else "trajectory.json")

@@ -165,7 +165,8 @@ def _finish(run: dict[str, Any], opts: argparse.Namespace, rec: Any, verdict: di
     window = {"times": {"t0": verdict.get("t0_sim"), "report": (verdict.get("times") or {}).get("report")}}
     traj, data = rec.mission_trajectory(window)
     (run_dir / "trajectory.json").write_text(json.dumps(data) + "\n", encoding="utf-8")
-    written = [run_dir / "run.json", *[p for p in (Path(run["results"]), run_dir / "trajectory.json") if p.is_file()]]
+    results = run_dir / Path(run["results"]).name  # as the other files name it (the referee's path is absolute)
+    written = [run_dir / "run.json", *[p for p in (results, run_dir / "trajectory.json") if p.is_file()]]
     try:
         from bt_nav_sim import load_world
 

@@ -165,10 +165,11 @@ def _show_handins(handins: dict[str, Any]) -> None:
 def _class_verdicts(out: Path, handins: dict[str, Any]) -> bool:
     """Every student's ``feedback.md``; for a folder of hand-ins a verdict line per student (runs and launch file
     together). Whether every student passed."""
+    from bt_nav.grading.classroom import CLASS_FILE
     from bt_nav.grading.feedback import write_feedback
     from bt_nav.grading.handins import load_class
 
-    if not (out / "class.json").is_file():
+    if not (out / CLASS_FILE).is_file():
         return False
     results = load_class(out)
     for result in results:
