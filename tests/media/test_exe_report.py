@@ -222,7 +222,8 @@ def test_the_drawer_draws_ended_runs_while_the_grid_runs(mission_bag: Path, tmp_
     out = tmp_path / "grid"
     passed = _row(out, mission_bag, 0, True, _verdict(True, 8.6), "passed")
     failed = _row(out, mission_bag, 1, False, _verdict(False, 7.4), "failed: minimum travelled distance")
-    drawer = Drawer(videos="failures", record="failures")
+    # a stall far beyond any machine's load: this test is the flow; a starved worker is the next test's
+    drawer = Drawer(videos="failures", record="failures", stall=600.0)
     drawer.submit(passed)
     drawer.submit(failed)
     assert drawer.sent == 1, "the run to be filmed waits for the report"
