@@ -23,7 +23,6 @@ profile there; such a run is slower and only says where the executive's time goe
 
 from __future__ import annotations
 
-import json
 import os
 import resource
 import tempfile
@@ -35,6 +34,7 @@ from typing import Any
 
 from bt_nav.ros.bringup import NodeSpec
 from bt_nav.ros.rosutil import dds_env
+from bt_nav.ros.tick_stats import read_final_stats
 from bt_nav.run.session import VERDICT, MissionSession, files_written
 
 #: Wall seconds the referee may take (its own timeout), and extra wall time before this gives up.
@@ -46,14 +46,8 @@ STARTUP = 45.0
 EXECUTIVE_STATS = "executive_stats.json"
 
 
-def executive_stats(path: Path) -> dict[str, Any]:
-    """What the executive wrote into its ``stats_path`` on its way out (:meth:`bt_nav.ros.tick_stats.TickStats.
-    final_record` and its counters); empty when it wrote nothing (it was killed) or the file cannot be read."""
-    try:
-        stats = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return stats if isinstance(stats, dict) else {}
+#: What the executive wrote into its ``stats_path`` on its way out: read beside its writer.
+executive_stats = read_final_stats
 
 
 def proc_status(pid: int) -> dict[str, int]:

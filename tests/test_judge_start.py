@@ -84,10 +84,10 @@ def test_the_verdict_file_and_the_exit_code_say_the_same(passed: bool, missing: 
     results = {"passed": passed, "checks": []}
     judge = SimpleNamespace(
         json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_PASSED if passed else judging.EXIT_FAILED,
-        audit=SimpleNamespace(findings=lambda exclude: [], parameter_findings=lambda: missing),
+        audit=SimpleNamespace(finding_records=lambda exclude: [], parameter_findings=lambda: missing),
         judge=SimpleNamespace(results=lambda: dict(results), t0=1.0), not_started=None,
         required_parameters=("safety_distance",), findings=[], timed_out=False, foreign=None, config=Config(),
-        wall_start=0.0, calls=[], get_logger=lambda: None, started=True)
+        wall_start=0.0, calls=[], get_logger=lambda: None, started=True, t0_wall=None)
     JudgeNode._write_json(judge, ["overall: PASSED" if passed else "overall: FAILED"])
     written = json.loads((tmp_path / "v.json").read_text())
     assert judge.exit_code == code and written["exit_code"] == code and written["passed"] is (code == 0)
@@ -117,7 +117,7 @@ def test_a_run_never_started_reports_the_robots_own_motion_and_no_check_passes(t
     checkoff = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "t", "segments": []}))
     judge = SimpleNamespace(
         json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_FAILED, started=False, free=free,
-        audit=None, judge=checkoff, required_parameters=(), findings=[],
+        audit=None, judge=checkoff, required_parameters=(), findings=[], finding_kinds=[], t0_wall=None,
         not_started="the service /toggle_navigation never appeared within 20 s wall", timed_out=False,
         foreign=None, config=Config(), wall_start=0.0, calls=0, get_logger=lambda: None,
         resolve_service_name=lambda name: "/toggle_navigation", activate_name="toggle_navigation")

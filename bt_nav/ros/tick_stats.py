@@ -6,9 +6,11 @@ Pure Python (no rclpy), so it is tested without a node. The executive records on
 
 from __future__ import annotations
 
+import json
 import math
 from collections import deque
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any
 
 
@@ -80,3 +82,13 @@ class TickStats:
         return {"tick_stats": self.describe(self.history), "durations": len(self.history), "ticks": self.ticks,
                 "overruns": self.overruns, "period_ms": round(self.period * 1e3, 3),
                 "exceptions": faults + self.exceptions, "vetoed_commands": self.vetoed}
+
+
+def read_final_stats(path: Path) -> dict[str, Any]:
+    """What the executive wrote into its ``stats_path`` on its way out (:meth:`TickStats.final_record` and its
+    counters); empty when it wrote nothing (it was killed) or the file cannot be read."""
+    try:
+        stats = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return stats if isinstance(stats, dict) else {}

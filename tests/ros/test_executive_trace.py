@@ -39,7 +39,10 @@ def test_trace_path_writes_a_trace_that_replay_reads(executive: Callable[..., Ha
                             capture_output=True, text=True, timeout=60)
     assert replay.returncode == 0, replay.stderr
     shown = replay.stdout.splitlines()
-    assert len(shown) == len(ticks) and "Randomizer" in replay.stdout
+    events = sum(len(line.get("events", [])) for line in ticks)  # each announcement printed before its tick
+    assert events >= 1, "the Randomizer announced itself in the trace"
+    assert len(shown) == len(ticks) + events and "Randomizer" in replay.stdout
+    assert sum(1 for text in shown if text.startswith("tick ")) == len(ticks)
 
 
 def test_an_unwritable_trace_path_refuses_to_start(start_executive: Callable[..., object], tmp_path: Path) -> None:
