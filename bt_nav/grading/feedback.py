@@ -14,18 +14,8 @@ from typing import Any
 
 from bt_nav.grading.grid import failure_groups, run_label, runs_label
 from bt_nav.grading.handins import FEEDBACK, StudentResult, load_class, load_grid
+from bt_nav.grading.hints import LAUNCH_HINTS
 from bt_nav.grading.rules import RULES_FILE
-
-#: What to look at, per launch check that failed.
-LAUNCH_HINTS = {
-    "starts the node": "the launch description must hold a `launch_ros.actions.Node(package=..., executable="
-                       "'reactive_navigator')` for your node, returned by `generate_launch_description()`",
-    "declares safety_distance (default 0.5)": "add `DeclareLaunchArgument('safety_distance', default_value='0.5')` "
-                                              "to the launch description",
-    "passes safety_distance to the node": "give the Node `parameters=[{'safety_distance': "
-                                          "LaunchConfiguration('safety_distance')}]` so `ros2 launch ... "
-                                          "safety_distance:=0.6` reaches your node",
-}
 
 
 def _link(result: StudentResult, row: dict[str, Any], key: str, text: str) -> str | None:
