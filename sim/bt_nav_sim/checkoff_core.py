@@ -50,6 +50,7 @@ import numpy as np
 from bt_nav.mission.maneuver_spec import LiveMap, ManeuverSpec, judge_names, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
+from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
@@ -173,16 +174,23 @@ CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers p
 class CheckoffJudge(Verdict):
     """The lab's check-off: schedule, ground truth and commands, the maneuver episodes, the verdict."""
 
-    def __init__(self, config: CheckoffConfig, world: World, *, update_world: bool = True) -> None:
+    def __init__(self, config: CheckoffConfig, world: World | None, *, update_world: bool = True,
+                 readings: ReadingSource | None = None) -> None:
+        """``readings``: where the trigger readings come from instead of casts in ``world`` (a real robot's recorded
+        scans, :class:`bt_nav_sim.feeds.ScanReadings`: the reading at a pose is the latest scan at or before it)."""
+        if world is None and readings is None:
+            raise ValueError("the check-off judge needs a world to cast its readings in, or a reading source")
         self.config = config
         self.world = world
-        self.update_world = update_world
-        name = config.lidar or world.lidar
-        self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
-        angles = self.caster.layout.angles()
-        self._mount = (self.caster.model.mount_x, self.caster.model.mount_y)
-        self._sectors = SectorReader(angles, config.family())
-        self._cos, self._sin = np.cos(angles), np.sin(angles)
+        self.update_world = update_world and world is not None
+        self.readings = readings
+        if world is not None:
+            name = config.lidar or world.lidar
+            self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
+            angles = self.caster.layout.angles()
+            self._mount = (self.caster.model.mount_x, self.caster.model.mount_y)
+            self._sectors = SectorReader(angles, config.family())
+            self._cos, self._sin = np.cos(angles), np.sin(angles)
         self.t0: float | None = None
         self._t: list[float] = []
         self._x: list[float] = []
@@ -267,7 +275,7 @@ class CheckoffJudge(Verdict):
         self._y.append(float(y))
         self._yaw.append(float(yaw))
         self._uyaw.append(uyaw)
-        self._readings.append(self._read(x, y, yaw, self._walkers_at(t)) if self._armed_at(t) else None)
+        self._readings.append(self._read(x, y, yaw, self._walkers_at(t), t) if self._armed_at(t) else None)
 
     def on_walkers(self, t: float, circles: Any) -> None:
         """Where the people walking were at ``t`` (circles (K, 3): x, y, r); out-of-order samples are dropped."""
@@ -300,9 +308,12 @@ class CheckoffJudge(Verdict):
             return False
         return self.deactivation_requested is None or t <= self.deactivation_requested + self.config.grace
 
-    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None) -> Reading:
+    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None,
+              t: float = math.nan) -> Reading | None:
         """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range), the
-        people walking included."""
+        people walking included; with a reading source, its reading at ``t`` instead (None: none then)."""
+        if self.readings is not None:
+            return self.readings.reading_at(t)
         sx, sy = self.caster.sensor_pose(float(x), float(y), float(yaw))
         r = self.caster.true_ranges(sx, sy, float(yaw), walkers)
         along, across = r * self._cos + self._mount[0], np.abs(r * self._sin + self._mount[1])  # from the centre
@@ -554,11 +565,11 @@ class CheckoffJudge(Verdict):
         held = [r for r in window if self._trigger(r)[0]]
         return held or [self._readings[i]]
 
-    def _cast_at(self, k: int) -> Reading:
+    def _cast_at(self, k: int) -> Reading | None:
         """The reading of sample ``k`` though it was taken before the arming (an episode that starts at the arming
         may have been decided on a scan from just before it)."""
         t = self._t[k]
-        return self._read(self._x[k], self._y[k], self._yaw[k], self._walkers_at(t))
+        return self._read(self._x[k], self._y[k], self._yaw[k], self._walkers_at(t), t)
 
     def _stood_before(self, a: int) -> float:
         """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""
