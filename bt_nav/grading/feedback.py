@@ -42,6 +42,9 @@ def _run_lines(result: StudentResult) -> list[str]:
         checks = (row.get("verdict") or {}).get("report_lines") or []
         lines += [f"  - {line}" for line in checks if not line.startswith("overall:")]
         lines += [f"  - finding: {f}" for f in row.get("findings") or []]
+        said = (row.get("rerun") or {}).get("said")
+        if said and said not in (row.get("findings") or []):  # how its re-runs ended (bt_nav.grading.realtime)
+            lines.append(f"  - run again: {said}")
     return lines
 
 

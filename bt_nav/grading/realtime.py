@@ -1,43 +1,60 @@
-"""A failure at more than real time is checked at 1x before it stands: a node that keeps time by the wall clock is
-not failed for the grader's speed.
+"""A failed run at more than real time is run again before it stands: once more at the grade's speed, and (where a
+speed can matter) at 1x; the grade says what each showed, and a failure stands unless the failed run's own evidence
+excuses it.
 
 Why: ``--exe`` runs the node's world faster than real time (``--rtf``, 5 by default) and gives the node sim time
 (``use_sim_time``). A node that times its turn or its 50 s with ``time.sleep`` or ``time.time`` is right on a robot
-at 1x and wrong in any faster simulation: at 5x its 90 deg pivot turns 450 deg, its evaluation comes at 250 sim s.
-The grader must never fail a right node, so before failures stand one failed run is run again at 1x (the probe).
-If it passes there, every failed run is run at 1x, graded there, and carries a finding that names the wall clock;
-a node that fails at 1x too keeps its verdicts (its mistake is not the speed), at the cost of one run at 1x.
+at 1x and wrong in any faster simulation: at 5x its 90 deg pivot turns 450 deg. And a machine busy enough can starve
+a right node for a wall second, long enough for the simulator's pace to stop waiting for it (its turn then runs on).
+Neither is the node's mistake. But a node whose decisions change from run to run (an angle drawn, a side chosen)
+can fail one run and pass the next for its own reasons: a passing re-run of it proves nothing.
 
-Only failures a speed can have caused are run again (:func:`speed_cannot_matter`): not a node that crashed while
-starting, whose arm service never appeared, that only failed to declare a parameter, or whose scans or commands
-no message could carry (a wrong topic, type or QoS). Those are fixed before the simulation moves.
+The rule (:func:`decide`), for a failed run at ``rtf`` > 1 that a speed can change (:func:`speed_cannot_matter`):
 
-The 1x runs live in ``<out>/realtime/`` (the faster runs stay where they are, linked from the finding); resuming
-reuses the 1x runs that finished there.
+- **load**: the failed run's own evidence shows its timing slipped (:func:`slipped_timing`: the simulator stopped
+  waiting for the node's commands inside a failed maneuver, or while it was armed for any other failure) and a
+  re-run passed: graded by the re-run, with a finding that names the load;
+- **wall clock**: its turns lasted about ``rtf`` times longer in sim time than at 1x, or its evaluation call came at
+  1x only (:func:`wall_clock_evidence`), and the 1x run passed: graded at 1x, with a finding that names the wall
+  clock;
+- otherwise the failure stands, and the words say whether the runs differed (:func:`decisions_differ`: the
+  maneuvers' sides or angles), whether a re-run passed, and how each ended.
+
+Only failures a speed can have caused are run again: not a node that crashed while starting, whose arm service never
+appeared, that only failed to declare a parameter, or whose scans or commands no message could carry (a wrong
+topic, type or QoS). Those are fixed before the simulation moves. A run not graded (another program on its domain,
+:mod:`bt_nav.grading.exe.run`) is no failure and is never run again here.
+
+Cost: the grid's first such failure goes first (the probe); when both its re-runs fail, the other failures stand
+without running again (a mistake fails at any speed); otherwise every one is run again. The re-runs at the grade's
+speed live in ``<out>/rerun/``, those at 1x in ``<out>/realtime/``; resuming reuses the re-runs that finished.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.exe.grid import ERROR, STOPPED, finished_runs, run_pool
+from bt_nav.grading.exe.log import pace_drops
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.ros.nodes.findings import CUT_OFF
 from bt_nav.ros.supervise import StopRequest
 
 Row = dict[str, Any]
-#: Where a grid's 1x runs go, below its ``--out``.
-REALTIME_DIR = "realtime"
+#: Where a grid's re-runs go, below its ``--out``: at the grade's own speed, and at 1x.
+RERUN_DIR, REALTIME_DIR = "rerun", "realtime"
 #: Wall seconds a 1x run may take at least (a lab mission is ~75 sim s, start-up and shutdown besides).
 REALTIME_LIMIT = 240.0
 
 
 def failed_at_speed(row: Row | None) -> bool:
-    """A run the node failed (not bt_nav's error, not stopped, not already a 1x run)."""
-    return bool(row) and not row["passed"] and row["outcome"] not in (ERROR, STOPPED) and "realtime" not in row
+    """A run the node failed (not bt_nav's error, not stopped, not graded, not already decided on its re-runs)."""
+    return bool(row) and not row["passed"] and row["outcome"] not in (ERROR, STOPPED) and "realtime" not in row \
+        and "rerun" not in row and not row.get("not_graded")
 
 
 #: Failed checks no speed can change: what the node declares at start-up (the lab's ``ros2 param list``), not what
@@ -97,10 +114,11 @@ def check_plan(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row])
     lines = []
     if again:
         others = len(again) - 1
-        then = f", then the {others} other failed run{'s' if others > 1 else ''} that may depend on speed if it " \
-            "passes there" if others else ""
-        lines.append(f"bt-nav grade: {run_label(rows[again[0].key])} again at 1x real time before the failures "
-                     f"stand{then} (--realtime-check off skips it): into {settings.out / REALTIME_DIR}/")
+        then = f", then the {others} other failed run{'s' if others > 1 else ''} that may depend on speed unless it " \
+            "fails at both" if others else ""
+        lines.append(f"bt-nav grade: {run_label(rows[again[0].key])} again at {settings.rtf:g}x and at 1x real time "
+                     f"before the failures stand{then} (--realtime-check off skips it): into "
+                     f"{settings.out / RERUN_DIR}/ and {settings.out / REALTIME_DIR}/")
     if kept:
         head = "not re-run at 1x, no speed changes their verdict" if again else \
             "no failed run depends on speed, so none is re-run at 1x"
@@ -115,12 +133,9 @@ def _labels(labels: list[str], shown: int = 3) -> str:
     return ", ".join(labels[:shown]) + more
 
 
-def wall_clock_finding(rtf: float, reason: str, evidence: str | None = None) -> str:
-    """What a run that passed at 1x after failing faster tells its student: the wall clock only on ``evidence``
-    (:func:`wall_clock_evidence`), else that its timing followed sim time and the load is the likelier cause."""
-    if evidence is None:
-        return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x, graded at 1x; its timing followed sim "
-                "time at both speeds, so the faster run's failure is put down to the machine's load, not to the node")
+def wall_clock_finding(rtf: float, reason: str, evidence: str) -> str:
+    """What a run graded at 1x for its wall clock tells its student: the faster run's failure and the evidence
+    (:func:`wall_clock_evidence`)."""
     return (f"failed at {rtf:g}x real time ({reason}) and passed at 1x ({evidence}): the node keeps time by the wall "
             "clock (time.sleep, time.time) where ROS time (self.get_clock(), sim time under use_sim_time) would keep "
             "it right in a simulation at any speed")
@@ -151,6 +166,150 @@ def wall_clock_evidence(slow: dict[str, Any] | None, fast: dict[str, Any] | None
     return None
 
 
+
+#: Degrees two runs' turns may differ and still be the same decision: twice the check-off's tolerance (each run's
+#: turn may be off by that much from what the node meant).
+SAME_ANGLE_DEG = 20.0
+
+
+def _turns(verdict: dict[str, Any] | None) -> list[tuple[str, float]]:
+    """A verdict's maneuvers as (side, degrees turned), in order."""
+    return [(str(m.get("side")), abs(float(m.get("angle_deg", 0.0)))) for m in (verdict or {}).get("maneuvers") or []]
+
+
+def _turn_words(turns: list[tuple[str, float]]) -> str:
+    return ", ".join(f"{angle:.0f} deg {side}" for side, angle in turns) or "no maneuver"
+
+
+def decisions_differ(failed: dict[str, Any] | None, again: dict[str, Any] | None) -> str | None:
+    """How two runs' decisions differed, in words (None: they made the same ones, or there is nothing to compare):
+    a maneuver turned to the other side, or by more than :data:`SAME_ANGLE_DEG` more or less, in the same place of
+    the run's sequence. A node that draws its angle or its side (the lab's Randomizer, a coin for the side of a
+    tie) differs from run to run for its own reasons, and one of its runs passing says nothing of another. The
+    number of maneuvers alone is not compared (a turn that overshoots changes where the robot goes next)."""
+    first, second = _turns(failed), _turns(again)
+    for number, ((side1, angle1), (side2, angle2)) in enumerate(zip(first, second, strict=False), start=1):
+        if side1 != side2 or abs(angle1 - angle2) > SAME_ANGLE_DEG:
+            return f"maneuver {number} turned {angle1:.0f} deg {side1} in the failed run, {angle2:.0f} deg {side2} " \
+                   f"when run again (turns: {_turn_words(first)}; again: {_turn_words(second)})"
+    return None
+
+
+def slipped_timing(verdict: dict[str, Any] | None, drops: list[float]) -> str | None:
+    """The failed run's own evidence that its timing slipped, in words (None: none): the simulator stopped waiting
+    for the node's commands (``drops``, sim times: :func:`bt_nav.grading.exe.log.pace_drops`) inside one of its
+    failed maneuvers (between the turn's first command and its settling), or, when no maneuver failed, while it was
+    armed. Sim time waits for the node's commands (:data:`bt_nav.grading.exe.run.FOLLOW_NODE`) unless the node says
+    nothing for a wall second; a node that keeps commanding on its sim-time timer never meets that unless the
+    machine starves it, and its turn then runs on without it. A drop while disarmed (the node has nothing to say)
+    is no slip."""
+    if not verdict or not drops:
+        return None
+    t0 = float(verdict.get("t0_sim") or 0.0)
+    failed = [(n, m) for n, m in enumerate(verdict.get("maneuvers") or [], start=1) if not m.get("passed")]
+    for number, m in failed:
+        inside = [t - t0 for t in drops if m["t"] - 0.05 <= t - t0 <= m.get("settled", m["t"])]
+        if inside:
+            return (f"the simulator stopped waiting for the node's commands at t={inside[0]:.1f} s, inside maneuver "
+                    f"{number} (t={m['t']:.1f}-{m.get('settled', m['t']):.1f} s): the node sent nothing for a wall "
+                    "second while it turned")
+    times = verdict.get("times") or {}
+    armed, disarmed = times.get("activated"), times.get("deactivation_requested")
+    if failed or armed is None:
+        return None
+    end = float("inf") if disarmed is None else disarmed
+    inside = [t - t0 for t in drops if armed <= t - t0 < end]
+    if inside:
+        return (f"the simulator stopped waiting for the node's commands at t={inside[0]:.1f} s while it was armed: "
+                "the node sent nothing for a wall second")
+    return None
+
+
+def run_slipped(row: Row) -> str | None:
+    """:func:`slipped_timing` of a run, read from its directory (its ``sim.log``) and its verdict."""
+    log = Path(str(row.get("run_dir") or "")) / "sim.log"
+    if not row.get("run_dir") or not log.is_file():
+        return None
+    return slipped_timing(row.get("verdict"), pace_drops(log.read_text(errors="replace")))
+
+
+def _judged(row: Row) -> bool:
+    """A re-run that says something of the node: not bt_nav's error, not stopped, not left without a grade."""
+    return row["outcome"] not in (ERROR, STOPPED) and not row.get("not_graded")
+
+
+def _failed_both(again: Row | None, slow: Row | None) -> bool:
+    """Both re-runs of a failure ran, judged, and failed."""
+    return all(r is not None and _judged(r) and not r["passed"] for r in (again, slow))
+
+
+def _ended(row: Row | None, rtf: float) -> str:
+    """How one re-run ended, in words."""
+    speed = "1x" if rtf <= 1.0 else f"{rtf:g}x"
+    if row is None:
+        return f"at {speed}: not run (stopped)"
+    if not _judged(row):
+        return f"at {speed}: no verdict ({row['reason']})"
+    if row["passed"]:
+        return f"at {speed}: passed"
+    return f"at {speed}: failed ({row['reason']})"
+
+
+def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: str | None) -> tuple[Row, str]:
+    """The row that stands for a failed run at ``rtf`` (``fast``) after its re-runs (``again`` at ``rtf``, ``slow``
+    at 1x; None where one did not run), and the grade's words on it (see the module docstring for the rule).
+    ``slipped``: :func:`slipped_timing` of the failed run. The row returned carries ``rerun``: each re-run's
+    verdict, the decision (``load``, ``wall clock`` or ``stands``) and the words."""
+    ended = "; ".join(_ended(r, speed) for r, speed in ((again, rtf), (slow, 1.0)))
+    again, slow = (r if r is not None and _judged(r) else None for r in (again, slow))
+    runs = [(r, speed) for r, speed in ((again, rtf), (slow, 1.0)) if r is not None]
+    head = f"failed at {rtf:g}x ({fast['reason']}); run again {ended}"
+    passing = [r for r, _ in runs if r["passed"]]
+    record = {"runs": [{"rtf": speed, "passed": r["passed"], "reason": r["reason"], "run_dir": r["run_dir"]}
+                       for r, speed in runs], "failed": {"rtf": rtf, "reason": fast["reason"],
+                                                         "run_dir": fast["run_dir"]}}
+    if slipped is not None and passing:
+        said = (f"{head}: {slipped}, so the failure is put down to the machine's load, not to the node; graded by the "
+                "re-run that passed")
+        return _regraded(passing[0], fast, {**record, "decision": "load", "said": said}, said), said
+    wall = wall_clock_evidence((slow or {}).get("verdict"), fast.get("verdict"), rtf)
+    if wall is not None and slow is not None and slow["passed"]:
+        said = f"{head}: {wall_clock_finding(rtf, fast['reason'], wall)}; graded at 1x"
+        return _regraded(slow, fast, {**record, "decision": "wall clock", "said": said},
+                         wall_clock_finding(rtf, fast["reason"], wall)), said
+    differed = next((d for r, _ in runs if (d := decisions_differ(fast.get("verdict"), r.get("verdict")))), None)
+    if differed is not None:
+        why = (f"the runs differed ({differed}): a re-run that passes does not overturn a failure of a node whose "
+               "decisions change from run to run" if passing else f"the runs differed ({differed})")
+    elif passing:
+        why = ("nothing in the failed run shows its timing slipped (the simulator waited for the node's commands "
+               "throughout) or a wall clock")
+    else:
+        why = "it failed again"
+    said = f"{head}: {why}; the failure stands"
+    row = dict(fast)
+    row["rerun"] = {**record, "decision": "stands", "said": said}
+    row["realtime_probe"] = {"passed": bool(slow and slow["passed"]), "reason": said,
+                             "run_dir": (slow or again or fast)["run_dir"]}
+    return row, said
+
+
+def _regraded(graded: Row, fast: Row, record: dict[str, Any], finding: str) -> Row:
+    """The re-run's row that replaces the failed one, with what the failed run said and the finding."""
+    row = dict(graded)
+    row["rerun"] = record
+    row["realtime"] = {"rtf": record["failed"]["rtf"], "passed": False, "reason": fast["reason"],
+                       "run_dir": fast["run_dir"]}
+    row["findings"] = [*row.get("findings", []), finding]
+    row["reason"] = f"{row['reason']}; {finding}"
+    return row
+
+
+def rerun_settings(settings: ExeSettings) -> ExeSettings:
+    """The grid's settings for its re-runs at its own speed, into ``<out>/rerun``."""
+    return replace(settings, out=settings.out / RERUN_DIR)
+
+
 def realtime_settings(settings: ExeSettings) -> ExeSettings:
     """The grid's settings at 1x, into ``<out>/realtime``."""
     return replace(settings, rtf=1.0, out=settings.out / REALTIME_DIR, limit=max(settings.limit, REALTIME_LIMIT))
@@ -158,68 +317,87 @@ def realtime_settings(settings: ExeSettings) -> ExeSettings:
 
 #: One grid to check: its jobs, settings and rows (job key -> row, replaced in place), and who sees a new row.
 Grid = tuple[Sequence[Job], ExeSettings, dict[str, Row], Callable[[Row], None] | None]
+#: Who hears the words on each re-run (the grid's index among those checked, and the line).
+Say = Callable[[int, str], None]
 
 
 def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row], workers: int,
-                         stop: StopRequest | None = None, on_row: Callable[[Row], None] | None = None) -> int:
-    """Check one grid's failures at 1x (see the module docstring), replacing ``rows`` (job key -> row) in place
-    where the node passes there; returns how many rows were replaced. Nothing runs at ``rtf <= 1``, with the check
-    off, or without a failure."""
-    return confirm_grids([(jobs, settings, rows, on_row)], workers, stop)[0]
+                         stop: StopRequest | None = None, on_row: Callable[[Row], None] | None = None,
+                         say: Callable[[str], None] | None = None) -> int:
+    """Run one grid's failures again (see the module docstring), replacing ``rows`` (job key -> row) in place with
+    the row that stands for each; ``say`` hears the words on each (``bt-nav grade: <run>: ...``). Returns how many
+    failures were overturned. Nothing runs at ``rtf <= 1``, with the check off, or without a failure."""
+    heard = None if say is None else (lambda _index, line: say(line))
+    return confirm_grids([(jobs, settings, rows, on_row)], workers, stop, heard)[0]
 
 
-def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None = None) -> list[int]:
-    """:func:`confirm_at_real_time` for several grids (a class) in one pool: every grid's probe at once, then the
-    other failed runs of the grids whose probe passed; how many rows each grid had replaced."""
-    plans = []  # per grid: its failed jobs, its 1x settings, the 1x rows it has already
+def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None = None,
+                  say: Say | None = None) -> list[int]:
+    """:func:`confirm_at_real_time` for several grids (a class) in one pool: every grid's probe (its first failure
+    to check, at both speeds) at once, then the other failures of the grids whose probe did not fail both re-runs;
+    how many failures each grid had overturned."""
+    plans = []  # per grid: its failed jobs, its settings at its speed and at 1x, the re-runs finished there
     for jobs, settings, rows, _on_row in grids:
         failed = failed_jobs(jobs, settings, rows)
-        slow = realtime_settings(settings) if failed else settings
-        plans.append((failed, slow, finished_runs(slow.out, failed) if failed and slow.out.is_dir() else {}))
-    probes = _run_missing([(failed[0], slow, done) for failed, slow, done in plans if failed], workers, stop)
-    rest, confirmed = [], []  # the other failed runs to run at 1x; per grid, whether its probe passed
-    for (failed, slow, done), (_, _, rows, _) in zip(plans, grids, strict=True):
-        probe = probes.get((str(slow.out), failed[0].key)) if failed else None
-        confirmed.append(probe is not None and probe["passed"])
-        if confirmed[-1]:
-            rest += [(job, slow, done) for job in failed[1:]]
-        elif probe is not None:
-            rows[failed[0].key]["realtime_probe"] = {"passed": False, "reason": probe["reason"],
-                                                     "run_dir": probe["run_dir"]}
+        fast, slow = rerun_settings(settings), realtime_settings(settings)
+        plans.append((failed, fast, slow, _finished(fast, failed), _finished(slow, failed)))
+
+    def tasks(index: int, chosen: Sequence[Job]) -> list[tuple[Job, ExeSettings, dict[str, Row]]]:
+        _, fast, slow, done_fast, done_slow = plans[index]
+        return [task for job in chosen for task in ((job, fast, done_fast), (job, slow, done_slow))]
+
+    probes = _run_missing([t for i, plan in enumerate(plans) if plan[0] for t in tasks(i, plan[0][:1])], workers, stop)
+    rest = []
+    for index, (failed, fast, slow, _, _) in enumerate(plans):
+        if not failed:
+            continue
+        if not _failed_both(*(probes.get((str(s.out), failed[0].key)) for s in (fast, slow))):
+            rest += tasks(index, failed[1:])
     results = {**probes, **_run_missing(rest, workers, stop)}
-    replaced = []
-    for (failed, slow, _), passed_at_1x, (_, settings, rows, on_row) in zip(plans, confirmed, grids, strict=True):
-        count = 0
-        for job in failed if passed_at_1x else ():
-            slow_row = results.get((str(slow.out), job.key))
-            if slow_row is not None:
-                rows[job.key] = _graded_at_real_time(slow_row, rows[job.key], settings.rtf)
-                count += 1
-                if on_row is not None:
-                    on_row(rows[job.key])
-        replaced.append(count)
-    return replaced
+    return [_settle(index, grid, plans[index], results, say) for index, grid in enumerate(grids)]
+
+
+def _settle(index: int, grid: Grid, plan: tuple[Any, ...], results: dict[tuple[str, str], Row],
+            say: Say | None) -> int:
+    """Decide every failure of one grid on its re-runs (:func:`decide`); a failure not run again (its probe failed
+    at both speeds) stands with words that say so. Returns how many were overturned."""
+    _jobs, settings, rows, on_row = grid
+    failed, fast, slow = plan[0], plan[1], plan[2]
+    overturned = 0
+    probe_failed = bool(failed) and _failed_both(*(results.get((str(s.out), failed[0].key)) for s in (fast, slow)))
+    for number, job in enumerate(failed):
+        again, at_1x = (results.get((str(s.out), job.key)) for s in (fast, slow))
+        if again is None and at_1x is None:
+            if not (number and probe_failed):
+                continue  # stopped before it ran: its failure stands as it was, unchecked
+            probe = rows[failed[0].key]
+            said = f"not run again: {run_label(probe)}, the first failure, failed again at both speeds; the " \
+                   "failure stands"
+            rows[job.key] = {**rows[job.key], "rerun": {"runs": [], "decision": "stands", "said": said}}
+        else:
+            fast_row = rows[job.key]
+            rows[job.key], said = decide(fast_row, again, at_1x, settings.rtf,
+                                         run_slipped(fast_row) if again or at_1x else None)
+            overturned += bool(rows[job.key]["passed"])
+            if on_row is not None and rows[job.key]["passed"]:
+                on_row(rows[job.key])
+        if say is not None:
+            say(index, f"bt-nav grade: {run_label(rows[job.key])}: {said}")
+    return overturned
+
+
+def _finished(settings: ExeSettings, failed: Sequence[Job]) -> dict[str, Row]:
+    """The re-runs of ``failed`` that finished in ``settings.out`` already (a resumed grade)."""
+    return finished_runs(settings.out, failed) if failed and settings.out.is_dir() else {}
 
 
 def _run_missing(tasks: Sequence[tuple[Job, ExeSettings, dict[str, Row]]], workers: int,
                  stop: StopRequest | None) -> dict[tuple[str, str], Row]:
-    """Each (job, 1x settings, finished 1x rows): the finished row, else the job run now (all in one pool); by
-    (1x directory, job key), nothing for a run that never started."""
-    out = {(str(slow.out), job.key): done[job.key] for job, slow, done in tasks if job.key in done}
-    todo = [(job, slow) for job, slow, done in tasks if job.key not in done]
+    """Each (job, re-run settings, finished re-runs): the finished row, else the job run now (all in one pool); by
+    (re-run directory, job key), nothing for a run that never started."""
+    out = {(str(s.out), job.key): done[job.key] for job, s, done in tasks if job.key in done}
+    todo = [(job, s) for job, s, done in tasks if job.key not in done]
     for index, row in run_pool(todo, workers, stop):
         if row is not None:
             out[(str(todo[index][1].out), todo[index][0].key)] = row
     return out
-
-
-def _graded_at_real_time(slow: Row, fast: Row, rtf: float) -> Row:
-    """The 1x run's row, with what the faster run said: a finding when the 1x run passed."""
-    row = dict(slow)
-    row["realtime"] = {"rtf": rtf, "passed": fast["passed"], "reason": fast["reason"], "run_dir": fast["run_dir"]}
-    if row["passed"]:  # a passed row is a verdict (never a bt_nav error nor stopped)
-        finding = wall_clock_finding(rtf, fast["reason"], wall_clock_evidence(slow.get("verdict"),
-                                                                              fast.get("verdict"), rtf))
-        row["findings"] = [*row.get("findings", []), finding]
-        row["reason"] = f"{row['reason']}; {finding}"
-    return row
