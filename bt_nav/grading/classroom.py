@@ -346,8 +346,9 @@ def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dic
             say(f"{name}: {line.removeprefix('bt-nav grade: ')}")
     names = [name for name, (settings, jobs, rows) in grids.items() if failed_jobs(jobs, settings, rows)]
     shown = [None if on_row is None else (lambda row, who=name: on_row(who, row)) for name in names]
+    heard = None if say is None else (lambda index, line: say(f"{names[index]}: {line.removeprefix('bt-nav grade: ')}"))
     confirm_grids([(grids[n][1], grids[n][0], grids[n][2], show) for n, show in zip(names, shown, strict=True)],
-                  workers, stop)
+                  workers, stop, heard)
     for name in names:
         _write_student_report(*grids[name])
 

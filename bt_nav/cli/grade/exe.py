@@ -119,9 +119,7 @@ def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str,
         print(line, flush=True)
     if not failed_jobs(jobs, settings, by_key):
         return rows
-    replaced = confirm_at_real_time(jobs, settings, by_key, workers, stop, _show)
-    if not replaced and not stop.requested:
-        print("bt-nav grade: it failed at 1x too: the failures stand", flush=True)
+    confirm_at_real_time(jobs, settings, by_key, workers, stop, _show, lambda line: print(line, flush=True))
     return [by_key[job.key] for job in jobs if job.key in by_key]
 
 
