@@ -23,188 +23,172 @@ Pure: no rclpy; the only files read are the weights (:func:`load_weights`) and a
 
 from __future__ import annotations
 
+import csv
+import io
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-import yaml
+from bt_nav_sim.referee_core import check_reason
 
 from bt_nav.grading.grid import cell_label, failure_groups, run_label, runs_label
+from bt_nav.grading.hints import LAUNCH_HINTS, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
+from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this module's API since it began)
+    ERROR,
+    NOT_CHECKED,
+    NOT_GRADED,
+    WEIGHTS_FILE,
+    Weights,
+    check_counts,
+    check_not_checked,
+    graded_runs,
+    handin_verdict,
+    launch_checks,
+    load_weights,
+    not_graded_reason,
+    run_not_graded,
+    score,
+    student_record,
+    unscored,
+)
+from bt_nav.grading.scores import tests as scored_tests
 
-#: bt_nav's default weights (installed as package data); ``--weights FILE`` changes some of them.
-WEIGHTS_FILE = Path(__file__).with_name("gradescope_weights.yaml")
-#: Gradescope's visibility values (results.json's ``visibility`` and each test's).
-VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
-#: A run whose outcome is this is bt_nav's failure, not the node's (:data:`bt_nav.grading.exe.grid.ERROR`).
-ERROR = "bt_nav error"
 #: How many failed checks of a run its test's output lists before "and N more".
 CHECKS_SHOWN = 5
+#: The lines of a crashed node's output its test quotes.
+NODE_LOG_LINES = 12
+#: Gradescope's Markdown: each test's ``output`` and the top-level one are Markdown.
+OUTPUT_FORMAT = "md"
 
 
-@dataclass(frozen=True)
-class Weights:
-    """The Gradescope points: ``total`` for the hand-in, ``launch_share`` of it for the launch-file checks, a
-    weight per world (default 1), and the visibility settings (``gradescope_weights.yaml`` documents each)."""
-
-    total: float = 100.0
-    launch_share: float = 0.2
-    worlds: dict[str, float] = field(default_factory=dict)
-    visibility: str = "visible"
-    test_visibility: str = "visible"
-    stdout_visibility: str = "hidden"
-
-
-def load_weights(path: Path | None = None) -> Weights:
-    """bt_nav's default weights, with the keys of ``path`` (an instructor's YAML) over them. ValueError naming the
-    file and the key for an unknown key, a wrong type or value: a bad weights file refuses the grade before any
-    run, as a typo would otherwise grade a whole class with the defaults."""
-    doc = _yaml_mapping(WEIGHTS_FILE)
-    if path is not None:
-        doc.update(_yaml_mapping(Path(path)))
-    where = path or WEIGHTS_FILE
-    known = {f.name for f in fields(Weights)}
-    unknown = sorted(set(doc) - known)
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)} (known: {', '.join(sorted(known))})")
+def node_output(row: dict[str, Any], lines: int = NODE_LOG_LINES) -> str:
+    """The last ``lines`` lines the node printed in a run (its ``node.log`` in the finished grade; '' when there is
+    none): a crash's traceback, quoted where the student reads the verdict."""
     try:
-        total, share = float(doc["total"]), float(doc["launch_share"])
-        worlds = {str(k): float(v) for k, v in (doc.get("worlds") or {}).items()}
-    except (TypeError, ValueError, AttributeError) as exc:
-        raise ValueError(f"{where}: total and launch_share are numbers, worlds a mapping world: number ({exc})") \
-            from None
-    if total <= 0 or not 0 <= share <= 1 or any(w < 0 for w in worlds.values()):
-        raise ValueError(f"{where}: total must be > 0, launch_share within 0..1, a world's weight >= 0")
-    for key in ("visibility", "test_visibility", "stdout_visibility"):
-        if doc[key] not in VISIBILITIES:
-            raise ValueError(f"{where}: {key} is {doc[key]!r}; Gradescope knows {', '.join(VISIBILITIES)}")
-    return Weights(total, share, worlds, doc["visibility"], doc["test_visibility"], doc["stdout_visibility"])
+        text = (Path(str(row.get("run_dir", ""))) / "node.log").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+    return student_words("\n".join(text.rstrip().splitlines()[-lines:]))
 
 
-def _yaml_mapping(path: Path) -> dict[str, Any]:
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise ValueError(f"cannot read the weights file {path}: {exc}") from None
-    if doc is None:
-        return {}
-    if not isinstance(doc, dict):
-        raise ValueError(f"{path}: a weights file is a YAML mapping (key: value)")
-    return doc
+def _md(text: str) -> str:
+    """``text`` safe inside Markdown prose: no character starts a heading, a list, a link or emphasis by accident."""
+    return re.sub(r"([\\*_#<>\[\]])", r"\\\1", text)
 
 
-def _launch_checks(record: dict[str, Any]) -> list[dict[str, Any]]:
-    launch = record.get("launch")
-    return list(launch.get("checks") or []) if isinstance(launch, dict) else []
-
-
-def _runs(record: dict[str, Any]) -> list[dict[str, Any]]:
-    return [] if record.get("refused") else list(record.get("runs") or [])
+def _check_line(check: dict[str, Any]) -> str:
+    """A failed check for a student: what happened, and the rule it broke (the check's ``required``)."""
+    name = str(check.get("name"))
+    why = student_words(check_reason(check))
+    rule = check.get("required")
+    rule_text = f" (the rule: {_md(str(rule))})" if rule not in (None, "") and str(rule) not in why else ""
+    what = why if why.startswith(name) else f"{name}: {why}"
+    return f"- {_md(what)}{rule_text}"
 
 
 def _run_text(row: dict[str, Any]) -> str:
-    """A run's verdict for a student: its reason, the checks it failed, its findings, where its pictures are."""
-    if row.get("outcome") == ERROR:
-        return (f"bt_nav error (not your node's failure; not scored): {row.get('reason', '?')}. "
+    """A run's verdict for a student, in Markdown (Gradescope's ``output_format`` md): the failure's words, each
+    failed check with the rule it broke, what to change (:mod:`bt_nav.grading.hints`), the 1x check, findings,
+    and a crash's last output; no file of the grader's."""
+    if row.get("outcome") == ERROR or run_not_graded(row):
+        what = "bt_nav error" if row.get("outcome") == ERROR else "Not graded"
+        return (f"**{what}** (not your node's failure; not scored): {_md(student_words(row.get('reason', '?')))}. "
                 "Ask for a regrade: the run is run again.")
-    reason = str(row.get("reason", "?"))
-    lines = [("PASSED" if row.get("passed") else "FAILED")  # the reason without the verdict said twice
-             + (f": {rest}" if (rest := reason.removeprefix("passed").removeprefix("failed: ").lstrip(": ")) else "")]
-    failed = [c for c in (row.get("verdict") or {}).get("checks", []) if not c.get("passed")]
-    for check in failed[:CHECKS_SHOWN]:
-        why = str(check.get("reason") or check.get("detail") or "failed")
-        lines.append(f"- {why}" if why.startswith(str(check.get("name"))) else f"- {check.get('name')}: {why}")
-    if len(failed) > CHECKS_SHOWN:
-        lines.append(f"- and {len(failed) - CHECKS_SHOWN} more failed checks")
+    reason = student_words(str(row.get("reason", "?")))
+    rest = reason.removeprefix("passed").removeprefix("failed: ").lstrip(": ")  # the verdict said once
+    checks = (row.get("verdict") or {}).get("checks") or []
+    failed = [c for c in checks if not c.get("passed")]
+    head = f"{len(failed)} of {len(checks)} checks failed" if failed else rest  # the checks below say the words
+    lines = [("**PASSED**" if row.get("passed") else "**FAILED**") + (f": {_md(head)}" if head else "")]
+    if failed:
+        lines += ["", "What failed, and the rule it broke:", *(_check_line(c) for c in failed[:CHECKS_SHOWN])]
+        if len(failed) > CHECKS_SHOWN:
+            lines.append(f"- and {len(failed) - CHECKS_SHOWN} more failed checks")
+    hints = run_hints(row) if not row.get("passed") else []
+    if hints:
+        lines += ["", "**How to fix:** " + " Also: ".join(h[0].upper() + h[1:] + "." for h in hints)]
     probe = row.get("realtime_probe")
     if isinstance(probe, dict):
-        lines.append(f"checked again at 1x real time: {probe.get('reason', '?')}")
-    lines += [f"finding: {f}" for f in row.get("findings") or []]
-    lines += [f"note: {n}" for n in row.get("notes") or []]
-    media = row.get("media") or {}
-    where = Path(str(row.get("run_dir", ""))).name
-    shown = [f"{what} {where}/{media[what]}" for what in ("picture", "video") if media.get(what)]
-    if shown:
-        lines.append("in the grade's directory: " + ", ".join(shown))
+        lines += ["", f"Checked again at 1x real time: {_md(student_words(str(probe.get('reason', '?'))))}"]
+    said = [f"Finding: {_md(student_words(str(f)))}" for f in row.get("findings") or []]
+    said += [f"Note: {_md(student_words(str(n)))}" for n in row.get("notes") or []]
+    if said:
+        lines += ["", *said]
+    output = node_output(row) if not row.get("passed") and not failed else ""
+    if output:
+        lines += ["", "What your node printed last:", "", "~~~", output.replace("~~~", "~ ~ ~"), "~~~"]
     return "\n".join(lines)
-
-
-def _run_points(runs: Sequence[dict[str, Any]], points: float, weights: Weights) -> list[float]:
-    """Each run's max score: ``points`` split by world weight among the judged runs (a bt_nav error: 0)."""
-    scale = [0.0 if r.get("outcome") == ERROR else weights.worlds.get(r.get("world", ""), 1.0) for r in runs]
-    whole = sum(scale)
-    return [points * s / whole if whole else 0.0 for s in scale]
-
-
-def _points(record: dict[str, Any], weights: Weights) -> tuple[float, float]:
-    """(the runs' points, the launch-file checks' points)."""
-    launch = weights.total * weights.launch_share if _launch_checks(record) else 0.0
-    return weights.total - launch, launch
 
 
 def _test(name: str, score: float, max_score: float, output: str, visibility: str, **extra: Any) -> dict[str, Any]:
     return {"name": name, "score": score, "max_score": max_score, "output": output,  # unrounded: they add up
-            "visibility": visibility, **extra}
+            "visibility": visibility, "output_format": OUTPUT_FORMAT, **extra}
 
 
-def gradescope_results(record: dict[str, Any], weights: Weights | None = None) -> dict[str, Any]:
-    """Gradescope's ``results.json`` for one node's grade (a record: see the module's docstring)."""
+def _launch_text(check: dict[str, Any]) -> str:
+    """A launch-file check for a student: its verdict, why and on which line, and what to change when it failed; a
+    check that ended "not checked" says a TA looks at it (it scores as passed)."""
+    line = f" (line {check['line']})" if check.get("line") else ""
+    verdict = "NOT CHECKED: a TA will look" if check_not_checked(check) else \
+        "PASSED" if check.get("passed") else "FAILED"
+    text = f"**{verdict}**: {_md(student_words(str(check.get('reason', ''))))}{line}"
+    hint = None if check_counts(check) else LAUNCH_HINTS.get(str(check.get("name")))
+    return text + (f"\n\n**How to fix:** {hint[0].upper()}{hint[1:]}." if hint else "")
+
+
+def gradescope_results(record: dict[str, Any], weights: Weights | None = None,
+                       wall_time: float | None = None) -> dict[str, Any]:
+    """Gradescope's ``results.json`` for one node's grade (a record: see the module's docstring), every output in
+    Markdown that names no file the student cannot open there. ``wall_time``: the seconds the grade took (the
+    ``bt-nav grade`` command's), Gradescope's ``execution_time`` (left out when unknown: the runs ran in parallel,
+    so their sum is not it). A hand-in with a run not graded has no results.json (:func:`not_graded_reason`)."""
     weights = weights or load_weights()
-    run_points, launch_points = _points(record, weights)
-    runs = _runs(record)
-    tests: list[dict[str, Any]] = []
-    judged = [r for r in runs if r.get("outcome") != ERROR]
-    if judged:
-        for i, (row, points) in enumerate(zip(runs, _run_points(runs, run_points, weights), strict=True), 1):
-            passed = bool(row.get("passed")) and row.get("outcome") != ERROR
-            status = {} if row.get("outcome") == ERROR else {"status": "passed" if passed else "failed"}
-            tests.append(_test(f"run {run_label(row)}", points if passed else 0.0, points, _run_text(row),
-                               weights.test_visibility, number=f"1.{i}", **status,
-                               tags=[t for t in (row.get("world"), row.get("maneuver"), row.get("lidar")) if t]))
-    else:
-        reason = record.get("refused") or ("every run hit a bt_nav error (not your node's failure): ask for a regrade"
-                                           if runs else "no run of the grid ended")
-        tests.append(_test("the node's runs", 0.0, run_points, f"not graded: {reason}", weights.test_visibility,
-                           status="failed", number="1"))
-    checks = _launch_checks(record)
-    for i, check in enumerate(checks, 1):
-        share = launch_points / len(checks)
-        passed = bool(check.get("passed"))
-        line = f" (line {check['line']})" if check.get("line") else ""
-        tests.append(_test(f"launch file: {check.get('name')}", share if passed else 0.0, share,
-                           f"{'PASSED' if passed else 'FAILED'}: {check.get('reason', '')}{line}",
-                           weights.test_visibility, status="passed" if passed else "failed", number=f"2.{i}",
-                           tags=["launch file"]))
-    return {"score": round(sum(t["score"] for t in tests), 4), "output": _overall_text(record, runs, checks),
-            "visibility": weights.visibility, "stdout_visibility": weights.stdout_visibility,
-            "execution_time": math.ceil(sum(r.get("wall_time", 0.0) for r in runs)), "tests": tests}
+    out: list[dict[str, Any]] = []
+    for i, test in enumerate(scored_tests(record, weights), 1):
+        tags = [t for t in (test.row.get("world"), test.row.get("maneuver"), test.row.get("lidar")) if t]
+        status = {} if test.state == "not scored" else {"status": "failed" if test.state == "failed" else "passed"}
+        if test.name.startswith("launch file: "):
+            output, tags = _launch_text(test.row), ["launch file"]
+        elif test.row:
+            output = _run_text(test.row)
+        else:
+            reason = record.get("refused") or ("no run was graded (not your node's failure): ask for a regrade"
+                                               if graded_runs(record) else "no run of the grid ended")
+            output = f"**Not run**: {_md(student_words(str(reason)))}"
+        out.append(_test(test.name, test.score, test.max_score, output, weights.test_visibility, number=str(i),
+                         **status, **({"tags": tags} if tags else {})))
+    doc = {"score": round(sum(t["score"] for t in out), 4),
+           "output": _overall_text(record, graded_runs(record), launch_checks(record)),
+           "output_format": OUTPUT_FORMAT, "test_output_format": OUTPUT_FORMAT,
+           "visibility": weights.visibility, "stdout_visibility": weights.stdout_visibility, "tests": out}
+    if wall_time is not None:
+        doc["execution_time"] = math.ceil(wall_time)
+    return doc
 
 
 def _overall_text(record: dict[str, Any], runs: Sequence[dict[str, Any]], checks: Sequence[dict[str, Any]]) -> str:
-    """The hand-in's summary for a student: runs passed, launch-file checks passed, failures grouped by reason
-    with the runs that failed so, the grid's findings."""
+    """The hand-in's summary for a student, in Markdown: runs passed, each failure with the runs that failed so,
+    the launch-file checks passed, the grid's findings; each failed test below says why and what to change."""
     if record.get("refused"):
-        lines = [f"Not run: {record['refused']}"]
+        lines = [f"**Not run**: {_md(student_words(str(record['refused'])))}"]
     else:
-        judged = [r for r in runs if r.get("outcome") != ERROR]
-        lines = [f"{sum(1 for r in judged if r.get('passed'))}/{len(judged)} runs passed."]
-        lines += [f"- {runs_label(group)}: {reason}" for reason, group in failure_groups(runs)]
+        judged = [r for r in runs if not unscored(r)]
+        lines = [f"**{sum(1 for r in judged if r.get('passed'))}/{len(judged)} runs passed.**"]
+        lines += [f"- {runs_label(group)}: {_md(student_words(reason))}" for reason, group in failure_groups(judged)]
         errors = len(runs) - len(judged)
         if errors:
-            lines.append(f"{errors} run(s) hit a bt_nav error (not your node's failure; not scored): ask for a "
+            lines.append(f"\n{errors} run(s) without a grade (not your node's failure; not scored): ask for a "
                          "regrade.")
     if checks:
-        lines.append(f"Launch file: {sum(1 for c in checks if c.get('passed'))}/{len(checks)} checks passed.")
-    lines += [f"Finding: {f}" for f in record.get("findings") or []]
-    if runs:
-        media = [r.get("media") or {} for r in runs]
-        shown = [f"{sum(1 for m in media if m.get(k))} {k}(s)" for k in ("picture", "video")
-                 if any(m.get(k) for m in media)]
-        lines.append("The grade's directory holds rules.md (the rules your node was judged by) and report.html"
-                     + (f" ({', '.join(shown)} of the runs)." if shown else "."))
+        shown = sum(1 for c in checks if check_counts(c))
+        lines.append(f"\nLaunch file: {shown}/{len(checks)} checks passed.")
+    lines += [f"\nFinding: {_md(student_words(str(f)))}" for f in record.get("findings") or []]
+    if any(not r.get("passed") for r in runs) or not all(check_counts(c) for c in checks):
+        lines.append("\nEach failed test below says what happened, the rule it broke and what to change.")
     return "\n".join(lines)
 
 
@@ -218,12 +202,13 @@ def _testsuite(name: str, record: dict[str, Any]) -> ET.Element:
         if value:
             ET.SubElement(props, "property", name=key, value=str(value))
     counts = {"tests": 0, "failures": 0, "errors": 0}
-    runs = _runs(record)
+    runs = graded_runs(record)
     for row in runs:
         case = ET.SubElement(suite, "testcase", classname=_classname(name, cell_label(row)), name=run_label(row),
                              time=f"{float(row.get('wall_time', 0.0)):.3f}")
-        if row.get("outcome") == ERROR:
-            ET.SubElement(case, "error", message=str(row.get("reason", "?")), type=ERROR).text = _run_text(row)
+        if unscored(row):
+            ET.SubElement(case, "error", message=str(row.get("reason", "?")),
+                          type=str(row.get("outcome"))).text = _run_text(row)
             counts["errors"] += 1
         elif not row.get("passed"):
             ET.SubElement(case, "failure", message=str(row.get("reason", "?")), type="failed").text = _run_text(row)
@@ -233,10 +218,10 @@ def _testsuite(name: str, record: dict[str, Any]) -> ET.Element:
         ET.SubElement(case, "failure", message=str(record.get("refused") or "no run of the grid ended"),
                       type="not run")
         counts["failures"] += 1
-    for check in _launch_checks(record):
+    for check in launch_checks(record):
         case = ET.SubElement(suite, "testcase", classname=_classname(name, "launch_file"),
                              name=str(check.get("name")))
-        if not check.get("passed"):
+        if not check_counts(check):
             ET.SubElement(case, "failure", message=str(check.get("reason", "")), type="launch file")
             counts["failures"] += 1
     counts["tests"] = len(suite.findall("testcase"))
@@ -272,25 +257,30 @@ def read_record(grade_dir: Path) -> dict[str, Any]:
 
 
 def class_records(class_dir: Path) -> list[tuple[str, dict[str, Any]]]:
-    """Every student's record from a finished class (``class.json`` and each student's ``grade.json``): a refused
-    student's holds the reason, a student whose grid wrote no grade.json has no runs; the launch-file checks are
-    taken from the student's grade.json, else from their line of class.json (a folder of hand-ins:
-    ``handin.launch``, :meth:`bt_nav.grading.handins.HandIn.record`)."""
+    """Every student's record from a finished class (``class.json`` and each student's ``grade.json``,
+    :func:`bt_nav.grading.scores.student_record`)."""
     from bt_nav.grading.classroom import read_class_page
 
     doc = read_class_page(Path(class_dir))
-    out = []
-    for student in doc.get("students", []):
-        name = str(student["name"])
-        if student.get("refused"):
-            record: dict[str, Any] = {"refused": student["refused"], "runs": []}
-        elif (Path(class_dir) / student.get("dir", name) / GRADE_FILE).is_file():
-            record = read_record(Path(class_dir) / student.get("dir", name))
-        else:
-            record = {"runs": []}
-        launch = (student.get("handin") or {}).get("launch") or student.get("launch")
-        if "launch" not in record and isinstance(launch, dict):
-            record["launch"] = launch
-        record.setdefault("settings", {}).setdefault("command", (doc.get("commands") or {}).get(name, ""))
-        out.append((name, record))
-    return out
+    return [(str(s["name"]), student_record(Path(class_dir), s, doc.get("commands"))) for s in doc.get("students", [])]
+
+
+#: The CSV's first columns; a column per run and launch-file check follows, each cell that part's state.
+CSV_HEAD = ("student", "score", "max_score", "verdict")
+
+
+def scores_csv(records: Sequence[tuple[str, dict[str, Any]]], weights: Weights | None = None) -> str:
+    """A gradebook's CSV of a class: a row per student with their score (the Gradescope points; empty for a hand-in
+    not graded), the points possible, the hand-in's verdict, and a column per run and launch-file check (``passed``,
+    ``failed``, ``not checked`` (a TA looks), ``not scored`` (not the node's doing), empty: not in their grade)."""
+    weights = weights or load_weights()
+    parts = {name: {t.name: t.state for t in scored_tests(record, weights)} for name, record in records}
+    columns = list(dict.fromkeys(test for states in parts.values() for test in states))
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow([*CSV_HEAD, *columns])
+    for name, record in records:
+        got = score(record, weights)
+        writer.writerow([name, "" if got is None else f"{got:g}", f"{weights.total:g}", handin_verdict(record),
+                         *(parts[name].get(c, "") for c in columns)])
+    return text.getvalue()

@@ -65,6 +65,18 @@ ENDING_HINTS = (
 )
 
 
+#: A file the grader wrote, named in a reason: ``(see node.log)``, ``; see node.log)``.
+_SEE_FILE = re.compile(r"\s*\(see [^()]*\)|;\s*see [\w.-]+\.\w+(?: and [\w.-]+\.\w+)?(?=\))")
+#: An absolute path: said by its last part (a student's own file keeps its name; the grader's folders go).
+_ABSOLUTE = re.compile(r"(?<![\w.])/(?:[^\s/'\"():,;]+/)+([^\s/'\"():,;]+)")
+
+
+def student_words(text: str) -> str:
+    """``text`` without the grader's files a student cannot open where they read it (Gradescope): ``(see
+    node.log)`` goes (the node's output is quoted instead), an absolute path is said by its file's name."""
+    return _ABSOLUTE.sub(r"\1", _SEE_FILE.sub("", text))
+
+
 def check_hint(name: str) -> str | None:
     """The hint for a failed check named ``name`` (None: no hint for it)."""
     return CHECK_HINTS.get(name) or CHECK_HINTS.get(re.sub(r" \d+$", "", name))

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import copy
 import json
+import re
 import shutil
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -36,6 +37,15 @@ from tests.gradescope_schema import gradescope_problems
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 CLASS = FIXTURES / "grades" / "lab_class"
+#: What a student on Gradescope cannot open: the grader's files and folders, an absolute path.
+GRADER_FILES = re.compile(r"[\w.-]+\.(?:log|json|html|md|png|mp4|mcap|db3)\b|grade's directory|\bbag/|(?<![\w.])/[\w.-]+/")
+
+
+def unopenable(text: str) -> list[str]:
+    """The names in ``text`` a student reading it on Gradescope could not open."""
+    return GRADER_FILES.findall(text)
+
+
 def record(name: str) -> dict[str, Any]:
     return read_record(CLASS / name)
 
@@ -51,12 +61,20 @@ def test_one_node_s_results_json_validates_and_scores_its_runs() -> None:
         assert len(doc["tests"]) == 1 and sum(t["max_score"] for t in doc["tests"]) == 100, doc
     assert right["score"] == 100 and right["tests"][0]["status"] == "passed", right
     assert wrong["score"] == 0 and wrong["tests"][0]["status"] == "failed", wrong
-    reason = record("bob")["runs"][0]["reason"]
+    run = record("bob")["runs"][0]
+    first = next(c for c in run["verdict"]["checks"] if not c["passed"])  # maneuver 1 turned 44 deg right; ...
+    output = wrong["tests"][0]["output"]
     assert wrong["tests"][0]["name"] == "run lab_object C lds01 seed 0", wrong
-    assert wrong["tests"][0]["output"].startswith(f"FAILED: {reason.removeprefix('failed: ')}\n"), wrong
-    assert reason in wrong["output"] and right["tests"][0]["output"].startswith("PASSED\n"), (wrong, right)
-    assert "lab_object_C_lds01_seed0/video.mp4" in wrong["tests"][0]["output"], wrong  # where to look
-    assert "checked again at 1x real time" in wrong["tests"][0]["output"], wrong
+    assert output.startswith("**FAILED**: 21 of 27 checks failed\n") and f"\n- {first['reason']}\n" in output, output
+    assert "**How to fix:** Turn by the angle and to the side the rule says" in output, output
+    assert run["reason"].removeprefix("failed: ") in wrong["output"], wrong["output"]
+    assert right["tests"][0]["output"] == "**PASSED**", right
+    assert "Checked again at 1x real time: failed: maneuver 1 turned 45 deg" in output, output
+    for doc in (right, wrong):  # Gradescope shows Markdown, and nothing the student cannot open there
+        assert doc["output_format"] == doc["test_output_format"] == "md", doc
+        assert all(t["output_format"] == "md" for t in doc["tests"]), doc
+        assert unopenable(json.dumps(doc)) == [], doc
+        assert "execution_time" not in doc  # not known from a grade's files: the runs ran in parallel
 
 
 def test_the_launch_file_checks_take_their_share() -> None:
@@ -68,7 +86,10 @@ def test_the_launch_file_checks_take_their_share() -> None:
     assert [t["status"] for t in checks] == ["passed", "failed", "failed"], checks
     assert sum(t["max_score"] for t in checks) == pytest.approx(20) and doc["score"] == pytest.approx(80 + 20 / 3)
     assert "Launch file: 1/3 checks passed." in doc["output"], doc["output"]
-    assert all(t["output"].startswith("FAILED: ") for t in checks[1:]), checks
+    assert all(t["output"].startswith("**FAILED**: ") for t in checks[1:]), checks
+    assert "**How to fix:** Add `DeclareLaunchArgument('safety_distance', default_value='0.5')`" in \
+        checks[1]["output"], checks[1]
+    assert "How to fix" not in checks[0]["output"], checks[0]
 
 
 def test_a_bt_nav_error_is_not_the_node_s_and_scores_nothing() -> None:
@@ -138,7 +159,7 @@ def test_a_class_as_junit_and_gradescope(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "results.json").read_text()) == results  # several students: name -> results
     assert all(gradescope_problems(doc) == [] for doc in results.values()), results
     assert [results[n]["score"] for n in ("ann", "bob", "cy")] == [100, 0, 0], results
-    assert len(results["ann"]["tests"]) == 4 and results["cy"]["output"].startswith("Not run: nothere.py"), results
+    assert len(results["ann"]["tests"]) == 4 and results["cy"]["output"].startswith("**Not run**: nothere.py"), results
     cases = junit_cases((tmp_path / "report.xml").read_text())
     assert list(cases) == ["ann", "bob", "cy"]
     assert [c.get("classname") for c in cases["ann"]] == ["ann.lab_object.C.lds01", *["ann.launch_file"] * 3]
