@@ -27,6 +27,22 @@ TRIGGER_READS: dict[str, tuple[str, str]] = {
 }
 #: Side rules: ``either`` (any way round passes) or ``clearer`` (towards the side that reads more room).
 SIDE_RULES = ("either", "clearer")
+#: What a maneuver is for, which decides how a chain of them back to back (each begun with its trigger still holding)
+#: is judged: ``search`` (a turn to find a new path: another turn on a still-blocked front is the search going on) or
+#: ``exit`` (a turn to get out: one that never leads out, however often repeated, failed its purpose).
+PURPOSES = ("search", "exit")
+
+
+@dataclass(frozen=True)
+class Purpose:
+    """Why a maneuver turns, in the sheet's words (``to find a new path``), and its kind (:data:`PURPOSES`)."""
+
+    kind: str
+    words: str
+
+    def __post_init__(self) -> None:
+        if self.kind not in PURPOSES:
+            raise ValueError(f"a maneuver's purpose is one of {PURPOSES}, not {self.kind!r}")
 
 
 @dataclass(frozen=True)
@@ -93,7 +109,8 @@ class ManeuverSpec:
 
     ``tip`` is the leaf's node name in the tree: the tip the trace and the pictures show and the label its
     log lines start with (``Randomizer: front 0.49 m: turning right 143 deg``). ``arenas``: the worlds that
-    can check it off, the default first (each lists the letter in its ``checkoff_maneuvers``)."""
+    can check it off, the default first (each lists the letter in its ``checkoff_maneuvers``). ``purpose``: why
+    it turns (the check-off judges a chain of them back to back by it)."""
 
     letter: str
     title: str
@@ -104,6 +121,7 @@ class ManeuverSpec:
     trigger: Trigger
     angle: AngleRule
     arenas: tuple[str, ...]
+    purpose: Purpose = Purpose("search", "to find a new path")
 
     @property
     def full_title(self) -> str:
@@ -121,13 +139,15 @@ _FRONT_ARENAS = ("lab_object", "lab_appearing", "lab_cluttered", "lab_dead_end",
                  "lab_side")
 MANEUVER_SPECS: dict[str, ManeuverSpec] = {spec.letter: spec for spec in (
     ManeuverSpec("A", "Randomizer", ("randomizer",), "RandomizerManeuver", "Randomizer", "ManeuverA",
-                 Trigger("front", "safety_distance"), AngleRule(90.0, 180.0), _FRONT_ARENAS),
+                 Trigger("front", "safety_distance"), AngleRule(90.0, 180.0), _FRONT_ARENAS,
+                 Purpose("search", "to find a new path")),
     ManeuverSpec("B", "Retreat", ("retreat",), "RetreatManeuver", "Retreat", "ManeuverB",
                  Trigger("sides", "safety_distance"), AngleRule(180.0, 180.0),
-                 ("lab_dead_end", "lab_cluttered", "lab_narrow_gap")),
+                 ("lab_dead_end", "lab_cluttered", "lab_narrow_gap"), Purpose("exit", "to exit the narrow space")),
     ManeuverSpec("C", "Smart Pivot", ("smart_pivot", "smartpivot", "pivot"), "SmartPivotManeuver", "SmartPivot",
                  "ManeuverC", Trigger("front", "pivot_distance", or_braked_at="safety_distance"),
-                 AngleRule(90.0, 90.0, side="clearer"), _FRONT_ARENAS),
+                 AngleRule(90.0, 90.0, side="clearer"), _FRONT_ARENAS,
+                 Purpose("search", "toward the clearest side")),
 )}
 """Letter -> record, in the order the lab lists them. The one place a maneuver is defined."""
 NONE_SUBTREE = "ManeuverNone"

@@ -17,8 +17,16 @@ collision event to :meth:`CheckoffJudge.on_collision`, every ``cmd_vel`` to
 answers (False, ...) so a driver that serves one anyway gets a clear refusal.
 
 Schedule (seconds from ``t0``): static until ``activate_at``; ``toggle_navigation(true)`` on every step
-until an answer says success; at ``activate_at + armed_for`` ``toggle_navigation(false)`` until success;
-``grace`` to brake; static for ``static_after``; then the report.
+until an answer says success; the toggle cycle: ``toggle_navigation(false)`` ``toggle_off_after`` s after the first
+maneuver ends (the robot creeping on: no turning command for that long), ``grace`` to brake, static for
+``static_after``, and ``toggle_navigation(true)`` again ``toggle_off_for`` s after the false (a cycle that would not
+end ``toggle_off_for`` s before the final disarm is left out; ``toggle_off_for`` 0: no cycle); at
+``activate_at + armed_for`` ``toggle_navigation(false)`` until success; ``grace`` to brake; static for
+``static_after``; then the report. Each call is asked on every step until an answer says success.
+
+Announcements (:meth:`CheckoffJudge.on_announcement`): the lines the judged node logs (``/rosout`` over DDS; any
+words, only their times count) mark where it began a new maneuver within one continuous rotation, so maneuvers
+made back to back are judged one by one (:mod:`bt_nav_sim.chains`).
 
 Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate``, whatever
 their forward speed (one that drives forward while turning is judged for that; a run that drives and turns the
@@ -47,9 +55,11 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.mission.maneuver_spec import LiveMap, ManeuverSpec, judge_names, maneuver_spec
+from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
+from bt_nav_sim.chains import chain_check, split_run
+from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
@@ -112,6 +122,8 @@ class CheckoffConfig:
     # every reading held its trigger, and it does not pass as the maneuver
     half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
     min_maneuvers: int = 1
+    toggle_off_after: float = 1.0  # s: the toggle cycle's false this long after the first maneuver ends ...
+    toggle_off_for: float = 5.0  # s: ... and its true again this long after it (0: no toggle cycle)
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
     # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
     lidar: str = ""
@@ -122,6 +134,8 @@ class CheckoffConfig:
             raise ValueError(f"maneuver must be one of {', '.join(MANEUVERS)}, got {self.maneuver!r}")
         if not (self.armed_for > 0 and self.rate_hz > 0 and self.grace >= 0 and self.static_after > 0):
             raise ValueError("need armed_for > 0, rate_hz > 0, grace >= 0 and static_after > 0")
+        if not (self.toggle_off_after >= 0 and self.toggle_off_for >= 0):
+            raise ValueError("need toggle_off_after >= 0 and toggle_off_for >= 0")
 
     def family(self) -> SectorFamily:
         """The sector readings this config accepts as reasonable."""
@@ -155,8 +169,8 @@ class CheckoffConfig:
         trigger = self.spec.trigger
         also = (f" (the sheet's {trigger.distance} {self.distance(trigger.distance):.2f} m or {trigger.or_braked_at} "
                 f"{self.distance(trigger.or_braked_at):.2f} m)" if trigger.or_braked_at else "")
-        return (f"held: {trigger.words} < {loose:.2f} m{also} + {self.trigger_margin:.2f} m by any of the "
-                f"{self.family().describe()}; late: only once every one of them read < {tight:.2f} m")
+        return (f"held: {trigger.words} < {loose:g} m{also} (+{self.trigger_margin:.2f} m sensor-noise tolerance) by "
+                f"any of the {self.family().describe()}; late: only once every one of them read < {tight:g} m")
 
     def angle_rule(self, side: str = "either side") -> str:
         """The maneuver's angle rule in words, as a maneuver line and the rules page (bt-nav rules) say it; ``side``
@@ -166,7 +180,7 @@ class CheckoffConfig:
 
 #: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
 CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers performed", "maneuver",
-          "recovery turns", "no collision", "static after deactivation")
+          "back-to-back maneuvers", "recovery turns", "no collision", "static after deactivation")
 
 
 
@@ -211,6 +225,7 @@ class CheckoffJudge(Verdict):
         self.evaluation_calls = 0
         self.report_time: float | None = None
         self._results: dict[str, Any] | None = None
+        self._init_cycle()
 
     # ------------------------------------------------------------------ driver inputs
     def start(self, t0: float) -> None:
@@ -234,8 +249,36 @@ class CheckoffJudge(Verdict):
         if rel >= cfg.activate_at:
             if self.activation_requested is None:
                 self.activation_requested = float(t)
-            return [] if self.activated is not None else [Activate(True)]
+            return self._cycle_step(t) if self.activated is not None else [Activate(True)]
         return []
+
+    def _init_cycle(self) -> None:
+        """The toggle cycle's state and the node's announcements (see the module docstring)."""
+        self.announcements: list[tuple[float, str, str]] = []  # (t, node, text) as the node logged them
+        self.cycle_off_requested: float | None = None
+        self.cycle_off: float | None = None
+        self.cycle_on_requested: float | None = None
+        self.cycle_on: float | None = None
+        self._turned = False  # a turning command came while armed, before the cycle
+        self._calm_since: float | None = None  # the first command since the last turning one, if none turned since
+
+    def _cycle_step(self, t: float) -> list[Activate]:
+        """The toggle cycle while armed: false once the first maneuver has ended ``toggle_off_after`` s ago (no
+        turning command since), until success; true again ``toggle_off_for`` s after the false, until success."""
+        cfg = self.config
+        if cfg.toggle_off_for <= 0:
+            return []
+        if self.cycle_off_requested is None:
+            final = (self.t0 or 0.0) + cfg.activate_at + cfg.armed_for
+            if self._calm_since is None or t < self._calm_since + cfg.toggle_off_after \
+                    or t + 2 * cfg.toggle_off_for > final:
+                return []
+            self.cycle_off_requested = float(t)
+        if t < self.cycle_off_requested + cfg.toggle_off_for:
+            return [] if self.cycle_off is not None else [Activate(False)]
+        if self.cycle_on_requested is None:
+            self.cycle_on_requested = float(t)
+        return [] if self.cycle_on is not None else [Activate(True)]
 
     def on_activate_result(self, t: float, data: bool, success: bool, answer: str = ANSWERED,
                            message: str = "") -> None:
@@ -244,10 +287,16 @@ class CheckoffJudge(Verdict):
         self.answers.record(data, success, answer, message)
         if not success:
             return  # step() asks again
-        if data and self.activated is None and self.deactivation_requested is None:
+        final = self.deactivation_requested is not None
+        if data and self.activated is None and not final:
             self.activated = float(t)
-        elif not data and self.deactivation_requested is not None and self.deactivated is None:
+        elif data and self.cycle_on_requested is not None and self.cycle_on is None and not final:
+            self.cycle_on = float(t)
+        elif not data and final and self.deactivated is None:
             self.deactivated = float(t)
+        elif not data and self.cycle_off_requested is not None and self.cycle_off is None \
+                and self.cycle_on_requested is None:
+            self.cycle_off = float(t)
 
     def on_command(self, t: float, v: float, w: float) -> None:
         """A ``cmd_vel`` the robot's node published (non-finite values read as 0, as the base does)."""
@@ -255,6 +304,21 @@ class CheckoffJudge(Verdict):
             return
         v, w = float(v), float(w)
         self.commands.append((float(t), v if math.isfinite(v) else 0.0, w if math.isfinite(w) else 0.0))
+        if self.cycle_off_requested is None and self._armed_at(t):  # when the first maneuver ends: the cycle's time
+            if abs(self.commands[-1][2]) >= self.config.rotation_min_rate:
+                self._turned, self._calm_since = True, None
+            elif self._turned and self._calm_since is None:
+                self._calm_since = float(t)
+
+    def on_announcement(self, t: float, node: str, text: str) -> None:
+        """A line the judged node logged at ``t`` (its clock: sim time). Any words: only when it came counts, as a
+        mark that the node began a new maneuver there (:mod:`bt_nav_sim.chains`); never as a reading."""
+        if not self._late(t) and math.isfinite(t):
+            self.announcements.append((float(t), str(node), str(text)))
+
+    def announcement_times(self) -> list[float]:
+        """When the node logged its lines, in order."""
+        return sorted(t for t, _, _ in self.announcements)
 
     def observe(self, t: float, x: float, y: float, yaw: float) -> None:
         """One ground-truth pose; out-of-order samples and those stamped after the report are ignored. While
@@ -303,10 +367,29 @@ class CheckoffJudge(Verdict):
 
     # ------------------------------------------------------------------ ground truth helpers
     def _armed_at(self, t: float) -> bool:
-        """From the first activation request until the disarm request plus the grace."""
+        """From the first activation request until the disarm request plus the grace, but for the toggle cycle's
+        off time (from its false plus the grace until its true)."""
         if self.activation_requested is None or t <= self.activation_requested:
             return False
-        return self.deactivation_requested is None or t <= self.deactivation_requested + self.config.grace
+        grace = self.config.grace
+        if self.cycle_off_requested is not None and self.cycle_off_requested + grace < t \
+                and (self.cycle_on_requested is None or t <= self.cycle_on_requested):
+            return False
+        return self.deactivation_requested is None or t <= self.deactivation_requested + grace
+
+    def disarms(self) -> list[float]:
+        """The disarm requests so far (the toggle cycle's, the final one), in order."""
+        return [d for d in (self.cycle_off_requested, self.deactivation_requested) if d is not None]
+
+    def next_disarm(self, t: float) -> float:
+        """The disarm in effect at ``t`` or the next one (its request; ``inf``: none yet)."""
+        return min((d for d in self.disarms() if d + self.config.grace >= t), default=math.inf)
+
+    def _armed_since(self, t: float) -> float:
+        """The arming request in effect at ``t`` (the toggle cycle's true after it came)."""
+        if self.cycle_on_requested is not None and t > self.cycle_on_requested:
+            return self.cycle_on_requested
+        return self.activation_requested if self.activation_requested is not None else -math.inf
 
     def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None,
               t: float = math.nan) -> Reading | None:
@@ -428,25 +511,36 @@ class CheckoffJudge(Verdict):
         return abs(math.degrees(self._interp(self._uyaw, end) - self._interp(self._uyaw, start))) < cfg.steer_max_deg
 
     def _judge_all(self, now: float) -> list[dict[str, Any]]:
-        """Every episode judged (see :meth:`_judge_episode`), with its settling time."""
-        runs = self.episodes()
-        starts = [self.commands[a][0] for a, _ in runs]
+        """Every episode judged (see :meth:`_judge_episode`), with its settling time; a rotation that holds
+        maneuvers back to back judged one by one (:func:`bt_nav_sim.chains.split_run`)."""
+        runs = [piece for a, b in self.episodes() for piece in split_run(self, a, b)]
+        starts = [self.commands[a][0] for a, _, _, _ in runs]
         out = []
         since = self.activation_requested if self.activation_requested is not None else -math.inf
         begin = None  # where the last turn's rotation really ended, when the next began before it settled
-        for k, (a, b) in enumerate(runs):
+        for k, (a, b, cut, _why) in enumerate(runs):
             last = self.commands[b][0]
             nxt = starts[k + 1] if k + 1 < len(runs) else math.inf
-            limit = min(nxt, last + self.config.settle_timeout, now)
-            settle = min(nxt, self._settled_at(last, limit))
-            joined = None
-            if k + 1 < len(runs) and settle >= nxt and self._t:  # back to back: split where the rotation turned
-                joined = self._turning_point(last, nxt, now, self.commands[b][2], self.commands[runs[k + 1][0]][2])
-                settle = joined
+            if cut is not None:  # the node began its next maneuver here, within one rotation
+                settle = joined = cut
+            else:
+                limit = min(nxt, last + self.config.settle_timeout, now)
+                settle = min(nxt, self._settled_at(last, limit))
+                joined = None
+                if k + 1 < len(runs) and settle >= nxt and self._t:  # back to back: split where the rotation turned
+                    joined = self._turning_point(last, nxt, now, self.commands[b][2],
+                                                 self.commands[runs[k + 1][0]][2])
+                    settle = joined
             episode = self._judge_episode(a, b, settle, nxt, now, begin)
+            if begin is not None and runs[k - 1][2] is not None:
+                episode["began_by"] = runs[k - 1][3]  # what marked this maneuver's start within the rotation
+            whole = begin is None and cut is None
+            if whole and not episode["angle_ok"] and not episode["interrupted"]:
+                episode["unsplit"] = abs(episode["angle_deg"]) >= 2 * self.config.spec.angle.low_deg - \
+                    2 * self.config.angle_tolerance_deg
             begin = joined
             if episode["kind"] == "maneuver":
-                self._judge_lateness(episode, since, self.commands[a][0])
+                self._judge_lateness(episode, max(since, self._armed_since(self.commands[a][0])), self.commands[a][0])
             out.append(episode)
             since = settle
         return out
@@ -506,8 +600,7 @@ class CheckoffJudge(Verdict):
         candidates = self._readings_at(start, self._stood_before(a))
         reading = candidates[0]
         trigger, trigger_text = self._trigger(reading)
-        disarm = self.deactivation_requested
-        interrupted = disarm is not None and last >= disarm - INTERRUPT_SLACK
+        interrupted = last >= self.next_disarm(start) - INTERRUPT_SLACK
         turn_from = start if begin is None else max(begin, start - 0.5)  # a turn begun while the last one coasted
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, turn_from)) if self._t else 0.0
         # the commands and the motion of one window: the turn's commands (those the node sent between its turning
@@ -518,7 +611,7 @@ class CheckoffJudge(Verdict):
         motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
         angle_ok, rule = self._judged_angle(angle, candidates, interrupted)
-        moved_on, moved_text = self._moved_on(settle, next_start, now)
+        moved_on, moved_text = self._moved_on(settle, next_start, now, start)
         as_maneuver = trigger and angle_ok and forward_ok and moved_on
         recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
                     and self._stood_before(a) >= cfg.aeb_stop and not self._trigger_all(reading))
@@ -586,10 +679,10 @@ class CheckoffJudge(Verdict):
         if r is None:
             return False, "no ground truth at the start"
         limit = cfg.limits()[0] + cfg.trigger_margin
+        sheet = f"{cfg.limits()[0]:g} m (+{cfg.trigger_margin:.2f} m sensor-noise tolerance)"
         if cfg.spec.trigger.reads == "sides":
-            return (r.left < limit and r.right < limit,
-                    f"left {r.left:.2f} m and right {r.right:.2f} m < {limit:.2f} m")
-        return r.front < limit, f"front {r.front:.2f} m < {limit:.2f} m"
+            return r.left < limit and r.right < limit, f"left {r.left:.2f} m and right {r.right:.2f} m < {sheet}"
+        return r.front < limit, f"front {r.front:.2f} m < {sheet}"
 
     def _trigger_all(self, r: Reading | None) -> bool:
         """Whether the trigger held by every reasonable reading: the narrowest front, every side centre, the
@@ -629,12 +722,12 @@ class CheckoffJudge(Verdict):
         cfg = self.config
         return abs(angle) <= cfg.spec.angle.high_deg + cfg.angle_tolerance_deg
 
-    def _moved_on(self, settle: float, next_start: float, now: float) -> tuple[bool, str]:
+    def _moved_on(self, settle: float, next_start: float, now: float, start: float) -> tuple[bool, str]:
         """Within ``move_on_within`` of settling: travelled ``move_on_distance`` or another episode began
-        (a disarm that comes first excuses it)."""
+        (a disarm that comes first excuses it; ``start``: the episode's, whose disarm counts)."""
         cfg = self.config
         horizon = settle + cfg.move_on_within
-        disarm = self.deactivation_requested if self.deactivation_requested is not None else math.inf
+        disarm = self.next_disarm(start)
         if next_start <= horizon and next_start <= disarm:
             return True, "another maneuver began"
         end = min(horizon, disarm, now)
@@ -666,8 +759,11 @@ class CheckoffJudge(Verdict):
         episodes = self._judge_all(now)
         maneuvers = [e for e in episodes if e["kind"] == "maneuver"]
         recoveries = [e for e in episodes if e["kind"] == "recovery"]
-        checks.append(_performed_check(cfg, maneuvers, recoveries))
-        checks += [_maneuver_check(i + 1, cfg.maneuver, e) for i, e in enumerate(maneuvers)]
+        checks.append(performed_check(cfg, maneuvers, recoveries))
+        checks += [maneuver_check(i + 1, cfg.maneuver, e) for i, e in enumerate(maneuvers)]
+        chained, findings = chain_check(self, maneuvers, now)
+        if chained is not None:
+            checks.append(chained)
         if recoveries:
             bad = [e for e in recoveries if not e["passed"]]
             checks.append({"name": "recovery turns", "passed": not bad, "value": len(recoveries), "required":
@@ -677,32 +773,61 @@ class CheckoffJudge(Verdict):
         checks.append({"name": "no collision", "passed": n == 0, "value": n, "required": 0,
                        "detail": f"{n} collision{'s' if n != 1 else ''}"
                        + "".join(f", t={c[0] - t0:.1f} s ({c[1]:.2f}, {c[2]:.2f})" for c in self.collisions[:5])})
-        after = None if self.deactivation_requested is None else self.deactivation_requested + cfg.grace
-        checks.append(static_check("static after deactivation", samples, after,
-                                   None if after is None else min(now, after + cfg.static_after),
-                                   "the run ended before the deactivation", limits, t0))
+        checks.append(self._static_after_check(now, samples, limits))
         return {"passed": all(c["passed"] for c in checks), "checks": checks, "maneuver": cfg.maneuver,
                 "maneuvers": maneuvers, "recovery_turns": recoveries, "travelled": round(self.travelled, 4),
                 "max_distance_from_start": round(self.max_distance, 4), "collisions": n,
                 "collision_events": [{"t": c[0] - t0, "x": c[1], "y": c[2]} for c in self.collisions],
                 "times": {k: None if v is None else v - t0 for k, v in (
                     ("t0", self.t0), ("activation_requested", self.activation_requested),
-                    ("activated", self.activated), ("deactivation_requested", self.deactivation_requested),
+                    ("activated", self.activated), ("cycle_off_requested", self.cycle_off_requested),
+                    ("cycle_off", self.cycle_off), ("cycle_on_requested", self.cycle_on_requested),
+                    ("cycle_on", self.cycle_on), ("deactivation_requested", self.deactivation_requested),
                     ("deactivated", self.deactivated), ("report", now))},
+                "findings": findings, "announcements": len(self.announcements),
                 "evaluation_calls": self.evaluation_calls, "commands": len(self.commands),
                 "samples": len(self._t), "done": self.done}
 
+    def _static_after_check(self, now: float, samples: tuple[list[float], ...], limits: tuple[float, float]
+                            ) -> dict[str, Any]:
+        """Static for ``static_after`` after each disarm and its grace: the toggle cycle's (until its true) and
+        the final one's; one check, both windows in its detail."""
+        cfg, t0 = self.config, self.t0 or 0.0
+        after = None if self.deactivation_requested is None else self.deactivation_requested + cfg.grace
+        final = static_check("static after deactivation", samples, after,
+                             None if after is None else min(now, after + cfg.static_after),
+                             "the run ended before the deactivation", limits, t0)
+        if self.cycle_off_requested is None:
+            return final
+        start = self.cycle_off_requested + cfg.grace
+        rearm = self.cycle_on_requested if self.cycle_on_requested is not None else math.inf
+        cycle = static_check("static after deactivation", samples, start, min(now, start + cfg.static_after, rearm),
+                             "the run ended before the toggle cycle's deactivation", limits, t0)
+        values = [c["value"] for c in (cycle, final)]
+        return {**final, "passed": cycle["passed"] and final["passed"],
+                "value": None if None in values else max(values),
+                "detail": f"after the toggle cycle's false: {cycle['detail']}; "
+                          f"after the final false: {final['detail']}"}
+
     def _answered_check(self) -> dict[str, Any]:
-        """Both toggle_navigation calls (true, then false) were answered with success."""
+        """Every toggle_navigation call (true; the toggle cycle's false and true; the final false) was answered
+        with success."""
         t0 = self.t0 or 0.0
         name = "toggle_navigation"
-        parts = [f"true at t={self.activated - t0:.2f} s" if self.activated is not None
-                 else self.answers.failed_text(name, True)]
-        if self.deactivation_requested is not None:
-            parts.append(f"false at t={self.deactivated - t0:.2f} s" if self.deactivated is not None
-                         else self.answers.failed_text(name, False))
-        ok = self.activated is not None and self.deactivated is not None
-        return {"name": "toggle_navigation answered", "passed": ok, "value": ok, "required": "true, then false",
+        calls = [(True, "true", self.activation_requested, self.activated),
+                 (False, "false (toggle cycle)", self.cycle_off_requested, self.cycle_off),
+                 (True, "true again", self.cycle_on_requested, self.cycle_on),
+                 (False, "false", self.deactivation_requested, self.deactivated)]
+        parts, ok = [], True
+        for k, (data, words, requested, answered) in enumerate(calls):
+            if requested is None and k > 0:
+                continue
+            ok = ok and answered is not None
+            parts.append(f"{words} at t={answered - t0:.2f} s" if answered is not None
+                         else self.answers.failed_text(name, data))
+        ok = ok and self.deactivated is not None
+        required = "true, false, true, false" if self.cycle_off_requested is not None else "true, then false"
+        return {"name": "toggle_navigation answered", "passed": ok, "value": ok, "required": required,
                 "detail": ", ".join(parts)}
 
     def report_lines(self) -> list[str]:
@@ -713,81 +838,5 @@ class CheckoffJudge(Verdict):
         return lines
 
 
-#: The lab's names of the maneuvers (``the Randomizer``), a live view of the maneuver spec.
-MANEUVER_NAMES = LiveMap(judge_names)
-
-
-def _forward_text(e: dict[str, Any]) -> str:
-    """Why a turn failed the forward rule, in figures that agree with each other: a forward command during it, or
-    (none commanded) the ground truth's motion alone."""
-    rule = "the check-off allows no forward motion during a maneuver"
-    if e["forward_command"] > 0.0:
-        speed = f"{e['forward_command']:.2f}" if e["forward_command"] >= 0.01 else f"{e['forward_command']:.3f}"
-        return f"drove forward during the turn (commanded up to {speed} m/s, moved {e['forward_motion']:.2f} m); {rule}"
-    return (f"moved {e['forward_motion']:.3f} m during the turn (ground truth) though none of its commands asked for "
-            f"forward speed: stop fully before turning; {rule}")
-
-
-def _readings_text(e: dict[str, Any], maneuver: str = "") -> str:
-    """The judge's readings at a turn's start, as the failing line shows them: the front and the nearest of any
-    side sector (what the triggers read); for a maneuver that turns towards the clearer side the sides beside the
-    robot (60-120 deg), as it compares them (a wide side sector also sees the obstacle ahead)."""
-    r = e.get("readings") or {}
-    clearer = bool(maneuver) and maneuver_spec(maneuver).angle.side == "clearer"
-    keys = (("front", "front"), ("left", "left_abeam"), ("right", "right_abeam")) if clearer else \
-        (("front", "front"), ("left", "left"), ("right", "right"))
-    parts = [f"{name} {r[k]:.2f} m" if r.get(k) is not None else f"{name} nothing" for name, k in keys if k in r]
-    return "readings at the start: " + ", ".join(parts) if parts else "no readings at the start"
-
-
-def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
-    """What is wrong with one judged maneuver, one sentence each, in the check-off's words (empty: nothing)."""
-    name = MANEUVER_NAMES.get(maneuver, maneuver)
-    out = []
-    if not e["trigger"]:
-        out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
-    if e.get("late"):
-        out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
-                   "after its trigger held (does it read its distance parameter, and its sectors at their angles "
-                   "from angle_min and angle_increment?)")
-    if not e["angle_ok"]:
-        out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}")
-    if not e["forward_ok"]:
-        out.append(_forward_text(e))
-    if not e["moved_on"]:
-        out.append(f"did not move on after the turn ({e['moved_on_detail']})")
-    return out
-
-
-def _performed_check(cfg: CheckoffConfig, maneuvers: list[dict[str, Any]],
-                     recoveries: list[dict[str, Any]]) -> dict[str, Any]:
-    """Enough maneuvers; when there are too few and some turns were counted as emergency-stop recoveries, the
-    detail says why the first of them is not the maneuver (a student sees a turn and must learn why it did not
-    count)."""
-    passed = len(maneuvers) >= cfg.min_maneuvers
-    detail = f"{len(maneuvers)} performed, required >= {cfg.min_maneuvers}"
-    if not passed and recoveries:
-        e = recoveries[0]
-        n = len(recoveries)
-        why = "; ".join(maneuver_problems(cfg.maneuver, e)) or "it is one"
-        detail += (f"; {n} turn{'s' if n != 1 else ''} after a stop with the path blocked counted as "
-                   f"emergency-stop recover{'ies' if n != 1 else 'y'}, not as {cfg.maneuver}: the one at "
-                   f"t={e['t']:.1f} s {why} ({_readings_text(e, cfg.maneuver)})")
-    return {"name": "maneuvers performed", "passed": passed, "value": len(maneuvers),
-            "required": cfg.min_maneuvers, "detail": detail}
-
-
-def _maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:
-    """The report line of one maneuver episode: every rule it was held to, what is wrong with it in words."""
-    sim = f" (sim {e['t'] + e['t0']:.2f} s)" if e.get("t0") else ""  # the terminal's and the video's clock
-    problems = maneuver_problems(maneuver, e)
-    detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
-              f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
-              f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
-              f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e, maneuver)}; " + "; ".join(problems)
-                                                     if problems else ""))
-    check = {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
-             "detail": detail}
-    if problems:
-        check["reason"] = f"maneuver {number} " + "; ".join(problems) + f" ({_readings_text(e, maneuver)})"
-    return check
+__all__ = ["CHECKS", "INTERRUPT_SLACK", "MANEUVERS", "MANEUVER_NAMES", "CheckoffConfig", "CheckoffJudge",
+           "_forward_text", "maneuver_problems"]

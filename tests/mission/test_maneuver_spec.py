@@ -92,7 +92,7 @@ def test_the_judge_holds_d_to_45_deg_not_to_cs_90(maneuver_d: S.ManeuverSpec) ->
     assert judge._angle_rule(44.0, None)[0] and not judge._angle_rule(90.0, None)[0]
     assert judge._within_max(50.0) and not judge._within_max(90.0)
     assert judge.config.limits() == (0.5, 0.5)
-    assert judge.config.trigger_rule().startswith("held: front < 0.50 m + 0.05 m")
+    assert judge.config.trigger_rule().startswith("held: front < 0.5 m (+0.05 m sensor-noise tolerance)")
     assert MANEUVER_NAMES["D"] == "the Wiggle"
     event = {"trigger": True, "angle_ok": False, "angle_deg": 90.0, "side": "left", "rule": "45 +- 10 deg either side",
              "forward_ok": True, "moved_on": True}
