@@ -69,3 +69,24 @@ def test_a_foreign_program_is_named_by_its_file_however_deep_its_folder(tmp_path
     guard = DomainGuard(MARK, tmp_path)
     guard.see(_endpoint(400, "wanderer"))
     assert "node wanderer of pid 400 (python noservice_node.py --drive 0.3)" in (guard.finding("150") or "")
+
+
+def _stat(proc: Path, pid: int, parent: int) -> None:
+    (proc / str(pid) / "stat").write_text(f"{pid} (python3 my node) S {parent} {pid} {pid} 0 -1\n")
+
+
+def test_the_nodes_children_are_the_nodes_whatever_environment_it_gave_them(tmp_path: Path) -> None:
+    """Issue 44: a run is not graded only for a program that is neither the node nor one of its children. A child
+    the node started with an environment of its own (no mark) is the node's; a program without the mark whose
+    ancestors carry none is foreign, even one the launcher's own process started (a test's talker)."""
+    proc = _proc(tmp_path, {300: MARK, 310: None, 320: None, 400: None, 4242: None})
+    _stat(proc, 300, 1)
+    _stat(proc, 310, 300)  # the node's child, env={}
+    _stat(proc, 320, 310)  # and its grandchild
+    _stat(proc, 400, 4242)  # started by the launcher's process, not by the run's mark
+    _stat(proc, 4242, 1)
+    guard = DomainGuard(MARK, proc)
+    for pid in (310, 320, 400):
+        guard.see(_endpoint(pid, f"node{pid}"))
+    finding = guard.finding("150") or ""
+    assert "node400 of pid 400" in finding and "node310" not in finding and "node320" not in finding, finding

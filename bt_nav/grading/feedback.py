@@ -34,8 +34,8 @@ def _link(result: StudentResult, row: dict[str, Any], key: str, text: str) -> st
 def _run_lines(result: StudentResult) -> list[str]:
     lines: list[str] = []
     for row in result.runs:
-        verdict = "PASSED" if row.get("passed") else "bt_nav error (not yours)" if row.get("outcome") == \
-            "bt_nav error" else "FAILED"
+        verdict = "PASSED" if row.get("passed") else "not graded (not yours)" if row.get("not_graded") else \
+            "bt_nav error (not yours)" if row.get("outcome") == "bt_nav error" else "FAILED"
         links = [x for x in (_link(result, row, "picture", "picture"), _link(result, row, "video", "video")) if x]
         lines.append(f"- **{run_label(row)}: {verdict}** ({row.get('reason', '?')})"
                      + (" " + ", ".join(links) if links else ""))

@@ -9,7 +9,8 @@ runs. The graph audit cannot tell that program from the student's by its node na
 What tells them apart is the process. Every process a bt_nav launcher starts carries :data:`RUN_MARK_ENV` (the
 launcher's pid and the run's domain: :func:`run_mark`) in its environment, and its children inherit it. A Fast DDS
 endpoint's GUID carries the low 16 bits of its process id (GUID prefix bytes 4-5, little-endian; vendor 0x010f). A
-process on this machine with that pid whose environment carries another mark, or none, is foreign; so is one whose
+process on this machine with that pid whose environment carries another mark, or none, is foreign (unless one of its
+ancestors is the run's: the node's own children are the node's, whatever environment it gave them); so is one whose
 pid is none of ours. Endpoints of another DDS vendor, and pids no process has any more, are left alone (never blamed
 on anyone). Linux only (``/proc``); elsewhere the guard sees nothing.
 """
@@ -112,10 +113,27 @@ class DomainGuard:
         if not candidates:
             return None
         for pid in candidates:
-            if pid in self.own_pids or _environ_mark(pid, self.proc) == self.mark:
+            # the launcher itself by its pid; below it only what carries the run's mark and what that started (a
+            # program the launcher's process started by other means, as a test does, is not the run's)
+            if pid in self.own_pids or any(_environ_mark(p, self.proc) == self.mark for p in self._lineage(pid)):
                 return False, pid
         readable = [pid for pid in candidates if _environ_mark(pid, self.proc) is not None]
         return (True, readable[0]) if readable else None
+
+    def _lineage(self, pid: int, depth: int = 32) -> list[int]:
+        """``pid`` and its ancestors (nearest first, up to ``depth``): a child the node starts with an environment
+        of its own (``subprocess`` with ``env={...}``) has no mark, but it is still the node's, never foreign."""
+        chain = [pid]
+        while len(chain) <= depth:
+            try:
+                stat = (self.proc / str(chain[-1]) / "stat").read_text()
+                parent = int(stat.rpartition(")")[2].split()[1])  # after the command name, which may hold spaces
+            except (OSError, ValueError, IndexError):
+                break
+            if parent <= 1 or parent in chain:
+                break
+            chain.append(parent)
+        return chain
 
     def finding(self, domain: str) -> str | None:
         """The run's domain is shared: with what (None: only the run's own processes were seen)."""

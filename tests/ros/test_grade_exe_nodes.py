@@ -206,4 +206,4 @@ def test_a_run_whose_domain_another_program_uses_moves_and_says_so(tmp_path: Pat
     [move] = [note for note in row["notes"] if "another program" in note]  # (a lost SIGINT may be noted too)
     assert re.match(rf"no verdict: another program is on ROS_DOMAIN_ID {low}: (node reactive_control|a participant) "
                     rf"of pid {talker.pid} \(.*noservice_node.py\) \(not the run's, not the node's\): the run "
-                    "started again on another domain", move), move
+                    rf"started again on ROS_DOMAIN_ID {row['domain']} \(that attempt on {low}: ", move), move

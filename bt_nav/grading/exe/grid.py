@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.admission import Admission
-from bt_nav.grading.exe.run import ExeSettings, run_exe_job
+from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
 from bt_nav.ros.supervise import StopRequest
@@ -47,8 +47,6 @@ from bt_nav.ros.supervise import StopRequest
 GRID_FILE = "grid.json"
 #: The outcome of a run cut short by a stop: no result; left out of the report, run again by a resume.
 STOPPED = "stopped"
-#: The outcome of a run bt_nav itself failed to run (it raised): a failed row in the report, run again by a resume.
-ERROR = "bt_nav error"  # an exception inside bt_nav: never the node's failure, rerun on resume
 #: The settings a resumed grade must share with the grade it continues.
 SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter", "node_params")
 #: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.

@@ -57,7 +57,7 @@ from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shu
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
-from bt_nav.ros.supervise import Child, StopRequest
+from bt_nav.ros.supervise import DOMAIN_RANGE_ENV, Child, StopRequest, launcher_domains
 from bt_nav.run.rundir import make_run_dir
 from bt_nav.run.session import EXITED, STOPPED, VERDICT, DomainLease, MissionSession, files_written, read_verdict
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -201,6 +201,10 @@ def _exit_reason(code: int, wall: float, crash: Crash | None) -> str:
     return f"the node crashed after {wall:.1f} s wall{status}: {crash.quote()}"
 
 
+#: The outcome of a run without a verdict of the node's: bt_nav failed to run it (it raised), or it was not graded
+#: (another program on every domain it could take). A failed row in the report, counted apart (never the node's
+#: failure), run again by a resume.
+ERROR = "bt_nav error"
 #: The outcome of an attempt that found its domain shared; how many times a run moves to another domain.
 SHARED_DOMAIN, DOMAIN_MOVES = "shared domain", 3
 
@@ -276,23 +280,53 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     ``on_verdict`` once the run's outcome is known, before its processes are stopped (the grid's next run may start
     while this one shuts down: stopping is waiting, not work).
 
-    A program that is not the run's on its domain (:mod:`bt_nav.ros.domain_guard`) ends the attempt without a
-    verdict; the run starts again on another domain (the shared one held until the job ends, so no attempt picks it
-    again), up to :data:`DOMAIN_MOVES` times, and its row's ``notes`` say so.
+    A program that is neither the node nor one of its children on the run's domain (:mod:`bt_nav.ros.domain_guard`)
+    ends the attempt without a verdict; the run starts again on a free domain (the shared one held until the job
+    ends, so no attempt picks it again), up to :data:`DOMAIN_MOVES` times, and its row's ``notes`` say which. With
+    no free domain left (``BT_NAV_DOMAIN_RANGE`` of one domain, every other one claimed) the run is not graded
+    (:func:`not_graded_row`): never the node's failure, never re-run at 1x, run again by ``--resume``.
     """
     moves: list[str] = []
+    tried: list[int] = []
     # the domains claimed, held until the job ends: the last the run's, the others found shared
     with DomainLease(start=hash(job.key), user_env=False) as lease:
+        domain = lease.claim()
         while True:
-            row = _attempt(job, settings, lease.claim(), stop, sink, on_start, on_verdict)
-            if row["outcome"] != SHARED_DOMAIN or len(moves) >= DOMAIN_MOVES:
+            tried.append(domain)
+            row = _attempt(job, settings, domain, stop, sink, on_start, on_verdict)
+            if row["outcome"] != SHARED_DOMAIN:
+                break
+            following = lease.claim() if len(moves) < DOMAIN_MOVES else None
+            if following is None or following in tried:
+                row = not_graded_row(row, tried, following is None)
                 break
             aside = _set_aside(Path(row["run_dir"]))
-            moves.append(f"{row['reason']}: the run started again on another domain (that attempt: {aside})")
+            moves.append(f"{row['reason']}: the run started again on ROS_DOMAIN_ID {following} (that attempt on "
+                         f"{domain}: {aside})")
+            domain = following
     if moves:
         row["notes"] = [*moves, *row.get("notes", [])]
         (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row
+
+
+def not_graded_row(row: dict[str, Any], tried: list[int], moved_enough: bool) -> dict[str, Any]:
+    """The row of a run that found another program on every domain it could take (``tried``, in order): not
+    graded. Its outcome is :data:`ERROR`, counted apart from the node's verdicts
+    everywhere a bt_nav error is (the pass rate, the exit code, ``--resume`` runs it again); ``not_graded`` says
+    why, for the reports (an autograder error, never a score)."""
+    domains = ", ".join(str(d) for d in tried)
+    if moved_enough:
+        why = f"the run moved {len(tried) - 1} times and found another program each time (ROS_DOMAIN_ID {domains})"
+    else:
+        low, high = launcher_domains()
+        why = (f"no other domain was free to move to (tried ROS_DOMAIN_ID {domains}; {DOMAIN_RANGE_ENV} "
+               f"{low}-{high})")
+    said = f"not graded: {row['reason'].removeprefix('no verdict: ')}; {why}: not the node's failure, --resume " \
+           "runs it again"
+    graded = {**row, "passed": False, "outcome": ERROR, "reason": said, "not_graded": said, "domains": list(tried)}
+    (Path(row["run_dir"]) / "result.json").write_text(json.dumps(graded, indent=1) + "\n", encoding="utf-8")
+    return graded
 
 
 def _set_aside(run_dir: Path) -> Path:
