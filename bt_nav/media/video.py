@@ -11,7 +11,10 @@ caption; ``bt-nav video --still --at T`` is the frame whose clock reads T); feed
 the snapshot at that instant, countdowns counted down to the frame (:func:`live_feedback`), a maneuver's turn
 so far from ground truth; the scan placed from the pose at the scan's own stamp
 (:meth:`~bt_nav.media.bagread.MissionRecord.scan_at`); the console filtered by one rule
-(:data:`HIDDEN_PREFIXES`).
+(:data:`bt_nav.media.console.HIDDEN_PREFIXES`), or a hand-in's terminal (:class:`bt_nav.media.console.ConsoleScript`:
+the command, the launch line it stands in for, the node's lines and the service calls, on the sim clock, which is
+then the frame's time base). Every frame says it is a simulation (:data:`bt_nav.media.console.SIM_LABEL`), and
+:func:`write_video` can record the console rows of every frame it drew (:class:`bt_nav.media.console.ConsoleLog`).
 
 Why PIL and not matplotlib: a 55 s mission at 10 fps is 550 frames and the budget is 20 s on two cores,
 so ~35 ms a frame including the encoder. Frames are drawn with PIL on a pre-rendered background; the
@@ -27,7 +30,7 @@ of everyone's log lines. :func:`renderer_for` picks the renderer, so a one-robot
 
 from __future__ import annotations
 
-import re
+import dataclasses
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -37,6 +40,17 @@ from typing import Any
 import numpy as np
 
 from bt_nav.media.bagread import MissionRecord
+from bt_nav.media.console import (
+    CONSOLE_ROWS,
+    SIM_LABEL,
+    ConsoleLog,
+    ConsoleScript,
+    command_at,
+    console_lines,
+    doing_text,
+    motion_text,
+    node_lines,
+)
 from bt_nav.mission.snapshot import DEADLINE, DEADLINE_LEFT, TO_GO, SnapshotNode, snapshot_nodes
 
 WIDTH, HEIGHT = 1280, 720
@@ -115,23 +129,6 @@ def _bounds(record: MissionRecord, world: Any) -> tuple[float, float, float, flo
 # own, on one time base, and a test compares it with the bag. The drawing code only draws these strings.
 
 TIME_BASE = "since the bag's first /clock"  # the origin of every time a picture shows (MissionRecord.origin)
-
-#: The console strip shows the mission's story as the lab's terminal does: launch and start-up lines, service
-#: calls and their replies (arm / toggle_navigation, the referee's activate), maneuver announcements and
-#: results, the emergency brake (AEB), deadline, evaluation and verdict lines. It hides diagnostics: DEBUG lines
-#: and the lines whose message (after the ``[LEVEL]`` tag and a ``[node]:`` tag, as ``ros2 launch`` prints them)
-#: begins with one of these prefixes: tick statistics and the scan pipeline's health chatter.
-HIDDEN_PREFIXES = ("stats:", "final stats:", "ProcessScan:")
-_TAGS = re.compile(r"^(?:\[(?P<level>[A-Z]+)\]\s*)?(?:\[[^\]\s]+\]:\s*)?")
-
-
-def console_shows(line: str) -> bool:
-    """Whether the console strip shows this log line (the rule: :data:`HIDDEN_PREFIXES`)."""
-    match = _TAGS.match(line)
-    if match["level"] == "DEBUG":
-        return False
-    return not line[match.end():].startswith(HIDDEN_PREFIXES)
-
 
 #: s: a tip's feedback older than this is shown with its time (snapshots come only when a status changes).
 STALE_AFTER = 0.5
@@ -232,11 +229,12 @@ class FrameText:
     turned: float | None  # deg turned since the running maneuver began (ground truth); None when none runs
     snapshot: float | None  # the snapshot's time, s since the origin (None before the first)
     live: bool = False  # the feedback is a countdown counted to the frame (:func:`is_countdown`): never "as of"
+    base: str = TIME_BASE  # the words of ``clock``'s origin (a hand-in's: the sim clock)
 
     def lines(self) -> tuple[str, str]:
         """The caption's two lines: time (and its base), distance and deadline; then branch, tip, the turn so far
         and the feedback (last: a stale feedback's "as of" may be cut at the frame's edge, the turn may not)."""
-        head = f"t = {self.clock:.2f} s {TIME_BASE}    travelled {self.travelled:.2f} m"
+        head = f"t = {self.clock:.2f} s {self.base}    travelled {self.travelled:.2f} m"
         if self.deadline:
             head += f"    {self.deadline}"
         if not self.tip or self.tip == self.branch:
@@ -328,58 +326,10 @@ class Track:
                 for n, row in enumerate(snap.rows)]
 
 
-def console_lines(events: list[tuple[float, str]], prefix: str = "") -> list[tuple[float, str]]:
-    """The log lines the console strip shows (:func:`console_shows`), each behind ``prefix``."""
-    return [(t, prefix + text) for t, text in events if console_shows(text)]
-
-
-# ---------------------------------------------------------------------- a robot node that is not bt_nav's
-# Why: a student films their own node (``bt-nav demo --exe``, ``grade --exe --videos``); it publishes no tree. The
-# side panel then shows what the node says (its log lines, from /rosout) and does (its command), and the caption
-# says what the robot does, from the command and the ground truth's motion, never "Stopped" while it turns.
-
-#: Names of bt_nav's own nodes in a bag's events (``[INFO] sim: ...``, :func:`bt_nav.ros.graphtap.event_text`).
-BT_NAV_SPEAKERS = ("sim", "referee", "checkoff")
-_SPEAKER = re.compile(r"^\[[A-Z]+\] (?P<name>[\w/.-]+): ")
-#: Below these a speed is "no motion" (m/s, rad/s): the simulator's resolution, not a robot's creep.
-STILL_V, STILL_W = 0.005, 0.01
-
-
-def node_lines(events: list[tuple[float, str]]) -> list[tuple[float, str]]:
-    """The log lines of nodes other than bt_nav's own (the robot node's), as the console shows them."""
-    return [(t, text) for t, text in console_lines(events)
-            if (m := _SPEAKER.match(text)) is not None and m["name"] not in BT_NAV_SPEAKERS]
-
-
-def motion_text(v: float, w: float) -> str:
-    """A twist in words: ``turning left 0.50 rad/s``, ``driving 0.20 m/s``, ``driving 0.05 m/s, turning right
-    0.30 rad/s``, ``reversing 0.10 m/s``, ``stopped``."""
-    parts = []
-    if abs(v) >= STILL_V:
-        parts.append(f"{'driving' if v > 0 else 'reversing'} {abs(v):.2f} m/s")
-    if abs(w) >= STILL_W:
-        parts.append(f"turning {'left' if w > 0 else 'right'} {abs(w):.2f} rad/s")
-    return ", ".join(parts) or "stopped"
-
-
-def command_at(record: MissionRecord, t: float) -> tuple[float, float] | None:
-    """The latest command (linear, angular) at or before ``t``; None before the first."""
-    k = int(np.searchsorted(record.cmd[:, 0], t, side="right")) - 1 if len(record.cmd) else -1
-    return (float(record.cmd[k, 1]), float(record.cmd[k, 2])) if k >= 0 else None
-
-
-def doing_text(record: MissionRecord, t: float) -> str:
-    """What a robot without a tree does at ``t``: its command and its ground-truth motion, in words."""
-    cmd = command_at(record, t)
-    i = int(np.searchsorted(record.truth.t, t, side="right")) - 1
-    robot = motion_text(float(record.truth.v[i]), float(record.truth.w[i])) if i >= 0 else "not seen yet"
-    return f"robot {robot}; cmd_vel {motion_text(*cmd) if cmd else 'none yet'}"
-
-
 class VideoRenderer:
     """Frames of one recorded mission (see the module docstring); ``frame(t)`` must be called with rising t."""
 
-    def __init__(self, record: MissionRecord, world: Any = None) -> None:
+    def __init__(self, record: MissionRecord, world: Any = None, script: ConsoleScript | None = None) -> None:
         from PIL import Image, ImageDraw
 
         self._Image, self._Draw = Image, ImageDraw
@@ -387,7 +337,9 @@ class VideoRenderer:
         self.world = world
         self.view = MapView.fit(_bounds(record, world))
         self.font, self.mono = _fonts()
-        self.origin = record.origin  # every time a frame shows counts from here (TIME_BASE)
+        self.script = script  # a hand-in's terminal in place of the bag's events (its origin: the sim clock)
+        self.origin = record.origin if script is None else script.origin  # every time a frame shows counts from here
+        self.time_base = TIME_BASE if script is None else script.time_base
         if not hasattr(self, "tracks"):  # one robot: one track, its path coloured by branch
             self.tracks = [Track("", record, (40, 40, 40))]
         self.track = self.tracks[0]
@@ -399,7 +351,7 @@ class VideoRenderer:
         self.layer = self._background()
         self._tree_cache: tuple[Any, Any] = (None, None)
         self._panel_base: tuple[int | None, Any] = (None, None)
-        self._console_cache: tuple[int, Any] = (-1, None)
+        self._console_cache: tuple[Any, Any] = (None, None)
 
     # ------------------------------------------------------------------ static parts
     def _background(self) -> Any:
@@ -491,7 +443,21 @@ class VideoRenderer:
 
     def text(self, t: float) -> FrameText:
         """What the frame at sim time ``t`` says (its caption is :meth:`FrameText.lines`, drawn as is)."""
-        return self.track.text(t, self.origin)
+        return dataclasses.replace(self.track.text(t, self.origin), base=self.time_base)
+
+    def console_rows(self, t: float) -> list[str]:
+        """The console's rows at sim time ``t``: the script's (a hand-in), else the newest shown log lines of the
+        bag, each stamped on the frame's time base."""
+        if self.script is not None:
+            return self.script.rows(t)
+        n = int(np.searchsorted(self.event_t, t, side="right"))
+        return [f"[{lt - self.origin:7.2f}] {text}" for lt, text in self.events[:n][-CONSOLE_ROWS:]]
+
+    def _draw_label(self, d: Any) -> None:
+        """:data:`SIM_LABEL` in the map's lower left corner, on every frame."""
+        box = d.textbbox((8, MAP_H - 22), SIM_LABEL, font=self.font)
+        d.rectangle([box[0] - 3, box[1] - 2, box[2] + 3, box[3] + 2], fill=(255, 255, 255), outline=(150, 150, 160))
+        d.text((8, MAP_H - 22), SIM_LABEL, font=self.font, fill=(90, 90, 110))
 
     def frame(self, t: float) -> Any:
         """The frame at sim time ``t`` (a PIL RGB image of WIDTH x HEIGHT)."""
@@ -510,7 +476,8 @@ class VideoRenderer:
         d.text((10, 4), head, font=self.font, fill=INK)
         d.text((10, 25), detail[:90], font=self.mono, fill=(70, 70, 90))
         img.paste(self._tree_panel(t), (MAP_W + 2, 0))
-        img.paste(self._console(int(np.searchsorted(self.event_t, t, side="right"))), (0, CONSOLE_Y))
+        img.paste(self._console(self.console_rows(t)), (0, CONSOLE_Y))
+        self._draw_label(d)
         return img
 
     def _tree_panel(self, t: float) -> Any:
@@ -591,18 +558,19 @@ class VideoRenderer:
         label = row.name + (f" - {feedback}" if feedback else "")
         d.text((x + 12, y), label[:70 - 2 * row.depth], font=self.mono, fill=colour)
 
-    def _console(self, n_events: int) -> Any:
-        """The console strip with the first ``n_events`` shown log lines (:func:`console_lines`), newest at the
-        bottom, each stamped on the frame's time base (cached)."""
-        if self._console_cache[0] == n_events:
+    def _console(self, rows: list[str]) -> Any:
+        """The console strip with ``rows`` (:meth:`console_rows`), the newest (last) brightest; a script's pinned
+        head in green, as a shell's prompt lines (cached while the rows are the same)."""
+        key = tuple(rows)
+        if self._console_cache[0] == key:
             return self._console_cache[1]
         img = self._Image.new("RGB", (WIDTH, HEIGHT - CONSOLE_Y), CONSOLE_BG)
         d = self._Draw.Draw(img)
-        lines = self.events[:n_events][-9:]
-        for n, (t, text) in enumerate(lines):
-            ink = (255, 255, 255) if n == len(lines) - 1 else CONSOLE_INK
-            d.text((10, 6 + 17 * n), f"[{t - self.origin:7.2f}] {text}"[:160], font=self.mono, fill=ink)
-        self._console_cache = (n_events, img)
+        pinned = len(self.script.head) if self.script is not None else 0
+        for n, text in enumerate(rows):
+            ink = (140, 220, 140) if n < pinned else (255, 255, 255) if n == len(rows) - 1 else CONSOLE_INK
+            d.text((10, 6 + 17 * n), text[:160], font=self.mono, fill=ink)
+        self._console_cache = (key, img)
         return img
 
 
@@ -611,12 +579,12 @@ def _wrap(text: str, width: int) -> list[str]:
     return [text[:width]] + [f"  {text[k:k + width - 2]}" for k in range(width, len(text), width - 2)]
 
 
-def renderer_for(record: MissionRecord, world: Any = None) -> VideoRenderer:
+def renderer_for(record: MissionRecord, world: Any = None, script: ConsoleScript | None = None) -> VideoRenderer:
     """The renderer of this bag: :class:`TracksRenderer` when it holds robots in namespaces (each in its
-    colour), else :class:`VideoRenderer` (one robot, its path coloured by branch)."""
+    colour), else :class:`VideoRenderer` (one robot, its path coloured by branch; ``script``: a hand-in's console)."""
     if record.robots:
         return TracksRenderer(record, world)
-    return VideoRenderer(record, world)
+    return VideoRenderer(record, world, script)
 
 
 def frame_times(record: MissionRecord, fps: float) -> np.ndarray:
@@ -636,15 +604,21 @@ class VideoStats:
     seconds: float  # wall time to render and encode
 
 
-def iter_frames(record: MissionRecord, fps: float, world: Any = None) -> Iterator[Any]:
-    """The frames of the video, as PIL images."""
-    renderer = renderer_for(record, world)
+def iter_frames(record: MissionRecord, fps: float, world: Any = None,
+                script: ConsoleScript | None = None) -> Iterator[tuple[float, Any, list[str]]]:
+    """The frames of the video: (sim time, PIL image, the console rows drawn on it)."""
+    renderer = renderer_for(record, world, script)
     for t in frame_times(record, fps):
-        yield renderer.frame(float(t))
+        yield float(t), renderer.frame(float(t)), renderer.console_rows(float(t))
 
 
-def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world: Any = None) -> VideoStats:
-    """Render ``record`` to an H.264 MP4 (yuv420p) at ``out``; returns the frame count and wall time."""
+def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world: Any = None,
+                script: ConsoleScript | None = None, console_log: str | Path | None = None) -> VideoStats:
+    """Render ``record`` to an H.264 MP4 (yuv420p) at ``out``; returns the frame count and wall time.
+
+    ``script``: a hand-in's console (:class:`bt_nav.media.console.ConsoleScript`) in place of the bag's events;
+    ``console_log``: also write there, per frame, the console rows drawn (:class:`bt_nav.media.console.ConsoleLog`).
+    """
     import imageio_ffmpeg
 
     started = time.perf_counter()
@@ -656,13 +630,19 @@ def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world
                                          output_params=["-preset", "veryfast", "-crf", "23",
                                                         "-movflags", "+faststart"])
     writer.send(None)
+    log = ConsoleLog(path, TIME_BASE if script is None else script.time_base) if console_log else None
+    origin = record.origin if script is None else script.origin
     frames = 0
     try:
-        for img in iter_frames(record, fps, world):
+        for t, img, rows in iter_frames(record, fps, world, script):
             writer.send(img.tobytes())
+            if log is not None:
+                log.add(t - origin, rows)
             frames += 1
     finally:
         writer.close()
+    if log is not None and console_log is not None:
+        log.write(Path(console_log))
     return VideoStats(path, frames, fps, time.perf_counter() - started)
 
 
@@ -787,7 +767,8 @@ class TracksRenderer(VideoRenderer):
                 d.text((float(px) + 9, float(py) - 22), tr.name, font=self.mono, fill=tr.colour)
         self._legend(d, t)
         img.paste(self._paths_panel(t), (MAP_W + 2, 0))
-        img.paste(self._console(int(np.searchsorted(self.event_t, t, side="right"))), (0, CONSOLE_Y))
+        img.paste(self._console(self.console_rows(t)), (0, CONSOLE_Y))
+        self._draw_label(d)
         return img
 
     def _legend(self, d: Any, t: float) -> None:

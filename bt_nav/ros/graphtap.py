@@ -87,6 +87,7 @@ class GraphTap:
         self.subscribed: dict[str, str] = {}
         self.clock_ns: int | None = None
         self.clock = SimClock()
+        self.first_clock: tuple[int, int] | None = None  # (wall ns, sim ns) of the first /clock seen
         self._serialize, self._String = serialize_message, String
         self.sim_time = sim_time
         self.message_info = message_info
@@ -120,6 +121,8 @@ class GraphTap:
             sim = self.clock.sim_at(int(wall_ns))
             if sim is not None:
                 return sim
+            if self.first_clock is not None and wall_ns < self.first_clock[0]:
+                return self.first_clock[1]  # before the first /clock seen (a log line's history): not the newest
         return self.now_ns()
 
     def _clock_sub(self) -> None:
@@ -131,6 +134,8 @@ class GraphTap:
             self.clock_ns = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
             sent = info.get("source_timestamp") if isinstance(info, dict) else None
             self.clock.add(sent or time.time_ns(), self.clock_ns)
+            if self.first_clock is None:
+                self.first_clock = (sent or time.time_ns(), self.clock_ns)
 
         self.node.create_subscription(Clock, "/clock", self._with_info(on_clock), qos)
 
@@ -144,7 +149,10 @@ class GraphTap:
                 self.handler(self.events_topic, "std_msgs/msg/String", when, data, None)
 
         self.subscribed["/rosout"] = "rcl_interfaces/msg/Log"
-        self.node.create_subscription(Log, "/rosout", self._with_info(on_log), QoSProfile(depth=100))
+        # transient local, as Jazzy's /rosout publishers offer it: a node's lines logged before this recorder found it
+        # (its start-up line) come as history
+        qos = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(Log, "/rosout", self._with_info(on_log), qos)
 
     def _discover(self) -> None:
         for topic, types in self.node.get_topic_names_and_types():

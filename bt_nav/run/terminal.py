@@ -32,13 +32,17 @@ strip, are exactly the terminal's lines, stamped with the sim time at which this
 
 from __future__ import annotations
 
+import heapq
+import json
 import re
+import shlex
 import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
 from bt_nav.media.bag import ANNOUNCEMENTS, EVENTS, TREE
+from bt_nav.media.console import sim_stamp
 from bt_nav.mission.snapshot import read_event, read_snapshot
 from bt_nav.ros.bringup import EXECUTIVE_NAME, JUDGE_NODE_NAMES
 from bt_nav.run.rundir import Logs, judge_line, split_stamp
@@ -94,14 +98,19 @@ class TerminalNode:
         qos = QoSProfile(depth=500, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.publisher = self.ros.node.create_publisher(String, EVENTS, qos) if publish else None
         self._string = String
+        self._subscriptions: list[Any] = []
 
     def subscribe(self, topic: str, callback: Callable[[str], Any], latched: bool = False) -> None:
         """Hand each message's text on ``topic`` to ``callback`` (QoS as the publisher's: ``~/tree``'s latched depth
         1, an events topic's depth 100)."""
         from bt_nav.ros.rosutil import EVENTS_QOS, LATCHED
 
-        self.ros.node.create_subscription(self._string, topic, lambda msg: callback(msg.data),
-                                          LATCHED if latched else EVENTS_QOS)
+        self._subscriptions.append(self.ros.node.create_subscription(
+            self._string, topic, lambda msg: callback(msg.data), LATCHED if latched else EVENTS_QOS))
+
+    def publishers(self) -> int:
+        """How many publishers the subscriptions have found (0: none discovered yet)."""
+        return sum(sub.get_publisher_count() for sub in self._subscriptions)
 
     def start(self) -> None:
         """Start spinning (the subscriptions' callbacks run on this node's thread)."""
@@ -168,7 +177,7 @@ class LabTerminal:
         t = self.logs.line_time() if t is None else t
         with self._lock:
             self.lines.append((t, text))
-            self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
+            self.out(sim_stamp(t, text))
             if self.node is not None:
                 self.node.publish(text)
 
@@ -217,32 +226,64 @@ class NodeTerminal:
     """The terminal of ``bt-nav demo --exe``: a student's own node in place of bt_nav's executive.
 
     Shows, stamped with the sim time each happened (:class:`bt_nav.ros.simclock.SimClock`): every line the node
-    prints (its log lines at their log call; a plain ``print`` when it is read: a foreign node has only its text),
-    the judge's service calls and replies as ``ros2 service call`` prints them (from the judge's events, at the
-    judge's sim time: :meth:`listen`), and the judge's report lines as they are. Not the simulator's or the
-    recorder's lines (they are in the run's log files).
+    prints (its log lines at their log call; a plain ``print`` when it is read: a foreign node has only its text)
+    and the judge's service calls and replies as ``ros2 service call`` prints them (from the judge's events, at the
+    judge's sim time: :meth:`listen`). Not the simulator's, the judge's or the recorder's own lines (they are in the
+    run's log files); the judge's report lines are kept (:attr:`report`) for the command to print after the run, on
+    the sim clock (:func:`on_sim_clock`).
+
+    Why ``hold``: the node's lines come through its pipe at once, the judge's calls over DDS, whose transient-local
+    history can reach a reader seconds late (discovery on a loaded machine): printed as they came, a call at
+    ``sim 5.50 s`` once followed a maneuver line at ``sim 15.90 s``. With ``hold`` > 0 a line is printed once the sim
+    clock is ``hold`` s past it and this process has found the judge's events (or :data:`FIND_JUDGE` wall seconds
+    went by), in time order; :meth:`close` prints what is left. 0: printed at once.
 
     Args:
         clock: the map from wall to sim time (the demo's recorder node's).
         out: prints one terminal line (default ``print``).
+        hold: sim seconds a line waits for earlier ones (see above).
     """
 
-    def __init__(self, clock: Any, out: Callable[[str], Any] | None = None) -> None:
+    def __init__(self, clock: Any, out: Callable[[str], Any] | None = None, hold: float = 0.0) -> None:
         self.clock = clock
         self.out = out or (lambda text: print(text, flush=True))
-        self.lines: list[tuple[float | None, str]] = []
+        self.hold = hold
+        self.lines: list[tuple[float | None, str, str]] = []  # (sim time, text, kind: node, call) as shown
+        self.report: list[str] = []  # the judge's report lines as it printed them (its own time base)
         self.node: TerminalNode | None = None  # the judge's events (:meth:`listen`)
+        self._pending: list[tuple[float, int, float | None, str]] = []  # heap: (t, order, t, text)
+        self._listening_since = time.monotonic()
         self._lock = threading.Lock()
+        self._ticker: threading.Thread | None = None
 
-    def show(self, text: str, t: float | None) -> None:
-        """One terminal line at sim time ``t`` (None: not known yet)."""
+    def show(self, text: str, t: float | None, kind: str = "node") -> None:
+        """One terminal line at sim time ``t`` (None: not known yet: printed at once, it comes before the clock)."""
         with self._lock:
-            self.lines.append((t, text))
-            self.out(f"[sim {t:6.2f} s] {text}" if t is not None else f"[sim      - s] {text}")
+            self.lines.append((t, text, kind))
+            if self.hold <= 0 or t is None:
+                self.out(sim_stamp(t, text))
+                return
+            heapq.heappush(self._pending, (t, len(self.lines), t, text))
+        self.release()
+
+    def release(self, everything: bool = False) -> None:
+        """Print the held lines whose time has come (see the class docstring), or all of them."""
+        now = None if everything else self._sim()
+        with self._lock:
+            ready = everything or self._found_judge()
+            while self._pending and ready and (everything or (now is not None and self._pending[0][0] <= now -
+                                                              self.hold)):
+                _, _, t, text = heapq.heappop(self._pending)
+                self.out(sim_stamp(t, text))
+
+    def _found_judge(self) -> bool:
+        if time.monotonic() - self._listening_since > FIND_JUDGE:
+            return True
+        return self.node is not None and self.node.publishers() > 0
 
     def _sim(self, wall_s: float | None = None) -> float | None:
-        import time
-
+        if self.clock is None:
+            return None
         sim = self.clock.sim_at(time.time_ns() if wall_s is None else round(wall_s * 1e9))
         return None if sim is None else sim * 1e-9
 
@@ -255,26 +296,89 @@ class NodeTerminal:
             else:
                 self.show(f"[{match['level']}] [{match['node']}]: {match['msg']}", self._sim(float(match["time"])))
         elif judge_line(name, line) == "report" and not PYTHON_ERROR.match(line):
-            # a judge's report line (of its own process or hosted by the simulator's): its times are the judge's own;
-            # a judge stopped early says so in its log file, not here
+            # a judge's report line (of its own process or hosted by the simulator's): kept for after the run; a
+            # judge stopped early says so in its log file, not here
             with self._lock:
-                self.out(line)
+                self.report.append(line)
 
     def listen(self) -> None:
         """Show the judge's calls and replies from its events (call once this process is on the run's domain; again
         for a run again on another domain)."""
-        self.close()
+        self.close(flush=False)
         self.node = TerminalNode(publish=False)
         for topic in judge_event_topics():
             self.node.subscribe(topic, self.on_judge_event)
         self.node.start()
+        self._listening_since = time.monotonic()
+        if self.hold > 0 and self._ticker is None:
+            self._ticker = threading.Thread(target=self._tick, name="terminal-release", daemon=True)
+            self._ticker.start()
+
+    def _tick(self) -> None:
+        while self._ticker is not None:
+            self.release()
+            time.sleep(0.1)
 
     def on_judge_event(self, text: str) -> None:
         """A judge's call or reply, as ``ros2 service call`` shows it, at the judge's sim time."""
-        show_judge_event(self.show, text)
+        show_judge_event(lambda line, t: self.show(line, t, "call"), text)
 
-    def close(self) -> None:
-        """Stop listening."""
+    def transcript(self) -> list[dict[str, Any]]:
+        """Every line shown, in time order (the unknown times first): ``{"t", "text", "kind"}``."""
+        with self._lock:
+            lines = list(self.lines)
+        ordered = sorted(enumerate(lines), key=lambda e: (e[1][0] is not None, e[1][0] or 0.0, e[0]))
+        return [{"t": t, "text": text, "kind": kind} for _, (t, text, kind) in ordered]
+
+    def close(self, flush: bool = True) -> None:
+        """Stop listening; print what is still held (``flush``)."""
+        if flush:
+            self._ticker = None
+            self.release(everything=True)
         if self.node is not None:
             self.node.close(wait=0.0)
             self.node = None
+
+
+#: Wall seconds the terminal holds lines at most while it has not found the judge's events (:class:`NodeTerminal`).
+FIND_JUDGE = 10.0
+#: A time in a judge's report line, counted from its t0 (``t=5.10 s``, ``t=0.00-5.00 s``), with the sim clock's
+#: reading it may add (`` (sim 5.86 s)``).
+_REPORT_TIME = re.compile(r"\bt=(?P<a>-?\d+(?:\.\d+)?)(?:-(?P<b>-?\d+(?:\.\d+)?))? s(?: \(sim -?\d+(?:\.\d+)? s\))?")
+
+
+def on_sim_clock(line: str, t0_sim: float) -> str:
+    """A judge's report line with its times (seconds from its t0) said on the sim clock, as every other line of the
+    demo (``true at t=5.10 s`` -> ``true at sim 5.86 s``, ``over t=0.00-5.00 s`` -> ``over sim 0.76-5.76 s``), in
+    the figure's own precision. Why: one time base in what a student reads; the judge's JSON keeps its own."""
+    def shift(text: str) -> str:
+        digits = len(text.partition(".")[2])
+        return f"{float(text) + t0_sim:.{digits}f}"
+
+    def repl(m: re.Match[str]) -> str:
+        return f"sim {shift(m['a'])}" + (f"-{shift(m['b'])}" if m["b"] else "") + " s"
+
+    return _REPORT_TIME.sub(repl, line)
+
+
+def shell_text(words: list[str] | tuple[str, ...]) -> str:
+    """A command's words as one would type them in a shell: ``-p maneuver:="C"`` (the double quotes keep a string a
+    string for rcl's YAML) as ``-p maneuver:=C`` where YAML reads the bare word as the same string, and a word
+    shell-quoted only when it needs it."""
+    return " ".join(shlex.quote(_bare(word)) for word in words)
+
+
+#: Words YAML would not read as a string when bare (booleans, nulls, in YAML 1.1 and 1.2 spellings).
+_YAML_WORDS = {"true", "false", "yes", "no", "on", "off", "y", "n", "null", "~"}
+
+
+def _bare(word: str) -> str:
+    name, sep, value = word.partition(":=")
+    if not sep or not (value.startswith('"') and value.endswith('"')):
+        return word
+    try:
+        text = json.loads(value)
+    except ValueError:
+        return word
+    plain = isinstance(text, str) and re.fullmatch(r"[A-Za-z_][\w./-]*", text) and text.lower() not in _YAML_WORDS
+    return f"{name}:={text}" if plain else word

@@ -12,11 +12,11 @@ import pytest
 from bt_nav.cli.video import main as video_main
 from bt_nav.media.bag import MissionBag
 from bt_nav.media.bagread import MissionRecord, read_bag
+from bt_nav.media.console import console_shows
 from bt_nav.media.video import (
     MAP_W,
     TIME_BASE,
     VideoRenderer,
-    console_shows,
     live_feedback,
     shown_feedback,
     world_of,

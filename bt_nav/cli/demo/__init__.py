@@ -61,6 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "the maneuver its file's '# CHOICE: X' declares, unless --maneuver); "
                         "its log lines are shown at their sim time and the run is filmed (run directory's video.mp4, "
                         "or --video) for the hand-in")
+    parser.add_argument("--launch", metavar="FILE", help="with --exe --profile lab: the launch file the run stands in "
+                        "for (its package on the terminal's 'ros2 launch' line, its parameters given to the node; "
+                        "default: turtlebot_bringup.launch.py beside the node's file)")
     parser.set_defaults(world=None)  # the lab's default arena depends on the maneuver; the homework's is stage_4
     return parser
 

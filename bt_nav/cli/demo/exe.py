@@ -4,8 +4,14 @@ One run of ``bt-nav grade --exe``'s machinery (:func:`bt_nav.grading.exe.run.run
 profile's judge, the node with ``use_sim_time`` and the profile's remaps, the recorder) with a terminal: the node's
 log lines with the sim time each was logged at, the judge's service calls and replies and its report
 (:class:`bt_nav.run.terminal.NodeTerminal`), then the verdict. The bag is recorded into the run directory
-(``bag/``) and filmed (``--video``, default ``video.mp4`` there): the robot, its scan, the node's command and its
-log lines, which is what the lab's hand-in asks for (the terminal output and the robot reacting).
+(``bag/``) and filmed (``--video``, default ``video.mp4`` there): the robot, its scan, the node's command and the
+terminal, which is what the lab's hand-in asks for (the terminal output and the robot reacting).
+
+The terminal (and the film's console, :mod:`bt_nav.grading.handin_film`) begins with the command that ran and, in the
+lab, the ``ros2 launch`` it stands in for (the package and the node's parameters from the launch file beside the
+node, or ``--launch FILE``), then the node's lines and the judge's service calls in time order. One time base: every
+line is stamped with the simulator's clock (``[sim 5.76 s]``), the judge's report lines are said on it too
+(:func:`bt_nav.run.terminal.on_sim_clock`), and the film's caption counts on it.
 
 In the lab the maneuver is the one the node's file declares (the template's ``# CHOICE: X``, read as ``bt-nav
 grade`` reads it) unless ``--maneuver`` says another (a line says which wins), and the arena the one that checks it
@@ -18,6 +24,7 @@ The run directory is ``<out>/<name>/<world>_<maneuver>_seed<seed>`` with grade -
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -25,6 +32,8 @@ from typing import Any
 
 #: Sim seconds per wall second when ``--rtf 0``: the simulator does not wait for a foreign node (grade --exe's pace).
 EXE_RTF = 5.0
+#: Sim seconds a terminal line waits for earlier ones that come over DDS (:class:`bt_nav.run.terminal.NodeTerminal`).
+HOLD = 2.0
 
 
 def exe_maneuver(opts: argparse.Namespace) -> tuple[str, str]:
@@ -42,9 +51,28 @@ def exe_maneuver(opts: argparse.Namespace) -> tuple[str, str]:
     return normalise_maneuver(chosen), note
 
 
-def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
-    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.exe.run.ExeSettings`, and a note on
-    its maneuver (:func:`exe_maneuver`; ValueError on a bad option)."""
+def stand_in(opts: argparse.Namespace) -> Any:
+    """The lab's ``ros2 launch`` this run stands in for (:class:`bt_nav.grading.handin_film.StandIn`): from
+    ``--launch FILE``, else the launch file beside the node's file; None for the homework (it has no launch file).
+    ValueError: a ``--launch`` file that does not exist."""
+    from bt_nav.grading.exe.grid import node_file
+    from bt_nav.grading.handin_film import launch_beside, launch_stand_in
+
+    if opts.profile != "lab":
+        if opts.launch:
+            raise ValueError("--launch is the lab's (its launch file); the homework has none")
+        return None
+    node = node_file(opts.exe)
+    node = node if node is not None and node.is_file() else None
+    if opts.launch and not Path(opts.launch).is_file():
+        raise ValueError(f"--launch {opts.launch}: no such file")
+    return launch_stand_in(Path(opts.launch) if opts.launch else launch_beside(node), node)
+
+
+def _settings(opts: argparse.Namespace, params: tuple[tuple[str, Any], ...] = ()) -> tuple[Any, Any, str]:
+    """The run's :class:`~bt_nav.grading.grid.Job` and :class:`~bt_nav.grading.exe.run.ExeSettings` (``params``: the
+    node's parameters, as its launch file gives them), and a note on its maneuver (:func:`exe_maneuver`; ValueError
+    on a bad option)."""
     from bt_nav.grading.exe.grid import resolve_program
     from bt_nav.grading.exe.run import ExeSettings
     from bt_nav.grading.grid import Job
@@ -67,30 +95,36 @@ def _settings(opts: argparse.Namespace) -> tuple[Any, Any, str]:
     name = opts.name or f"{time.strftime('%Y%m%d-%H%M%S')}_exe"
     settings = ExeSettings(resolve_program(opts.exe), opts.profile, Path(opts.out) / name,
                            limit=opts.timeout, rtf=opts.rtf or EXE_RTF, maneuvers=opts.maneuver is not None or lab,
-                           record="on", videos="off", cwd=str(Path.cwd()))
+                           record="on", videos="off", cwd=str(Path.cwd()), node_params=params)
     return Job(world, maneuver, opts.seed, profile=opts.profile), settings, note
 
 
 def run_exe_demo(opts: argparse.Namespace) -> int:
     """The demo of ``--exe``; 0 PASSED, 1 FAILED, 2 no verdict (or a bad option)."""
-    from bt_nav.cli.options import film
     from bt_nav.grading.exe.bag import BAG
-    from bt_nav.grading.exe.run import run_exe_job
+    from bt_nav.grading.exe.run import exe_ros_args, run_exe_job
+    from bt_nav.grading.handin_film import terminal_head, write_transcript
     from bt_nav.ros.simclock import SimClock
     from bt_nav.ros.supervise import StopRequest, use_domain_here
     from bt_nav.run.terminal import NodeTerminal
 
     try:
-        job, settings, note = _settings(opts)
+        launched = stand_in(opts)
+        job, settings, note = _settings(opts, launched.params if launched is not None else ())
     except (ValueError, FileNotFoundError) as exc:
         print(f"bt-nav demo: {exc}", file=sys.stderr)
         return 2
     if note:
         print(f"bt-nav demo: {note}", flush=True)
     print(f"bt-nav demo: {settings.command!r} as the robot node, {opts.profile} judge, {job.world}, maneuver "
-          f"{job.maneuver}, seed {job.seed}, {settings.rtf:g}x real time", flush=True)
-    clock = SimClock()
-    terminal = NodeTerminal(clock)
+          f"{job.maneuver}, seed {job.seed}, {settings.rtf:g}x real time; times on the simulator's clock "
+          "([sim T s])", flush=True)
+    argv = [*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
+                                                          settings.profile, settings.node_params)]
+    head = terminal_head(argv, launched)
+    for line in head:
+        print(line, flush=True)
+    terminal = NodeTerminal(SimClock(), hold=HOLD)
     recorder: list[Any] = []
 
     def on_start(domain: int, run_dir: Path) -> None:
@@ -110,16 +144,45 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
         terminal.close()
         if recorder:
             recorder[0].close()
-    print(f"bt-nav demo: {'PASSED' if row['passed'] else 'FAILED'}: {row['reason']}", flush=True)
     run_dir = Path(row["run_dir"])
+    write_transcript(run_dir, head, terminal.transcript())
+    _print_report(row, terminal.report)
+    print(f"bt-nav demo: {'PASSED' if row['passed'] else 'FAILED'}: {row['reason']}", flush=True)
     if row.get("bag"):
-        video = opts.video or str(run_dir / "video.mp4")
-        try:
-            film(str(run_dir / BAG), video, 10.0)
-        except Exception as exc:  # noqa: BLE001 - a film that cannot be made must not hide the verdict
-            print(f"bt-nav demo: no video: {exc}", file=sys.stderr)
+        _film(run_dir, run_dir / BAG, opts.video or str(run_dir / "video.mp4"))
     else:
         print("bt-nav demo: no bag was recorded, so no video (see record.log)", file=sys.stderr)
     if row["outcome"] != "verdict":
         return 2
     return 0 if row["passed"] else 1
+
+
+def _print_report(row: dict[str, Any], kept: list[str]) -> None:
+    """The judge's report lines, their times said on the sim clock (the verdict's ``t0_sim``); without a verdict the
+    lines the judge printed, as it printed them (its times count from its t0)."""
+    from bt_nav.run.terminal import on_sim_clock
+
+    verdict = row.get("verdict") or {}
+    lines, t0 = verdict.get("report_lines"), verdict.get("t0_sim")
+    if lines and t0 is not None:
+        print("the judge's report (times on the simulator's clock):", flush=True)
+        for line in lines:
+            print(on_sim_clock(str(line), float(t0)), flush=True)
+    elif kept:
+        print("the judge's report (t: seconds from its start, t0):", flush=True)
+        for line in kept:
+            print(line, flush=True)
+
+
+def _film(run_dir: Path, bag: Path, video: str) -> None:
+    """The hand-in film (:func:`bt_nav.grading.handin_film.film_handin`); a film that cannot be made is said, never
+    hides the verdict."""
+    from bt_nav.grading.handin_film import film_handin
+
+    try:
+        stats = film_handin(run_dir, bag, video, 10.0)
+    except Exception as exc:  # noqa: BLE001 - a film that cannot be made must not hide the verdict
+        print(f"bt-nav demo: no video: {exc}", file=sys.stderr)
+        return
+    print(f"video: {video} ({stats.frames} frames at {stats.fps:g} fps, rendered in {stats.seconds:.1f} s; its "
+          "console, frame by frame, beside it as .console.json)", flush=True)
