@@ -1,8 +1,9 @@
 """The launch files, checked without ``ros2 launch`` (launch/launch_ros are not on PyPI).
 
 Static checks read each file's source; then each ``generate_launch_description()`` runs against
-small recording stand-ins for the launch API, so the real code path executes and what it would hand
-to ``launch_ros`` is inspected. Where the real ``launch_ros`` is importable, it runs with that too.
+the recording stand-ins of the launch API (bt_nav.grading.launch_standins, the grader's own), so
+the real code path executes and what it would hand to ``launch_ros`` is inspected.
+Where the real ``launch_ros`` is importable, it runs with that too.
 """
 
 from __future__ import annotations
@@ -11,11 +12,11 @@ import ast
 import importlib.util
 import sys
 import tomllib
-import types
 from pathlib import Path
 
 import pytest
 
+from bt_nav.grading.launch_standins import standin_modules
 from bt_nav.mission.params import SPECS
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -24,29 +25,8 @@ FILES = sorted(LAUNCH.glob("*.launch.py"))
 SCRIPTS = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"])
 
 
-class Recorded:
-    """A stand-in launch object that keeps its constructor arguments."""
-
-    def __init__(self, *args, **kwargs) -> None:
-        self.args, self.kwargs = args, kwargs
-
-
-def fake_launch_modules() -> dict[str, types.ModuleType]:
-    modules = {name: types.ModuleType(name) for name in (
-        "launch", "launch.actions", "launch.substitutions", "launch_ros", "launch_ros.actions",
-        "launch_ros.parameter_descriptions")}
-    for module, names in {
-        "launch": ["LaunchDescription"], "launch.actions": ["DeclareLaunchArgument"],
-        "launch.substitutions": ["LaunchConfiguration"], "launch_ros.actions": ["Node"],
-        "launch_ros.parameter_descriptions": ["ParameterValue"],
-    }.items():
-        for name in names:
-            setattr(modules[module], name, type(name, (Recorded,), {}))
-    return modules
-
-
 def run_launch_file(path: Path, monkeypatch: pytest.MonkeyPatch):
-    for name, module in fake_launch_modules().items():
+    for name, module in standin_modules().items():  # the grader's stand-ins: one home for them
         monkeypatch.setitem(sys.modules, name, module)
     spec = importlib.util.spec_from_file_location(path.stem.replace(".", "_"), path)
     module = importlib.util.module_from_spec(spec)

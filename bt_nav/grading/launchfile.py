@@ -1,84 +1,45 @@
-"""A student's launch file read statically (Python's ``ast``; nothing of ``launch`` or ``launch_ros`` imported) and
-checked for what the lab sheet's Task 3 asks: it starts the student's node, declares the launch argument
-``safety_distance`` with the default 0.5, and passes that argument into the node's parameters.
+"""A student's launch file checked as ``ros2 launch`` would run it, for what the lab sheet's Task 3 asks: it starts
+the student's node, declares the launch argument ``safety_distance`` with the default 0.5, and passes that argument
+into the node's parameters.
 
-Why statically: the grader runs where ROS 2's launch packages may not be installed (a pip venv, a Gradescope image),
-and importing a student's file would run it. Why the checks follow the launch description and not just any call in
-the file: a ``Node(...)`` built but never returned by ``generate_launch_description()`` starts nothing. Where the
-description cannot be followed (a helper function's result, a comprehension), every call in the file counts, so an
-unusual but working file is never failed for the reader's limits.
+How: the file's ``generate_launch_description()`` is evaluated in a child process against stand-ins of the launch
+API (:mod:`bt_nav.grading.launch_eval`), twice -- with the defaults, and with ``safety_distance:=0.7`` given on the
+command line. The node passes "passes" when it would get 0.5; "declares" when it would get 0.5 by default *and* 0.7
+with the override (a launch argument that reaches it), so a constant ``{'safety_distance': 0.5}`` passes the one
+and fails the other. Each check cites the line it is about (the Node's ``parameters=`` line, a params file's line).
 
-Pure: no rclpy, no launch; never raises on a student's file (a syntax error is a failed check quoting it).
+Why evaluated and not read: students write the same launch file many ways (variables, helper lists, ``add_action``,
+``ParameterValue``, a params YAML, ``OpaqueFunction``, included files); only running it says what the node gets.
+What the evaluation cannot follow is "not checked: a TA should look", never a failure; the static reader
+(:mod:`bt_nav.grading.launch_static`) is the fallback when the evaluation cannot run at all. Pure: no rclpy.
 """
 
 from __future__ import annotations
 
 import ast
+import difflib
 import importlib.util
-from dataclasses import asdict, dataclass, field
+import re
 from pathlib import Path
 from typing import Any
 
-#: The lab sheet's name for the launch file, and its launch argument with the default it asks.
-LAUNCH_NAME = "turtlebot_bringup.launch.py"
-ARGUMENT, DEFAULT = "safety_distance", 0.5
-#: The three checks, in the verdict's order (their names are stable: other formats key on them).
-STARTS, DECLARES, PASSES = ("starts the node", f"declares {ARGUMENT} (default {DEFAULT:g})",
-                            f"passes {ARGUMENT} to the node")
+from bt_nav.grading.launch_eval import TIME_LIMIT, evaluate
+from bt_nav.grading.launch_report import (
+    ARGUMENT,
+    DECLARES,
+    DEFAULT,
+    LAUNCH_NAME,
+    NOT_CHECKED,
+    OVERRIDE,
+    PASSES,
+    STARTS,
+    LaunchCheck,
+    LaunchReport,
+)
+from bt_nav.grading.launch_static import read_statically
 
-_NODE = {"launch_ros.actions.Node", "launch_ros.actions.node.Node"}
-_PROCESS = {"launch.actions.ExecuteProcess", "launch.actions.execute_process.ExecuteProcess"}
-_DECLARE = {"launch.actions.DeclareLaunchArgument", "launch.actions.declare_launch_argument.DeclareLaunchArgument"}
-_CONFIG = {"launch.substitutions.LaunchConfiguration",
-           "launch.substitutions.launch_configuration.LaunchConfiguration"}
-_DESCRIPTION = {"launch.LaunchDescription", "launch.launch_description.LaunchDescription"}
-#: Actions that hold other actions (``actions=[...]``).
-_GROUPS = {"launch.actions.GroupAction", "launch.actions.TimerAction"}
-
-
-@dataclass(frozen=True)
-class LaunchCheck:
-    """One check of the launch file: its name, whether it passed, why, and the line it is about (None: none)."""
-
-    name: str
-    passed: bool
-    reason: str
-    line: int | None = None
-
-    def text(self) -> str:
-        """``starts the node: PASSED (line 12: Node(package='my_package', executable='reactive_navigator'))``."""
-        where = f"line {self.line}: " if self.line else ""
-        return f"{self.name}: {'PASSED' if self.passed else 'FAILED'} ({where}{self.reason})"
-
-
-@dataclass(frozen=True)
-class LaunchReport:
-    """The launch file's checks: the file read (None: none handed in), the checks, and a note on how it was used."""
-
-    file: str | None
-    checks: tuple[LaunchCheck, ...]
-    notes: tuple[str, ...] = field(default=())
-
-    @property
-    def passed(self) -> bool:
-        return all(c.passed for c in self.checks)
-
-    def lines(self) -> list[str]:
-        """A line per check; one line when every check failed for the same reason (no file, a syntax error)."""
-        reasons = {c.reason for c in self.checks}
-        if not self.passed and len(reasons) == 1 and not any(c.passed for c in self.checks):
-            check = self.checks[0]
-            return ["launch file: FAILED (" + (f"line {check.line}: " if check.line else "") + f"{check.reason})"]
-        return [f"launch file: {c.text()}" for c in self.checks]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"file": self.file, "passed": self.passed, "checks": [asdict(c) for c in self.checks],
-                "notes": list(self.notes)}
-
-    @classmethod
-    def from_dict(cls, doc: dict[str, Any]) -> LaunchReport:
-        return cls(doc.get("file"), tuple(LaunchCheck(**c) for c in doc.get("checks", [])),
-                   tuple(doc.get("notes", [])))
+__all__ = ["ARGUMENT", "DECLARES", "DEFAULT", "LAUNCH_NAME", "NOT_CHECKED", "OVERRIDE", "PASSES", "STARTS",
+           "LaunchCheck", "LaunchReport", "check_launch", "launch_ros_installed"]
 
 
 def launch_ros_installed() -> bool:
@@ -89,247 +50,201 @@ def launch_ros_installed() -> bool:
         return False
 
 
-def _all_failed(reason: str, line: int | None = None) -> tuple[LaunchCheck, ...]:
-    return tuple(LaunchCheck(name, False, reason, line) for name in (STARTS, DECLARES, PASSES))
-
-
-def check_launch(path: Path | None, node: Path | None) -> LaunchReport:
-    """The sheet's three checks of the launch file ``path`` for the node file ``node`` (None: none found)."""
+def check_launch(path: Path | None, node: Path | None, folder: Path | None = None,
+                 limit: float = TIME_LIMIT) -> LaunchReport:
+    """The sheet's three checks of the launch file ``path`` for the node file ``node`` (None: none found), in the
+    hand-in ``folder`` (default: the launch file's): the working directory and the package share it is run in."""
     if path is None:
-        return LaunchReport(None, _all_failed(f"no launch file handed in (expected {LAUNCH_NAME})"))
+        return read_statically(None, node)
     try:
-        source = path.read_bytes()
-        tree = ast.parse(source, filename=path.name)
-    except OSError as exc:
-        return LaunchReport(path.name, _all_failed(f"{path.name} cannot be read ({exc.strerror or exc})"))
-    except (SyntaxError, ValueError) as exc:
-        line = getattr(exc, "lineno", None)
-        msg = getattr(exc, "msg", None) or str(exc)
-        return LaunchReport(path.name, _all_failed(f"{path.name} is not valid Python: {msg}", line))
-    reader = _Reader(tree)
-    described = reader.described()
-    if described is None:
-        return LaunchReport(path.name, _all_failed(
-            "no generate_launch_description() function (ros2 launch calls it)"))
-    return LaunchReport(path.name, reader.checks(described, node))
+        ast.parse(path.read_bytes())
+    except (OSError, SyntaxError, ValueError):  # ros2 launch could not load it either: the reading says why
+        return read_statically(path, node)
+    folder = Path(folder) if folder is not None else path.parent
+    evaluation = evaluate(path, folder, {ARGUMENT: str(OVERRIDE)}, limit)
+    if "failed" in evaluation:
+        return _fallback(read_statically(path, node), f"the evaluation failed: {evaluation['failed']}",
+                         keep=not evaluation.get("hung"))  # a hang is the file's (ros2 launch would hang too)
+    default, override = evaluation["runs"]
+    if "stop" in default:
+        return LaunchReport(path.name, tuple(_check(name, False, f"ros2 launch stops: {default['stop']}",
+                                                    default.get("where")) for name in (STARTS, DECLARES, PASSES)))
+    if default.get("raised"):
+        return _fallback(read_statically(path, node), "; ".join(default["unsure"]), keep=False)
+    return _Judge(path, node, folder, default, override).report()
 
 
-class _Reader:
-    """What the module binds (imports, assignments, functions) and the calls its launch description holds."""
+def _check(name: str, passed: bool, reason: str, at: str | None = None, checked: bool = True) -> LaunchCheck:
+    """A check citing ``at`` (``file.py:12``, or ``params.yaml:3 (given at file.py:12)``: the first one counts)."""
+    match = re.match(r"([^:\s]+):(\d+)", at or "")
+    file, line = (match.group(1), int(match.group(2))) if match else (None, None)
+    return LaunchCheck(name, passed or not checked, reason, line, checked, file)
 
-    def __init__(self, tree: ast.Module) -> None:
-        self.tree = tree
-        self.aliases: dict[str, str] = {}  # local name -> dotted name it was imported as
-        self.stars: list[str] = []  # modules imported with *
-        self.values: dict[str, ast.expr] = {}  # name -> the last value assigned to it anywhere
-        self.functions: dict[str, ast.FunctionDef] = {}
-        for node in ast.walk(tree):
-            if isinstance(node, ast.Import):
-                for a in node.names:
-                    self.aliases[a.asname or a.name.split(".")[0]] = a.name if a.asname else a.name.split(".")[0]
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                for a in node.names:
-                    if a.name == "*":
-                        self.stars.append(node.module)
-                    else:
-                        self.aliases[a.asname or a.name] = f"{node.module}.{a.name}"
-            elif isinstance(node, ast.Assign):
-                for target in node.targets:
-                    if isinstance(target, ast.Name):
-                        self.values[target.id] = node.value
-            elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name) and node.value is not None:
-                self.values[node.target.id] = node.value
-            elif isinstance(node, ast.FunctionDef):
-                self.functions[node.name] = node
-        self.unsure = False  # the description holds something this reader cannot follow
 
-    def qualname(self, func: ast.expr) -> str:
-        """The dotted name a callee stands for (``Node`` -> ``launch_ros.actions.Node``), '' when unknown."""
-        parts: list[str] = []
-        while isinstance(func, ast.Attribute):
-            parts.insert(0, func.attr)
-            func = func.value
-        if not isinstance(func, ast.Name):
-            return ""
-        head = self.aliases.get(func.id)
-        if head is None:
-            known = {"Node": "launch_ros.actions", "ExecuteProcess": "launch.actions",
-                     "DeclareLaunchArgument": "launch.actions", "LaunchConfiguration": "launch.substitutions",
-                     "LaunchDescription": "launch", "GroupAction": "launch.actions", "TimerAction": "launch.actions"}
-            module = known.get(func.id)
-            head = f"{module}.{func.id}" if module in self.stars else func.id
-        return ".".join([head, *parts])
+def _fallback(static: LaunchReport, why: str, keep: bool = True) -> LaunchReport:
+    """The static reading where the evaluation could not say: its passed checks stand (``keep``), any other check
+    is not checked, with why and what the reading said."""
+    checks = tuple(c if keep and c.passed else LaunchCheck(c.name, True, f"{why} (read statically: "
+                                                           f"{c.status.lower()}, {c.reason})", c.line, False,
+                                                           static.file if c.line else None)
+                   for c in static.checks)
+    return LaunchReport(static.file, checks, (*static.notes, f"{why}: {NOT_CHECKED}"))
 
-    def resolve(self, expr: ast.expr | None, depth: int = 0) -> ast.expr | None:
-        """``expr`` with a variable replaced by the value last assigned to it."""
-        while isinstance(expr, ast.Name) and expr.id in self.values and depth < 20:
-            expr, depth = self.values[expr.id], depth + 1
-        return expr
 
-    def constant(self, expr: ast.expr | None) -> Any:
-        """The constant ``expr`` resolves to (None: not a constant)."""
-        expr = self.resolve(expr)
-        return expr.value if isinstance(expr, ast.Constant) else None
+def _package(folder: Path) -> str | None:
+    """The hand-in's ROS package name (its one ``package.xml``), None when it has none."""
+    found = [p for p in folder.rglob("package.xml") if not any(part.startswith(".") for part in p.parts)]
+    if len(found) != 1:
+        return None
+    match = re.search(r"<name>\s*([^<\s]+)\s*</name>", found[0].read_text(errors="replace"))
+    return match.group(1) if match else None
 
-    def described(self) -> list[ast.Call] | None:
-        """The calls ``generate_launch_description()`` puts in its description (None: no such function)."""
-        func = self.functions.get("generate_launch_description")
-        if func is None:
-            return None
-        return self._entities_of_function(func, set())
 
-    def _entities_of_function(self, func: ast.FunctionDef, seen: set[str]) -> list[ast.Call]:
-        seen.add(func.name)
-        out: list[ast.Call] = []
-        for node in ast.walk(func):
-            if isinstance(node, ast.Return) and node.value is not None:
-                out += self._entities(node.value, seen, 0)
-            elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                  and node.func.attr in ("add_action", "add_entity", "append", "extend", "insert")):
-                for arg in node.args[-1:]:
-                    out += self._entities(arg, seen, 0)
-        return out
+def _shown(value: Any) -> str:
+    return repr(value) if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else repr(value)
 
-    def _entities(self, expr: ast.expr | None, seen: set[str], depth: int) -> list[ast.Call]:
-        """The launch actions ``expr`` stands for: a list or tuple's elements, a description's, a group's."""
-        expr = self.resolve(expr)
-        if expr is None or depth > 30:
-            return []
-        if isinstance(expr, ast.List | ast.Tuple | ast.Set):
-            return [c for e in expr.elts for c in self._entities(e, seen, depth + 1)]
-        if isinstance(expr, ast.Starred):
-            return self._entities(expr.value, seen, depth + 1)
-        if isinstance(expr, ast.BinOp):
-            return self._entities(expr.left, seen, depth + 1) + self._entities(expr.right, seen, depth + 1)
-        if not isinstance(expr, ast.Call):
-            self.unsure = self.unsure or not isinstance(expr, ast.Constant)
-            return []
-        name = self.qualname(expr.func)
-        if name in _DESCRIPTION or name in _GROUPS:
-            inner = [*expr.args[:1], *(k.value for k in expr.keywords if k.arg in ("initial_entities", "actions"))]
-            return [expr] + [c for e in inner for c in self._entities(e, seen, depth + 1)]
-        if isinstance(expr.func, ast.Name) and expr.func.id in self.functions and expr.func.id not in seen:
-            return self._entities_of_function(self.functions[expr.func.id], seen)
-        if name in _NODE | _PROCESS | _DECLARE:
-            return [expr]
-        if name.endswith("OpaqueFunction"):  # its actions come from a function run at launch time
-            self.unsure = True
-        self.unsure = self.unsure or not name.startswith(("launch.", "launch_ros."))
-        return [expr]
 
-    def calls(self, described: list[ast.Call], names: set[str]) -> tuple[list[ast.Call], list[ast.Call]]:
-        """(the calls to ``names`` in the description, those elsewhere in the file); when the description could not
-        be followed, every call in the file is taken as in it."""
-        every = [n for n in ast.walk(self.tree) if isinstance(n, ast.Call) and self.qualname(n.func) in names]
-        inside = [c for c in every if any(c is d for d in described)]
+class _Judge:
+    """The three checks from the two evaluated runs (defaults, ``safety_distance:=0.7``)."""
+
+    def __init__(self, path: Path, node: Path | None, folder: Path, default: dict[str, Any],
+                 override: dict[str, Any]) -> None:
+        self.path, self.folder, self.default, self.override = path, folder, default, override
+        self.names = {"reactive_navigator", "reactive_navigator.py"}  # the sheet's name, whatever the file is named
+        self.names |= {node.stem, node.name} if node is not None else set()
+        self.unsure = list(default.get("unsure", []))
+        self.declared = next((d for d in reversed(default.get("declared", [])) if d["name"] == ARGUMENT), None)
+
+    def mine(self, run: dict[str, Any]) -> dict[str, Any] | None:
+        """The student's node among what ``run`` starts (by executable, or a process running the node's file)."""
+        for started in run.get("started", []):
+            if started["executable"] in self.names or any(Path(w).name in self.names for w in started.get("cmd", [])):
+                return started
+        return None
+
+    def report(self) -> LaunchReport:
+        node = self.mine(self.default)
+        value = None if node is None else node["parameters"].get(ARGUMENT)
+        after = None if (other := self.mine(self.override)) is None else other["parameters"].get(ARGUMENT)
+        notes = [f"evaluated as ros2 launch runs it (stand-ins of launch and launch_ros), {self.path.name} in "
+                 f"{self.folder.name}/"]
+        if value is not None and "value" in (value or {}):
+            reach = after is not None and _number(after.get("value")) == OVERRIDE
+            notes.append(f"with the defaults the node gets {ARGUMENT}={_shown(value['value'])}; "
+                         f"{ARGUMENT}:={OVERRIDE:g} {'reaches it' if reach else 'would not reach it'}")
+        notes += [f"not followed: {u}" for u in self.unsure]
+        return LaunchReport(self.path.name, (self.starts(node), self.declares(node, value, after),
+                                             self.passes(node, value)), tuple(notes))
+
+    def starts(self, node: dict[str, Any] | None) -> LaunchCheck:
+        want = " or ".join(sorted(self.names))
+        if node is None:
+            nodes = [s for s in self.default.get("started", []) if s["kind"] == "node"]
+            if self.unsure:
+                return _check(STARTS, False, f"no Node of {want} found, but the grader could not follow: "
+                              + "; ".join(self.unsure), checked=False)
+            if nodes:
+                found = ", ".join(repr(s["executable"]) for s in nodes)
+                return _check(STARTS, False, f"its Node runs executable {found}, not {want}", nodes[0]["where"])
+            static = read_statically(self.path, None).checks[0]
+            if "not return it" in static.reason:
+                return LaunchCheck(STARTS, False, static.reason, static.line, file=self.path.name)
+            return _check(STARTS, False, f"no launch_ros.actions.Node (nor ExecuteProcess) starts {want}")
+        if node["kind"] == "process":
+            return _check(STARTS, True, f"ExecuteProcess running {' '.join(node['cmd'])!r}", node["where"])
+        package = _package(self.folder)
+        if package is not None and node["package"] != package:
+            return _check(STARTS, False, f"Node(package={node['package']!r}): the hand-in's package is {package!r} "
+                          "(package.xml): ros2 launch finds no such executable", node["where"])
+        return _check(STARTS, True, f"Node(package={node['package']!r}, executable={node['executable']!r})",
+                      node["where"])
+
+    def passes(self, node: dict[str, Any] | None, value: dict[str, Any] | None) -> LaunchCheck:
+        if node is None:
+            return _check(PASSES, False, "no Node starts the student's node: nothing to pass it to",
+                          checked=not self.unsure)
+        at = node.get("parameters_at", node["where"])
+        if value is None:
+            return self._missing(node, at)
+        if "unsure" in value:
+            return _check(PASSES, False, f"{ARGUMENT} is given something the grader cannot resolve: "
+                          f"{value['unsure']}", at, checked=False)
+        got = value["value"]
+        source = "" if value["source"] == at else f" (from {value['source']})"
+        if isinstance(got, float) and got == DEFAULT:
+            return _check(PASSES, True, f"the node gets {ARGUMENT}={_shown(got)}{source}", at)
+        if isinstance(got, str):
+            return _check(PASSES, False, f"the node gets {ARGUMENT} as the string {got!r}{source}: its float "
+                          "parameter refuses a string", at)
+        return _check(PASSES, False, f"the node gets {ARGUMENT}={_shown(got)}{source}, the sheet asks 0.5", at)
+
+    def _missing(self, node: dict[str, Any], at: str) -> LaunchCheck:
+        """The node gets no ``safety_distance``: a near miss named (a typo, a remapping), or none at all."""
         if self.unsure:
-            return every, []
-        return inside, [c for c in every if not any(c is d for d in described)]
+            return _check(PASSES, False, f"{ARGUMENT} is not among the Node's parameters, but the grader could not "
+                          "follow: " + "; ".join(self.unsure), at, checked=False)
+        close = difflib.get_close_matches(ARGUMENT, list(node["parameters"]), n=1, cutoff=0.75)
+        if close:
+            return _check(PASSES, False, f"the Node is given {close[0]!r}, not {ARGUMENT!r} (a typo?)", at)
+        if any(ARGUMENT in word for pair in node.get("remappings", []) for word in pair):
+            return _check(PASSES, False, f"{ARGUMENT} is given as a remapping, not in parameters=[...]", at)
+        if node["kind"] == "process":
+            return _check(PASSES, False, f"the command never passes -p {ARGUMENT}:=...", at)
+        if not node["parameters"]:
+            return _check(PASSES, False, "the Node has no parameters=[...]", node["where"])
+        return _check(PASSES, False, f"{ARGUMENT} is not among the Node's parameters", at)
 
-    def keyword(self, call: ast.Call, *names: str) -> ast.expr | None:
-        return next((k.value for k in call.keywords if k.arg in names), None)
+    def declares(self, node: dict[str, Any] | None, value: dict[str, Any] | None,
+                 after: dict[str, Any] | None) -> LaunchCheck:
+        declared = self.declared
+        shown = None if declared is None else declared["default"]
+        right = shown is not None and _is_default(shown)
+        at = None if declared is None else declared["where"]
+        if value is not None and "unsure" in value:
+            return _check(DECLARES, False, f"what the node gets cannot be resolved: {value['unsure']}", at,
+                          checked=False)
+        if node is None or value is None:
+            if declared is None:
+                return _check(DECLARES, False, f"no DeclareLaunchArgument('{ARGUMENT}', default_value='0.5')",
+                              checked=not self.unsure)
+            if not right:
+                return _check(DECLARES, False, f"default_value is {shown!r}, the sheet asks 0.5", at)
+            if node is not None and value is None and not self.unsure:
+                return _check(DECLARES, False, f"DeclareLaunchArgument('{ARGUMENT}', default_value={shown!r}) is "
+                              f"declared but never reaches the node: {ARGUMENT}:={OVERRIDE:g} would change nothing", at)
+            return _check(DECLARES, True, f"DeclareLaunchArgument('{ARGUMENT}', default_value={shown!r})", at)
+        reach = after is not None and _number(after.get("value")) == OVERRIDE
+        if not reach:
+            if "stop" in self.override:
+                return _check(DECLARES, False, f"with {ARGUMENT}:={OVERRIDE:g} ros2 launch stops: "
+                              f"{self.override['stop']}", self.override.get("where"))
+            if declared is not None:
+                return _check(DECLARES, False, f"`{ARGUMENT}:={OVERRIDE:g}` would not reach the node: the launch "
+                              f"argument is declared at {at} but the node is given {_shown(value['value'])} "
+                              f"({value['source']}), not LaunchConfiguration('{ARGUMENT}')", node.get("parameters_at"))
+            return _check(DECLARES, False, f"`{ARGUMENT}:={OVERRIDE:g}` would not reach the node; declare a launch "
+                          "argument", node.get("parameters_at"))
+        if declared is not None and not right:
+            return _check(DECLARES, False, f"default_value is {shown!r}, the sheet asks 0.5", at)
+        if _number(value["value"]) != DEFAULT:
+            return _check(DECLARES, False, f"with the defaults the node gets {_shown(value['value'])}, the sheet asks "
+                          "0.5", at or node.get("parameters_at"))
+        if declared is None:
+            return _check(DECLARES, True, f"no DeclareLaunchArgument, but LaunchConfiguration('{ARGUMENT}') has the "
+                          f"default 0.5 and {ARGUMENT}:={OVERRIDE:g} reaches the node", node.get("parameters_at"))
+        return _check(DECLARES, True, f"DeclareLaunchArgument('{ARGUMENT}', default_value={shown!r}); "
+                      f"{ARGUMENT}:={OVERRIDE:g} reaches the node", at)
 
-    def checks(self, described: list[ast.Call], node: Path | None) -> tuple[LaunchCheck, ...]:
-        started, starts = self._starts(described, node)
-        return starts, self._declares(described), self._passes(started)
 
-    def _starts(self, described: list[ast.Call], node: Path | None) -> tuple[ast.Call | None, LaunchCheck]:
-        """The call that starts the node (None: none) and the check saying so."""
-        names = {"reactive_navigator", "reactive_navigator.py"}  # the sheet's name, whatever the file is named
-        names |= {node.stem, node.name} if node is not None else set()
-        nodes, outside = self.calls(described, _NODE)
-        for call in nodes:
-            executable = self.constant(self.keyword(call, "executable", "node_executable"))
-            if isinstance(executable, str) and executable in names:
-                package = self.constant(self.keyword(call, "package"))
-                what = f"Node(package={package!r}, executable={executable!r})"
-                return call, LaunchCheck(STARTS, True, what, call.lineno)
-        for call in self.calls(described, _PROCESS)[0]:
-            words = self.resolve(self.keyword(call, "cmd"))
-            elts = words.elts if isinstance(words, ast.List | ast.Tuple) else []
-            for word in (self.constant(e) for e in elts):
-                if isinstance(word, str) and Path(word).name in names:
-                    return call, LaunchCheck(STARTS, True, f"ExecuteProcess running {word!r}", call.lineno)
-        want = " or ".join(sorted(names))
-        if nodes:
-            found = ", ".join(repr(self.constant(self.keyword(c, "executable", "node_executable"))) for c in nodes)
-            return None, LaunchCheck(STARTS, False, f"its Node runs executable {found}, not {want}",
-                                     nodes[0].lineno)
-        if outside:
-            return None, LaunchCheck(STARTS, False, "a Node is built but generate_launch_description() does not "
-                                     "return it in the launch description", outside[0].lineno)
-        return None, LaunchCheck(STARTS, False, f"no launch_ros.actions.Node (nor ExecuteProcess) starts {want}")
+def _is_default(text: str) -> bool:
+    return _number(text) == DEFAULT
 
-    def _declares(self, described: list[ast.Call]) -> LaunchCheck:
-        declared, outside = self.calls(described, _DECLARE)
-        mine = [c for c in declared if self._argument_name(c) == ARGUMENT]
-        if not mine:
-            if any(self._argument_name(c) == ARGUMENT for c in outside):
-                return LaunchCheck(DECLARES, False, f"DeclareLaunchArgument('{ARGUMENT}') is built but not in the "
-                                   "launch description", outside[0].lineno)
-            return LaunchCheck(DECLARES, False, f"no DeclareLaunchArgument('{ARGUMENT}', default_value='0.5')")
-        call = mine[0]
-        default = self.keyword(call, "default_value")
-        if default is None:
-            return LaunchCheck(DECLARES, False, f"DeclareLaunchArgument('{ARGUMENT}') has no default_value (the "
-                               "sheet's default is 0.5)", call.lineno)
-        value = self.constant(default)
-        try:
-            right = not isinstance(value, bool) and float(value) == DEFAULT
-        except (TypeError, ValueError):
-            right = False
-        shown = ast.unparse(self.resolve(default) or default)
-        if right:
-            return LaunchCheck(DECLARES, True, f"DeclareLaunchArgument('{ARGUMENT}', default_value={shown})",
-                               call.lineno)
-        return LaunchCheck(DECLARES, False, f"default_value is {shown}, the sheet asks 0.5", call.lineno)
 
-    def _argument_name(self, call: ast.Call) -> Any:
-        return self.constant(call.args[0] if call.args else self.keyword(call, "name"))
-
-    def _passes(self, started: ast.Call | None) -> LaunchCheck:
-        if started is None:
-            return LaunchCheck(PASSES, False, "no Node starts the student's node: nothing to pass it to")
-        if self.qualname(started.func) in _PROCESS:
-            return self._passes_on_command_line(started)
-        params = self.resolve(self.keyword(started, "parameters"))
-        if params is None:
-            return LaunchCheck(PASSES, False, "the Node has no parameters=[...]", started.lineno)
-        entries = params.elts if isinstance(params, ast.List | ast.Tuple) else [params]
-        for entry in (self.resolve(e) for e in entries):
-            for key, value in self._items(entry):
-                if self.constant(key) != ARGUMENT:
-                    continue
-                value = self.resolve(value)
-                line = getattr(value, "lineno", started.lineno)
-                if isinstance(value, ast.Call) and self.qualname(value.func) in _CONFIG:
-                    name = self.constant(value.args[0] if value.args else self.keyword(value, "variable_name"))
-                    if name == ARGUMENT:
-                        return LaunchCheck(PASSES, True, f"parameters {{'{ARGUMENT}': LaunchConfiguration("
-                                           f"'{ARGUMENT}')}}", line)
-                    return LaunchCheck(PASSES, False, f"{ARGUMENT} is given LaunchConfiguration({name!r}), not "
-                                       f"the launch argument '{ARGUMENT}'", line)
-                shown = ast.unparse(value) if value is not None else "?"
-                return LaunchCheck(PASSES, False, f"{ARGUMENT} is given {shown}, not "
-                                   f"LaunchConfiguration('{ARGUMENT}'): the launch argument never reaches the node",
-                                   line)
-        return LaunchCheck(PASSES, False, f"{ARGUMENT} is not among the Node's parameters", started.lineno)
-
-    def _passes_on_command_line(self, call: ast.Call) -> LaunchCheck:
-        """An ExecuteProcess passes the argument in its ``cmd`` (``-p safety_distance:=`` then the configuration)."""
-        for sub in ast.walk(self.resolve(self.keyword(call, "cmd")) or call):
-            sub = self.resolve(sub) if isinstance(sub, ast.Name) else sub
-            if isinstance(sub, ast.Call) and self.qualname(sub.func) in _CONFIG and self.constant(
-                    sub.args[0] if sub.args else self.keyword(sub, "variable_name")) == ARGUMENT:
-                return LaunchCheck(PASSES, True, f"LaunchConfiguration('{ARGUMENT}') on the command line",
-                                   sub.lineno)
-        return LaunchCheck(PASSES, False, f"the command never passes LaunchConfiguration('{ARGUMENT}')",
-                           call.lineno)
-
-    def _items(self, entry: ast.expr | None) -> list[tuple[ast.expr | None, ast.expr]]:
-        """(key, value) pairs of a parameters entry: a dict literal, or ``dict(name=value)``."""
-        if isinstance(entry, ast.Dict):
-            return list(zip(entry.keys, entry.values, strict=True))
-        if isinstance(entry, ast.Call) and isinstance(entry.func, ast.Name) and entry.func.id == "dict":
-            return [(ast.Constant(k.arg), k.value) for k in entry.keywords if k.arg]
-        return []
+def _number(value: Any) -> float | None:
+    """A parameter's value as a number (``'0.5'`` too: the type is the "passes" check's business), None: none."""
+    if isinstance(value, bool):
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return None

@@ -1,0 +1,118 @@
+"""The launch-file suite: the lab sheet's Task 3 checked as ``ros2 launch`` would run each file
+(bt_nav.grading.launchfile), on right files written the many ways students write them and on wrong ones, each with
+the verdict it must get and the words of its reason. The grader must pass every right file, fail every wrong one
+for its reason, and say "not checked" (never "failed") where it cannot follow a file.
+
+The fixtures are one hand-in folder (tests/fixtures/launch: its package.xml names the package ``my_package``, its
+params files and ``included/navigator.launch.py`` are found as an installed share's would be).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from bt_nav.grading.launchfile import DECLARES, PASSES, STARTS, check_launch
+
+LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
+NODE = Path("reactive_navigator.py")
+P, F, N = "PASSED", "FAILED", "NOT CHECKED"
+
+#: fixture -> (right or wrong, (starts, declares, passes), words the reason of the first check not passed says)
+SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
+    # right: ros2 launch starts the node with safety_distance 0.5, and safety_distance:=0.7 reaches it
+    "sheet": ("right", (P, P, P), ""),
+    "parameter_value": ("right", (P, P, P), ""),
+    "config_default": ("right", (P, P, P), ""),
+    "str_default": ("right", (P, P, P), ""),
+    "aliases": ("right", (P, P, P), ""),
+    "variables_add_action": ("right", (P, P, P), ""),
+    "module_style": ("right", (P, P, P), ""),
+    "group_star": ("right", (P, P, P), ""),
+    "helper_function": ("right", (P, P, P), ""),
+    "helper_lists": ("right", (P, P, P), ""),
+    "yaml_then_argument": ("right", (P, P, P), ""),
+    "include": ("right", (P, P, P), ""),
+    "opaque_function": ("right", (P, P, P), ""),
+    "namespace_group": ("right", (P, P, P), ""),
+    "python_expression": ("right", (P, P, P), ""),
+    "conditions_timer": ("right", (P, P, P), ""),
+    "ros_arguments": ("right", (P, P, P), ""),
+    "execute_process": ("right", (P, P, P), ""),
+    # wrong: each for its reason
+    "forgets_safety": ("wrong", (P, F, F), "no DeclareLaunchArgument('safety_distance'"),
+    "hardcoded_value": ("wrong", (P, F, P), "`safety_distance:=0.7` would not reach the node"),
+    "yaml_only": ("wrong", (P, F, P), "`safety_distance:=0.7` would not reach the node; declare a launch argument"),
+    "wrong_default": ("wrong", (P, F, F), "default_value is '0.3', the sheet asks 0.5"),
+    "declared_not_passed": ("wrong", (P, F, F), "is declared but never reaches the node"),
+    "typo_name": ("wrong", (P, F, F), "is declared but never reaches the node"),
+    "remapping_string": ("wrong", (P, F, F), "is declared but never reaches the node"),
+    "string_type": ("wrong", (P, P, F), "as the string '0.5'"),
+    "wrong_executable": ("wrong", (F, P, F), "its Node runs executable 'turtlesim_node'"),
+    "wrong_package": ("wrong", (F, P, P), "the hand-in's package is 'my_package'"),
+    "not_returned": ("wrong", (F, P, F), "does not return it in the launch description"),
+    "condition_off": ("wrong", (F, P, F), "no launch_ros.actions.Node"),
+    "other_config": ("wrong", (F, F, F), "'safety_distance' has no default_value and was not given"),
+    "undeclared_no_default": ("wrong", (F, F, F), "launch configuration 'safety_distance' does not exist"),
+    "float_default": ("wrong", (F, F, F), "a float is not a string or substitution (TypeError)"),
+    "plain_list": ("wrong", (F, F, F), "returns a list, not a LaunchDescription"),
+    "no_function": ("wrong", (F, F, F), "no generate_launch_description() function"),
+    # the grader cannot follow these: a TA looks, nothing is failed
+    "command_default": ("TA", (P, N, N), "Command is not one the grader can resolve"),
+    "unknown_import": ("TA", (N, N, N), "No module named 'nav2_common'"),
+}
+
+#: The reason of a wrong file's check that is not its first failure, where it names its own mistake.
+SECOND_REASONS = {
+    "typo_name": (PASSES, "the Node is given 'saftey_distance', not 'safety_distance' (a typo?)"),
+    "remapping_string": (PASSES, "safety_distance is given as a remapping, not in parameters=[...]"),
+    "wrong_default": (PASSES, "the node gets safety_distance=0.3, the sheet asks 0.5"),
+    "declared_not_passed": (PASSES, "safety_distance is not among the Node's parameters"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SUITE))
+def test_each_launch_file_gets_its_verdict_for_its_reason(name: str) -> None:
+    kind, statuses, said = SUITE[name]
+    report = check_launch(LAUNCH / f"{name}.launch.py", NODE)
+    assert [c.name for c in report.checks] == [STARTS, DECLARES, PASSES]
+    assert tuple(c.status for c in report.checks) == statuses, report.lines()
+    assert report.passed == (kind != "wrong"), "a right file passes, a wrong one fails, one a TA looks at passes"
+    assert report.checked == (kind != "TA")
+    first = next((c for c in report.checks if c.status != P), None)
+    if kind == "right":
+        assert first is None
+        assert any("safety_distance:=0.7 reaches it" in n for n in report.notes), report.notes
+    else:
+        assert first is not None and said in first.reason, report.lines()
+    if name in SECOND_REASONS:
+        check, words = SECOND_REASONS[name]
+        assert next(c for c in report.checks if c.name == check).reason == words
+
+
+def test_every_fixture_is_in_the_suite_and_the_suite_is_big_enough() -> None:
+    names = sorted(p.name.removesuffix(".launch.py") for p in LAUNCH.glob("*.launch.py"))
+    assert names == sorted(SUITE)
+    kinds = [kind for kind, _, _ in SUITE.values()]
+    assert len(SUITE) >= 25 and kinds.count("right") >= 12 and kinds.count("wrong") >= 12
+
+
+@pytest.mark.parametrize(("name", "cited"), [
+    ("sheet", ("sheet.launch.py", 15)),  # the Node's parameters= line, not the Node's first line
+    ("variables_add_action", ("variables_add_action.launch.py", 12)),  # not the params variable's line (11)
+    ("include", ("navigator.launch.py", 11)),  # the included file's Node
+    ("yaml_only", ("yaml_only.launch.py", 12)),
+])
+def test_passes_cites_the_nodes_parameters_line(name: str, cited: tuple[str, int]) -> None:
+    check = check_launch(LAUNCH / f"{name}.launch.py", NODE).checks[2]
+    assert (check.file, check.line) == cited, check
+    assert check.text().startswith(f"{PASSES}: PASSED ({cited[0]}:{cited[1]}: ")
+
+
+def test_the_override_is_said_to_reach_the_node_or_not() -> None:
+    reached = check_launch(LAUNCH / "config_default.launch.py", NODE)
+    constant = check_launch(LAUNCH / "hardcoded_value.launch.py", NODE)
+    assert "with the defaults the node gets safety_distance=0.5; safety_distance:=0.7 reaches it" in reached.notes
+    assert "with the defaults the node gets safety_distance=0.5; safety_distance:=0.7 would not reach it" in \
+        constant.notes
