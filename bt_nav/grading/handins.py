@@ -143,7 +143,7 @@ def read_handin(name: str, folder: Path) -> HandIn:
     """One student's hand-in: the node found (or why not), the launch file checked against it."""
     node, problem = find_node(folder)
     launch_path = find_launch(folder)
-    report = check_launch(launch_path, node)
+    report = check_launch(launch_path, node, folder)
     notes = list(report.notes)
     if launch_path is not None and launch_path.name != LAUNCH_NAME:
         notes.append(f"read {launch_path.relative_to(folder)} (the sheet names it {LAUNCH_NAME})")
@@ -154,11 +154,12 @@ def read_handin(name: str, folder: Path) -> HandIn:
 
 
 def started_note(node: Path) -> str:
-    """How the node was started, said in every hand-in's verdict (the launch file itself was not run)."""
+    """How the node was started, said in every hand-in's verdict (the launch file was evaluated, not started)."""
     how = f"the node was started as `{Path(sys.executable).name} {node}` (this grader's Python)"
+    done = "launch file evaluated against stand-ins of launch/launch_ros, not started"
     if launch_ros_installed():
-        return f"launch file read statically; launch_ros is installed but bt_nav does not start launch files yet: {how}"
-    return f"launch file read statically; launch_ros not installed, {how}"
+        return f"{done}; launch_ros is installed but bt_nav does not start launch files yet: {how}"
+    return f"{done}; launch_ros not installed, {how}"
 
 
 def read_handins(folder: Path) -> list[HandIn]:

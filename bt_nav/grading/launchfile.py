@@ -126,8 +126,7 @@ class _Judge:
         node = self.mine(self.default)
         value = None if node is None else node["parameters"].get(ARGUMENT)
         after = None if (other := self.mine(self.override)) is None else other["parameters"].get(ARGUMENT)
-        notes = [f"evaluated as ros2 launch runs it (stand-ins of launch and launch_ros), {self.path.name} in "
-                 f"{self.folder.name}/"]
+        notes = []
         if value is not None and "value" in (value or {}):
             reach = after is not None and _number(after.get("value")) == OVERRIDE
             notes.append(f"with the defaults the node gets {ARGUMENT}={_shown(value['value'])}; "
