@@ -15,13 +15,16 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "executive": ("bt_nav.ros.executive", "run the mission executive node (ros2 run bt_nav executive)"),
     "sim": ("bt_nav.ros.nodes.simulator", "run the 2D TurtleBot3 simulator node"),
     "referee": ("bt_nav.ros.nodes.referee", "run the homework referee node"),
-    "checkoff": ("bt_nav.ros.nodes.checkoff", "run the lab's check-off judge node (calls toggle_navigation)"),
+    "checkoff": ("bt_nav.cli.checkoff", "the lab's check-off: the judge node over DDS (calls toggle_navigation), or "
+                 "a real robot's bag (--bag)"),
     "sim-run": ("bt_nav.cli.sim_run", "simulator + executive (+ referee) in one go, without ros2 launch"),
     "demo": ("bt_nav.cli.demo", "the homework mission (or --profile lab: the lab's check-off) over DDS in sim time"),
     "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),
     "grade": ("bt_nav.cli.grade", "grade worlds x maneuvers x seeds in lock-step, in parallel"),
     "rules": ("bt_nav.cli.rules", "print what a graded node must do: topics, services, parameters, each maneuver's "
               "trigger and tolerances, the schedule"),
+    "check-launch": ("bt_nav.cli.check_launch", "check a launch file or hand-in folder for the lab's Task 3, "
+                     "evaluated as ros2 launch would run it"),
     "dump-tree": ("bt_nav.cli.dump_tree", "print or render the static mission tree"),
     "replay": ("bt_nav.cli.replay", "print a recorded tick trace tick by tick, or render one tick"),
     "watch": ("bt_nav.cli.watch", "print the executive's ~/tree snapshots as they change"),

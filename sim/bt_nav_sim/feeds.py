@@ -163,24 +163,29 @@ class Disobeyed:
 
 
 def not_followed(pose_t: Sequence[float], uyaw: Sequence[float], commands: Sequence[tuple[float, float, float]],
-                 *, settle: float = 0.5, hold: float = 1.0, min_rate: float = 0.2) -> list[Disobeyed]:
+                 *, settle: float = 0.5, hold: float = 1.0, min_rate: float = 0.2, stale: float = 1.0
+                 ) -> list[Disobeyed]:
     """Intervals of at least ``hold`` s, ``settle`` s or more after a command changed, over which the yaw turned the
     other way than the command in force (|rate| >= ``min_rate``), turned less than a fifth of it while it asked for
     ``min_rate`` or more (stalled, held), or turned at ``min_rate`` or more with none commanded (a person turned it).
-    ``uyaw`` is the unwrapped odometry yaw (rad) at ``pose_t``; ``commands`` (t, v, w) in time order."""
+    ``uyaw`` is the unwrapped odometry yaw (rad) at ``pose_t``; ``commands`` (t, v, w) in time order. A command
+    older than ``stale`` s is not taken as in force (the commands fell silent: a gap says so, not this)."""
     if len(pose_t) < 3 or not commands:
         return []
     t, yaw = np.asarray(pose_t, dtype=np.float64), np.asarray(uyaw, dtype=np.float64)
     times = [c[0] for c in commands]
+    since = []  # when the command in force at each command began (repeats of one command are one command)
+    for k, (tk, _, w) in enumerate(commands):
+        since.append(since[-1] if k and abs(w - commands[k - 1][2]) < 1e-6 else tk)
     bad: list[tuple[float, float, float, str]] = []  # (t0, t1, w, kind) of sample pairs
     for i in range(1, t.size):
         a, b = t[i - 1], t[i]
         k = bisect.bisect_right(times, a) - 1
-        if k < 0 or a - times[k] < settle or b - a <= 0 or b - a > 0.5:
+        if k < 0 or a - since[k] < settle or a - times[k] > stale or b - a <= 0 or b - a > 0.5:
             continue
         w = commands[k][2]
         nxt = times[k + 1] if k + 1 < len(times) else math.inf
-        if nxt <= b:  # a new command within the pair: not settled under one command
+        if nxt <= b and abs(commands[k + 1][2] - w) >= 1e-6:  # the command changes within the pair
             continue
         rate = (yaw[i] - yaw[i - 1]) / (b - a)
         kind = _disobedience(w, rate, min_rate)

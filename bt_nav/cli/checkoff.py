@@ -1,0 +1,137 @@
+"""``bt-nav checkoff``: the lab's check-off, one judge and its rules, two ways in.
+
+- over DDS (default): the judge node (:mod:`bt_nav.ros.nodes.checkoff`) calls ``toggle_navigation`` on a running
+  robot node in the simulator and judges it from ground truth and its own ray casts;
+- from a bag (``--bag BAG``): a real TurtleBot's recording (rosbag2 sqlite3 or MCAP, or a ROS 1 .bag), judged
+  offline without DDS from /odom (the pose's yaw, never the twist), /scan as recorded and /cmd_vel
+  (:mod:`bt_nav.media.robotbag`, :mod:`bt_nav_sim.recorded`). Same rules, same words; what the bag cannot show
+  (the service calls, unless it holds their events; contact) is listed as not judged.
+
+Exit 0 when the check-off passed, 1 when it failed, 2 on a refused option or an unreadable bag.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+#: Options only a bag can honour, and only the DDS judge.
+BAG_ONLY = ("--bag", "--node", "--from", "--to", "--armed-at", "--odom-topic", "--scan-topic", "--cmd-topic",
+            "--service-topic", "--namespace")
+DDS_ONLY = ("--world", "--seed", "--timeout")
+
+
+def parser() -> argparse.ArgumentParser:
+    """Both modes' options (``--help`` shows them all)."""
+    from bt_nav.mission.maneuver_spec import letters_text
+
+    p = argparse.ArgumentParser(prog="bt-nav checkoff", allow_abbrev=False, description=__doc__.split("\n\n")[0])
+    p.add_argument("--maneuver", help=f"the maneuver to check off: {letters_text()} (parameter maneuver)")
+    p.add_argument("--json", help="write the verdict JSON here (parameter json)")
+    dds = p.add_argument_group("over DDS, in the simulator")
+    dds.add_argument("--world", help="the simulator's world (parameter world)")
+    dds.add_argument("--seed", type=int, help="the simulator's seed (parameter seed)")
+    dds.add_argument("--timeout", type=float, help="wall-clock limit, s (parameter timeout)")
+    bag = p.add_argument_group("from a real robot's bag (no DDS)")
+    bag.add_argument("--bag", help="the recording: a rosbag2 directory (.db3 or .mcap) or file, or a ROS 1 .bag")
+    bag.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
+    bag.add_argument("--from", dest="start", type=float, help="the check-off starts this many s into the bag")
+    bag.add_argument("--to", dest="end", type=float, help="... and ends this many s into the bag")
+    bag.add_argument("--armed-at", type=float, help="s into the bag at which toggle_navigation(true) was called "
+                     "(default: its service events, else the first non-zero command)")
+    bag.add_argument("--odom-topic", default="odom", help="nav_msgs/Odometry topic (default odom)")
+    bag.add_argument("--scan-topic", default="scan", help="sensor_msgs/LaserScan topic (default scan)")
+    bag.add_argument("--cmd-topic", default="cmd_vel", help="Twist or TwistStamped topic (default cmd_vel)")
+    bag.add_argument("--service-topic", default="toggle_navigation/_service_event",
+                     help="the SetBool service events (rosbag2 service introspection)")
+    bag.add_argument("--namespace", default="", help="the robot's namespace, put before relative topic names")
+    return p
+
+
+def _given(argv: list[str], option: str) -> bool:
+    return any(a == option or a.startswith(option + "=") for a in argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``bt-nav checkoff`` (see the module docstring)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    own = argv[:argv.index("--ros-args")] if "--ros-args" in argv else argv
+    if "-h" in own or "--help" in own:
+        parser().print_help()
+        return 0
+    if not _given(own, "--bag"):
+        refused = [o for o in BAG_ONLY if _given(own, o)]
+        if refused:
+            print(f"bt-nav checkoff: {', '.join(refused)} only with --bag (a recording to judge)", file=sys.stderr)
+            return 2
+        from bt_nav.ros.nodes.checkoff import main as node_main
+
+        return node_main(argv)
+    refused = [o for o in DDS_ONLY if _given(own, o)] + (["--ros-args"] if own != argv else [])
+    if refused:
+        print(f"bt-nav checkoff: {', '.join(refused)} mean nothing on a bag (the robot's world is the one it "
+              "recorded)", file=sys.stderr)
+        return 2
+    return _judge_bag(parser().parse_args(own))
+
+
+def _maneuver(opts: argparse.Namespace) -> str:
+    """The maneuver: --maneuver, else the node file's '# CHOICE: X' (ValueError: neither)."""
+    from bt_nav.grading.exe.grid import choice_line
+    from bt_nav.mission.params import normalise_maneuver
+
+    if opts.maneuver:
+        return normalise_maneuver(opts.maneuver)
+    if opts.node:
+        try:
+            found = choice_line().search(Path(opts.node).read_text(errors="replace"))
+        except OSError as exc:
+            raise ValueError(f"--node {opts.node}: {exc.strerror or exc}") from exc
+        if not found:
+            raise ValueError(f"--node {opts.node}: no '# CHOICE: X' line in it; give --maneuver")
+        return normalise_maneuver(found.group(1))
+    raise ValueError("which maneuver? give --maneuver X or --node FILE (its '# CHOICE: X' line)")
+
+
+def _judge_bag(opts: argparse.Namespace) -> int:
+    """Read, judge, print; the verdict JSON if asked."""
+    from bt_nav_sim.checkoff_core import CheckoffConfig
+    from bt_nav_sim.recorded import Window, judge_recording, odometry_config, report_lines
+
+    from bt_nav.media.bag import BagError
+    from bt_nav.media.robotbag import Topics, read_robot_bag
+
+    try:
+        config = CheckoffConfig(maneuver=_maneuver(opts))
+        topics = Topics(opts.odom_topic, opts.scan_topic, opts.cmd_topic, opts.service_topic, opts.namespace)
+        rec = read_robot_bag(opts.bag, topics)
+        res = judge_recording(rec, config, Window(opts.start, opts.end, opts.armed_at))
+    except (BagError, ValueError) as exc:
+        print(f"bt-nav checkoff: {exc}", file=sys.stderr)
+        return 2
+    feed = res["feed"]
+    print(f"check-off of maneuver {config.maneuver} from {opts.bag}: t=0 is the bag's first message; window "
+          f"t={feed['window'][0]:.1f}-{feed['window'][1]:.1f} s; armed: {feed['arming']}")
+    for note in feed["notes"]:
+        print(f"note: {note}")
+    lines = report_lines(res)
+    print("\n".join(lines))
+    if opts.json:
+        from dataclasses import asdict
+
+        res.update(report_lines=lines, config=asdict(odometry_config(config)), bag=str(opts.bag),
+                   exit_code=0 if res["passed"] else 1,
+                   time_base="times and report lines: seconds from the window's start")
+        try:
+            Path(opts.json).parent.mkdir(parents=True, exist_ok=True)
+            Path(opts.json).write_text(json.dumps(res, indent=2, default=str) + "\n")
+        except OSError as exc:
+            print(f"bt-nav checkoff: could not write {opts.json}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
+    return 0 if res["passed"] else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

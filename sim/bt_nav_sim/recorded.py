@@ -1,0 +1,259 @@
+"""The lab's check-off judged from a real robot's recording: the same judge, the same rules and words, fed from
+odometry and recorded scans instead of ground truth and ray casts. Pure (no rclpy, no bag format): the bag reader
+(:mod:`bt_nav.media.robotbag`) hands over a :class:`Recording` of plain series.
+
+What a recording cannot say, the verdict does not guess (:func:`judge_recording`):
+
+- a service call is not on a topic: unless the recording holds rosbag2's service events
+  (``/toggle_navigation/_service_event``), the arming is taken as the first non-zero command (or ``armed_at``) and
+  the checks that need the calls (static before and after, toggle_navigation answered) are *not judged*;
+- a real robot has no collision sensor in its bag: "no collision" is not judged (the TA watches for contact);
+- a maneuver during which /odom or /scan (or /cmd_vel) fell silent, or the robot did not follow its commands
+  (handled, or stalled against something), is not judged, never passed; the data's contradictions are named.
+
+PASS needs every judged check to pass and at least one complete, judged maneuver.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from bt_nav.mission.scan import Scan
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.feeds import (
+    ODOMETRY_FORWARD_MOTION_MAX,
+    SCAN_MAX_AGE,
+    Disobeyed,
+    Gap,
+    ScanReadings,
+    gaps,
+    not_followed,
+)
+
+#: The checks that need the toggle_navigation calls to be seen.
+SERVICE_CHECKS = ("static before activation", "toggle_navigation answered", "static after deactivation")
+NO_COLLISION_SENSOR = "a robot's recording has no contact sensor: the TA watches for collisions"
+
+
+@dataclass(frozen=True)
+class ServiceCall:
+    """One ``toggle_navigation`` call seen in the recording's service events (absolute seconds)."""
+
+    t: float  # the request
+    data: bool
+    answered: float | None = None  # the response (None: never answered)
+    success: bool = False
+    message: str = ""
+
+
+@dataclass
+class Recording:
+    """A real robot's run as plain series, every time on one clock (absolute seconds, sorted)."""
+
+    odom: list[tuple[float, float, float, float]]  # t, x, y, yaw (the pose's yaw; the twist is never read)
+    scans: list[tuple[float, Scan]]
+    commands: list[tuple[float, float, float]]  # t, v, w
+    calls: list[ServiceCall] | None = None  # None: no service events recorded (arming not visible)
+    mount: tuple[float, float] = (0.0, 0.0)  # the LiDAR's (x, y) on the robot (from /tf when recorded)
+    topics: dict[str, str] = field(default_factory=lambda: {"odom": "/odom", "scan": "/scan", "cmd": "/cmd_vel"})
+    notes: list[str] = field(default_factory=list)  # what the reader did (clock offsets, skipped messages)
+
+    @property
+    def start(self) -> float:
+        firsts = [s[0][0] for s in (self.odom, self.scans, self.commands) if s]
+        return min(firsts) if firsts else 0.0
+
+    @property
+    def end(self) -> float:
+        lasts = [s[-1][0] for s in (self.odom, self.scans, self.commands) if s]
+        return max(lasts) if lasts else 0.0
+
+
+@dataclass(frozen=True)
+class Window:
+    """Which part of a recording is the check-off (seconds from its first message; None: from the start / to the
+    end / the arming as the recording shows it)."""
+
+    start: float | None = None
+    end: float | None = None
+    armed_at: float | None = None
+
+
+def odometry_config(config: CheckoffConfig) -> CheckoffConfig:
+    """The check-off's rules for odometry poses: the displacement allowance of a pivot's wheel slip."""
+    return replace(config, forward_motion_max=max(config.forward_motion_max, ODOMETRY_FORWARD_MOTION_MAX))
+
+
+def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Window()) -> dict[str, Any]:  # noqa: B008
+    """The check-off verdict of a recording (the simulator's verdict JSON, plus ``not_judged``, ``flags`` and
+    ``feed``). ValueError: an empty window, or no /odom or /scan in it."""
+    origin = rec.start
+    a = origin + (window.start or 0.0)
+    b = origin + window.end if window.end is not None else rec.end
+    if not b > a:
+        raise ValueError(f"the window t={a - origin:.1f}-{b - origin:.1f} s is empty")
+    odom = [p for p in rec.odom if a <= p[0] <= b]
+    if len(odom) < 2:
+        raise ValueError(f"no {rec.topics['odom']} (nav_msgs/Odometry) in the window: the judge needs the pose")
+    if not any(a - SCAN_MAX_AGE <= t <= b for t, _ in rec.scans):
+        raise ValueError(f"no {rec.topics['scan']} (sensor_msgs/LaserScan) in the window: the judge needs the scans")
+    cfg = odometry_config(config)
+    source = ScanReadings(cfg.family(), cfg.half_width, rec.mount)
+    for t, scan in rec.scans:
+        if a - SCAN_MAX_AGE <= t <= b:
+            source.add(t, scan)
+    judge = CheckoffJudge(cfg, None, readings=source)
+    judge.start(a)
+    arming = _arm(judge, rec, window, a, b)
+    for t, x, y, yaw in odom:
+        judge.observe(t, x, y, yaw)
+    for t, v, w in rec.commands:
+        if a <= t <= b:
+            judge.on_command(t, v, w)
+    judge._finish(b)  # noqa: SLF001 - the recording is the schedule: the report is at its end
+    res = judge.results()
+    armed = judge.activation_requested if judge.activation_requested is not None else a
+    flags = _flags(rec, odom, a, b, armed)
+    _restate(res, rec, cfg, flags, a)
+    res["feed"] = {"poses": f"{rec.topics['odom']} (pose x, y and yaw; the twist is not read)",
+                   "readings": f"{rec.topics['scan']} as recorded ({len(source.t)} scans, {source.skipped} skipped)",
+                   "commands": rec.topics["cmd"], "arming": arming, "window": [a - origin, b - origin],
+                   "forward_motion_max": cfg.forward_motion_max, "lidar_mount": list(rec.mount), "notes": rec.notes}
+    return res
+
+
+def _arm(judge: CheckoffJudge, rec: Recording, window: Window, a: float, b: float) -> str:
+    """Set the judge's schedule from what the recording shows; the arming in words."""
+    if rec.calls is not None:
+        for call in (c for c in rec.calls if a <= c.t <= b):
+            if call.data and judge.activation_requested is None:
+                judge.activation_requested = call.t
+            elif not call.data and judge.activated is not None and judge.deactivation_requested is None:
+                judge.deactivation_requested = call.t
+            answer = "answered" if call.answered is not None else "no response"
+            judge.on_activate_result(call.answered if call.answered is not None else call.t, call.data,
+                                     call.success, answer, call.message)
+        return "toggle_navigation service events"
+    if window.armed_at is not None:
+        judge.activation_requested = judge.activated = rec.start + window.armed_at
+        return f"given: t={judge.activation_requested - a:.1f} s (--armed-at)"
+    first = next((t for t, v, w in rec.commands if a <= t <= b and (v != 0.0 or w != 0.0)), None)
+    if first is None:
+        return "never: no non-zero command in the window"
+    judge.activation_requested = judge.activated = first - 1e-3
+    return f"the first non-zero command, t={first - a:.1f} s (service calls not visible)"
+
+
+@dataclass
+class _Flags:
+    gaps: list[Gap]
+    disobeyed: list[Disobeyed]
+    gap_turns: list[dict[str, str]] = field(default_factory=list)  # turns the robot made while a topic was silent
+
+
+def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, armed: float) -> _Flags:
+    """Where the recording falls silent or contradicts the commands (from the arming on)."""
+    found = gaps(rec.topics["odom"], [p[0] for p in odom], within=(max(a, armed), b))
+    found += gaps(rec.topics["scan"], [t for t, _ in rec.scans if a <= t <= b], within=(max(a, armed), b))
+    found += gaps(rec.topics["cmd"], [t for t, _, _ in rec.commands if max(a, armed) <= t <= b])
+    t = np.asarray([p[0] for p in odom])
+    uyaw = np.unwrap(np.asarray([p[3] for p in odom]))
+    cmds = [c for c in rec.commands if a <= c[0] <= b]
+    flags = _Flags(sorted(found, key=lambda g: g.start), not_followed(t, uyaw, cmds))
+    for g in flags.gaps:  # a turn nobody saw commanded (or read its scans): not judged, and said
+        turned = math.degrees(float(np.interp(g.end, t, uyaw) - np.interp(g.start, t, uyaw)))
+        seen = any(g.start < float(turn["end"]) for turn in flags.gap_turns)  # one turn, several silent topics
+        if abs(turned) >= 20.0 and g.topic != rec.topics["odom"] and not seen:
+            flags.gap_turns.append({"name": "a turn", "end": str(g.end), "why": f"the robot turned {turned:+.0f} "
+                                                                                 f"deg while there was {g.text(a)}"})
+    return flags
+
+
+def _episode_problem(e: dict[str, Any], flags: _Flags, cfg: CheckoffConfig, t0: float) -> str:
+    """Why an episode cannot be judged on this recording (empty: it can)."""
+    start, end = t0 + e["t"] - cfg.scan_age, t0 + e["settled"]
+    for g in flags.gaps:
+        if g.start < end and g.end > start:
+            return g.text(t0)
+    for d in flags.disobeyed:
+        if d.start < end and d.end > start:
+            return d.text(t0)
+    if e.get("readings") is None:
+        return "no scan at its start"
+    return ""
+
+
+def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _Flags, t0: float) -> None:
+    """The judge's verdict restated for what the recording supports: checks it cannot judge moved to
+    ``not_judged``, maneuvers in a gap or a contradiction too, the verdict from the judged ones."""
+    not_judged: list[dict[str, str]] = []
+    keep: dict[str, dict[str, Any]] = {}
+    for kind, key in (("maneuver", "maneuvers"), ("recovery", "recovery_turns")):
+        judged = []
+        for number, e in enumerate(res[key], 1):
+            why = _episode_problem(e, flags, cfg, t0)
+            if why and kind == "maneuver":
+                not_judged.append({"name": f"maneuver {number}", "why": f"at t={e['t']:.1f} s: {why}"})
+            elif why:
+                not_judged.append({"name": "recovery turn", "why": f"at t={e['t']:.1f} s: {why}"})
+            else:
+                judged.append(e)
+                if kind == "maneuver":
+                    keep[f"maneuver {number}"] = e
+        res[f"judged_{key}"] = judged
+    checks = []
+    for c in res["checks"]:
+        name = c["name"]
+        if name in SERVICE_CHECKS and rec.calls is None:
+            not_judged.append({"name": name, "why": "service calls not visible (no /toggle_navigation/_service_event "
+                                                    "in the recording)"})
+        elif name == "no collision":
+            not_judged.append({"name": name, "why": NO_COLLISION_SENSOR})
+        elif name.startswith("maneuver ") and name not in keep:
+            continue
+        elif name.startswith("maneuver "):  # a recording's clock is not a simulator's: no "(sim 1700000000.00 s)"
+            checks.append({**c, "detail": re.sub(r" \(sim [-0-9.]+ s\)", "", c["detail"], count=1)})
+        elif name == "maneuvers performed":
+            checks.append(_performed(res, cfg, len(flags.gap_turns)))
+        elif name == "recovery turns":
+            bad = [e for e in res["judged_recovery_turns"] if not e["passed"]]
+            checks.append({**c, "passed": not bad, "value": len(res["judged_recovery_turns"])})
+        else:
+            checks.append(c)
+    res["checks"] = checks
+    res["not_judged"] = not_judged + [{"name": n["name"], "why": n["why"]} for n in flags.gap_turns]
+    res["flags"] = [g.text(t0) for g in flags.gaps] + [d.text(t0) for d in flags.disobeyed]
+    res["passed"] = bool(checks) and all(c["passed"] for c in checks) and len(res["judged_maneuvers"]) >= 1
+
+
+def _performed(res: dict[str, Any], cfg: CheckoffConfig, unseen: int = 0) -> dict[str, Any]:
+    """"maneuvers performed" over the complete, judged maneuvers (``unseen``: turns made while a topic was
+    silent)."""
+    judged, seen = len(res["judged_maneuvers"]), len(res["maneuvers"]) + unseen
+    need = max(1, cfg.min_maneuvers)
+    detail = f"{judged} performed and judged, required >= {need}"
+    if seen > judged:
+        detail += f" ({seen - judged} more seen but not judged)"
+    return {"name": "maneuvers performed", "passed": judged >= need, "value": judged, "required": need,
+            "detail": detail}
+
+
+def report_lines(res: dict[str, Any]) -> list[str]:
+    """The verdict as the simulator's judge prints it (``name (detail): PASSED|FAILED``), then what was not judged
+    and what the data contradicts, then the overall verdict."""
+    lines = [f"{c['name']} ({c['detail']}): {'PASSED' if c['passed'] else 'FAILED'}" for c in res["checks"]]
+    lines += [f"{n['name']}: NOT JUDGED ({n['why']})" for n in res.get("not_judged", [])]
+    lines += [f"data: {f}" for f in res.get("flags", [])]
+    lines.append(f"overall: {'PASSED' if res['passed'] else 'FAILED'}")
+    return lines
+
+
+def angle_of(res: dict[str, Any], number: int) -> float:
+    """The signed angle (deg, + = left) of maneuver ``number`` as judged (NaN if there is none)."""
+    m = res.get("maneuvers", [])
+    return float(m[number - 1]["angle_deg"]) if 0 < number <= len(m) else math.nan
