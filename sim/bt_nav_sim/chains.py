@@ -43,30 +43,35 @@ SPLIT_HINT = ("if these were several maneuvers back to back, none was seen to be
               "(as the template's execute_rotation_maneuver does), or pause or change the turn rate between them")
 
 
-def _rate_step(w_before: float, w: float, w_after: float | None) -> bool:
-    """Whether the commanded rate steps from ``w_before`` to ``w``: a rise, or a drop to a rate the next command
-    keeps (a new maneuver's steady rate, not a closed loop slowing down towards its target)."""
+def _rate_step(commands: Sequence[tuple[float, float, float]], i: int, b: int, min_turn: float) -> bool:
+    """Whether the commanded rate steps at command ``i`` (of a run ending at ``b``): a rise or a reversal, or a drop
+    to a rate the node then keeps while turning at least ``min_turn`` rad (a new maneuver's steady rate, not a
+    closed loop slowing down towards its target, nor its last few degrees at a minimum rate)."""
+    w_before, w = commands[i - 1][2], commands[i][2]
     if abs(w - w_before) < max(RATE_STEP, RATE_FRACTION * max(abs(w), abs(w_before))):
         return False
     if w * w_before < 0 or abs(w) > abs(w_before):
         return True
-    return w_after is not None and abs(w_after - w) <= 0.02 * abs(w)
+    j = i
+    while j < b and abs(commands[j + 1][2] - w) <= 0.02 * abs(w):
+        j += 1
+    return (commands[j][0] - commands[i][0]) * abs(w) >= min_turn
 
 
-def marks(commands: Sequence[tuple[float, float, float]], a: int, b: int,
-          announcements: Sequence[float]) -> list[tuple[int, str]]:
+def marks(commands: Sequence[tuple[float, float, float]], a: int, b: int, announcements: Sequence[float],
+          min_turn: float = 0.0) -> list[tuple[int, str]]:
     """The command indices in ``(a, b]`` at which the node marks a new maneuver, and how (``announcement``,
-    ``pause``, ``rate change``), in order. An announcement marks the nearest pause or rate step within
-    :data:`ANNOUNCE_WINDOW` of it, else the first command at or after it (its maneuver's first command follows
-    the line), else the nearest command within the window."""
+    ``pause``, ``rate change``), in order; ``min_turn`` (rad): how far a drop's new rate must turn to count
+    (:func:`_rate_step`). An announcement marks the nearest pause or rate step within :data:`ANNOUNCE_WINDOW` of
+    it, else the first command at or after it (its maneuver's first command follows the line), else the nearest
+    command within the window."""
     found: dict[int, str] = {}
     gaps = [commands[i][0] - commands[i - 1][0] for i in range(a + 1, b + 1)]
     usual = statistics.median([g for g in gaps if g > 0.0] or [0.0])
     for i in range(a + 1, b + 1):
-        t, w = commands[i][0], commands[i][2]
-        if t - commands[i - 1][0] > max(PAUSE_MIN, PAUSE_FACTOR * usual):
+        if commands[i][0] - commands[i - 1][0] > max(PAUSE_MIN, PAUSE_FACTOR * usual):
             found[i] = "pause"
-        elif _rate_step(commands[i - 1][2], w, commands[i + 1][2] if i < b else None):
+        elif _rate_step(commands, i, b, min_turn):
             found[i] = "rate change"
     first_t, last_t = commands[a][0], commands[b][0]
     for ta in announcements:
@@ -92,7 +97,8 @@ def split_run(judge: Any, a: int, b: int) -> list[tuple[int, int, float | None, 
     rule = cfg.spec.angle
     pieces: list[tuple[int, int, float | None, str]] = []
     first, since = a, commands[a][0]
-    for i, why in marks(commands, a, b, judge.announcement_times()):
+    half = 0.5 * math.radians(rule.low_deg - cfg.angle_tolerance_deg)  # half the smallest maneuver
+    for i, why in marks(commands, a, b, judge.announcement_times(), half):
         if i <= first:
             continue
         t = commands[i][0]

@@ -14,6 +14,12 @@ given to the simulator; objects that appear are revealed from the poses it obser
 judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), writes the verdict JSON
 (``json``) and exits 0 when the check-off passed, 1 when it failed, 2 without a verdict.
 
+What the robot node logs (``/rosout``, rcl_interfaces/Log; any node not bt_nav's own infrastructure, the judge's and
+the simulator's lines excluded) goes to the judge as announcements (``on_announcement``): any words, only their
+times count, as marks where the node began a new maneuver within one continuous rotation. A line's stamp is the
+node's clock (sim time under ``use_sim_time``); a stamp more than ``LOG_STAMP_SLACK`` s off the judge's clock (a node
+on the wall clock) is replaced by the time the line arrived.
+
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
 7.30 s)``) is :class:`bt_nav.ros.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
 Every :class:`bt_nav_sim.checkoff_core.CheckoffConfig` field is a parameter of the same name (``armed_for``,
@@ -29,16 +35,21 @@ from typing import Any
 
 from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import load_world
+from rcl_interfaces.msg import Log
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from bt_nav.mission.assignments import LAB
 from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver
-from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode
+from bt_nav.ros.nodes.audit import is_ours
+from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode, locked
 from bt_nav.ros.runner import param_args, run_node
 
 NODE_NAME = LAB.judge.node_name
 
 _DEFAULTS = CheckoffConfig()
+#: s: a log line stamped further than this from the judge's clock is timed by its arrival instead (wall-clock node).
+LOG_STAMP_SLACK = 2.0
 
 
 def _config_parameters() -> dict[str, tuple[Any, str]]:
@@ -62,6 +73,21 @@ class CheckoffNode(JudgeNode):
     def __init__(self, wall_start: float | None = None, **hosting: Any) -> None:
         super().__init__(NODE_NAME, wall_start, **hosting)  # hosting: fed, cli_args (a hosted judge: JudgeNode)
 
+    def _create_interfaces(self, p: dict[str, Any]) -> None:
+        """The driver's interfaces, and ``/rosout`` for the robot node's lines (the announcements)."""
+        super()._create_interfaces(p)
+        self.create_subscription(Log, "/rosout", self._on_log,
+                                 QoSProfile(depth=200, reliability=ReliabilityPolicy.RELIABLE))
+
+    @locked
+    def _on_log(self, msg: Log) -> None:
+        """One logged line: the judged node's goes to the judge, timed by its stamp (see the module docstring)."""
+        if not self.started or any(is_ours(part) for part in str(msg.name).split(".") if part):
+            return
+        now = self.now()
+        stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
+        self.judge.on_announcement(stamp if abs(stamp - now) <= LOG_STAMP_SLACK else now, str(msg.name), str(msg.msg))
+
     def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
         """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""
         values = {f.name: type(getattr(_DEFAULTS, f.name))(p[f.name]) for f in fields(_DEFAULTS)}
@@ -80,8 +106,10 @@ class CheckoffNode(JudgeNode):
         c = self.config
         off = c.activate_at + c.armed_for
         call = self.call_name
+        cycle = (f"{call}(false) {c.toggle_off_after:g} s after the first maneuver and (true) {c.toggle_off_for:g} s "
+                 "later, " if c.toggle_off_for > 0 else "")
         return (f"check-off of maneuver {c.maneuver} in {self.world_name}: {call}(true) at {c.activate_at:g} s, "
-                f"{call}(false) at {off:g} s, report at {off + c.grace + c.static_after:g} s (sim time from t0)")
+                f"{cycle}{call}(false) at {off:g} s, report at {off + c.grace + c.static_after:g} s (sim time from t0)")
 
 
 def make_node(wall_start: float | None = None) -> CheckoffNode:

@@ -99,6 +99,8 @@ FINAL_CALL_WAIT = 1.0
 #: The report waits until ground truth is taken up to this many sim s before its time, for at most TRUTH_WAIT
 #: wall s more (see JudgeNode._caught_up).
 TRUTH_LAG, TRUTH_WAIT = 0.1, 5.0
+#: ``finding_kinds``' kind of a finding the judge made itself (its results' ``findings``), not the graph audit.
+JUDGE_FINDING = "judge"
 #: ``cmd_vel_type`` values: the message class of each (auto: whatever the robot publishes).
 CMD_TYPES = {"Twist": Twist, "TwistStamped": TwistStamped}
 
@@ -675,12 +677,14 @@ class JudgeNode(QuietQosEvents, Node):
     def _write_json(self, lines: list[str], exclude: tuple[str, ...] = ()) -> None:
         """The results, the run's facts and the audit's findings (logged here too); ``exclude``: findings the
         ending already states."""
-        if self.audit is not None:
-            records = self.audit.finding_records(exclude)
-            self.findings = [found.text for found in records]
-            self.finding_kinds = [found.record() for found in records]
-            for finding in self.findings:
-                self.get_logger().warning(f"finding: {finding}")
+        records = self.audit.finding_records(exclude) if self.audit is not None else []
+        # the judge's own first (the check-off's maneuvers back to back), then the audit's
+        judged = [str(f) for f in self.judge.results().get("findings") or []] if self.started else []
+        self.findings = [*judged, *(found.text for found in records)]
+        self.finding_kinds = [*({"kind": JUDGE_FINDING, "topic": None, "clause": f} for f in judged),
+                              *(found.record() for found in records)]
+        for finding in self.findings:
+            self.get_logger().warning(f"finding: {finding}")
         if not self.json_path:
             return
         results = dict(self.judge.results())

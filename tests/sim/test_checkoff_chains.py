@@ -1,0 +1,225 @@
+"""The check-off judge on maneuvers back to back (bt_nav_sim.chains) and on its toggle cycle: a tiny kinematic
+driver plays a node's script in a small world, feeding the judge commands (20 Hz), ground truth (~33 Hz), the
+node's announcements (its log lines) and the schedule's service calls, which the scripted node obeys unless told
+otherwise (a false stops it, a true lets it go on)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+from bt_nav_sim.chains import SPLIT_HINT, marks
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.world import world_from_dict
+
+DT = 0.01
+ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
+#: A dead end along +x: walls 0.35 m either side of the axis from x = -1 to 1, closed at x = 1.
+DEAD_END = [[-1.0, 0.35, 1.0, 0.35], [-1.0, -0.35, 1.0, -0.35], [1.0, -0.35, 1.0, 0.35]]
+NARROW_END = [[-1.0, 0.3, 1.0, 0.3], [-1.0, -0.3, 1.0, -0.3], [1.0, -0.3, 1.0, 0.3]]
+WALL_AHEAD = [[1.0, -2.0, 1.0, 2.0]]
+BOX = [[-0.45, -0.45, 0.45, -0.45], [0.45, -0.45, 0.45, 0.45], [0.45, 0.45, -0.45, 0.45], [-0.45, 0.45, -0.45, -0.45]]
+DEG = math.radians(1.0)
+
+
+def _judge(maneuver: str, segments: list[list[float]], **kw) -> CheckoffJudge:
+    cfg = CheckoffConfig(**{"maneuver": maneuver, "armed_for": 20.0, **kw})  # disarm at 25 s, report at 29 s
+    return CheckoffJudge(cfg, world_from_dict({"name": "test", "segments": ROOM + segments}))
+
+
+def _play(judge: CheckoffJudge, script: list[tuple[float, float, float, bool]], *, obey: bool = True,
+          end: float = 80.0) -> CheckoffJudge:
+    """Play ``script`` ((seconds, v, w, announce) from t = 0, each started at once; ``announce``: the node logs a
+    line as that step begins). The robot follows its command instantly. ``obey``: a successful false makes the
+    node send zero twists until a true (else it ignores the false)."""
+    x = y = yaw = 0.0
+    judge.start(0.0)
+    timeline, t_at = [], 0.0
+    for seconds, v, w, announce in script:
+        timeline.append((t_at, v, w, announce))
+        t_at += seconds
+    pending = [t for t, _, _, announce in timeline if announce]
+    off = False
+    cmd = (0.0, 0.0)
+    for k in range(round(end / DT) + 1):
+        t = k * DT
+        if k % 50 == 0:
+            for action in judge.step(t):
+                judge.on_activate_result(t, action.data, True)
+                off = obey and not action.data
+        if judge.done:
+            break
+        while pending and pending[0] <= t + 1e-9:
+            judge.on_announcement(pending.pop(0), "reactive_navigator", "Obstacle Detected! Executing rotation")
+        if k % 5 == 0:
+            cmd = next(((v, w) for t0, v, w, _ in reversed(timeline) if t0 <= t + 1e-9), (0.0, 0.0))
+            cmd = (0.0, 0.0) if off else cmd
+            judge.on_command(t, *cmd)
+        if k % 3 == 0:
+            judge.observe(t, x, y, yaw)
+        x += cmd[0] * DT * math.cos(yaw)
+        y += cmd[0] * DT * math.sin(yaw)
+        yaw = math.remainder(yaw + cmd[1] * DT, 2 * math.pi)
+    assert judge.done
+    return judge
+
+
+def _turns(*degrees: float, rate: float = 1.0, announce: bool = True) -> list[tuple[float, float, float, bool]]:
+    """Turns left back to back at ``rate``, each announced (or none)."""
+    return [(math.radians(d) / rate, 0.0, rate, announce) for d in degrees]
+
+
+def _line(judge: CheckoffJudge, prefix: str) -> str:
+    return next(line for line in judge.report_lines() if line.startswith(prefix))
+
+
+# creep 10.2 s at 0.05 m/s from t = 5 into the dead end: x = 0.51, front 0.49 m
+INTO_DEAD_END = [(5.0, 0.0, 0.0, False), (10.2, 0.05, 0.0, False)]
+CREEP_OUT = [(30.0, 0.05, 0.0, False)]
+
+
+def test_randomizer_turns_back_to_back_announced_are_two_maneuvers_and_pass() -> None:
+    """A right Randomizer in a dead end: after 100 deg left its front (the side wall) is still blocked, so it draws
+    again at once, 100 deg left, with no stop between: each announced, each triggered, each in range."""
+    judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + _turns(100, 100) + CREEP_OUT)
+    res = judge.results()
+    assert judge.passed, judge.report_lines()
+    first, second = res["maneuvers"]
+    assert first["angle_deg"] == pytest.approx(100, abs=4) and second["angle_deg"] == pytest.approx(100, abs=4)
+    assert first["moved_on_detail"] == "another maneuver began" and second["began_by"] == "announcement"
+    assert second["trigger"] and second["readings"]["front"] < 0.4, second
+    chain = _line(judge, "back-to-back maneuvers")
+    assert chain.endswith(": PASSED") and "2 Randomizers back to back (" in chain and "to find a new path" in chain
+    assert res["findings"] and res["findings"][0].startswith("2 Randomizers back to back")
+
+
+def test_the_same_rotation_without_announcements_stays_one_maneuver_and_says_how_to_show_two() -> None:
+    judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + _turns(100, 100, announce=False) + CREEP_OUT)
+    (m,) = judge.results()["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(200, abs=4) and not judge.passed
+    line = _line(judge, "maneuver 1")
+    assert re.search(r"turned 20\d deg left; the Randomizer needs 80-190 deg either side \(if these were several", line)
+    assert SPLIT_HINT in line and "log a line as each one starts" in line
+    assert not any(line.startswith("back-to-back") for line in judge.report_lines())
+
+
+def test_a_step_in_the_turn_rate_marks_a_new_maneuver() -> None:
+    """No announcement, but the node turns its second maneuver at another rate: the step marks it."""
+    judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + _turns(100, rate=1.0, announce=False)
+                  + _turns(100, rate=0.6, announce=False) + CREEP_OUT)
+    first, second = judge.results()["maneuvers"]
+    assert second["began_by"] == "rate change" and judge.passed, judge.report_lines()
+
+
+def test_an_announcement_where_the_trigger_no_longer_held_splits_nothing() -> None:
+    """At a lone wall the front is clear after 120 deg: a line logged there is no new maneuver (the judge's readings
+    decide, never the node's words), so 240 deg in one rotation is one too-large maneuver."""
+    script = [(5.0, 0.0, 0.0, False), (10.2, 0.05, 0.0, False), *_turns(120, 120), *CREEP_OUT]
+    judge = _play(_judge("A", WALL_AHEAD), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(240, abs=4) and not judge.passed
+
+
+def test_a_node_that_always_spins_360_fails_with_or_without_announcements() -> None:
+    for announce in (True, False):
+        judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + _turns(360, 360, rate=2.0, announce=announce) + CREEP_OUT)
+        (m,) = judge.results()["maneuvers"]
+        assert m["angle_deg"] == pytest.approx(720, abs=6) and not judge.passed, announce
+        assert "the Randomizer needs 80-190 deg either side" in _line(judge, "maneuver 1")
+
+
+def test_a_node_that_spins_until_clear_announcing_once_fails() -> None:
+    """Boxed in, its front stays blocked for 250 deg: one line at the start, one constant-rate spin. The part up to
+    100 deg would have been a valid Randomizer with its trigger holding, but nothing marks a new maneuver there."""
+    script = [(5.0, 0.0, 0.0, False), *_turns(250), (30.0, 0.0, 0.0, False)]
+    judge = _play(_judge("A", BOX), script)
+    (m,) = judge.results()["maneuvers"]
+    assert m["angle_deg"] == pytest.approx(250, abs=4) and not judge.passed
+    assert re.search(r"turned 2[45]\d deg left; the Randomizer needs 80-190 deg", _line(judge, "maneuver 1"))
+
+
+def test_a_retreat_spinning_again_and_again_never_moved_on() -> None:
+    """Squeezed in a corridor, it spins 180 deg, is still squeezed, spins again, ... until the disarm: each spin is
+    a valid Retreat, but a Retreat is "to exit the narrow space" and it never drove out."""
+    script = [(5.0, 0.0, 0.0, False), *_turns(*[180] * 12)]
+    judge = _play(_judge("B", DEAD_END), script)
+    res = judge.results()
+    spins = res["maneuvers"]
+    assert len(spins) >= 6 and all(m["trigger"] for m in spins), spins
+    assert all(m["angle_ok"] for m in spins), [m["angle_deg"] for m in spins]
+    assert not judge.passed
+    chain = _line(judge, "back-to-back maneuvers")
+    assert chain.endswith(": FAILED")
+    check = next(c for c in res["checks"] if c["name"] == "back-to-back maneuvers")
+    assert re.match(rf"never moved on: {len(spins)} Retreats back to back \(\d+ deg in place\): after each 180 deg "
+                    r"Retreat the left and right still read < 0.5 m and it turned again; it never drove out to exit "
+                    r"the narrow space", check["reason"]), check["reason"]
+    assert check["reason"].count("0.35/0.35") == len(spins)  # the trigger readings at each start
+
+
+def test_a_retreat_without_announcements_is_one_rotation_still_turning_at_the_disarm() -> None:
+    judge = _play(_judge("B", DEAD_END), [(5.0, 0.0, 0.0, False), *_turns(*[180] * 12, announce=False)])
+    (m,) = judge.results()["maneuvers"]
+    assert m["angle_deg"] > 1000 and "it was still turning at the disarm" in _line(judge, "maneuver 1")
+
+
+def test_retreats_back_to_back_that_then_drive_out_pass_with_a_finding() -> None:
+    script = [(5.0, 0.0, 0.0, False), *_turns(180, 180, 180), (30.0, 0.05, 0.0, False)]
+    judge = _play(_judge("B", DEAD_END), script)
+    assert judge.passed, judge.report_lines()
+    assert judge.results()["findings"][0].startswith("3 Retreats back to back")
+
+
+def test_smart_pivots_back_to_back_get_the_same_finding() -> None:
+    """C at a narrow dead end: 90 deg left faces the side wall 0.3 m away (its trigger holds), so it pivots again
+    towards the clearer side (left, down the corridor)."""
+    script = [(5.0, 0.0, 0.0, False), (14.2, 0.05, 0.0, False), *_turns(90, 90), *CREEP_OUT]
+    judge = _play(_judge("C", NARROW_END), script)
+    assert judge.passed, judge.report_lines()
+    assert judge.results()["findings"][0].startswith("2 Smart Pivots back to back")
+
+
+def test_marks_ignore_a_closed_loop_slowing_down_but_not_a_rise_or_a_new_steady_rate() -> None:
+    """A closed loop's slow-down and its last degrees at a minimum rate are no new maneuver; a rise is, and so is a
+    drop to a rate kept for a turn of its own (``min_turn``)."""
+    slowing = [(k * 0.05, 0.0, w) for k, w in enumerate([0.6, 0.6, 0.5, 0.4, 0.3, 0.2, 0.15, 0.15, 0.6, 0.6])]
+    assert marks(slowing, 0, len(slowing) - 1, [], min_turn=0.6) == [(8, "rate change")]
+    assert marks(slowing, 0, len(slowing) - 1, [0.05], min_turn=0.6) == [(1, "announcement"), (8, "rate change")]
+    assert marks(slowing, 0, len(slowing) - 1, [0.3], min_turn=0.6) == [(8, "announcement")]  # the step it names
+    dropping = [(k * 0.05, 0.0, 1.0 if k < 5 else 0.5) for k in range(60)]
+    assert marks(dropping, 0, 59, [], min_turn=0.6) == [(5, "rate change")]
+    assert marks(dropping, 0, 59, [], min_turn=2.0) == []
+
+
+# ---------------------------------------------------------------------------------------- the toggle cycle
+A_SCRIPT = [(5.0, 0.0, 0.0, False), (10.2, 0.05, 0.0, False), (2.0, 0.0, 1.0, True), (60.0, 0.05, 0.0, False)]
+
+
+def test_the_toggle_cycle_disarms_after_the_first_maneuver_and_arms_again() -> None:
+    judge = _play(_judge("A", WALL_AHEAD, armed_for=40.0), A_SCRIPT)
+    assert judge.passed, judge.report_lines()
+    times = judge.results()["times"]
+    # the turn's last command at 17.15 s, the first calm one at 17.2 s: false on the first step 1 s after it
+    assert times["cycle_off_requested"] == pytest.approx(18.5) and times["cycle_on_requested"] == pytest.approx(23.5)
+    assert times["deactivation_requested"] == pytest.approx(45.0)
+    assert judge.hard_stop == pytest.approx(5.0 + 40.0 + 1.0 + 3.0 + 1.0)
+    answered = _line(judge, "toggle_navigation answered")
+    assert ("true at t=5.00 s, false (toggle cycle) at t=18.50 s, true again at t=23.50 s, false at t=45.00 s"
+            in answered)
+    static = _line(judge, "static after deactivation")
+    assert "after the toggle cycle's false: peak 0.000 m/s, 0.000 rad/s over t=19.50-22.50 s" in static
+
+
+def test_a_node_that_ignores_the_toggle_cycles_false_fails_static_after_deactivation() -> None:
+    judge = _play(_judge("A", WALL_AHEAD, armed_for=40.0), A_SCRIPT, obey=False)
+    static = _line(judge, "static after deactivation")
+    assert static.endswith(": FAILED") and "after the toggle cycle's false: peak 0.050 m/s" in static
+
+
+def test_no_toggle_cycle_without_a_maneuver_or_too_late_for_one() -> None:
+    never = [(5.0, 0.0, 0.0, False), (60.0, 0.02, 0.0, False)]
+    judge = _play(_judge("A", [], armed_for=40.0), never)
+    assert judge.results()["times"]["cycle_off_requested"] is None
+    judge = _play(_judge("A", WALL_AHEAD), A_SCRIPT)  # the first maneuver ends at 17.2 s, the disarm is at 25 s
+    assert judge.results()["times"]["cycle_off_requested"] is None and judge.passed, judge.report_lines()
