@@ -5,8 +5,8 @@ Why a layer over the single grid and not a bigger grid: each student's grid stay
 writes for one node (its own directory, ``grade.json``, ``report.html``, resumable), so a student's result read from
 the class directory equals grading that student alone, and an interrupted class resumes student by student. The class
 page only reads those ``grade.json`` files: ``class.json`` (every student's cells and findings), ``class.md`` and
-``class.html`` (students x cells pass rates coloured like the grid's page, each student's findings, links to their
-reports).
+``class.html`` (:mod:`bt_nav.grading.classpage`: a row per student, the hand-in's verdict coloured and its score,
+failures first with their arena and LiDAR, filters and sorting, links to each student's report).
 
 The manifest (``--class FILE``) is YAML: a mapping ``name: command``, or a list of ``{name: ..., command: ...}``.
 A name becomes a directory: letters, digits, ``.``, ``_`` and ``-`` only, unique.
@@ -19,7 +19,6 @@ manifest that cannot be read, or options that do not fit, still refuse the class
 
 from __future__ import annotations
 
-import html
 import json
 import re
 import shlex
@@ -32,7 +31,6 @@ from typing import Any
 import yaml
 
 from bt_nav.grading.grid import cell_label, failure_groups, runs_label
-from bt_nav.grading.html import STYLE, rate_colour
 
 #: What a student's name may hold (it names their grid's directory).
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
@@ -227,11 +225,27 @@ def write_class_page(out: Path, students: Sequence[Student], title: str,
     cells = sorted({c for r in rows for c in r["cells"]})
     doc = {"title": title, "cells": cells, "students": rows,
            "commands": {s.name: s.command for s in students}}
-    json_path, md_path, html_path = out / CLASS_FILE, out / "class.md", out / "class.html"
+    json_path, md_path = out / CLASS_FILE, out / "class.md"
     json_path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     md_path.write_text(class_markdown(rows, cells, title), encoding="utf-8")
-    html_path.write_text(class_html(rows, cells, title), encoding="utf-8")
-    return json_path, md_path, html_path
+    return json_path, md_path, write_class_html(out)
+
+
+#: The class's page for an instructor (:mod:`bt_nav.grading.classpage`), beside :data:`CLASS_FILE`.
+CLASS_HTML = "class.html"
+
+
+def write_class_html(out: Path, weights: Any = None) -> Path:
+    """``class.html`` of the class graded into ``out``, from its ``class.json`` and each student's ``grade.json``,
+    the scores with ``weights`` (:class:`bt_nav.grading.scores.Weights`; default: bt_nav's)."""
+    from bt_nav.grading.classpage import class_page_html
+    from bt_nav.grading.scores import load_weights, student_record
+
+    doc = read_class_page(out)
+    records = {str(s["name"]): student_record(out, s, doc.get("commands")) for s in doc.get("students") or []}
+    path = Path(out) / CLASS_HTML
+    path.write_text(class_page_html(doc, records, weights or load_weights()), encoding="utf-8")
+    return path
 
 
 def _rate(cell: list[int] | None) -> str:
@@ -271,29 +285,6 @@ def _said(row: dict[str, Any]) -> list[str]:
     return [*(row.get("handin") or {}).get("lines", []),
             *(f"{runs}: {reason}" for runs, reason in row.get("failures", [])),
             *(f"finding: {f} (x{n})" for f, n in row["findings"].items())]
-
-
-def class_html(rows: Sequence[dict[str, Any]], cells: Sequence[str], title: str) -> str:
-    """The class page: a static file, every link relative (the class directory can be zipped and sent)."""
-    esc = html.escape
-    handins = any("verdict" in r for r in rows)
-    head = ("<th>hand-in</th><th>launch file</th>" if handins else "") + "<th>passed</th>" + "".join(
-        f"<th>{esc(c)}</th>" for c in cells)
-    body = []
-    for r in rows:
-        link = f'<a href="{esc(r["dir"])}/report.html">{esc(r["name"])}</a>' if r["graded"] else esc(r["name"])
-        tds = "".join(
-            f'<td class="rate" style="background:{rate_colour(*r["cells"][c])}">{_rate(r["cells"][c])}</td>'
-            if c in r["cells"] else "<td>-</td>" for c in cells)
-        notes = "<br>".join(esc(s) for s in _said(r)) or ('<span class="note">nothing to say</span>' if r["graded"]
-                                                          else '<span class="note">not graded yet</span>')
-        total = f"{r['passed']}/{r['runs']}" if r["graded"] else "FAILED, not run" if r.get("refused") else "-"
-        verdict = f"<td>{esc(r.get('verdict', '-'))}</td><td class=\"num\">{_launch_rate(r)}</td>" if handins else ""
-        body.append(f"<tr><td>{link}</td>{verdict}<td class=\"num\">{total}</td>{tds}"
-                    f"<td class=\"num\">{r['errors']}</td><td>{notes}</td></tr>")
-    return (f"<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>{esc(title)}</title><style>{STYLE}</style>"
-            f"</head><body><h1>{esc(title)}</h1><table><tr><th>student</th>{head}"
-            f"<th>bt_nav errors</th><th>failures and findings</th></tr>{''.join(body)}</table></body></html>\n")
 
 
 def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, Sequence[Any]]],

@@ -38,12 +38,13 @@ from bt_nav.grading.grid import cell_label, failure_groups, run_label, runs_labe
 from bt_nav.grading.hints import LAUNCH_HINTS, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
 from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this module's API since it began)
+    CHECKED,
     ERROR,
-    NOT_CHECKED,
     NOT_GRADED,
     WEIGHTS_FILE,
     Weights,
     check_counts,
+    check_line,
     check_not_checked,
     graded_runs,
     handin_verdict,
@@ -76,8 +77,10 @@ def node_output(row: dict[str, Any], lines: int = NODE_LOG_LINES) -> str:
 
 
 def _md(text: str) -> str:
-    """``text`` safe inside Markdown prose: no character starts a heading, a list, a link or emphasis by accident."""
-    return re.sub(r"([\\*_#<>\[\]])", r"\\\1", text)
+    """``text`` safe inside Markdown prose: no character starts a heading, a list, a link or emphasis by accident;
+    code in backticks stays code."""
+    parts = re.split(r"(`[^`]+`)", text)  # odd: code spans, kept as they are
+    return "".join(p if i % 2 else re.sub(r"([\\*_#<>\[\]])", r"\\\1", p) for i, p in enumerate(parts))
 
 
 def _check_line(check: dict[str, Any]) -> str:
@@ -94,9 +97,10 @@ def _run_text(row: dict[str, Any]) -> str:
     """A run's verdict for a student, in Markdown (Gradescope's ``output_format`` md): the failure's words, each
     failed check with the rule it broke, what to change (:mod:`bt_nav.grading.hints`), the 1x check, findings,
     and a crash's last output; no file of the grader's."""
-    if row.get("outcome") == ERROR or run_not_graded(row):
-        what = "bt_nav error" if row.get("outcome") == ERROR else "Not graded"
-        return (f"**{what}** (not your node's failure; not scored): {_md(student_words(row.get('reason', '?')))}. "
+    if unscored(row):
+        what = "Not graded" if run_not_graded(row) else "bt_nav error"
+        why = str(row.get(NOT_GRADED) or row.get("reason", "?"))
+        return (f"**{what}** (not your node's failure; not scored): {_md(student_words(why))}. "
                 "Ask for a regrade: the run is run again.")
     reason = student_words(str(row.get("reason", "?")))
     rest = reason.removeprefix("passed").removeprefix("failed: ").lstrip(": ")  # the verdict said once
@@ -132,7 +136,7 @@ def _test(name: str, score: float, max_score: float, output: str, visibility: st
 def _launch_text(check: dict[str, Any]) -> str:
     """A launch-file check for a student: its verdict, why and on which line, and what to change when it failed; a
     check that ended "not checked" says a TA looks at it (it scores as passed)."""
-    line = f" (line {check['line']})" if check.get("line") else ""
+    line = f" ({check_line(check)})" if check.get("line") else ""
     verdict = "NOT CHECKED: a TA will look" if check_not_checked(check) else \
         "PASSED" if check.get("passed") else "FAILED"
     text = f"**{verdict}**: {_md(student_words(str(check.get('reason', ''))))}{line}"

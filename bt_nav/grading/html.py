@@ -19,6 +19,7 @@ from __future__ import annotations
 import html
 import json
 import os
+import re
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -53,6 +54,17 @@ STYLE = """
  img.thumb { width: 180px; border: 1px solid #ccc; }
  img.figure { max-width: 100%; }
 """
+
+
+#: Inline code in Markdown words: `name`.
+_CODE = re.compile(r"`([^`]+)`")
+
+
+def md_html(text: str) -> str:
+    """Words written in Markdown (a judge's reason, a launch-file note) as HTML: inline code (backticks) as
+    ``<code>``, everything else escaped."""
+    parts = _CODE.split(text)  # even: prose, odd: code
+    return "".join(f"<code>{html.escape(p)}</code>" if i % 2 else html.escape(p) for i, p in enumerate(parts))
 
 
 def rate_colour(passed: int, runs: int) -> str:

@@ -32,12 +32,12 @@ VISIBILITIES = ("visible", "hidden", "after_due_date", "after_published")
 #: A run whose outcome is this is bt_nav's failure, not the node's (:data:`bt_nav.grading.exe.grid.ERROR`).
 ERROR = "bt_nav error"
 
-#: A run's ``outcome`` when it was not graded: a program outside the node interfered (not the student's doing). A
-#: hand-in with such a run is an autograder error on Gradescope (:func:`not_graded_reason`): never 0, never full marks.
-NOT_GRADED = "not graded"
-#: A launch-file check's key, true when the check ended "not checked: a TA should look": it scores as passed and
-#: says so, for the TA.
-NOT_CHECKED = "not_checked"
+#: A run's key holding why it was not graded (``not graded: another program is on ROS_DOMAIN_ID 7: ...``): a program
+#: outside the node interfered, not the student's doing (its outcome is :data:`ERROR` too).
+NOT_GRADED = "not_graded"
+#: A launch-file check's key, false when the grader could not follow the file: "not checked: a TA should look"
+#: (:class:`bt_nav.grading.launch_report.LaunchCheck`); it scores as passed and says so, for the TA.
+CHECKED = "checked"
 
 
 @dataclass(frozen=True)
@@ -104,12 +104,19 @@ def graded_runs(record: dict[str, Any]) -> list[dict[str, Any]]:
 
 def run_not_graded(row: dict[str, Any]) -> bool:
     """Whether a run was left without a grade (:data:`NOT_GRADED`: not the node's doing)."""
-    return row.get("outcome") == NOT_GRADED
+    return bool(row.get(NOT_GRADED))
 
 
 def check_not_checked(check: dict[str, Any]) -> bool:
-    """Whether a launch-file check ended "not checked" (:data:`NOT_CHECKED`): it scores as passed, a TA looks."""
-    return bool(check.get(NOT_CHECKED))
+    """Whether a launch-file check ended "not checked" (:data:`CHECKED` false): it scores as passed, a TA looks."""
+    return check.get(CHECKED, True) is False
+
+
+def check_line(check: dict[str, Any]) -> str:
+    """Where a launch-file check points: ``line 12``, or ``params.yaml line 3`` in another file ('' for none)."""
+    if not check.get("line"):
+        return ""
+    return f"{Path(str(check['file'])).name} line {check['line']}" if check.get("file") else f"line {check['line']}"
 
 
 def unscored(row: dict[str, Any]) -> bool:
@@ -118,13 +125,14 @@ def unscored(row: dict[str, Any]) -> bool:
 
 
 def not_graded_reason(record: dict[str, Any]) -> str | None:
-    """Why the hand-in of ``record`` cannot be given a score (None: it can): runs left not graded (a program
-    outside the node interfered). Gradescope must show an autograder error, never 0 and never full marks."""
-    left = [r for r in graded_runs(record) if run_not_graded(r)]
+    """Why the hand-in of ``record`` cannot be given a score (None: it can): runs left without a verdict that are
+    none of the node's doing (not graded: a program outside the node interfered; or a bt_nav error). A score from
+    the other runs alone would be a guess: Gradescope must show an autograder error, never 0 and never full marks."""
+    left = [r for r in graded_runs(record) if unscored(r)]
     if not left:
         return None
-    return (f"{len(left)} run(s) not graded ({student_words(str(left[0].get('reason', '?')))}); not your node's "
-            "failure: the submission must be graded again")
+    why = str(left[0].get(NOT_GRADED) or left[0].get("reason") or "?")
+    return f"{len(left)} of {len(graded_runs(record))} run(s) not graded ({student_words(why)})"
 
 
 def run_points(runs: Sequence[dict[str, Any]], points: float, weights: Weights) -> list[float]:
@@ -184,7 +192,7 @@ def tests(record: dict[str, Any], weights: Weights) -> list[Test]:
             state = "not scored" if unscored(row) else "passed" if row.get("passed") else "failed"
             out.append(Test(f"run {run_label(row)}", most if state == "passed" else 0.0, most, state, row))
     else:
-        out.append(Test("the node's runs", 0.0, run_share, "failed"))
+        out.append(Test("the node's runs", 0.0, run_share, "not scored" if runs else "failed"))
     checks = launch_checks(record)
     for check in checks:
         state = "not checked" if check_not_checked(check) else "passed" if check.get("passed") else "failed"
