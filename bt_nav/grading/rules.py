@@ -23,6 +23,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+from bt_nav_sim.chains import ANNOUNCE_WINDOW
 from bt_nav_sim.checkoff_core import CHECKS as LAB_CHECKS
 from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, MANEUVER_NAMES, CheckoffConfig
 from bt_nav_sim.lidar import LIDARS
@@ -74,18 +75,23 @@ _HOMEWORK_REQUIRED = {
 #: What each lab check requires (every check-off check has a line; "parameters declared" is the judge node's).
 _LAB_REQUIRED = {
     "static before activation": lambda c: f"still from t0 until the first `{LAB_ARM}` call ({c.activate_at:g} s)",
-    "toggle_navigation answered": lambda c: "both calls (`data: true`, then `data: false`) answered with "
-                                            "`success: true`",
+    "toggle_navigation answered": lambda c: "every call (`data: true`; the toggle cycle's `data: false` and "
+                                            "`data: true`; the final `data: false`) answered with `success: true`",
     "maneuvers performed": lambda c: f"at least {c.min_maneuvers} turn judged as the maneuver",
     "maneuver": lambda c: "each turn: its trigger held, not late, its angle and side, no forward motion, moved on",
+    "back-to-back maneuvers": lambda c: "maneuvers made one after another without moving on serve their purpose: "
+                                        "a search (A, C) may go on; a Retreat (B) must end by driving out",
     "recovery turns": lambda c: "no forward command or motion",
     "no collision": lambda c: "no contact with anything",
-    "static after deactivation": lambda c: f"still from {c.grace:g} s after the disarm call "
-                                           f"({c.activate_at + c.armed_for + c.grace:g} s) for {c.static_after:g} s",
+    "static after deactivation": lambda c: f"still from {c.grace:g} s after each disarm call (the toggle cycle's, "
+                                           f"and the final one at {c.activate_at + c.armed_for:g} s) for "
+                                           f"{c.static_after:g} s",
     "parameters declared": lambda c: f"a node of yours declares `{LAB_PARAMETERS[0]}` (`ros2 param list`)",
 }
 #: A failure's words for the lab's checks that CHECK_WORDS does not hold (a maneuver's are its rules' own).
 _LAB_WORDS = {"maneuver": "one sentence per rule it broke, e.g. its angle and the rule's",
+              "back-to-back maneuvers": "never moved on: N Retreats back to back (D deg in place), with the "
+                                        "trigger's readings at each start",
               "parameters declared": f"no node declares the parameter {LAB_PARAMETERS[0]}"}
 
 
@@ -219,8 +225,9 @@ def _lab(level: int, maneuvers: Sequence[str], setup: GradeSetup, base: Checkoff
     off = cfg.activate_at + cfg.armed_for
     out = [_h(level, "The lab: what your node must do"), "", *_lab_short(cfg, configs, node_params), "",
            _h(level + 1, "The lab: interface"), "",
-           *_interface_rows(LAB_ARM, f"called with `data: true` at {cfg.activate_at:g} s and `data: false` at "
-                                     f"{off:g} s (schedule below)"), "",
+           *_interface_rows(LAB_ARM, f"called with `data: true` at {cfg.activate_at:g} s, `data: false` and "
+                                     f"`data: true` again once (the toggle cycle) and `data: false` at {off:g} s "
+                                     "(schedule below)"), "",
            *_lab_parameters(cfg, node_params), "", _h(level + 1, "The lab: schedule and time limits"), "",
            *_lab_schedule(cfg, setup), "", _h(level + 1, "The lab: each maneuver"), "", *_family(cfg), ""]
     for config in configs:
@@ -237,8 +244,9 @@ def _lab_short(cfg: CheckoffConfig, configs: Sequence[CheckoffConfig], node_para
     """The two-minute answer: the numbered list a lab node must satisfy."""
     off = cfg.activate_at + cfg.armed_for
     lines = [f"1. Serve `{LAB_ARM}` (`{SET_BOOL}`) and answer every call with `success: true`.",
-             f"2. Stand still until it is called with `data: true` (at {cfg.activate_at:g} s); after `data: false` (at "
-             f"{off:g} s) stop within {cfg.grace:g} s and stay still.",
+             f"2. Stand still until it is called with `data: true` (at {cfg.activate_at:g} s); after every `data: "
+             f"false` (the toggle cycle's, {cfg.toggle_off_after:g} s after your first maneuver, and the last at "
+             f"{off:g} s) stop within {cfg.grace:g} s and stay still; after `data: true` again go on.",
              f"3. Declare the parameter `{LAB_PARAMETERS[0]}` and use it as your trigger distance"
              + (f" (the grade gives it {float(node_params['safety_distance']):g} m)." if "safety_distance"
                 in node_params else f" (default {cfg.safety_distance:g} m, the judge's)."),
@@ -274,11 +282,25 @@ def _lab_schedule(cfg: CheckoffConfig, setup: GradeSetup) -> list[str]:
             f"| 0 - {cfg.activate_at:g} | nothing | {still} |",
             f"| {cfg.activate_at:g} | `{LAB_ARM}` `data: true`, again every {1 / cfg.rate_hz:g} s until an answer "
             "says `success: true` | creep; turn when the trigger holds |",
+            *_cycle_rows(cfg, still),
             f"| {off:g} | `data: false`, again every {1 / cfg.rate_hz:g} s until success | stop "
             f"({cfg.grace:g} s to brake) |",
             f"| {off + cfg.grace:g} - {off + cfg.grace + cfg.static_after:g} | watches | {still} |",
             f"| {off + cfg.grace + cfg.static_after:g} | the report | |", "",
             "No deadline and no evaluation service in the lab (a call to one is refused). " + _limits(LAB_ARM, setup)]
+
+
+def _cycle_rows(cfg: CheckoffConfig, still: str) -> list[str]:
+    """The toggle cycle's rows of the lab's schedule (none when the config has no cycle)."""
+    if cfg.toggle_off_for <= 0:
+        return []
+    after = f"{cfg.toggle_off_after:g} s after your first maneuver ends (no turning command since)"
+    return [f"| T = {after} | the toggle cycle: `data: false`, again until success | stop ({cfg.grace:g} s to "
+            "brake) |",
+            f"| T + {cfg.grace:g} - T + {cfg.grace + cfg.static_after:g} | watches | {still} |",
+            f"| T + {cfg.toggle_off_for:g} | `data: true` again, until success (no cycle when T + "
+            f"{2 * cfg.toggle_off_for:g} s would pass the final `data: false`) | creep on; turn when the trigger "
+            "holds |"]
 
 
 def _family(cfg: CheckoffConfig) -> list[str]:
@@ -328,7 +350,14 @@ def _turns(cfg: CheckoffConfig) -> list[str]:
             f"within {cfg.aeb_distance:g} m, that not every reading's trigger explains and that does not pass as the "
             "maneuver, is an emergency stop's **recovery turn**: judged for forward motion only.",
             f"- A turn still commanded {INTERRUPT_SLACK:g} s before the disarm or later is not judged on its angle, "
-            "unless it had turned past the largest angle of its rule."]
+            "unless it had turned past the largest angle of its rule.",
+            "- **Maneuvers back to back**: one continuous rotation is several maneuvers only where your node marks a "
+            f"new one (a line it logs, within {ANNOUNCE_WINDOW:g} s: the template's `execute_rotation_maneuver` logs "
+            "one; a pause; a step in the turn rate), the judge's own readings show the trigger held there, and the "
+            "part before is within the angle rule (the earliest such point each time). Without such a mark it stays "
+            "one turn. Maneuvers made without moving on between them are a chain, judged by the maneuver's purpose: "
+            "the Randomizer and the Smart Pivot search, and may go on (a finding counts them); the Retreat is to "
+            "exit the narrow space, and a chain of them that never drives out before the disarm fails."]
 
 
 def _checks(names: Sequence[str], required: Mapping[str, str]) -> list[str]:
