@@ -37,6 +37,7 @@ from bt_nav.grading.grid import (
     run_label,
 )
 from bt_nav.grading.rules import RULES_LINE_HTML
+from bt_nav.run.terminal import shell_text
 
 STYLE = """
  body { font-family: sans-serif; margin: 1.5em; color: #222; max-width: 1400px; }
@@ -85,7 +86,8 @@ def _link(out: Path, path: Path, text: str) -> str:
 
 def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
     passed = sum(1 for r in rows if r.get("passed"))
-    appended = " ".join(exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params))
+    # as one would type it (-p maneuver:=X, not the argv's maneuver:="X"), shell-quoted only where needed
+    appended = shell_text(exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params))
     return [f"<h1>Grade of <code>{html.escape(settings.command)}</code></h1>",
             f'<p class="overall">overall: <b>{passed}/{len(rows)} passed '
             f"({100 * passed / max(1, len(rows)):.1f} %)</b></p>",

@@ -114,3 +114,14 @@ def test_the_stand_in_line_names_the_launch_files_package() -> None:
     assert missing.params == () and "no launch file beside reactive_navigator.py" in missing.line()
     assert terminal_head(["python3", "n.py"], None) == ("$ python3 n.py",)
     assert terminal_head(["python3", "n.py"], StandIn(package="p"))[1].startswith("# stands in for: ros2 launch p ")
+
+
+def test_the_reports_command_row_is_typed_as_a_shell_takes_it(tmp_path: Path) -> None:
+    from bt_nav.grading.exe.run import ExeSettings
+    from bt_nav.grading.html import report_html
+    from bt_nav.grading.report import summarize_exe
+
+    settings = ExeSettings("python3 n.py", "lab", tmp_path, maneuvers=True, node_params=(("safety_distance", 0.6),))
+    page = report_html([], summarize_exe([]), settings, {}, [])
+    row = next(line for line in page.splitlines() if line.startswith("<tr><th>command</th>"))
+    assert "-p maneuver:=X -p safety_distance:=0.6</code>" in row and "&quot;" not in row, row
