@@ -21,8 +21,8 @@ REPO = Path(__file__).resolve().parents[2]
 RED, AMBER, GREEN = "rgb(246, 214, 214)", "rgb(253, 233, 184)", "rgb(216, 240, 216)"
 EDGE = {"FAILED": "rgb(192, 57, 43)", "NOT GRADED": "rgb(212, 160, 23)", "PASSED": "rgb(46, 139, 87)"}
 
-ROWS_JS = """() => Array.from(document.querySelectorAll('#students tbody tr')).filter(r => !r.classList.contains('hidden'))
-  .map(r => ({name: r.dataset.name, verdict: r.cells[1].textContent,
+ROWS_JS = """() => Array.from(document.querySelectorAll('#students tbody tr'))
+  .filter(r => !r.classList.contains('hidden')).map(r => ({name: r.dataset.name, verdict: r.cells[1].textContent,
               cell: getComputedStyle(r.cells[1]).backgroundColor,
               edge: getComputedStyle(r.cells[0]).borderLeftColor, score: r.cells[2].textContent}))"""
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import copy
+import csv
 import json
 import re
 import shutil
@@ -29,16 +30,20 @@ from bt_nav.grading.formats import (
     gradescope_results,
     junit_xml,
     load_weights,
+    not_graded_reason,
     read_record,
 )
 from bt_nav.grading.grid import Job
+from bt_nav.grading.hints import student_words
 from bt_nav.grading.launchfile import check_launch
 from tests.gradescope_schema import gradescope_problems
+from tests.grading.classfixture import make_class
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 CLASS = FIXTURES / "grades" / "lab_class"
 #: What a student on Gradescope cannot open: the grader's files and folders, an absolute path.
-GRADER_FILES = re.compile(r"[\w.-]+\.(?:log|json|html|md|png|mp4|mcap|db3)\b|grade's directory|\bbag/|(?<![\w.])/[\w.-]+/")
+GRADER_FILES = re.compile(r"[\w.-]+\.(?:log|json|html|md|png|mp4|mcap|db3)\b|grade's directory|\bbag/"
+                          r"|(?<![\w.])/[\w.-]+/")
 
 
 def unopenable(text: str) -> list[str]:
@@ -194,7 +199,7 @@ def test_bad_format_options_refuse_the_grade_before_any_run(tmp_path: Path,
     bad.write_text("totl: 3\n")
     for argv, said in ((["--exe", "python3 x.py", "--gradescope", "r.json", "--weights", str(bad)], "unknown key"),
                        (["--junit", "r.xml"], "written for --exe or --class"),
-                       (["--exe", "python3 x.py", "--weights", str(bad)], "--gradescope, --csv or a class page: give one"),
+                       (["--exe", "python3 x.py", "--weights", str(bad)], "--csv or a class page: give one"),
                       (["--exe", "python3 x.py", "--csv", "s.csv"], "--csv is written for --class")):
         with pytest.raises(SystemExit) as exit_:
             grade.main(argv)
@@ -207,3 +212,77 @@ def test_records_are_not_changed_by_writing_them() -> None:
     gradescope_results(doc)
     junit_xml([("bob", doc)])
     assert doc == before
+
+
+def test_each_failed_test_says_what_failed_the_rule_and_the_fix_in_words_a_student_can_read(tmp_path: Path) -> None:
+    """The fixture class (tests/grading/classfixture.py): a crash quotes the node's last output (not "see
+    node.log"), a launch-file check a TA must look at scores as passed and says so, a refused hand-in says why; no
+    output names a file or folder the student cannot open on Gradescope."""
+    records = dict(class_records(make_class(tmp_path / "class")))
+    crash = gradescope_results(records["cy"])["tests"][0]
+    assert crash["status"] == "failed" and crash["output"].startswith(
+        "**FAILED**: the node crashed after 3.2 s wall: ValueError: min() arg is an empty sequence "
+        "(reactive\\_navigator.py:57 in scan\\_cb)\n"), crash
+    assert "**How to fix:** Your node raised the exception quoted here" in crash["output"], crash
+    assert '  File "reactive_navigator.py", line 57, in scan_cb\n' in crash["output"], crash  # its traceback
+    dee = gradescope_results(records["dee"])
+    ta = dee["tests"][-1]
+    assert dee["score"] == 100 and ta["status"] == "passed" and ta["score"] == ta["max_score"], dee
+    assert ta["output"].startswith("**NOT CHECKED: a TA will look**: a `Command` substitution"), ta
+    for name, record in records.items():
+        doc = gradescope_results(record)
+        assert gradescope_problems(doc) == [] and unopenable(json.dumps(doc)) == [], (name, doc)
+        for test in doc["tests"]:
+            if test.get("status") == "failed" and test["name"].startswith("run "):
+                assert "**How to fix:**" in test["output"] and test["output"].startswith("**FAILED**: "), test
+
+
+def test_a_hand_in_with_a_run_not_graded_is_an_autograder_error_never_a_score(tmp_path: Path) -> None:
+    """fay's run was not graded (another program on its domain): no results.json (Gradescope shows an autograder
+    error: never 0, never full marks), autograder_error.md saying why; the CSV leaves her score empty."""
+    out = make_class(tmp_path / "class")
+    for name in ("fay", "ann"):  # a class of one, as Gradescope's submission is
+        one = tmp_path / name
+        shutil.copytree(out / name, one / name)
+        page = json.loads((out / "class.json").read_text())
+        page["students"] = [s for s in page["students"] if s["name"] == name]
+        (one / "class.json").write_text(json.dumps(page))
+        target = tmp_path / f"{name}-results" / "results.json"
+        target.parent.mkdir()
+        target.write_text("{}")  # an old one must not stay
+        args = argparse.Namespace(gradescope=str(target), junit=None, csv=None, weights=None, exe=None, klass="x")
+        written = write_class_formats(args, one)
+        if name == "fay":
+            assert not target.exists() and written == [one / "_gradescope" / "fay" / "autograder_error.md"], written
+            text = written[0].read_text()
+            assert text.startswith("The autograder could not grade this submission: 1 of 1 run(s) not graded (not "
+                                   "graded: another program is on ROS_DOMAIN_ID 7"), text
+            assert "not a failure of your code" in text and "pid 4242" in text, text
+        else:
+            assert json.loads(target.read_text())["score"] == pytest.approx(80 + 20 / 3)
+    assert not_graded_reason(dict(class_records(out))["fay"]) is not None
+
+
+def test_the_gradebook_csv_has_a_row_per_student(tmp_path: Path) -> None:
+    out = make_class(tmp_path / "class")
+    weights = tmp_path / "w.yaml"
+    weights.write_text("total: 10\n")
+    args = argparse.Namespace(gradescope=None, junit=None, csv=str(tmp_path / "scores.csv"), weights=str(weights),
+                              exe=None, klass=str(out))
+    assert write_class_formats(args, out) == [tmp_path / "scores.csv"]
+    rows = list(csv.DictReader((tmp_path / "scores.csv").open()))
+    got = {r["student"]: (r["score"], r["max_score"], r["verdict"]) for r in rows}
+    assert got == {"ann": ("8.6667", "10", "FAILED"), "bob": ("2", "10", "FAILED"), "cy": ("2", "10", "FAILED"),
+                   "dee": ("10", "10", "PASSED"), "eve": ("0", "10", "FAILED"), "fay": ("", "10", "NOT GRADED")}, got
+    ann, dee = rows[0], rows[3]
+    assert ann["run lab_object C lds01 seed 0"] == "passed" and \
+        ann["launch file: declares safety_distance (default 0.5)"] == "failed", ann
+    assert dee["launch file: passes safety_distance to the node"] == "not checked", dee
+    assert "10 / 10" in (out / "class.html").read_text()  # the class page written again with the weights
+
+
+def test_student_words_drop_the_grader_s_files() -> None:
+    assert student_words("failed (see node.log)") == "failed"
+    assert student_words("ValueError: x (node.py:3 in cb; see node.log)") == "ValueError: x (node.py:3 in cb)"
+    assert student_words("/autograder/submission/pkg/reactive_navigator.py does not exist") == \
+        "reactive_navigator.py does not exist"
