@@ -257,17 +257,18 @@ def load_class(out: Path) -> list[StudentResult]:
 
 
 def load_grid(out: Path, name: str = "student") -> StudentResult:
-    """One ``--exe`` grade in ``out`` as a student's result (no launch file: ``--exe`` grades a command)."""
+    """One ``--exe`` grade in ``out`` as a student's result (its launch checks when ``--launch`` gave a file)."""
     runs = [r for r in _runs(Path(out)) if r.get("outcome") != "stopped"]
     judged = [r for r in runs if r.get("outcome") != "bt_nav error"]
     row = {"graded": bool(runs), "runs": len(judged), "passed": sum(1 for r in judged if r.get("passed")),
            "errors": len(runs) - len(judged)}
-    passed, why = verdict(row, None)
     try:
         doc = read_grade(Path(out)) or {}
     except ValueError:
         doc = {}
-    return StudentResult(name, Path(out), doc.get("settings", {}).get("command"), _choice(runs), None, runs, None,
+    launch = LaunchReport.from_dict(doc["launch"]) if isinstance(doc.get("launch"), dict) else None
+    passed, why = verdict(row, launch)
+    return StudentResult(name, Path(out), doc.get("settings", {}).get("command"), _choice(runs), launch, runs, None,
                          passed, why)
 
 

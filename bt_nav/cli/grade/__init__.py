@@ -101,6 +101,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--node-param", action="append", default=[], metavar="NAME=VALUE",
                         help="--exe: a parameter for the node, as a TA's launch file sets it (repeatable), e.g. "
                         "safety_distance=0.6 (the lab's judge then triggers at it too)")
+    parser.add_argument("--launch", default=None, metavar="FILE",
+                        help="--exe: the student's launch file (or hand-in folder), given the lab sheet's launch "
+                        "checks as --class gives each hand-in (see bt-nav check-launch); grade.json and feedback.md "
+                        "carry them")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
     parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
     parser.add_argument("--realtime-check", choices=("on", "off"), default="on",
@@ -147,6 +151,8 @@ def main(argv: list[str] | None = None) -> int:
     lab = args.profile == "lab"
     try:
         check_format_options(args)  # a bad weights file refuses the grade before any run
+        if args.launch is not None and args.exe is None:
+            raise ValueError("--launch goes with --exe (with --class, each hand-in's own launch file is checked)")
     except ValueError as exc:
         parser.error(str(exc))
     if args.klass is not None:

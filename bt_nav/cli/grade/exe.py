@@ -18,7 +18,7 @@ from typing import Any
 from tqdm import tqdm
 
 from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
-from bt_nav.grading.grid import Job, run_label
+from bt_nav.grading.grid import Job, format_lidars, run_label
 from bt_nav.run.settings import DEFAULT_JITTER
 
 
@@ -56,6 +56,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
     from bt_nav.grading.admission import describe
     from bt_nav.grading.exe.grid import STOPPED, prepare_out, run_exe_grid
+    from bt_nav.grading.launch_target import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
@@ -63,6 +64,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     try:
         settings = _settings(args, maneuvers)
         done = prepare_out(settings, jobs, args.resume)
+        launch = exe_launch(args.launch, settings.command)  # --launch FILE: its checks, shown before any run
     except ValueError as exc:
         parser.error(str(exc))
     where = f"on {args.scheduler}" if args.scheduler else describe(args.jobs)
@@ -94,13 +96,12 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     json_path, md_path = write_exe_report(ended, settings, drawn=drawn)
     from bt_nav.grading.feedback import write_grid_feedback
 
+    attach_launch(settings.out, launch)  # grade.json carries the launch checks as a class's hand-in does
     write_grid_feedback(settings.out)
     if args.json:  # the grid's JSON results there too: --json means the same with and without --exe
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json_path.read_text(encoding="utf-8"), encoding="utf-8")
     print("".join(f"wrote {path}\n" for path in write_exe_formats(args, settings.out)), end="")  # --gradescope, --junit
-    from bt_nav.grading.grid import format_lidars
-
     for line in format_lidars(ended):
         print(line)
     return _verdict(args, ended, len(jobs), settings, time.perf_counter() - started, stop, (json_path, md_path))
@@ -128,6 +129,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     """The grid's last lines and exit code: 0 every run passed; 1 a run failed; 3 no run failed but some hit a
     bt_nav error (not the node's: ``--resume`` reruns them); 128 + the signal after a stop."""
     from bt_nav.grading.exe.grid import ERROR
+    from bt_nav.grading.launch_target import launch_passed
 
     errors = [r for r in ended if r["outcome"] == ERROR]
     judged = [r for r in ended if r["outcome"] != ERROR]
@@ -142,7 +144,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     if stop.requested:
         print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
         return 128 + int(stop.signum or 2)
-    if passed < len(judged) or not judged:
+    if passed < len(judged) or not judged or not launch_passed(settings.out):  # --launch: a check failed
         return 1
     return 3 if errors or len(judged) < planned else 0
 
