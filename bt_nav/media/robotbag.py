@@ -35,7 +35,7 @@ from bt_nav.mission.scan import Scan
 
 ODOMETRY, LASERSCAN = "nav_msgs/msg/Odometry", "sensor_msgs/msg/LaserScan"
 TWISTS = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
-TFS = ("tf2_msgs/msg/TFMessage",)
+TF_TOPICS = ("/tf_static", "/tf")  # where the LiDAR's mount is read (also under the robot's namespace)
 SETBOOL_EVENT = "std_srvs/srv/SetBool_Event"
 #: service_msgs/ServiceEventInfo event types
 REQUEST_SENT, REQUEST_RECEIVED, RESPONSE_SENT, RESPONSE_RECEIVED = 0, 1, 2, 3
@@ -112,6 +112,8 @@ def _decoded(path: Path, wanted: set[str], notes: list[str]) -> Iterator[tuple[s
     with reader:
         yield "", "", 0, {c.topic: c.msgtype for c in reader.connections}
         conns = [c for c in reader.connections if c.topic in wanted]
+        if decode == "deserialize_ros1":
+            _register_bag_types(store, conns)
         skipped = 0
         for conn, t_ns, raw in reader.messages(connections=conns):
             try:
@@ -122,6 +124,21 @@ def _decoded(path: Path, wanted: set[str], notes: list[str]) -> Iterator[tuple[s
             yield conn.topic, conn.msgtype, t_ns, msg
         if skipped:
             notes.append(f"{skipped} messages could not be decoded and were skipped")
+
+
+def _register_bag_types(store: Any, conns: list[Any]) -> None:
+    """A ROS 1 bag's own message definitions (Noetic's store lacks tf2_msgs, for one): each connection's type
+    registered from the definition text the bag carries, where the store does not have it."""
+    from rosbags.typesys import get_types_from_msg
+
+    for conn in conns:
+        text = getattr(conn.msgdef, "data", "")
+        if conn.msgtype in store.fielddefs or not text:
+            continue
+        try:
+            store.register(get_types_from_msg(text, conn.msgtype))
+        except Exception:  # noqa: BLE001 - a definition rosbags cannot parse: its messages are skipped, and counted
+            continue
 
 
 def _stream_decoded(path: Path, wanted: set[str], store: Any, notes: list[str]) -> Iterator[tuple[str, str, int, Any]]:
@@ -232,7 +249,7 @@ def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  #
     if not p.exists():
         raise BagError(f"{p}: no such bag (a rosbag2 directory, an .mcap or .db3 file, or a ROS 1 .bag)")
     names = topics.names()
-    wanted = {*names.values(), "/tf", "/tf_static"}
+    wanted = {*names.values(), *TF_TOPICS, *(topics.resolve(t.lstrip("/")) for t in TF_TOPICS)}
     notes: list[str] = []
     raw: dict[str, list[tuple[int, int | None, Any]]] = {}
     types: dict[str, str] = {}
@@ -271,7 +288,7 @@ def _recording(raw: dict[str, list[tuple[int, int | None, Any]]], names: dict[st
     service = raw.get(names["service"])
     calls = _calls([(r * 1e-9, m) for r, _, m in service]) if service else None
     frame = str(scans[0][1].header.frame_id).strip("/")
-    tf = [m for topic in ("/tf_static", "/tf") for _, _, m in raw.get(topic, [])]
+    tf = [m for topic, rows in raw.items() if topic.endswith(TF_TOPICS) for _, _, m in rows]
     mount = _mount(tf, frame)
     if mount is None:
         notes.append(f"no /tf from base_link to the scan's frame {frame!r}: the LiDAR taken at the robot's centre")

@@ -167,7 +167,17 @@ def _time(store: Any, t: float) -> Any:
     return _make(store, "builtin_interfaces/msg/Time", sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
-def messages(run: Synth, store: Any, effects: Effects, rng_seed: int = 7) -> list[tuple[str, str, float, Any]]:
+@dataclass(frozen=True)
+class Layout:
+    """How the robot's bag names and types its topics."""
+
+    namespace: str = ""  # e.g. "/tb3_1": every topic under it
+    stamped: bool = False  # cmd_vel as TwistStamped
+    tf_mount: bool = False  # /tf_static base_link -> base_scan at the burger's x -0.032 m
+
+
+def messages(run: Synth, store: Any, effects: Effects, rng_seed: int = 7,
+             layout: Layout = Layout()) -> list[tuple[str, str, float, Any]]:  # noqa: B008
     """(topic, type, receive time, message) of the whole run, in receive order; stamps ``stamp_lead`` ahead."""
     rng = np.random.default_rng(rng_seed)
     gap = effects.gap
@@ -204,10 +214,24 @@ def messages(run: Synth, store: Any, effects: Effects, rng_seed: int = 7) -> lis
             continue
         msg = _make(store, "geometry_msgs/msg/Twist", linear=_make(store, "geometry_msgs/msg/Vector3", x=v),
                     angular=_make(store, "geometry_msgs/msg/Vector3", z=w))
-        out.append(("/cmd_vel", "geometry_msgs/msg/Twist", t + 0.005, msg))
+        if layout.stamped:
+            header = _make(store, "std_msgs/msg/Header", stamp=_time(store, t), frame_id="base_link")
+            msg = _make(store, "geometry_msgs/msg/TwistStamped", header=header, twist=msg)
+        out.append(("/cmd_vel", "geometry_msgs/msg/TwistStamped" if layout.stamped else "geometry_msgs/msg/Twist",
+                    t + 0.005, msg))
     if effects.service_events:
         out += _service_events(run, store)
-    return sorted(out, key=lambda m: m[2])
+    if layout.tf_mount:
+        tr = _make(store, "geometry_msgs/msg/TransformStamped",
+                   header=_make(store, "std_msgs/msg/Header", frame_id="base_link"), child_frame_id="base_scan",
+                   transform=_make(store, "geometry_msgs/msg/Transform",
+                                   translation=_make(store, "geometry_msgs/msg/Vector3", x=-0.032, z=0.172),
+                                   rotation=_make(store, "geometry_msgs/msg/Quaternion", w=1.0)))
+        out.append(("/tf_static", "tf2_msgs/msg/TFMessage", 0.02, _make(store, "tf2_msgs/msg/TFMessage",
+                                                                       transforms=[tr])))
+    ns = layout.namespace.rstrip("/")
+    return sorted([(ns + topic if ns and topic != "/synthetic" else topic, *rest) for topic, *rest in out],
+                  key=lambda m: m[2])
 
 
 def _service_events(run: Synth, store: Any) -> list[tuple[str, str, float, Any]]:
@@ -223,7 +247,8 @@ def _service_events(run: Synth, store: Any) -> list[tuple[str, str, float, Any]]
     return out
 
 
-def write_rosbag2(run: Synth, path: Path, storage: str = "mcap", effects: Effects = Effects()) -> Path:  # noqa: B008
+def write_rosbag2(run: Synth, path: Path, storage: str = "mcap", effects: Effects = Effects(),  # noqa: B008
+                  layout: Layout = Layout()) -> Path:  # noqa: B008
     """The run as a rosbag2 bag (``storage``: mcap or sqlite3)."""
     from rosbags.rosbag2 import StoragePlugin, Writer
 
@@ -231,7 +256,7 @@ def write_rosbag2(run: Synth, path: Path, storage: str = "mcap", effects: Effect
 
     store = robot_typestore()
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
-    msgs = messages(run, store, effects)
+    msgs = messages(run, store, effects, layout=layout)
     with Writer(path, version=9, storage_plugin=plugin) as writer:
         conns: dict[str, Any] = {}
         for topic, typename, t, msg in msgs:

@@ -16,7 +16,7 @@ from bt_nav_sim.recorded import judge_recording, report_lines
 
 from bt_nav.media.bag import BagError
 from bt_nav.media.robotbag import Topics, read_robot_bag
-from tests.media.robotsynth import Effects, Synth, simulate, write_rosbag1, write_rosbag2
+from tests.media.robotsynth import Effects, Layout, Synth, simulate, write_rosbag1, write_rosbag2
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -151,3 +151,14 @@ def test_the_command_judges_a_bag_writes_the_json_and_refuses_what_a_bag_cannot_
     broken = _cli("--bag", str(tmp_path / "nothing"), "--maneuver", "A")
     assert broken.returncode == 2 and "Traceback" not in broken.stderr and len(broken.stderr.splitlines()) == 1
     assert math.isfinite(verdict["maneuvers"][0]["angle_deg"])
+
+
+def test_a_namespace_twiststamped_commands_and_the_lidar_mount_from_tf(tmp_path: Path) -> None:
+    bag = write_rosbag2(simulate(), tmp_path / "run", "mcap",
+                        layout=Layout(namespace="/tb3_1", stamped=True, tf_mount=True))
+    rec = read_robot_bag(bag, Topics(namespace="tb3_1"))
+    assert rec.mount == (-0.032, 0.0) and rec.commands and rec.topics["cmd"] == "/tb3_1/cmd_vel"
+    res = judge_recording(rec, CheckoffConfig(maneuver="A"))
+    assert res["passed"] and res["feed"]["lidar_mount"] == [-0.032, 0.0], report_lines(res)
+    with pytest.raises(BagError, match="no /odom topic"):
+        read_robot_bag(bag)
