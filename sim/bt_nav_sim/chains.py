@@ -12,7 +12,11 @@ A rotation is split only where all three hold (:func:`split_run`), the earliest 
     template logs one as each maneuver starts) within :data:`ANNOUNCE_WINDOW` s, a pause in its commands, or a step
     in its commanded rate (a rise, or a drop to a new steady rate; a closed loop's gradual slow-down is not one);
 (b) the judge's own readings show the trigger held at that moment (the node's words never replace them);
-(c) the part before it is within the maneuver's angle range.
+(c) the part before it is within the maneuver's angle range;
+
+and the rest of the rotation turns at least half the smallest maneuver, unless the disarm cut it short: a line the
+node logs as a maneuver ends (``done: turned 114 deg``) falls within the window of the turn's last commands, and must
+not cut off its last few degrees as a maneuver of their own (measured: bt_nav's own executive on a lagging base).
 
 A rotation with no such point stays one maneuver, judged as before; a too-large one is told how to make its
 maneuvers visible (:data:`SPLIT_HINT`). Maneuvers the robot made without travelling between them form a chain
@@ -29,6 +33,10 @@ import statistics
 from collections.abc import Sequence
 from typing import Any
 
+#: s: an episode whose last turning command came this close to the disarm request (or after it) was
+#: stopped by the disarm, as it must be: its angle is not judged. A node that publishes from its scan callback
+#: sends its last turning command up to a scan period (the LDS-01's 0.2 s) before the disarm reaches it.
+INTERRUPT_SLACK = 0.3
 #: s: a line the node logged this close to a point of its rotation marks a new maneuver there.
 ANNOUNCE_WINDOW = 0.3
 #: A gap between two turning commands longer than this many times their usual period (and at least
@@ -82,9 +90,8 @@ def marks(commands: Sequence[tuple[float, float, float]], a: int, b: int, announ
             continue
         marked = [i for i in near if i in found]
         after = [i for i in near if commands[i][0] >= ta - 1e-9]
-        pick = (min(marked, key=lambda i: abs(commands[i][0] - ta)) if marked else after[0] if after
-                else min(near, key=lambda i: abs(commands[i][0] - ta)))
-        found[pick] = "announcement"
+        if marked or after:  # a line after the rotation's last command is no mark in it (a "done" line)
+            found[min(marked, key=lambda i: abs(commands[i][0] - ta)) if marked else after[0]] = "announcement"
     return sorted(found.items())
 
 
@@ -98,12 +105,18 @@ def split_run(judge: Any, a: int, b: int) -> list[tuple[int, int, float | None, 
     pieces: list[tuple[int, int, float | None, str]] = []
     first, since = a, commands[a][0]
     half = 0.5 * math.radians(rule.low_deg - cfg.angle_tolerance_deg)  # half the smallest maneuver
+    last = commands[b][0]
+    cut_short = last >= judge.next_disarm(commands[a][0]) - INTERRUPT_SLACK
+    end_yaw = judge._interp(judge._uyaw, judge._settled_at(last, last + cfg.settle_timeout))
     for i, why in marks(commands, a, b, judge.announcement_times(), half):
         if i <= first:
             continue
         t = commands[i][0]
-        turned = math.degrees(judge._interp(judge._uyaw, t) - judge._interp(judge._uyaw, since))
+        at = judge._interp(judge._uyaw, t)
+        turned = math.degrees(at - judge._interp(judge._uyaw, since))
         if not rule.holds(abs(turned), cfg.angle_tolerance_deg):
+            continue
+        if abs(end_yaw - at) < half and not cut_short:
             continue
         if not judge._trigger(judge._readings_at(t)[0])[0]:
             continue

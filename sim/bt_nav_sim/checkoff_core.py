@@ -58,18 +58,13 @@ import numpy as np
 from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
-from bt_nav_sim.chains import chain_check, split_run
+from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
-
-#: s: an episode whose last turning command came this close to the disarm request (or after it) was
-#: stopped by the disarm, as it must be: its angle is not judged. A node that publishes from its scan callback
-#: sends its last turning command up to a scan period (the LDS-01's 0.2 s) before the disarm reaches it.
-INTERRUPT_SLACK = 0.3
 
 
 @dataclass(frozen=True)
