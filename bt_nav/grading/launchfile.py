@@ -78,13 +78,14 @@ def _check(name: str, passed: bool, reason: str, at: str | None = None, checked:
     """A check citing ``at`` (``file.py:12``, or ``params.yaml:3 (given at file.py:12)``: the first one counts)."""
     match = re.match(r"([^:\s]+):(\d+)", at or "")
     file, line = (match.group(1), int(match.group(2))) if match else (None, None)
-    return LaunchCheck(name, passed or not checked, reason, line, checked, file)
+    return LaunchCheck(name, passed or not checked, reason if checked else f"{NOT_CHECKED}; {reason}", line, checked,
+                       file)
 
 
 def _fallback(static: LaunchReport, why: str, keep: bool = True) -> LaunchReport:
     """The static reading where the evaluation could not say: its passed checks stand (``keep``), any other check
     is not checked, with why and what the reading said."""
-    checks = tuple(c if keep and c.passed else LaunchCheck(c.name, True, f"{why} (read statically: "
+    checks = tuple(c if keep and c.passed else LaunchCheck(c.name, True, f"{NOT_CHECKED}; {why} (read statically: "
                                                            f"{c.status.lower()}, {c.reason})", c.line, False,
                                                            static.file if c.line else None)
                    for c in static.checks)
@@ -100,6 +101,19 @@ def _package(folder: Path) -> str | None:
     return match.group(1) if match else None
 
 
+def _console_scripts(folder: Path, modules: set[str]) -> set[str]:
+    """The executables a hand-in's ``setup.py`` / ``setup.cfg`` maps to the node's module (``'navigator =
+    my_package.reactive_navigator:main'``): ``ros2 launch`` runs the node by that name too."""
+    names = set()
+    for path in sorted([*folder.rglob("setup.py"), *folder.rglob("setup.cfg")]):
+        if any(part.startswith(".") or part in ("build", "install", "log") for part in path.relative_to(folder).parts):
+            continue
+        for executable, module in re.findall(r"([\w.-]+)\s*=\s*([\w.]+)\s*:\s*\w+", path.read_text(errors="replace")):
+            if module.rpartition(".")[2] in modules:
+                names.add(executable)
+    return names
+
+
 def _shown(value: Any) -> str:
     return repr(value) if isinstance(value, str) else f"{value:g}" if isinstance(value, float) else repr(value)
 
@@ -112,6 +126,7 @@ class _Judge:
         self.path, self.folder, self.default, self.override = path, folder, default, override
         self.names = {"reactive_navigator", "reactive_navigator.py"}  # the sheet's name, whatever the file is named
         self.names |= {node.stem, node.name} if node is not None else set()
+        self.names |= _console_scripts(folder, {n.removesuffix(".py") for n in self.names})
         self.unsure = list(default.get("unsure", []))
         self.declared = next((d for d in reversed(default.get("declared", [])) if d["name"] == ARGUMENT), None)
 

@@ -4,7 +4,8 @@ the verdict it must get and the words of its reason. The grader must pass every 
 for its reason, and say "not checked" (never "failed") where it cannot follow a file.
 
 The fixtures are one hand-in folder (tests/fixtures/launch: its package.xml names the package ``my_package``, its
-params files and ``included/navigator.launch.py`` are found as an installed share's would be).
+setup.py the node's console script ``navigator``, its params files and ``included/navigator.launch.py`` are found as
+an installed share's would be).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
     "conditions_timer": ("right", (P, P, P), ""),
     "ros_arguments": ("right", (P, P, P), ""),
     "execute_process": ("right", (P, P, P), ""),
+    "console_script": ("right", (P, P, P), ""),  # setup.py's console script for the node's module
     # wrong: each for its reason
     "forgets_safety": ("wrong", (P, F, F), "no DeclareLaunchArgument('safety_distance'"),
     "hardcoded_value": ("wrong", (P, F, P), "`safety_distance:=0.7` would not reach the node"),
@@ -51,6 +53,7 @@ SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
     "string_type": ("wrong", (P, P, F), "as the string '0.5'"),
     "wrong_executable": ("wrong", (F, P, F), "its Node runs executable 'turtlesim_node'"),
     "wrong_package": ("wrong", (F, P, P), "the hand-in's package is 'my_package'"),
+    "other_console_script": ("wrong", (F, P, F), "its Node runs executable 'teleop', not navigator or"),
     "not_returned": ("wrong", (F, P, F), "does not return it in the launch description"),
     "condition_off": ("wrong", (F, P, F), "no launch_ros.actions.Node"),
     "other_config": ("wrong", (F, F, F), "'safety_distance' has no default_value and was not given"),
