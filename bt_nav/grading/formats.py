@@ -93,10 +93,24 @@ def _check_line(check: dict[str, Any]) -> str:
     return f"- {_md(what)}{rule_text}"
 
 
+def _run_again(row: dict[str, Any]) -> str:
+    """How the run went when it was run again before its failure stood (the grade's speed, 1x real time): one line
+    (the failure's words are above)."""
+    rerun, probe = row.get("rerun"), row.get("realtime_probe")
+    if isinstance(rerun, dict) and rerun.get("runs"):
+        said = ", ".join(f"at {float(r.get('rtf', 1)):g}x real time it {'passed' if r.get('passed') else 'failed'}"
+                         for r in rerun["runs"])
+        ending = {"stands": "the failure stands"}.get(str(rerun.get("decision")), str(rerun.get("decision") or ""))
+        return f"Run again before the failure stood: {said}" + (f"; {ending}." if ending else ".")
+    if isinstance(probe, dict):
+        return f"Checked again at 1x real time: it {'passed' if probe.get('passed') else 'failed'}."
+    return ""
+
+
 def _run_text(row: dict[str, Any]) -> str:
     """A run's verdict for a student, in Markdown (Gradescope's ``output_format`` md): the failure's words, each
-    failed check with the rule it broke, what to change (:mod:`bt_nav.grading.hints`), the 1x check, findings,
-    and a crash's last output; no file of the grader's."""
+    failed check with the rule it broke, what to change (:mod:`bt_nav.grading.hints`), how it went when run again,
+    findings, and a crash's last output; no file of the grader's, nor the grader's notes about itself."""
     if unscored(row):
         what = "Not graded" if run_not_graded(row) else "bt_nav error"
         why = str(row.get(NOT_GRADED) or row.get("reason", "?"))
@@ -115,11 +129,10 @@ def _run_text(row: dict[str, Any]) -> str:
     hints = run_hints(row) if not row.get("passed") else []
     if hints:
         lines += ["", "**How to fix:** " + " Also: ".join(h[0].upper() + h[1:] + "." for h in hints)]
-    probe = row.get("realtime_probe")
-    if isinstance(probe, dict):
-        lines += ["", f"Checked again at 1x real time: {_md(student_words(str(probe.get('reason', '?'))))}"]
+    again = _run_again(row)
+    if again:
+        lines += ["", again]
     said = [f"Finding: {_md(student_words(str(f)))}" for f in row.get("findings") or []]
-    said += [f"Note: {_md(student_words(str(n)))}" for n in row.get("notes") or []]
     if said:
         lines += ["", *said]
     output = node_output(row) if not row.get("passed") and not failed else ""
