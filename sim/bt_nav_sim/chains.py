@@ -184,15 +184,19 @@ def chain_verdict(judge: Any, chain: Sequence[dict[str, Any]], now: float) -> tu
 
 def chain_check(judge: Any, episodes: Sequence[dict[str, Any]], now: float) -> tuple[dict[str, Any] | None,
                                                                                       list[str]]:
-    """The "back-to-back maneuvers" check (None without a chain) and the findings that count the chains which
-    passed (a student sees that the judge counted each turn)."""
-    found = chains(judge, episodes)
-    if not found:
+    """The "back-to-back maneuvers" check (None without a chain to judge) and the findings that count the chains
+    which passed, each of valid maneuvers (a student sees that the judge counted each turn). A chain holding a failed
+    maneuver is judged only when it failed its purpose."""
+    verdicts = []
+    for chain in chains(judge, episodes):
+        ok, text = chain_verdict(judge, chain, now)
+        if not ok or all(e["passed"] for e in chain):  # a failed maneuver's own line says why it failed
+            verdicts.append((ok, text))
+    if not verdicts:
         return None, []
-    verdicts = [chain_verdict(judge, chain, now) for chain in found]
     failed = [text for ok, text in verdicts if not ok]
     findings = [text for ok, text in verdicts if ok]
-    check: dict[str, Any] = {"name": "back-to-back maneuvers", "passed": not failed, "value": len(found),
+    check: dict[str, Any] = {"name": "back-to-back maneuvers", "passed": not failed, "value": len(verdicts),
                              "required": f"each chain {judge.config.spec.purpose.words}",
                              "detail": "; ".join(text for _, text in verdicts)}
     if failed:
