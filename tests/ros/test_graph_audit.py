@@ -169,3 +169,27 @@ def test_every_fault_is_named(graph: tuple[Any, GraphAudit]) -> None:
             (kinds.NO_SUBSCRIBER, "/clock", "no node subscribed to /clock"),
             (kinds.SERVICE, "/reactive_control/activate", ""), (kinds.NON_FINITE, "/cmd_vel", ""),
             (kinds.FLOOD, "/cmd_vel", "")} <= records, records
+
+
+def test_the_parameters_are_listed_and_read_back(graph: tuple[Any, GraphAudit]) -> None:
+    """``ros2 param list`` and ``ros2 param get``, as the check-off's step 2: the names a node declares, and their
+    values (what a grade compares with what it passed); a node that declares none lists only rclpy's own."""
+    make, _ = graph
+    audit = GraphAudit(make("bt_nav_param_judge"), "toggle_navigation", parameters=("safety_distance",))
+    student = make("reactive_navigator")
+    student.declare_parameter("safety_distance", 0.7)
+    make("other_node")
+    report: list[dict[str, Any]] = []
+
+    def ready() -> bool:
+        audit.sample(force=True)
+        report[:] = audit.parameter_report()
+        return len(report) == 2 and all(entry["values"] for entry in report)
+
+    wait_until(ready, 20.0, "both nodes' parameters listed and read back", lambda: str(report))
+    by_node = {entry["node"]: entry for entry in report}
+    assert "safety_distance" in by_node["/reactive_navigator"]["names"]
+    assert by_node["/reactive_navigator"]["values"]["safety_distance"] == 0.7
+    assert "safety_distance" not in by_node["/other_node"]["names"]
+    assert by_node["/other_node"]["values"]["use_sim_time"] is False
+    assert audit.parameter_findings() == []  # one judged node declares it

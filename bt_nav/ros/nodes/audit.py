@@ -128,6 +128,8 @@ class GraphAudit:
         self.declared: dict[str, set[str] | None] = {}  # foreign node -> its parameter names (None: not answered)
         self._asked: dict[str, Any] = {}  # foreign node -> the pending ListParameters future
         self._clients: dict[str, Any] = {}  # foreign node -> its list_parameters client (one, kept until answered)
+        self.values: dict[str, dict[str, Any]] = {}  # foreign node -> its parameters' values (GetParameters)
+        self._getting: dict[str, tuple[Any, Any, list[str]]] = {}  # foreign node -> (client, future, names asked)
         self.service = node.resolve_service_name(service)
         self.inputs = tuple((node.resolve_topic_name(topic), kind) for topic, kind in inputs)
         self.command = node.resolve_topic_name(command)
@@ -185,6 +187,32 @@ class GraphAudit:
         elif future.done() and self.declared.get(full) is None:
             result = future.result()
             self.declared[full] = set(result.result.names) if result is not None else set()
+        elif future.done():
+            self._ask_values(full)
+
+    def _ask_values(self, full: str) -> None:
+        """Ask a foreign node once for the values of the parameters it listed (``ros2 param get``): what the grade
+        compares with what it passed (``-p NAME:=VALUE``), to say whether each was applied."""
+        from rcl_interfaces.srv import GetParameters
+        from rclpy.parameter import parameter_value_to_python
+
+        names = sorted(self.declared.get(full) or ())
+        if not names or full in self.values:
+            return
+        asked = self._getting.get(full)
+        if asked is None:
+            client = self.node.create_client(GetParameters, f"{full}/get_parameters")
+            self._getting[full] = (client, None, names)
+            asked = self._getting[full]
+        client, future, names = asked
+        if future is None:
+            if client.service_is_ready():
+                self._getting[full] = (client, client.call_async(GetParameters.Request(names=names)), names)
+        elif future.done():
+            result = future.result()
+            values = list(result.values) if result is not None else []
+            self.values[full] = {name: parameter_value_to_python(value) for name, value in zip(names, values,
+                                                                                                 strict=False)}
 
     def _sample_topics(self) -> None:
         for topic, _ in self.node.get_topic_names_and_types():
@@ -308,6 +336,14 @@ class GraphAudit:
                 f"show it; the lab's launch file must pass it)" for name in self.parameters
                 if not any(name in names for names in answered.values())]
 
+    def parameter_report(self) -> list[dict[str, Any]]:
+        """Every judged node that answered ``ros2 param list``: its name, the names it lists and (once it answered
+        ``ros2 param get``) their values, JSON-able (what a grade shows and compares with what it passed)."""
+        self.sample(force=True)
+        return [{"node": node, "names": sorted(names),
+                 "values": {k: _plain(v) for k, v in self.values.get(node, {}).items()}}
+                for node, names in sorted(self.declared.items()) if names is not None]
+
     def _missing_input(self, topic: str, kind: str) -> Finding:
         hint = self._elsewhere(self.subscribed, {kind}, "subscribes")
         clause = f"no node subscribed to {topic}"
@@ -334,3 +370,12 @@ class GraphAudit:
             found.append(Finding(FLOOD, f"cmd_vel flood: {rates[0]:.0f} messages per sim s ({rates[1]:.0f} per wall "
                                  "s); a controller sends 10 to 50", self.command))
         return found
+
+
+def _plain(value: Any) -> Any:
+    """A parameter's value as JSON holds it (arrays as lists, bytes as integers)."""
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, bytes):
+        return list(value)
+    return value if value is None or isinstance(value, bool | int | float | str) else str(value)

@@ -692,6 +692,8 @@ class JudgeNode(QuietQosEvents, Node):
             results.update(self.free.results(), checks=self._unjudged_checks(), passed=False,
                            unjudged=self.free.summary())
         missing = self.audit.parameter_findings() if self.audit is not None else []
+        if self.audit is not None and self.required_parameters:  # `ros2 param list` and the values read back
+            results["parameters"] = self.audit.parameter_report()
         if missing:  # the check-off's `ros2 param list` step failed
             results["checks"] = [*results["checks"], {
                 "name": "parameters declared", "passed": False, "value": None,
