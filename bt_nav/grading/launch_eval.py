@@ -410,7 +410,7 @@ def evaluate(path: Path, share: Path, overrides: dict[str, str], limit: float = 
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONDONTWRITEBYTECODE": "1"}
     with tempfile.TemporaryDirectory(prefix="bt_nav_launch_") as tmp:
         out = Path(tmp) / "evaluation.json"
-        command = [sys.executable, "-m", "bt_nav.grading.launch_eval", str(Path(path).resolve()),
+        command = [sys.executable, "-P", "-m", "bt_nav.grading.launch_eval", str(Path(path).resolve()),
                    str(Path(share).resolve()), str(out), *(f"{k}:={v}" for k, v in overrides.items())]
         try:
             done = subprocess.run(command, cwd=share, env=env, capture_output=True, timeout=limit, check=False,

@@ -29,7 +29,7 @@ NOT_CHECKED = "not checked: a TA should look"
 class LaunchCheck:
     """One check of the launch file: its name, whether it passed, why, the line it is about (None: none), and
     whether it was checked at all (``checked`` False: the grader could not follow the file; ``passed`` is then True,
-    so a grade never fails for it, and its reason starts with :data:`NOT_CHECKED`, so every format shows it)."""
+    so a grade never fails for it; :meth:`text` says :data:`NOT_CHECKED`, the formats say it from ``checked``)."""
 
     name: str
     passed: bool
@@ -52,7 +52,8 @@ class LaunchCheck:
 
     def text(self) -> str:
         """``starts the node: PASSED (line 12: Node(package='my_package', executable='reactive_navigator'))``."""
-        return f"{self.name}: {self.status} ({self.at}{self.reason})"
+        reason = f"{NOT_CHECKED}; {self.reason}" if not self.checked else self.reason
+        return f"{self.name}: {self.status} ({self.at}{reason})"
 
 
 @dataclass(frozen=True)

@@ -78,14 +78,13 @@ def _check(name: str, passed: bool, reason: str, at: str | None = None, checked:
     """A check citing ``at`` (``file.py:12``, or ``params.yaml:3 (given at file.py:12)``: the first one counts)."""
     match = re.match(r"([^:\s]+):(\d+)", at or "")
     file, line = (match.group(1), int(match.group(2))) if match else (None, None)
-    return LaunchCheck(name, passed or not checked, reason if checked else f"{NOT_CHECKED}; {reason}", line, checked,
-                       file)
+    return LaunchCheck(name, passed or not checked, reason, line, checked, file)
 
 
 def _fallback(static: LaunchReport, why: str, keep: bool = True) -> LaunchReport:
     """The static reading where the evaluation could not say: its passed checks stand (``keep``), any other check
     is not checked, with why and what the reading said."""
-    checks = tuple(c if keep and c.passed else LaunchCheck(c.name, True, f"{NOT_CHECKED}; {why} (read statically: "
+    checks = tuple(c if keep and c.passed else LaunchCheck(c.name, True, f"{why} (read statically: "
                                                            f"{c.status.lower()}, {c.reason})", c.line, False,
                                                            static.file if c.line else None)
                    for c in static.checks)

@@ -119,3 +119,18 @@ def test_the_override_is_said_to_reach_the_node_or_not() -> None:
     assert "with the defaults the node gets safety_distance=0.5; safety_distance:=0.7 reaches it" in reached.notes
     assert "with the defaults the node gets safety_distance=0.5; safety_distance:=0.7 would not reach it" in \
         constant.notes
+
+
+def test_a_check_not_checked_scores_as_passed_with_a_note_for_the_ta() -> None:
+    """Gradescope: a check the grader could not follow gets its points and says a TA looks (never failed for the
+    grader's limits); a failed one gets none."""
+    from bt_nav.grading.formats import gradescope_results
+
+    for name, statuses in (("command_default", ["passed", "passed", "passed"]),
+                           ("hardcoded_value", ["passed", "failed", "passed"])):
+        record = {"runs": [], "launch": check_launch(LAUNCH / f"{name}.launch.py", NODE).to_dict()}
+        tests = [t for t in gradescope_results(record)["tests"] if t["name"].startswith("launch file: ")]
+        assert [t["status"] for t in tests] == statuses
+        assert [t["score"] == t["max_score"] for t in tests] == [s == "passed" for s in statuses]
+        if name == "command_default":
+            assert [t["output"].startswith("**NOT CHECKED: a TA will look**") for t in tests] == [False, True, True]
