@@ -37,9 +37,10 @@ def parser() -> argparse.ArgumentParser:
     bag = p.add_argument_group("from a real robot's bag (no DDS)")
     bag.add_argument("--bag", help="the recording: a rosbag2 directory (.db3 or .mcap) or file, or a ROS 1 .bag")
     bag.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
-    bag.add_argument("--from", dest="start", type=float, help="the check-off starts this many s into the bag")
-    bag.add_argument("--to", dest="end", type=float, help="... and ends this many s into the bag")
-    bag.add_argument("--armed-at", type=float, help="s into the bag at which toggle_navigation(true) was called "
+    bag.add_argument("--from", dest="start", type=float,
+                     help="the check-off starts this many s after t=0 (the first message judged)")
+    bag.add_argument("--to", dest="end", type=float, help="... and ends this many s after t=0")
+    bag.add_argument("--armed-at", type=float, help="s after t=0 at which toggle_navigation(true) was called "
                      "(default: its service events, else the first non-zero command)")
     bag.add_argument("--odom-topic", default="odom", help="nav_msgs/Odometry topic (default odom)")
     bag.add_argument("--scan-topic", default="scan", help="sensor_msgs/LaserScan topic (default scan)")
@@ -112,7 +113,8 @@ def _judge_bag(opts: argparse.Namespace) -> int:
         print(f"bt-nav checkoff: {exc}", file=sys.stderr)
         return 2
     feed = res["feed"]
-    print(f"check-off of maneuver {config.maneuver} from {opts.bag}: t=0 is the bag's first message; window "
+    first = f"{rec.topics['odom']}, {rec.topics['scan']} or {rec.topics['cmd']}"
+    print(f"check-off of maneuver {config.maneuver} from {opts.bag} (t=0: its first {first} message): window "
           f"t={feed['window'][0]:.1f}-{feed['window'][1]:.1f} s; armed: {feed['arming']}")
     for note in feed["notes"]:
         print(f"note: {note}")

@@ -109,7 +109,15 @@ def _decoded(path: Path, wanted: set[str], notes: list[str]) -> Iterator[tuple[s
     else:
         yield from _stream_decoded(path, wanted, store, notes)
         return
-    with reader:
+    try:
+        reader.open()
+    except Exception as exc:  # noqa: BLE001 - a cut MCAP (no summary) is still read record by record
+        if not (path.is_dir() and any(path.glob("*.mcap"))):
+            raise
+        notes.append(f"the bag's index is unreadable ({type(exc).__name__}: {exc}): read record by record")
+        yield from _stream_decoded(path, wanted, store, notes)
+        return
+    try:
         yield "", "", 0, {c.topic: c.msgtype for c in reader.connections}
         conns = [c for c in reader.connections if c.topic in wanted]
         if decode == "deserialize_ros1":
@@ -124,6 +132,8 @@ def _decoded(path: Path, wanted: set[str], notes: list[str]) -> Iterator[tuple[s
             yield conn.topic, conn.msgtype, t_ns, msg
         if skipped:
             notes.append(f"{skipped} messages could not be decoded and were skipped")
+    finally:
+        reader.close()
 
 
 def _register_bag_types(store: Any, conns: list[Any]) -> None:
@@ -152,6 +162,8 @@ def _stream_decoded(path: Path, wanted: set[str], store: Any, notes: list[str]) 
         types[topic] = msgtype
         if topic in wanted:
             rows.append((topic, msgtype, t_ns, data))
+    if not types and status.get("reason"):
+        raise BagError(f"nothing readable before the damage: {status['reason']}")
     yield "", "", 0, types
     for topic, msgtype, t_ns, data in rows:
         try:
@@ -293,4 +305,4 @@ def _recording(raw: dict[str, list[tuple[int, int | None, Any]]], names: dict[st
     if mount is None:
         notes.append(f"no /tf from base_link to the scan's frame {frame!r}: the LiDAR taken at the robot's centre")
     return Recording(poses, [(t, _scan(m)) for t, m in scans], commands, calls, mount or (0.0, 0.0),
-                     {"odom": names["odom"], "scan": names["scan"], "cmd": names["cmd"]}, notes)
+                     dict(names), notes)

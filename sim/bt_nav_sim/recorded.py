@@ -210,8 +210,8 @@ def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _F
     for c in res["checks"]:
         name = c["name"]
         if name in SERVICE_CHECKS and rec.calls is None:
-            not_judged.append({"name": name, "why": "service calls not visible (no /toggle_navigation/_service_event "
-                                                    "in the recording)"})
+            events = rec.topics.get("service", "service event")
+            not_judged.append({"name": name, "why": f"service calls not visible: no {events} in the recording"})
         elif name == "no collision":
             not_judged.append({"name": name, "why": NO_COLLISION_SENSOR})
         elif name.startswith("maneuver ") and name not in keep:
@@ -238,7 +238,7 @@ def _performed(res: dict[str, Any], cfg: CheckoffConfig, unseen: int = 0) -> dic
     need = max(1, cfg.min_maneuvers)
     detail = f"{judged} performed and judged, required >= {need}"
     if seen > judged:
-        detail += f" ({seen - judged} more seen but not judged)"
+        detail += f"; {seen - judged} more seen but not judged"
     return {"name": "maneuvers performed", "passed": judged >= need, "value": judged, "required": need,
             "detail": detail}
 

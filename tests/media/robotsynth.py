@@ -248,8 +248,9 @@ def _service_events(run: Synth, store: Any) -> list[tuple[str, str, float, Any]]
 
 
 def write_rosbag2(run: Synth, path: Path, storage: str = "mcap", effects: Effects = Effects(),  # noqa: B008
-                  layout: Layout = Layout()) -> Path:  # noqa: B008
-    """The run as a rosbag2 bag (``storage``: mcap or sqlite3)."""
+                  layout: Layout = Layout(), raw: tuple[tuple[str, str, float, bytes], ...] = ()) -> Path:  # noqa: B008
+    """The run as a rosbag2 bag (``storage``: mcap or sqlite3); ``raw``: (topic, type, t, CDR bytes) messages
+    serialised elsewhere (by rclpy) added as they are."""
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     from bt_nav.media.robotbag import robot_typestore
@@ -265,6 +266,11 @@ def write_rosbag2(run: Synth, path: Path, storage: str = "mcap", effects: Effect
                 extra = event if "/srv/" in typename else {}
                 conns[topic] = writer.add_connection(topic, typename, typestore=store, **extra)
             writer.write(conns[topic], max(1, round(t * 1e9)), store.serialize_cdr(msg, typename))
+        for topic, typename, t, data in raw:
+            if topic not in conns:
+                event = {"msgdef": "# std_srvs/srv/SetBool_Event", "rihs01": "RIHS01_" + "0" * 64}
+                conns[topic] = writer.add_connection(topic, typename, typestore=store, **event)
+            writer.write(conns[topic], max(1, round(t * 1e9)), data)
     return path
 
 

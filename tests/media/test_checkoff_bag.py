@@ -162,3 +162,35 @@ def test_a_namespace_twiststamped_commands_and_the_lidar_mount_from_tf(tmp_path:
     assert res["passed"] and res["feed"]["lidar_mount"] == [-0.032, 0.0], report_lines(res)
     with pytest.raises(BagError, match="no /odom topic"):
         read_robot_bag(bag)
+
+
+def test_service_events_as_rclpy_serialises_them_server_side(tmp_path: Path) -> None:
+    """The events a node's introspected service publishes (REQUEST_RECEIVED, RESPONSE_SENT), serialised by rclpy
+    itself, give the arming and the disarming."""
+    from rclpy.serialization import serialize_message
+    from std_srvs.srv import SetBool
+
+    def event(kind: int, seq: int, t: float, data: bool | None = None, success: bool | None = None) -> bytes:
+        ev = SetBool.Event()
+        ev.info.event_type, ev.info.sequence_number = kind, seq
+        ev.info.stamp.sec, ev.info.stamp.nanosec = int(t), int((t % 1) * 1e9)
+        ev.info.client_gid = [9] * 16
+        if data is not None:
+            ev.request = [SetBool.Request(data=data)]
+        if success is not None:
+            ev.response = [SetBool.Response(success=success, message="ok")]
+        return serialize_message(ev)
+
+    topic, typename = "/toggle_navigation/_service_event", "std_srvs/srv/SetBool_Event"
+    raw = ((topic, typename, 3.0, event(1, 1, 3.0, data=True)),
+           (topic, typename, 3.01, event(2, 1, 3.01, success=True)),
+           (topic, typename, 28.0, event(1, 2, 28.0, data=False)),
+           (topic, typename, 28.01, event(2, 2, 28.01, success=True)))
+    rec = read_robot_bag(write_rosbag2(simulate(), tmp_path / "run", "mcap", raw=raw))
+    assert [(c.t, c.data, c.success) for c in rec.calls] == [(3.0, True, True), (28.0, False, True)]
+    res = judge_recording(rec, CheckoffConfig(maneuver="A"))
+    checks = {c["name"]: c for c in res["checks"]}
+    t0 = rec.start  # the report's time zero: the first /odom, /scan or /cmd_vel message
+    expected = f"true at t={3.01 - t0:.2f} s, false at t={28.01 - t0:.2f} s"
+    assert checks["toggle_navigation answered"]["detail"] == expected
+    assert checks["static after deactivation"]["passed"] and res["passed"], report_lines(res)
