@@ -107,7 +107,8 @@ def split_run(judge: Any, a: int, b: int) -> list[tuple[int, int, float | None, 
     half = 0.5 * math.radians(rule.low_deg - cfg.angle_tolerance_deg)  # half the smallest maneuver
     last = commands[b][0]
     cut_short = last >= judge.next_disarm(commands[a][0]) - INTERRUPT_SLACK
-    end_yaw = judge._interp(judge._uyaw, judge._settled_at(last, last + cfg.settle_timeout))
+    turning_next = next((t for t, _, w in commands[b + 1:] if abs(w) >= cfg.rotation_min_rate), math.inf)
+    end_yaw = judge._interp(judge._uyaw, judge._settled_at(last, min(last + cfg.settle_timeout, turning_next)))
     for i, why in marks(commands, a, b, judge.announcement_times(), half):
         if i <= first:
             continue

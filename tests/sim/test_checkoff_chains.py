@@ -94,6 +94,15 @@ def test_randomizer_turns_back_to_back_announced_are_two_maneuvers_and_pass() ->
     assert res["findings"] and res["findings"][0].startswith("2 Randomizers back to back")
 
 
+def test_a_turn_back_the_other_way_at_once_does_not_hide_the_split_before_it() -> None:
+    """100 + 100 deg left, then 150 deg right at once (measured: a right node's 148 + 100 deg read as one 247 deg turn,
+    because the rotation's end was looked for inside the turn back)."""
+    script = INTO_DEAD_END + _turns(100, 100) + [(math.radians(150), 0.0, -1.0, True), (20.0, 0.0, 0.0, False)]
+    judge = _play(_judge("A", DEAD_END), script)
+    angles = [m["angle_deg"] for m in judge.results()["maneuvers"]]
+    assert angles == pytest.approx([100, 100, -150], abs=5), angles
+
+
 def test_the_same_rotation_without_announcements_stays_one_maneuver_and_says_how_to_show_two() -> None:
     judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + _turns(100, 100, announce=False) + CREEP_OUT)
     (m,) = judge.results()["maneuvers"]
