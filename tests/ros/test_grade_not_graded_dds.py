@@ -15,6 +15,7 @@ import pytest
 from ros_harness import DOMAIN_ID
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+RUN = "lab_object C lds01 seed 0"
 
 
 @pytest.mark.slow
@@ -43,5 +44,7 @@ def test_a_foreign_program_on_the_only_domain_leaves_the_run_not_graded(tmp_path
     assert not row["passed"] and row["outcome"] == "bt_nav error" and row["domains"] == [domain]
     assert "another domain" not in done.stdout + json.dumps(row) and "started again" not in done.stdout
     assert not (out / "realtime").exists() and not (out / "rerun").exists()  # never re-run: it is no failure
-    assert "0/0 passed" in done.stdout and done.returncode == 3, done.stdout
+    assert f"{RUN}: NOT GRADED (not graded: another program" in done.stdout, done.stdout
+    assert "0/0 passed, 1 without a verdict apart (not the node's: not graded" in done.stdout, done.stdout
+    assert done.returncode == 3, done.stdout
     assert "not graded (not yours)" in (out / "feedback.md").read_text()

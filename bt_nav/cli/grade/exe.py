@@ -43,6 +43,7 @@ def _settings(args: argparse.Namespace, maneuvers: bool, command: str | None = N
 def _show(row: dict[str, Any]) -> None:
     """One line per run as it ends (above the progress bar, when there is one)."""
     label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
+    label = "NOT GRADED" if row.get("not_graded") else label  # another program on its domain: not the node's
     tqdm.write(f"  {run_label(row)}: {label} ({row['reason']}; "
                f"{row['wall_time']:.1f} s wall) {row['run_dir']}", file=sys.stdout)
     for note in row.get("notes", []):  # not the node's: a domain it had to leave, a lost SIGINT
@@ -134,7 +135,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     errors = [r for r in ended if r["outcome"] == ERROR]
     judged = [r for r in ended if r["outcome"] != ERROR]
     passed = sum(1 for r in judged if r["passed"])
-    extra = f", {len(errors)} bt_nav error(s) apart (not the node's; tracebacks in " \
+    extra = f", {len(errors)} without a verdict apart (not the node's: not graded, or a bt_nav error's traceback in " \
             f"{settings.out / 'bt_nav_errors'})" if errors else ""
     print(f"{passed}/{len(judged)} passed{extra} in {wall:.1f} s wall; wrote {written[0]}, {written[1]}, "
           f"{settings.out / 'report.html'}, {settings.out / 'feedback.md'}" + (f", {args.json}" if args.json else ""))
@@ -144,7 +145,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     if stop.requested:
         print(f"bt-nav grade: {stop.name}: stopped every run", file=sys.stderr)
         return 128 + int(stop.signum or 2)
-    if passed < len(judged) or not judged or not launch_passed(settings.out):  # --launch: a check failed
+    if passed < len(judged) or not (judged or errors) or not launch_passed(settings.out):  # --launch: a check failed
         return 1
     return 3 if errors or len(judged) < planned else 0
 
