@@ -302,6 +302,20 @@ def _yaml(text: str) -> Any:
     return value if isinstance(value, bool | int | float | str | list) else text
 
 
+#: Folders of a hand-in never searched: a colcon workspace's outputs, caches, a virtual environment.
+SKIPPED = {"build", "install", "log", "__pycache__", "node_modules", "venv"}
+
+
+def hand_in_files(folder: Path, *names: str) -> list[Path]:
+    """The files named ``names`` in the hand-in ``folder``, hidden and :data:`SKIPPED` folders pruned (a workspace's
+    ``build/`` or a ``.venv`` is never walked), in a stable order."""
+    found = []
+    for root, dirs, files in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in SKIPPED)
+        found += [Path(root) / f for f in sorted(files) if f in names]
+    return found
+
+
 def find_file(text: str, launch_file: Path) -> Path | None:
     """A file a launch file names, in the hand-in: as named (relative to the working directory: the hand-in), else
     the file of that name anywhere in the hand-in (an installed share's ``config/x.yaml`` is the hand-in's
@@ -310,8 +324,7 @@ def find_file(text: str, launch_file: Path) -> Path | None:
     if path.is_file():
         return path.resolve()
     for base in (s.SHARE[0], launch_file.parent):
-        found = sorted(p for p in Path(base).rglob(path.name) if p.is_file() and not any(
-            part.startswith(".") or part in ("build", "install", "log") for part in p.relative_to(base).parts[:-1]))
+        found = hand_in_files(Path(base), path.name)
         if found:
             return found[0].resolve()
     return None

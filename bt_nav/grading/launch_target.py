@@ -27,11 +27,20 @@ def launch_target(target: Path, node: Path | None = None) -> tuple[Path | None, 
     target = Path(target)
     if not target.exists():
         raise ValueError(f"{target}: no such file or folder")
-    folder = target if target.is_dir() else target.parent
+    folder = target if target.is_dir() else _package_root(target.parent)
     launch = find_launch(folder) if target.is_dir() else target
     if node is None:
         node = find_node(folder)[0]
     return launch, node, folder
+
+
+def _package_root(folder: Path) -> Path:
+    """The ROS package a launch file is in (``pkg/launch/x.launch.py`` -> ``pkg``: the nearest folder up to two
+    levels above holding a ``package.xml``), else its own folder: where its params files and includes are found."""
+    for candidate in [folder, *list(folder.resolve().parents)[:2]]:
+        if (candidate / "package.xml").is_file():
+            return candidate
+    return folder
 
 
 def check_target(target: Path, node: Path | None = None) -> LaunchReport:

@@ -23,7 +23,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.launch_eval import TIME_LIMIT, evaluate
+from bt_nav.grading.launch_eval import TIME_LIMIT, evaluate, hand_in_files
 from bt_nav.grading.launch_report import (
     ARGUMENT,
     DECLARES,
@@ -93,7 +93,7 @@ def _fallback(static: LaunchReport, why: str, keep: bool = True) -> LaunchReport
 
 def _package(folder: Path) -> str | None:
     """The hand-in's ROS package name (its one ``package.xml``), None when it has none."""
-    found = [p for p in folder.rglob("package.xml") if not any(part.startswith(".") for part in p.parts)]
+    found = hand_in_files(folder, "package.xml")
     if len(found) != 1:
         return None
     match = re.search(r"<name>\s*([^<\s]+)\s*</name>", found[0].read_text(errors="replace"))
@@ -104,9 +104,7 @@ def _console_scripts(folder: Path, modules: set[str]) -> set[str]:
     """The executables a hand-in's ``setup.py`` / ``setup.cfg`` maps to the node's module (``'navigator =
     my_package.reactive_navigator:main'``): ``ros2 launch`` runs the node by that name too."""
     names = set()
-    for path in sorted([*folder.rglob("setup.py"), *folder.rglob("setup.cfg")]):
-        if any(part.startswith(".") or part in ("build", "install", "log") for part in path.relative_to(folder).parts):
-            continue
+    for path in hand_in_files(folder, "setup.py", "setup.cfg"):
         for executable, module in re.findall(r"([\w.-]+)\s*=\s*([\w.]+)\s*:\s*\w+", path.read_text(errors="replace")):
             if module.rpartition(".")[2] in modules:
                 names.add(executable)

@@ -128,7 +128,8 @@ def test_a_folder_of_hand_ins_gives_each_student_a_verdict_with_the_launch_lines
     assert "launch file: passes safety_distance to the node: FAILED" in (out / "class.html").read_text()
     feedback = (out / "cy" / "feedback.md").read_text()
     assert feedback.startswith("# cy: FAILED\n")
-    assert "- passes safety_distance to the node: FAILED (line 7: the Node has no parameters=[...])" in feedback
+    assert ("- passes safety_distance to the node: FAILED (turtlebot_bringup.launch.py:7: the Node has no "
+            "parameters=[...])") in feedback
     assert "launch_ros not installed, the node was started as" in feedback
     assert "- **lab_object C lds01 seed 0: PASSED** (passed)" in feedback and "  - no collision" in feedback
     assert "add `DeclareLaunchArgument('safety_distance', default_value='0.5')`" in feedback
