@@ -174,9 +174,9 @@ def not_followed(pose_t: Sequence[float], uyaw: Sequence[float], commands: Seque
         return []
     t, yaw = np.asarray(pose_t, dtype=np.float64), np.asarray(uyaw, dtype=np.float64)
     times = [c[0] for c in commands]
-    since = []  # when the command in force at each command began (repeats of one command are one command)
+    since = []  # when the command in force at each command began (a closed loop's varying rate is one command)
     for k, (tk, _, w) in enumerate(commands):
-        since.append(since[-1] if k and abs(w - commands[k - 1][2]) < 1e-6 else tk)
+        since.append(since[-1] if k and _alike(w, commands[k - 1][2]) else tk)
     bad: list[tuple[float, float, float, str]] = []  # (t0, t1, w, kind) of sample pairs
     for i in range(1, t.size):
         a, b = t[i - 1], t[i]
@@ -185,13 +185,21 @@ def not_followed(pose_t: Sequence[float], uyaw: Sequence[float], commands: Seque
             continue
         w = commands[k][2]
         nxt = times[k + 1] if k + 1 < len(times) else math.inf
-        if nxt <= b and abs(commands[k + 1][2] - w) >= 1e-6:  # the command changes within the pair
+        if nxt <= b and not _alike(commands[k + 1][2], w):  # the command changes within the pair
             continue
         rate = (yaw[i] - yaw[i - 1]) / (b - a)
         kind = _disobedience(w, rate, min_rate)
         if kind:
             bad.append((a, b, w, kind))
     return _runs(bad, t, yaw, hold)
+
+
+def _alike(w1: float, w2: float) -> bool:
+    """Two commanded rates that ask for the same thing: both (almost) zero, or the same direction within a factor of
+    two (a node's P-controller varies its rate every message; the robot need not settle anew for each)."""
+    if abs(w1) < 1e-3 or abs(w2) < 1e-3:
+        return abs(w1) < 1e-3 and abs(w2) < 1e-3
+    return w1 * w2 > 0 and 0.5 <= w1 / w2 <= 2.0
 
 
 def _disobedience(w: float, rate: float, min_rate: float) -> str:
