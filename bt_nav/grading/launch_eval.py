@@ -85,6 +85,7 @@ class Walker:
         self.declared: list[dict[str, Any]] = []
         self.started: list[dict[str, Any]] = []
         self.unsure: list[str] = []
+        self.skipped: list[dict[str, Any]] = []  # nodes whose condition was false
         self.depth = 0
 
     def context(self) -> s.LaunchContext:
@@ -103,6 +104,10 @@ class Walker:
             return
         condition = entity.kwargs.get("condition")
         if isinstance(condition, s.Condition) and not condition.evaluate(self.context()):
+            if isinstance(entity, s.Node):  # said, so a node left out by its condition is named as such
+                executable = entity.kwargs.get("executable")
+                self.skipped.append({"executable": executable if isinstance(executable, str) else "",
+                                     "where": where(entity.position), "condition": type(condition).__name__})
             return
         handler = getattr(self, f"_{type(entity).__name__}", None)
         if handler is None and isinstance(entity, s.Node):
@@ -389,7 +394,8 @@ def walk(path: Path, arguments: dict[str, str]) -> dict[str, Any]:
     except Exception as exc:  # noqa: BLE001 (the student's code raised: reported, never re-raised)
         return {"unsure": [f"evaluating it raised {type(exc).__name__}: {exc}" + _student_frame(exc, path)],
                 "raised": True}
-    return {"declared": walker.declared, "started": walker.started, "unsure": walker.unsure}
+    return {"declared": walker.declared, "started": walker.started, "unsure": walker.unsure,
+            "skipped": walker.skipped}
 
 
 def _student_frame(exc: BaseException, path: Path) -> str:

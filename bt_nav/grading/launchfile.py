@@ -154,6 +154,10 @@ class _Judge:
             if self.unsure:
                 return _check(STARTS, False, f"no Node of {want} found, but the grader could not follow: "
                               + "; ".join(self.unsure), checked=False)
+            skipped = [k for k in self.default.get("skipped", []) if k["executable"] in self.names]
+            if skipped:
+                return _check(STARTS, False, f"its Node's {skipped[0]['condition']} is false with the default launch "
+                              "arguments: ros2 launch does not start it", skipped[0]["where"])
             if nodes:
                 found = ", ".join(repr(s["executable"]) for s in nodes)
                 return _check(STARTS, False, f"its Node runs executable {found}, not {want}", nodes[0]["where"])

@@ -55,7 +55,7 @@ SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
     "wrong_package": ("wrong", (F, P, P), "the hand-in's package is 'my_package'"),
     "other_console_script": ("wrong", (F, P, F), "its Node runs executable 'teleop', not navigator or"),
     "not_returned": ("wrong", (F, P, F), "does not return it in the launch description"),
-    "condition_off": ("wrong", (F, P, F), "no launch_ros.actions.Node"),
+    "condition_off": ("wrong", (F, P, F), "its Node's IfCondition is false with the default launch arguments"),
     "other_config": ("wrong", (F, F, F), "'safety_distance' has no default_value and was not given"),
     "undeclared_no_default": ("wrong", (F, F, F), "launch configuration 'safety_distance' does not exist"),
     "float_default": ("wrong", (F, F, F), "a float is not a string or substitution (TypeError)"),
