@@ -10,6 +10,7 @@ Benchmarks (``--only`` picks some, comma-separated):
 ``video``    bag a lock-step mission and film it: render time of a 55 s mission at 10 fps (:mod:`bench.video`)
 ``exe``      DDS grading throughput: missions/min of ``bt-nav grade --exe "bt-nav executive" --jobs 2``
              (:mod:`bench.exe_throughput`)
+``testquick`` wall time of ``make test-quick``, the contributor's loop of tests without DDS (:mod:`bench.quick_tests`)
 
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
 ``<out>/latest.md`` (the same as tables). With ``--only``, the sections not run this time are
@@ -41,9 +42,9 @@ from typing import Any
 
 from .common import DOMAIN_RANGE, REPO, Target, load_average, machine, now_iso
 
-BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video", "exe")
+BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video", "exe", "testquick")
 #: The order they run in: the quiet single-process measurements first, the process pools last.
-ORDER = ("tick", "sim", "video", "latency", "memory", "exe", "quality")
+ORDER = ("tick", "sim", "video", "latency", "memory", "exe", "quality", "testquick")
 SCHEMA = 1
 DEFAULT_OUT = REPO / "bench" / "results"
 #: Runs of the history shown in latest.md.
@@ -54,7 +55,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     """Command-line options."""
     parser = argparse.ArgumentParser(prog="python -m bench.run", description=__doc__.splitlines()[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog="\n".join(__doc__.splitlines()[2:9]))
+                                     epilog="\n".join(__doc__.splitlines()[2:13]))
     parser.add_argument("--quick", action="store_true", help="a fast smoke run: few repetitions and seeds")
     parser.add_argument("--only", default=",".join(BENCHMARKS),
                         help=f"comma-separated subset of {','.join(BENCHMARKS)} (default: all)")
@@ -156,6 +157,12 @@ class Session:
 
         return quality.run(quick=self.quick, jobs=self.args.jobs)
 
+    def testquick(self) -> dict[str, Any]:
+        """Benchmark 8: ``make test-quick``'s wall time."""
+        from . import quick_tests
+
+        return quick_tests.run(quick=self.quick)
+
 
 def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
     """The targets of one benchmark's result (none for a skipped one)."""
@@ -173,6 +180,8 @@ def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
         from .video import targets
     elif name == "exe":
         from .exe_throughput import targets
+    elif name == "testquick":
+        from .quick_tests import targets
     else:
         return []
     return targets(result)
