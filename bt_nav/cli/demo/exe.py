@@ -147,7 +147,7 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
     run_dir = Path(row["run_dir"])
     write_transcript(run_dir, head, terminal.transcript())
     _print_report(row, terminal.report)
-    print(f"bt-nav demo: {'PASSED' if row['passed'] else 'FAILED'}: {row['reason']}", flush=True)
+    print(f"bt-nav demo: {'PASSED' if row['passed'] else 'FAILED'}: {_on_sim_clock(row, row['reason'])}", flush=True)
     if row.get("bag"):
         _film(run_dir, run_dir / BAG, opts.video or str(run_dir / "video.mp4"))
     else:
@@ -157,17 +157,23 @@ def run_exe_demo(opts: argparse.Namespace) -> int:
     return 0 if row["passed"] else 1
 
 
+def _on_sim_clock(row: dict[str, Any], text: str) -> str:
+    """``text`` of the judge's (its times from its t0) said on the sim clock, when the verdict gives t0's reading."""
+    from bt_nav.run.terminal import on_sim_clock
+
+    t0 = (row.get("verdict") or {}).get("t0_sim")
+    return text if t0 is None else on_sim_clock(text, float(t0))
+
+
 def _print_report(row: dict[str, Any], kept: list[str]) -> None:
     """The judge's report lines, their times said on the sim clock (the verdict's ``t0_sim``); without a verdict the
     lines the judge printed, as it printed them (its times count from its t0)."""
-    from bt_nav.run.terminal import on_sim_clock
-
     verdict = row.get("verdict") or {}
-    lines, t0 = verdict.get("report_lines"), verdict.get("t0_sim")
-    if lines and t0 is not None:
+    lines = verdict.get("report_lines")
+    if lines and verdict.get("t0_sim") is not None:
         print("the judge's report (times on the simulator's clock):", flush=True)
         for line in lines:
-            print(on_sim_clock(str(line), float(t0)), flush=True)
+            print(_on_sim_clock(row, str(line)), flush=True)
     elif kept:
         print("the judge's report (t: seconds from its start, t0):", flush=True)
         for line in kept:
