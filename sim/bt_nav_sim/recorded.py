@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from bt_nav.mission.scan import Scan
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, CheckoffConfig, CheckoffJudge
 from bt_nav_sim.feeds import (
     ODOMETRY_FORWARD_MOTION_MAX,
     SCAN_MAX_AGE,
@@ -154,6 +154,7 @@ class _Flags:
     gaps: list[Gap]
     disobeyed: list[Disobeyed]
     gap_turns: list[dict[str, str]] = field(default_factory=list)  # turns the robot made while a topic was silent
+    last_move: float | None = None  # the last non-zero command, when the disarm is not visible (no service events)
 
 
 def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, armed: float) -> _Flags:
@@ -165,6 +166,8 @@ def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, ar
     uyaw = np.unwrap(np.asarray([p[3] for p in odom]))
     cmds = [c for c in rec.commands if a <= c[0] <= b]
     flags = _Flags(sorted(found, key=lambda g: g.start), not_followed(t, uyaw, cmds))
+    if rec.calls is None:
+        flags.last_move = max((c[0] for c in cmds if c[1] != 0.0 or c[2] != 0.0), default=None)
     for g in flags.gaps:  # a turn nobody saw commanded (or read its scans): not judged, and said
         turned = math.degrees(float(np.interp(g.end, t, uyaw) - np.interp(g.start, t, uyaw)))
         seen = any(g.start < float(turn["end"]) for turn in flags.gap_turns)  # one turn, several silent topics
@@ -185,6 +188,11 @@ def _episode_problem(e: dict[str, Any], flags: _Flags, cfg: CheckoffConfig, t0: 
             return d.text(t0)
     if e.get("readings") is None:
         return "no scan at its start"
+    last = flags.last_move
+    only_angle = not e["angle_ok"] and e["forward_ok"] and e["trigger"] and e["moved_on"] and not e.get("late")
+    if last is not None and t0 + e["settled"] >= last - INTERRUPT_SLACK and only_angle:
+        return (f"its turn ended with the run's last command (t={last - t0:.1f} s), as a disarm ends it, and the "
+                "recording shows no service calls: its angle is not judged")
     return ""
 
 

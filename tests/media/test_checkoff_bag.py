@@ -194,3 +194,16 @@ def test_service_events_as_rclpy_serialises_them_server_side(tmp_path: Path) -> 
     expected = f"true at t={3.01 - t0:.2f} s, false at t={28.01 - t0:.2f} s"
     assert checks["toggle_navigation answered"]["detail"] == expected
     assert checks["static after deactivation"]["passed"] and res["passed"], report_lines(res)
+
+
+def test_a_turn_cut_by_the_disarm_is_not_failed_on_its_angle(tmp_path: Path) -> None:
+    """Disarmed 1 s into the turn: with the service events the judge knows the disarm cut it ("interrupted");
+    without them the turn ends with the run's last command, and its angle is not judged either way."""
+    effects = Effects(service_events=True)
+    run = simulate(disarm_at=14.5, end=18.0, effects=effects)
+    seen = _judge(write_rosbag2(run, tmp_path / "events", "mcap", effects))
+    assert seen["maneuvers"][0]["rule"] == "interrupted by the disarm (angle not judged)"
+    unseen = _judge(write_rosbag2(run, tmp_path / "plain", "mcap"))
+    (entry,) = [n for n in unseen["not_judged"] if n["name"] == "maneuver 1"]
+    assert "ended with the run's last command" in entry["why"] and abs(unseen["maneuvers"][0]["angle_deg"]) < 80
+    assert not unseen["passed"]  # no complete maneuver: never a pass
