@@ -19,7 +19,7 @@ import statistics
 import sys
 import threading
 from collections import Counter
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from typing import Any
@@ -45,13 +45,17 @@ class Job:
     jitter: tuple[float, float] | None = None
     overrides: dict[str, Any] | None = field(default=None, hash=False, compare=False)
     sim_params: tuple[tuple[str, Any], ...] = ()  # simulator settings (--sim-param), e.g. actuation_latency
+    # the graded node's parameters in this cell (-p NAME:=VALUE, over --node-param's; its judge is given the
+    # trigger distances among them): a default grid's cell that checks the node applies its safety_distance
+    node_params: tuple[tuple[str, Any], ...] = ()
 
     @property
     def key(self) -> str:
         """A stable name of the job (results files and Dask keys use it)."""
         jitter = "exact" if not self.jitter else f"{self.jitter[0]:g}m{self.jitter[1]:g}deg"
         sim = "".join(f"|{name}={value}" for name, value in self.sim_params)
-        return f"{self.world}|{self.maneuver}|{self.seed}|{self.profile}|{self.kinematics or '-'}|{jitter}{sim}"
+        node = "".join(f"|p:{name}={value}" for name, value in self.node_params)
+        return f"{self.world}|{self.maneuver}|{self.seed}|{self.profile}|{self.kinematics or '-'}|{jitter}{sim}{node}"
 
     @property
     def lidar(self) -> str:
@@ -66,6 +70,19 @@ class Job:
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
         return asdict(self)
+
+    def params_over(self, given: Sequence[tuple[str, Any]] = ()) -> tuple[tuple[str, Any], ...]:
+        """The node's parameters in this run: ``given`` (``--node-param``, the whole grid's) with this cell's own
+        over them, in order (what ``-p`` gives the node and what its judge is configured by)."""
+        merged = dict(given)
+        merged.update(self.node_params)
+        return tuple(merged.items())
+
+
+def params_text(params: Mapping[str, Any] | Sequence[tuple[str, Any]] | None) -> str:
+    """A cell's parameters as its label shows them, ``safety_distance=0.7`` (empty: none)."""
+    pairs = params.items() if isinstance(params, Mapping) else (params or ())
+    return " ".join(f"{name}={value:g}" if isinstance(value, float) else f"{name}={value}" for name, value in pairs)
 
 
 def run_job(job: Job) -> dict[str, Any]:
@@ -121,12 +138,13 @@ def seed_list(seeds: int | Iterable[int]) -> list[int]:
 def make_jobs(worlds: Sequence[str], maneuvers: Sequence[str], seeds: int | Iterable[int],
               overrides: dict[str, Any] | None = None, profile: str = "homework",
               jitter: tuple[float, float] | None = DEFAULT_JITTER, kinematics: str = "",
-              sim_params: dict[str, Any] | None = None, lidars: Sequence[str] = ("",)) -> list[Job]:
+              sim_params: dict[str, Any] | None = None, lidars: Sequence[str] = ("",),
+              node_params: Sequence[tuple[str, Any]] = ()) -> list[Job]:
     """The grid in its canonical order: worlds, then maneuvers, then LiDARs (``""``: the profile's own, or
-    ``lidar`` of ``sim_params``), then seeds."""
+    ``lidar`` of ``sim_params``), then seeds; every job with the cell's ``node_params``."""
     base = dict(sim_params or {})
     sims = [tuple(sorted({**base, **({"lidar": lidar} if lidar else {})}.items())) for lidar in lidars or ("",)]
-    return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides, sim)
+    return [Job(w, normalise_maneuver(m), s, profile, kinematics, jitter, overrides, sim, tuple(node_params))
             for w in worlds for m in maneuvers for sim in sims for s in seed_list(seeds)]
 
 
@@ -298,9 +316,11 @@ def _crash_finding(rows: Sequence[dict[str, Any]]) -> list[str]:
 
 
 def cell_label(row: dict[str, Any]) -> str:
-    """A grid cell's name, ``lab_object C rplidar``: world, maneuver and (when the grid varies it) LiDAR; a grid over
-    three LiDARs has three cells per world and maneuver, and a report that left the LiDAR out would name them alike."""
-    return " ".join(part for part in (row["world"], row["maneuver"], row.get("lidar") or "") if part)
+    """A grid cell's name, ``lab_object C rplidar``: world, maneuver and (when the grid varies it) LiDAR, and the
+    cell's own node parameters (``lab_hallway B lds01 safety_distance=0.7``); a grid over three LiDARs has three cells
+    per world and maneuver, and a report that left the LiDAR out would name them alike."""
+    parts = (row["world"], row["maneuver"], row.get("lidar") or "", params_text(row.get("cell_params")))
+    return " ".join(part for part in parts if part)
 
 
 def run_label(row: dict[str, Any]) -> str:
@@ -334,7 +354,8 @@ def rate_table(summary: Sequence[dict[str, Any]]) -> tuple[list[str], list[tuple
     maneuvers = sorted({s["maneuver"] for s in summary})
     table: dict[tuple[str, str], dict[str, list[int]]] = {}
     for s in summary:
-        cell = table.setdefault((s["world"], s.get("lidar") or ""), {}).setdefault(s["maneuver"], [0, 0])
+        world = " ".join(filter(None, (s["world"], s.get("params"))))  # a cell's own node parameters name its row
+        cell = table.setdefault((world, s.get("lidar") or ""), {}).setdefault(s["maneuver"], [0, 0])
         cell[0] += s["passed"]
         cell[1] += s["runs"]
     return maneuvers, [(world, lidar, cells) for (world, lidar), cells in sorted(table.items())]

@@ -13,11 +13,11 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from bt_nav_sim.world import list_worlds, world_file
+from bt_nav_sim.world import list_worlds, load_world, world_file
 
 from bt_nav.grading.exe.grid import declared_choice, node_file
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
-from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
+from bt_nav.mission.assignments import ASSIGNMENTS, Grid, assignment_of
 from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -94,6 +94,15 @@ def lab_maneuver(command: str, given: str | None, option: str) -> tuple[str, str
     return given, f"{option} {given} wins over the '# CHOICE: {declared}' in {node_file(command)}"
 
 
+def default_cells(args: argparse.Namespace) -> Grid | None:
+    """The assignment's default ``--exe`` grid when it is made of cells (:class:`~bt_nav.mission.assignments.Cell`)
+    and the options leave the worlds to it (no ``--worlds``), else None: the plain product of worlds and maneuvers."""
+    if args.worlds or (args.exe is None and getattr(args, "klass", None) is None):
+        return None
+    grid = assignment_of(args.profile).exe_grid
+    return grid if grid.cells else None
+
+
 def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int],
                left_out: set[str] | None = None) -> list[Job]:
     """The grid of the options: worlds x maneuvers x LiDARs x seeds (the lab's arenas only where they can check
@@ -105,8 +114,17 @@ def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[
     sim_params = parse_assignments(args.sim_param) or None
     if sim_params and "lidar" in sim_params and len(lidars) > 1:
         raise ValueError("--sim-param lidar=... and --lidars with several LiDARs: choose one way")
-    jobs = make_jobs(worlds, maneuvers, seeds, parse_assignments(args.overrides) or None, args.profile,
-                     None if args.no_jitter else DEFAULT_JITTER, args.kinematics, sim_params, lidars)
+    options = (parse_assignments(args.overrides) or None, args.profile, None if args.no_jitter else DEFAULT_JITTER,
+               args.kinematics, sim_params, lidars)
+    cells = default_cells(args)
+    if cells is None:
+        jobs = make_jobs(worlds, maneuvers, seeds, *options)
+    else:  # the default grid's cells: each choice where its mistakes show
+        given = set(parse_assignments(getattr(args, "node_param", None) or []))
+        checked = {world: load_world(world).checkoff_maneuvers for world in worlds}  # a cell grades these only
+        jobs = list(dict.fromkeys(job for m in maneuvers for cell in cells.cells_of(m) if m in checked[cell.world]
+                                  for job in make_jobs([cell.world], [m], seeds, *options,
+                                                       tuple((k, v) for k, v in cell.params if k not in given))))
     if not lab:
         return jobs
     kept, skipped = checkoff_jobs(jobs)

@@ -10,9 +10,17 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.exe.grid import ERROR
+from bt_nav.grading.exe.grid import ERROR, parameters_lines
 from bt_nav.grading.exe.run import ExeSettings, exe_ros_args
-from bt_nav.grading.grid import failure_groups, lidar_findings, lidar_label, per_lidar, rate_table, runs_label
+from bt_nav.grading.grid import (
+    failure_groups,
+    lidar_findings,
+    lidar_label,
+    params_text,
+    per_lidar,
+    rate_table,
+    runs_label,
+)
 from bt_nav.grading.html import report_html
 from bt_nav.grading.media import grid_figures, render_runs
 from bt_nav.grading.rules import RULES_FILE, RULES_LINE_MD, grade_rules
@@ -21,17 +29,17 @@ from bt_nav.grading.rules import RULES_FILE, RULES_LINE_MD, grade_rules
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per world, maneuver and LiDAR: runs judged, passes, bt_nav errors (apart: never the node's failure), mean
     wall time and the reasons of the failures (counted)."""
-    cells: dict[tuple[str, str, str], list[dict[str, Any]]] = defaultdict(list)
-    for row in rows:
-        cells[(row["world"], row["maneuver"], row.get("lidar", ""))].append(row)
+    cells: dict[tuple[str, str, str, str], list[dict[str, Any]]] = defaultdict(list)
+    for row in rows:  # a cell's own node parameters (lab_hallway B safety_distance=0.7) make a cell of their own
+        cells[(row["world"], row["maneuver"], row.get("lidar", ""), params_text(row.get("cell_params")))].append(row)
     out = []
-    for (world, maneuver, lidar), cell in sorted(cells.items()):
+    for (world, maneuver, lidar, params), cell in sorted(cells.items()):
         judged = [r for r in cell if r.get("outcome") != ERROR]
         reasons: dict[str, int] = defaultdict(int)
         for row in judged:
             if not row["passed"]:
                 reasons[row["reason"]] += 1
-        out.append({"world": world, "maneuver": maneuver, "lidar": lidar, "runs": len(judged),
+        out.append({"world": world, "maneuver": maneuver, "lidar": lidar, "params": params, "runs": len(judged),
                     "passed": sum(1 for r in judged if r["passed"]), "errors": len(cell) - len(judged),
                     "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons)})
     return out
@@ -42,7 +50,8 @@ def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
     lidars = any(s.get("lidar") for s in summary)
     head = (f"{'world':<15} {'man':<4} " + (f"{'lidar':<9} " if lidars else "")
             + f"{'pass':>7} {'wall/run':>8}  reasons of the failures")
-    rows = [f"{s['world']:<15} {s['maneuver']:<4} " + (f"{s.get('lidar') or 'profile':<9} " if lidars else "")
+    rows = [f"{' '.join(filter(None, (s['world'], s.get('params')))):<15} {s['maneuver']:<4} "
+            + (f"{s.get('lidar') or 'profile':<9} " if lidars else "")
             + f"{s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
             + ("; ".join([*(f"{reason} x{n}" for reason, n in s["reasons"].items()),
                           *([f"bt_nav error x{s['errors']} (not the node's)"] if s.get("errors") else [])]) or "-")
@@ -75,6 +84,13 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     if errors:
         lines += ["", f"{errors} run(s) hit a bt_nav error (not the node's failure; tracebacks in bt_nav_errors/, "
                   "`--resume` reruns them)."]
+    shown: dict[str, list[str]] = {}  # per cell's own parameters, the first run's `ros2 param list` and applied
+    for row in rows:
+        said = parameters_lines(row)
+        if said:
+            shown.setdefault(params_text(row.get("cell_params")) or "the grid's", said)
+    for cell, said in shown.items():
+        lines += ["", f"## Parameters ({cell})", "", *(f"- {line}" for line in said)]
     failures = [f"- {runs_label(runs)}: {reason}" for reason, runs in failure_groups(rows)]
     if failures:
         lines += ["", "## Failures", "", *failures, "", RULES_LINE_MD + "."]

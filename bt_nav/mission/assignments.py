@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from bt_nav.mission.maneuver_spec import maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS, MANEUVERS, SPECS
 
 
@@ -45,11 +46,35 @@ class Judge:
 
 
 @dataclass(frozen=True)
+class Cell:
+    """One cell of a default grid: a world and the parameters the graded node is started with there
+    (``-p NAME:=VALUE``; its judge is given the same). A cell with parameters grades the maneuvers whose trigger
+    distance is one of them (it proves the node applies it) in place of the world's plain cell; the plain cell grades
+    the world's other maneuvers. Which maneuvers a world checks off at all is its own (``checkoff_maneuvers``)."""
+
+    world: str
+    params: tuple[tuple[str, float], ...] = ()
+
+
+@dataclass(frozen=True)
 class Grid:
     """A grid's default axes (``bt-nav grade`` without ``--worlds``/``--seeds``)."""
 
     worlds: str  # comma-separated world names, or ``all`` (the assignment's bundled worlds)
     seeds: int
+    #: when given, the default grid is these cells (their worlds are :attr:`worlds`), each choice graded where its
+    #: mistakes show; ``--worlds`` replaces them by the plain product of worlds and maneuvers
+    cells: tuple[Cell, ...] = ()
+
+    def cells_of(self, maneuver: str) -> list[Cell]:
+        """The cells that grade ``maneuver``: per world, the cells whose parameters hold its trigger distance, else
+        the world's plain cell (see :class:`Cell`)."""
+        distance = maneuver_spec(maneuver).trigger.distance
+        out = []
+        for world in dict.fromkeys(cell.world for cell in self.cells):
+            own = [c for c in self.cells if c.world == world]
+            out += [c for c in own if distance in dict(c.params)] or [c for c in own if not c.params]
+        return out
 
 
 @dataclass(frozen=True)
@@ -100,9 +125,15 @@ LAB = Assignment(
     name="lab", files=("lab.yaml",), arm_service="toggle_navigation", evaluate_service=None,
     judge=Judge("checkoff", "bt_nav_checkoff", ("safety_distance", "pivot_distance"), ("safety_distance",)),
     graph="checkoff", world_kind="lab", maneuvers=LAB_MANEUVERS, grid=Grid("all", 20),
-    # the lab's two arenas that check off every maneuver between them (lab_object: A and C with nothing else
-    # near; lab_dead_end: all three)
-    exe_grid=Grid("lab_object,lab_dead_end", 2))
+    # A node over DDS: per choice two cells x 3 LiDARs x 2 seeds = 12 runs, each choice where its mistakes show.
+    # lab_dead_end checks all three off at the sheet's 0.5 m. lab_beside starts the robot beside a wall 0.23 m to its
+    # left that no front sector sees: a whole-scan or side reading taken for "front" fires there (A, C); A is
+    # graded there with safety_distance 0.7 (the check-off's `ros2 param list` step: the parameter applied), where a
+    # node that keeps 0.5 m turns 0.2 m late. lab_hallway starts B beside a wall on its left only (left OR right
+    # fires) and narrows evenly, with safety_distance 0.7: a node that keeps 0.5 m turns late.
+    exe_grid=Grid("lab_beside,lab_dead_end,lab_hallway", 2, cells=(
+        Cell("lab_beside"), Cell("lab_beside", (("safety_distance", 0.7),)), Cell("lab_dead_end"),
+        Cell("lab_hallway", (("safety_distance", 0.7),)))))
 
 #: The assignments, by name.
 ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (HOMEWORK, LAB)}

@@ -136,14 +136,15 @@ class ManeuverSpec:
 
 #: The arenas with something ahead to trigger a front maneuver (the lone object first: the default check-off).
 _FRONT_ARENAS = ("lab_object", "lab_appearing", "lab_cluttered", "lab_dead_end", "lab_narrow_gap", "lab_passerby",
-                 "lab_side")
+                 "lab_side", "lab_beside")
 MANEUVER_SPECS: dict[str, ManeuverSpec] = {spec.letter: spec for spec in (
     ManeuverSpec("A", "Randomizer", ("randomizer",), "RandomizerManeuver", "Randomizer", "ManeuverA",
                  Trigger("front", "safety_distance"), AngleRule(90.0, 180.0), _FRONT_ARENAS,
                  Purpose("search", "to find a new path")),
     ManeuverSpec("B", "Retreat", ("retreat",), "RetreatManeuver", "Retreat", "ManeuverB",
                  Trigger("sides", "safety_distance"), AngleRule(180.0, 180.0),
-                 ("lab_dead_end", "lab_cluttered", "lab_narrow_gap"), Purpose("exit", "to exit the narrow space")),
+                 ("lab_dead_end", "lab_cluttered", "lab_narrow_gap", "lab_hallway"),
+                 Purpose("exit", "to exit the narrow space")),
     ManeuverSpec("C", "Smart Pivot", ("smart_pivot", "smartpivot", "pivot"), "SmartPivotManeuver", "SmartPivot",
                  "ManeuverC", Trigger("front", "pivot_distance", or_braked_at="safety_distance"),
                  AngleRule(90.0, 90.0, side="clearer"), _FRONT_ARENAS,

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -317,11 +318,14 @@ def test_maze_loops_remove_walls_and_seeds_differ() -> None:
 # get the generic checks (documented, spawn clear even jittered, closed) and their own: what each header
 # promises to check off lies straight ahead within 1.5 m of creeping.
 LAB_WORLDS = list_worlds("lab")
+#: Arenas that start the robot beside a wall on purpose (a side reading < 0.3 m at the arming), and the clearance
+#: they keep from it at the worst spawn jitter instead of 0.1 m.
+NEAR_START = {"lab_beside": 0.03}
 
 
 def test_lab_arenas_are_listed_apart() -> None:
     assert set(LAB_WORLDS) == {"lab_object", "lab_dead_end", "lab_narrow_gap", "lab_cluttered", "lab_appearing",
-                               "lab_passerby", "lab_side"}
+                               "lab_passerby", "lab_side", "lab_beside", "lab_hallway"}
     assert not set(LAB_WORLDS) & set(list_worlds())
     assert sorted(list_worlds() + LAB_WORLDS) == list_worlds("all")
 
@@ -336,7 +340,8 @@ def test_lab_arena_is_documented_closed_and_clear(name: str) -> None:
     full = world_from_dict({**_raw(name), "boxes": [{k: v for k, v in b.items() if k != "appear_within"}
                                                      for b in _raw(name).get("boxes", [])]})
     x, y, _ = w.spawn
-    assert full.clearance(x, y) - DEFAULT_JITTER[0] * math.sqrt(2) > ROBOT_RADIUS + 0.1
+    margin = NEAR_START.get(name, 0.1)
+    assert full.clearance(x, y) - DEFAULT_JITTER[0] * math.sqrt(2) > ROBOT_RADIUS + margin
     g = Grid(w)
     assert g.reach.any()
     assert not (g.reach[0, :].any() or g.reach[-1, :].any() or g.reach[:, 0].any() or g.reach[:, -1].any())
@@ -376,3 +381,27 @@ def test_lab_arena_triggers_what_it_checks_off_within_reach(name: str) -> None:
         assert first.get(maneuver, math.inf) <= 1.5, f"{name}: {maneuver}'s trigger not reached ({first})"
     if "B" not in w.checkoff_maneuvers:
         assert "B" not in first  # the header says B cannot be checked off: nothing squeezes both sides
+
+
+def _reading_at_spawn(name: str, dx: float, dy: float, dyaw: float) -> Any:
+    """The check-off judge's readings at the spawn moved by (dx, dy, dyaw deg)."""
+    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+
+    w = load_world(name)
+    x, y, yaw = w.spawn
+    return CheckoffJudge(CheckoffConfig(), w, update_world=False)._read(x + dx, y + dy, yaw + math.radians(dyaw))
+
+
+@pytest.mark.parametrize(("name", "side", "b_graded"), [("lab_beside", 0.3, False), ("lab_hallway", 0.5, True)])
+def test_the_wall_beside_the_start_is_near_one_side_and_no_front_sees_it(name: str, side: float,
+                                                                         b_graded: bool) -> None:
+    """At every corner of the spawn jitter: the left within ``side`` (C's 0.3 m, B's 0.5 m) and the widest front
+    beyond 0.75 m (A's safety_distance 0.7 and its margin), and where B is graded the right beyond 0.75 m too, so a
+    node that fires on a side or the whole scan there is judged "its trigger did not hold" at either distance."""
+    m, deg = DEFAULT_JITTER
+    for dx in (-m, m):
+        for dy in (-m, m):
+            for dyaw in (-deg, deg):
+                r = _reading_at_spawn(name, dx, dy, dyaw)
+                assert r.left_abeam < side and r.front > 0.75, (dx, dy, dyaw, r)
+                assert r.right > 0.75 or not b_graded, (dx, dy, dyaw, r)

@@ -152,7 +152,7 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
         judge["lidar"] = job.lidar
     # the trigger the node was given (as a TA's launch file gives it) is the one it is judged by
-    judge.update(assignment.judge.given(dict(settings.node_params), assignment.judge.launch_shared))
+    judge.update(assignment.judge.given(dict(job.params_over(settings.node_params)), assignment.judge.launch_shared))
     specs = nodes(assignment.graph, world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
     return host_judge([spec for spec in specs if spec.executable != "executive"])[0]
@@ -346,7 +346,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
     results_json = run_dir / "verdict.json"
     session = MissionSession(domain, run_dir=run_dir, tee=sink, stop=stop, driver="node")
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
-                                                                  settings.profile, settings.node_params))
+                                                          settings.profile, job.params_over(settings.node_params)))
     started = time.monotonic()
     recorder = None
     node = None
@@ -380,6 +380,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         if notes:
             row["notes"] = notes
     row.update({"job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
+                "cell_params": dict(job.node_params), "node_params": dict(job.params_over(settings.node_params)),
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})
     row.update(bag_row(run_dir, recorder, (row.get("verdict") or {}).get("t0_sim")))
