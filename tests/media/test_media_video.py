@@ -52,3 +52,31 @@ def test_bad_bag_exits_2_naming_the_file(tmp_path: Path, content: bytes, capsys:
     assert video_main([str(bad), "-o", str(tmp_path / "x.mp4")]) == 2
     assert "bad.mcap" in capsys.readouterr().err
     assert not (tmp_path / "x.mp4").exists()
+
+
+def test_a_scripted_console_is_drawn_and_recorded_frame_by_frame(mission_bag: Path, tmp_path: Path) -> None:
+    """A hand-in's console (a script: pinned head, lines in time order on the sim clock): the sidecar lists, per frame
+    of the MP4, the rows drawn; each frame read back has ink in its console and the simulation label."""
+    import imageio_ffmpeg
+
+    from bt_nav.media.console import ConsoleScript, console_log_path, read_console_log
+    from bt_nav.media.video import CONSOLE_BG, CONSOLE_Y, write_video
+
+    rec = read_bag(mission_bag)
+    script = ConsoleScript(("$ python3 node.py --ros-args -p maneuver:=C", "# stands in for: ros2 launch p f.py"),
+                           ((6.0, "[INFO] [node]: later"), (1.0, "[INFO] [node]: started")))
+    out = tmp_path / "handin.mp4"
+    stats = write_video(rec, out, 5.0, world_of(rec), script=script, console_log=console_log_path(out))
+    frames = read_console_log(tmp_path / "handin.console.json")
+    assert len(frames) == stats.frames == imageio_ffmpeg.count_frames_and_secs(str(out))[0]
+    assert all(rows[:2] == list(script.head) for _, rows in frames)
+    assert [rows[2:] for t, rows in frames if t >= 6.0][0] == ["[sim   1.00 s] [INFO] [node]: started",
+                                                               "[sim   6.00 s] [INFO] [node]: later"]
+    assert all(len(rows) == 2 for t, rows in frames if t < 1.0)
+    reader = imageio_ffmpeg.read_frames(str(out))
+    width, height = next(reader)["size"]
+    for raw in reader:
+        img = np.frombuffer(raw, np.uint8).reshape(height, width, 3).astype(int)
+        assert (np.abs(img[CONSOLE_Y:] - CONSOLE_BG).sum(axis=2) > 120).mean() > 0.005  # text in the console
+        label = img[MAP_H - 26:MAP_H - 2, 4:170]
+        assert (label.sum(axis=2) < 450).mean() > 0.02  # "simulation (bt_nav)" in dark ink on its white box
