@@ -6,7 +6,8 @@ beside the simulator and the executive.
 
 It judges any robot node with the lab's interface, not only bt_nav's: it calls its ``toggle_navigation``
 (std_srvs/SetBool; parameter ``activate_service``, relative so a namespace or a remap moves it) as the
-judge's schedule says (static 5 s, true, 60 s armed, false, 1 s grace, 3 s static, report); it reads
+judge's schedule says (static 5 s, true, 60 s armed with one toggle cycle inside: false 1 s after the first maneuver
+ends and true 5 s later, false, 1 s grace, 3 s static, report); it reads
 ground truth (``ground_truth_odom``), the simulator's ``collisions`` and every ``cmd_vel`` the robot
 publishes (Twist or TwistStamped, found on the graph; ``cmd_vel_type`` forces one); and it casts its
 noise-free trigger readings in its own copy of the simulator's world (parameters ``world`` and ``seed``, as
