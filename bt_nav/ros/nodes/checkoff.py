@@ -17,9 +17,10 @@ judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), write
 
 What the robot node logs (``/rosout``, rcl_interfaces/Log; any node not bt_nav's own infrastructure, the judge's and
 the simulator's lines excluded) goes to the judge as announcements (``on_announcement``): any words, only their
-times count, as marks where the node began a new maneuver within one continuous rotation. A line's stamp is the
-node's clock (sim time under ``use_sim_time``); a stamp more than ``LOG_STAMP_SLACK`` s off the judge's clock (a node
-on the wall clock) is replaced by the time the line arrived.
+times count, as marks where the node began a new maneuver within one continuous rotation. rclpy stamps a
+``/rosout`` line with the wall clock even under ``use_sim_time`` (rcutils' system time; measured), so a line is timed
+by its arrival on the judge's sim clock; a stamp within ``LOG_STAMP_SLACK`` s of that clock (a node that logs on sim
+time) is taken as it is.
 
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
 7.30 s)``) is :class:`bt_nav.ros.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
@@ -49,7 +50,7 @@ from bt_nav.ros.runner import param_args, run_node
 NODE_NAME = LAB.judge.node_name
 
 _DEFAULTS = CheckoffConfig()
-#: s: a log line stamped further than this from the judge's clock is timed by its arrival instead (wall-clock node).
+#: s: a log line stamped further than this from the judge's clock (rclpy's wall-clock stamps) is timed by its arrival.
 LOG_STAMP_SLACK = 2.0
 
 
