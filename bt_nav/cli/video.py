@@ -4,7 +4,9 @@ The frame shows the world, robot, scan, trajectory, the 1.5 m circle, the active
 distance, the tree coloured by status and the mission's log lines (:mod:`bt_nav.media.video`). The
 encoder is imageio-ffmpeg's bundled ffmpeg: no system ffmpeg needed. ``--still`` writes one frame as
 PNG and ``--plot`` the trajectory picture (:func:`bt_nav.media.plot.plot_run`) from the same bag. Every time
-shown, and ``--at``, counts sim seconds since the bag's first /clock (:data:`bt_nav.media.video.TIME_BASE`).
+shown, and ``--at``, counts sim seconds since the bag's first /clock (:data:`bt_nav.media.video.TIME_BASE`). Every
+frame says it is a simulation (:data:`bt_nav.media.console.SIM_LABEL`); a hand-in's film, with the student's
+terminal as its console, is ``bt-nav demo --exe``'s (:mod:`bt_nav.grading.handin_film`).
 """
 
 from __future__ import annotations
