@@ -260,8 +260,3 @@ def report_lines(res: dict[str, Any]) -> list[str]:
     lines.append(f"overall: {'PASSED' if res['passed'] else 'FAILED'}")
     return lines
 
-
-def angle_of(res: dict[str, Any], number: int) -> float:
-    """The signed angle (deg, + = left) of maneuver ``number`` as judged (NaN if there is none)."""
-    m = res.get("maneuvers", [])
-    return float(m[number - 1]["angle_deg"]) if 0 < number <= len(m) else math.nan
