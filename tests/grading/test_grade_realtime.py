@@ -338,3 +338,20 @@ def test_pace_drops_are_read_from_the_simulators_log() -> None:
     line = ("[INFO] [1795784742.318214010] [bt_nav_sim]: cmd_vel silent or holding too long (t=65.45 s): not waiting "
             "for it until it speaks again\n[INFO] [1795784743.275132263] [bt_nav_sim]: following cmd_vel (t=69.37 s)")
     assert pace_drops(line) == [65.45]
+
+
+def test_the_slip_of_a_real_stalled_run_is_found_before_the_maneuver_it_split() -> None:
+    """Recorded from a real run (2026-11-27, ``varying_node.py --odd stall --stall 1.5 --choice C``, lab_object, 5x):
+    the node was not scheduled for 1.5 s wall right after its first turn command; the judge saw its one turn as
+    maneuver 1 (89 deg, passed) and maneuver 2 (2 deg, failed). The simulator's drops (sim s, not from t0): 19.45
+    (the stall, inside maneuver 1), 23.45 (after maneuver 2), 65.65 (after the disarm)."""
+    sim_log = "\n".join(f"[INFO] [1795785025.871338346] [bt_nav_sim]: cmd_vel silent or holding too long (t={t} s): "
+                        "not waiting for it until it speaks again" for t in ("19.45", "23.45", "65.65"))
+    verdict = {"t0_sim": 0.26, "times": {"activated": 5.0, "deactivation_requested": 65.0},
+               "maneuvers": [{"t": 18.97, "settled": 21.6, "side": "right", "angle_deg": -89.04, "passed": True},
+                             {"t": 21.6, "settled": 21.74, "side": "right", "angle_deg": -2.02, "passed": False},
+                             {"t": 62.99, "settled": 65.24, "side": "left", "angle_deg": 75.56, "passed": True}]}
+    assert realtime.slipped_timing(verdict, pace_drops(sim_log)) == (
+        "the simulator stopped waiting for the node's commands at t=19.2 s, before maneuver 2, which failed "
+        "(t=21.6-21.7 s): the node sent nothing for a wall second")
+    assert realtime.slipped_timing(verdict, pace_drops(sim_log)[1:]) is None  # the other two are no slip
