@@ -277,7 +277,10 @@ def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: 
     if wall is not None and slow is not None and slow["passed"]:
         said = f"{head}: {wall_clock_finding(wall)}; graded at 1x"
         return _regraded(slow, fast, {**record, "decision": "wall clock", "said": said}, said), said
-    differed = next((d for r, _ in runs if (d := decisions_differ(fast.get("verdict"), r.get("verdict")))), None)
+    # the decisions are compared at the same speed (at 1x a wall-clock node's turns differ for its clock); at 1x
+    # only when the run at the grade's speed did not end with a verdict
+    twin = again if again is not None else slow
+    differed = decisions_differ(fast.get("verdict"), twin.get("verdict")) if twin is not None else None
     if differed is not None:
         why = (f"the runs differed ({differed}): a re-run that passes does not overturn a failure of a node whose "
                "decisions change from run to run" if passing else f"the runs differed ({differed})")

@@ -355,3 +355,16 @@ def test_the_slip_of_a_real_stalled_run_is_found_before_the_maneuver_it_split() 
         "the simulator stopped waiting for the node's commands at t=19.2 s, before maneuver 2, which failed "
         "(t=21.6-21.7 s): the node sent nothing for a wall second")
     assert realtime.slipped_timing(verdict, pace_drops(sim_log)[1:]) is None  # the other two are no slip
+
+
+def test_decisions_are_compared_at_the_grades_speed() -> None:
+    """A node whose turn is five times too long at 5x and that fails at 1x too (its angle wrong at any speed): the
+    1x run's turns differ for the clock, not for a decision; the same-speed re-run made the same turns, so the words
+    are that it failed again, not that the runs differed."""
+    fast = _failed(0, _turning(("left", 450.0), passed=False), "failed: maneuver 1 turned 450 deg left")
+    again = _failed(0, _turning(("left", 455.0), passed=False), "failed: maneuver 1 turned 455 deg left")
+    slow = _failed(0, _turning(("left", 45.0), passed=False), "failed: maneuver 1 turned 45 deg left")
+    row, said = realtime.decide(fast, again, slow, 5.0, None)
+    assert not row["passed"] and said.endswith(": it failed again; the failure stands"), said
+    row, said = realtime.decide(fast, None, slow, 5.0, None)  # no run at 5x: the 1x run is all there is to compare
+    assert "the runs differed (maneuver 1 turned 450 deg left in the failed run, 45 deg left" in said, said
