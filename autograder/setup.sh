@@ -4,9 +4,10 @@
 # weights.yaml if you put one in autograder/).
 #
 # It installs Python (3.11 or newer: pick a base image that has it, e.g. Ubuntu 24.04), a virtual environment
-# with bt_nav from the zip's wheel and ROS 2 Jazzy's rclpy and messages as pip wheels (no ROS install, no sourcing).
-# Every path can be changed by an environment variable (BT_NAV_AUTOGRADER_SOURCE, BT_NAV_AUTOGRADER_VENV); a
-# wheels/ folder in the zip is searched first (for a machine that cannot reach the package index).
+# with bt_nav from the zip's wheel, its dependencies (matplotlib; ROS 2 Jazzy's rclpy and messages as pip wheels: no
+# ROS install, no sourcing). Environment: BT_NAV_AUTOGRADER_SOURCE (the unzipped autograder, default
+# /autograder/source), BT_NAV_AUTOGRADER_VENV (default /autograder/venv), BT_NAV_AUTOGRADER_APT (default 1; 0 skips
+# apt-get). A wheels/ folder in the zip is searched first (for a machine that cannot reach the package index).
 set -euo pipefail
 
 SOURCE="${BT_NAV_AUTOGRADER_SOURCE:-/autograder/source}"

@@ -44,6 +44,8 @@ from bt_nav.grading.scores import (
     unscored,
 )
 
+#: A student's failures shown before the rest fold away ("N more failures").
+FAILURES_SHOWN = 3
 #: The verdicts' order on the page (failures first) and their CSS class.
 VERDICT_ORDER = {FAILED: 0, NOT_GRADED_VERDICT: 1, PASSED: 2}
 VERDICT_CLASS = {FAILED: "v-failed", NOT_GRADED_VERDICT: "v-notgraded", PASSED: "v-passed"}
@@ -66,6 +68,8 @@ PAGE_STYLE = STYLE + """
  .ta { background: #fff3c4; padding: 1px 4px; }
  details summary { cursor: pointer; color: #555; }
  tr.hidden { display: none; }
+ td.failures { min-width: 24em; }
+ th.cell, td.rate { font-size: 0.85em; }
 """
 
 #: The page's script: filters (verdict, reason, name) and sorting by any column with a ``data-key``.
@@ -187,7 +191,11 @@ def _failures(record: dict[str, Any], folder: str) -> list[str]:
         what = "not graded" if run_not_graded(row) else str(row.get("outcome"))
         why = str(row.get(NOT_GRADED) or row.get("reason", "?")).removeprefix("not graded: ")
         out.append(f'<div class="fail"><b>{html.escape(what)}</b> (not the node\'s; not scored): {md_html(why)}</div>')
-    return out + _launch_failures(record)
+    out += _launch_failures(record)
+    if len(out) > FAILURES_SHOWN + 1:
+        out[FAILURES_SHOWN:] = [f"<details><summary>{len(out) - FAILURES_SHOWN} more failures</summary>"
+                                + "".join(out[FAILURES_SHOWN:]) + "</details>"]
+    return out
 
 
 def _passed_lines(row: dict[str, Any], record: dict[str, Any], shared: set[str]) -> list[str]:
@@ -239,7 +247,7 @@ def _row(order: int, row: dict[str, Any], record: dict[str, Any], cells: Sequenc
             f'<td class="verdict {VERDICT_CLASS[verdict]}">{verdict}</td>'
             f'<td class="num">{"-" if got is None else f"{round(got, 1):g}"} / {weights.total:g}</td>'
             f'<td class="num">{passed}/{len(runs)}</td><td class="num">{launch}</td>{_cells(row, cells)}'
-            f"<td>{''.join(_failures(record, str(row.get('dir', row['name']))))}{details}</td></tr>")
+            f"<td class=\"failures\">{''.join(_failures(record, str(row.get('dir', row['name']))))}{details}</td></tr>")
 
 
 def _rank(row: dict[str, Any], record: dict[str, Any], weights: Weights) -> tuple[int, float, str]:
@@ -260,7 +268,7 @@ def class_page_html(doc: dict[str, Any], records: dict[str, dict[str, Any]], wei
     body = [_row(i, r, records[r["name"]], cells, weights, shared) for i, r in enumerate(rows)]
     head = ('<th class="sort" data-key="name">student</th><th class="sort" data-key="rank">hand-in</th>'
             '<th class="sort" data-key="score">score</th><th class="sort" data-key="runs">runs passed</th>'
-            "<th>launch file</th>" + "".join(f"<th>{esc(c)}</th>" for c in cells)
+            "<th>launch file</th>" + "".join(f'<th class="cell">{esc(c)}</th>' for c in cells)
             + "<th>failures (what passed: folded)</th>")
     options = "".join(f'<option value="{esc(v)}">{esc(v)} ({verdicts.get(v, 0)})</option>' for v in VERDICT_ORDER)
     reasons = "".join(f'<option value="{esc(k)}">{esc(k)}</option>' for k in kinds)
@@ -268,7 +276,7 @@ def class_page_html(doc: dict[str, Any], records: dict[str, dict[str, Any]], wei
     said = "".join(f"<p class=\"note\">Every hand-in: {md_html(n)}</p>" for n in sorted(shared))
     return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>{esc(title)}</title>'
             f"<style>{PAGE_STYLE}</style></head><body><h1>{esc(title)}</h1>"
-            f'<p class="counts">{len(rows)} students: {counts}</p>{said}'
+            f'<p class="counts">{len(rows)} student{"" if len(rows) == 1 else "s"}: {counts}</p>{said}'
             f'<div class="controls"><label>hand-in <select id="f-verdict"><option value="">all</option>{options}'
             f'</select></label><label>reason <select id="f-reason"><option value="">any</option>{reasons}</select>'
             f'</label><label>student <input id="f-name" type="search" placeholder="name"></label>'
