@@ -34,7 +34,6 @@ from bt_nav.grading.scores import (
     PASSED,
     Weights,
     check_counts,
-    check_line,
     check_not_checked,
     graded_runs,
     handin_verdict,
@@ -155,20 +154,24 @@ def _run_link(row: dict[str, Any], folder: str) -> str:
 
 
 def _launch_failures(record: dict[str, Any]) -> list[str]:
-    """The launch-file checks that failed (one line when all failed alike: no file, a syntax error) and those a TA
-    must look at."""
+    """The launch-file checks that failed, in the words of the terminal's lines (one line when all failed alike: no
+    file, a syntax error), and those a TA must look at."""
     checks = launch_checks(record)
     failed = [c for c in checks if not check_counts(c)]
+
+    def at(check: dict[str, Any]) -> str:
+        if not check.get("line"):
+            return ""
+        return f"{check['file']}:{check['line']}: " if check.get("file") else f"line {check['line']}: "
+
     out = [f'<div class="fail"><span class="ta">TA: look at the launch file</span> '
-           f"{html.escape(str(c.get('name')))}: {md_html(str(c.get('reason', '')))}</div>"
+           f"{html.escape(str(c.get('name')))}: {md_html(at(c) + str(c.get('reason', '')))}</div>"
            for c in checks if check_not_checked(c)]
     if failed and len(failed) == len(checks) and len({str(c.get("reason")) for c in failed}) == 1:
-        return [f'<div class="fail"><b>launch file:</b> FAILED: {md_html(str(failed[0].get("reason", "")))}</div>']
-    for check in failed:
-        line = f" ({check_line(check)})" if check.get("line") else ""
-        out.append(f'<div class="fail"><b>launch file:</b> {html.escape(str(check.get("name")))} FAILED: '
-                   f"{md_html(str(check.get('reason', '')))}{line}</div>")
-    return out
+        return [f'<div class="fail">launch file: FAILED ({md_html(at(failed[0]) + str(failed[0].get("reason")))})'
+                "</div>"]
+    return out + [f'<div class="fail">launch file: {html.escape(str(c.get("name")))}: FAILED '
+                  f"({md_html(at(c) + str(c.get('reason', '')))})</div>" for c in failed]
 
 
 def _failures(record: dict[str, Any], folder: str) -> list[str]:

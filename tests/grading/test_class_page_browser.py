@@ -57,7 +57,8 @@ def test_the_class_page_in_chromium(tmp_path: Path) -> None:
             assert next(r for r in rows if r["name"] == "fay")["score"] == "- / 100"  # not graded: no score
 
             ann_row = page.locator('tr[data-name="ann"]')
-            assert "declares safety_distance (default 0.5) FAILED" in ann_row.inner_text()
+            assert "launch file: declares safety_distance (default 0.5): FAILED (no DeclareLaunchArgument(" in \
+                ann_row.inner_text()
             assert not ann_row.locator("details").evaluate("d => d.open")  # what passed is folded
             assert "launch file: starts the node: PASSED" in ann_row.locator("details").text_content()
             bob = page.locator('tr[data-name="bob"]').inner_text()
@@ -67,6 +68,7 @@ def test_the_class_page_in_chromium(tmp_path: Path) -> None:
                 "bob/report.html#lab_object_C_lds01_seed0"  # each failure links to its run in the report
             eve = page.locator('tr[data-name="eve"]').inner_text()  # three checks failed alike: said once
             assert eve.count("no launch file handed in") == 1 and "not run: no reactive_navigator.py" in eve, eve
+            assert "launch file: FAILED (no launch file handed in)" in eve, eve
             assert "not graded (not the node's; not scored): another program" in \
                 page.locator('tr[data-name="fay"]').inner_text()
             # the note every hand-in shares is said once, as code, not on every row
