@@ -4,11 +4,13 @@ A grader is judged by two things: it fails every wrong node for its real reason 
 fixture's ``--mistake`` copies) and it never fails a right one (the correct-variant suite: the fixture's
 ``--variant`` nodes, each a reasonable reading of the lab sheet, written the ways students write them). This
 command grades both over real DDS, as an instructor grades a class (``bt-nav grade --class``, one class per lab
-choice), and prints one table::
+choice for the right nodes and one per choice for its mistakes, each on the choice's default grid: the cells a
+class is graded on must catch the mistakes), and prints one table::
 
     python tests/grader_suite.py                      # every variant and mistake, three LiDARs, --jobs auto
     python tests/grader_suite.py --hogs 2             # the same with two CPU hogs running
     python tests/grader_suite.py --compare runs/grader-suite/confusion.json --out runs/grader-suite-loaded
+    python tests/grader_suite.py --only mistakes --mistakes left_or_right,ignores_safety_distance --lidars lds01
 
 ``--compare`` names every run whose verdict differs from an earlier suite's (the verdicts must not depend on the
 machine's load). ``make grader-suite`` runs the first line. Written: ``<out>/confusion.json`` (every run's verdict)
@@ -31,11 +33,13 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from bt_nav.grading.grid import cell_label
+
 FIXTURE = Path(__file__).resolve().parent / "fixtures" / "lab_student_node.py"
-#: The mutation suite: what the grader must say of each mistake (``LAB_C``) and which show on one LiDAR only.
+#: The mutation suite: what the grader must say of each choice's mistakes (``LAB_BY_CHOICE``) and which show on one
+#: LiDAR only. Each choice's mistakes are graded in the choice's default grid (``--maneuvers X``, no ``--worlds``):
+#: the grid a class is graded on must catch them.
 MUTANTS = Path(__file__).resolve().parent / "ros" / "test_mutants.py"
-#: The mistakes' arena and choice, as the mutation suite grades them (a box to the side: C has a side to pick).
-MISTAKE_GRID = ("--maneuvers", "C", "--worlds", "lab_side")
 
 
 def _load(path: Path) -> ModuleType:
@@ -52,24 +56,38 @@ def fixture() -> ModuleType:
     return _load(FIXTURE)
 
 
-def expectations() -> tuple[dict[str, str], dict[str, tuple[str, str]]]:
-    """The mutation suite's table: each mistake's reason (a regex), and the (right, wrong) LiDAR of those that only
-    some LiDARs show."""
+Expected = dict[str, dict[str, tuple[str, str | None]]]
+
+
+def expectations() -> tuple[Expected, dict[str, tuple[str, str]]]:
+    """The mutation suite's table: per choice, each mistake's reason (a regex) and the cells it must fail in (a
+    regex on the cell's label; None: every cell); and the (right, wrong) LiDAR of those only some LiDARs show."""
     mutants = _load(MUTANTS)
-    return mutants.LAB_C, mutants.BY_LIDAR
+    return mutants.LAB_BY_CHOICE, mutants.BY_LIDAR
 
 
-def classes(node: ModuleType, variants: Sequence[str], mistakes: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """The classes to grade: one per lab choice of the right variants, one of the mistakes (choice C)."""
+def mistake_student(choice: str, mistake: str) -> str:
+    """A mistake's student name in its choice's class (and in the matrix): ``A_front_is_whole_scan``."""
+    return f"{choice}_{mistake}"
+
+
+def classes(node: ModuleType, variants: Sequence[str], mistakes: Sequence[str],
+            choices: Sequence[str] = "ABC") -> dict[str, dict[str, Any]]:
+    """The classes to grade, each on its choice's default grid: one per lab choice of the right variants, one per
+    choice of that choice's mistakes (those among ``mistakes`` the mutation suite expects of it)."""
     command = f"{sys.executable} {FIXTURE}"
     out: dict[str, dict[str, Any]] = {}
     for name in variants:
         choice = node.VARIANTS[name][0]
         right = out.setdefault(f"right_{choice}", {"grid": ("--maneuvers", choice), "students": {}})
         right["students"][name] = f"{command} --variant {name}"
-    if mistakes:
-        out["mistakes"] = {"grid": MISTAKE_GRID,
-                           "students": {name: f"{command} --choice C --mistake {name}" for name in mistakes}}
+    table = expectations()[0]
+    for choice in choices:
+        wanted = [name for name in mistakes if name in table[choice]]
+        if wanted:
+            out[f"mistakes_{choice}"] = {"grid": ("--maneuvers", choice), "students": {
+                mistake_student(choice, name): f"{command} --choice {choice} --seed 1 --mistake {name}"
+                for name in wanted}}
     return out
 
 
@@ -93,8 +111,7 @@ def judged(kind: str, student: str, rows: list[dict[str, Any]]) -> dict[str, Any
     """One student's line of the matrix: how it came out and, where it came out wrong, why. A right node must pass
     every run; a mistake must fail every run for its own reason (:func:`expectations`), except one that only some
     LiDARs show (it must pass with the one it reads right and fail with the other)."""
-    runs = [{"cell": " ".join(str(r.get(k) or "") for k in ("world", "maneuver", "lidar")).strip(),
-             "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]),
+    runs = [{"cell": cell_label(r), "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]),
              "reason": r["reason"]} for r in rows]
     if not runs:
         return {"student": student, "kind": kind, "outcome": "not graded", "runs": runs, "wrong": ["no runs"]}
@@ -102,14 +119,21 @@ def judged(kind: str, student: str, rows: list[dict[str, Any]]) -> dict[str, Any
         wrong = [f"{r['cell']} seed {r['seed']}: {r['reason']}" for r in runs if not r["passed"]]
         return {"student": student, "kind": kind, "outcome": "failed" if wrong else "passed", "runs": runs,
                 "wrong": wrong}
-    must_say, by_lidar = expectations()
-    pattern, (good, bad) = must_say[student], by_lidar.get(student, (None, None))
-    wrong = []
+    table, by_lidar = expectations()
+    choice, mistake = student.split("_", 1)
+    pattern, cells = table[choice][mistake]
+    good, bad = by_lidar.get(mistake, (None, None))
+    wrong, judged_runs = [], 0
     for r in runs:
+        if cells is not None and not re.search(cells, r["cell"]):
+            continue  # a cell where this mistake does not show: not held against the grader either way
+        judged_runs += 1
         if r["lidar"] == good and not r["passed"]:
             wrong.append(f"{r['cell']}: failed with the LiDAR it reads right ({r['reason']})")
         elif (good is None or r["lidar"] == bad) and (r["passed"] or not re.search(pattern, r["reason"])):
             wrong.append(f"{r['cell']}: {'PASSED' if r['passed'] else r['reason']}")
+    if not judged_runs:
+        wrong.append(f"no run in the cells it must fail in ({cells})")
     return {"student": student, "kind": kind, "outcome": "failed for its reason" if not wrong else "wrong",
             "runs": runs, "wrong": wrong}
 
@@ -159,8 +183,9 @@ def parse(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--out", type=Path, default=Path("runs/grader-suite"))
     parser.add_argument("--only", choices=("all", "right", "mistakes"), default="all")
     parser.add_argument("--variants", default="", help="comma-separated variant names (default: every one)")
-    parser.add_argument("--mistakes", default="", help="comma-separated mistakes (default: every one but "
-                                                       "ignores_safety_distance, which needs a TA's parameter)")
+    parser.add_argument("--mistakes", default="", help="comma-separated mistakes (default: every one the mutation "
+                                                       "suite expects of a choice, each graded as that choice)")
+    parser.add_argument("--choices", default="ABC", help="the lab choices whose mistakes are graded (e.g. AB)")
     parser.add_argument("--lidars", default="lds01,lds02,rplidar")
     parser.add_argument("--seeds", default="1")
     parser.add_argument("--jobs", default="auto")
@@ -175,15 +200,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     node = fixture()
     variants = [v for v in args.variants.split(",") if v] or list(node.VARIANTS)
-    mistakes = [m for m in args.mistakes.split(",") if m] or list(expectations()[0])
-    todo = classes(node, variants if args.only != "mistakes" else [], mistakes if args.only != "right" else [])
+    mistakes = [m for m in args.mistakes.split(",") if m] or sorted({m for t in expectations()[0].values() for m in t})
+    todo = classes(node, variants if args.only != "mistakes" else [], mistakes if args.only != "right" else [],
+                   args.choices)
     # at --rtf 5 only: a right node must pass there on its own (the 1x re-run would hide a grader that fails it)
     options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
                "--realtime-check", "off", "--progress", "off"]
     lines = []
     with cpu_hogs(args.hogs):
         for name, spec in todo.items():
-            kind = "mistake" if name == "mistakes" else "right"
+            kind = "mistake" if name.startswith("mistakes") else "right"
             for student, rows in grade_class(name, spec, options, args.out).items():
                 lines.append(judged(kind, student, rows))
     args.out.mkdir(parents=True, exist_ok=True)

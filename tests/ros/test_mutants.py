@@ -44,6 +44,32 @@ LAB_C = {
 #: Mistakes only one of the LiDARs shows: (the LiDAR it passes with, the one it fails with). Fixed indices read the
 #: LDS-01 right and the RPLIDAR's rear as its front; a 0.0 is "no return" only on the LDS-01.
 BY_LIDAR = {"hardcoded_indices": ("lds01", "rplidar"), "zero_is_obstacle": ("rplidar", "lds01")}
+#: Each choice's mistakes as the choice's default grid grades them (``--maneuvers X`` without ``--worlds``: the lab's
+#: cells, bt_nav.mission.assignments.LAB.exe_grid): mistake -> (what its failing runs must say, the cells it must
+#: fail in: a regex on the cell's label, None for every cell). Elsewhere a mistake may not show (a node ignoring
+#: safety_distance is right where it is 0.5 m; left OR right fires with both sides near too).
+NOT_HELD = r"turned although its trigger did not hold \(front"
+_EVERY_CHOICE = {name: (LAB_C[name], None) for name in (
+    "ignores_toggle_off", "no_stop_on_toggle_off", "moves_before_toggle", "forward_while_turning",
+    "never_stops_turning", "wrong_topic", "twist_stamped", "no_safety_param")}
+LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
+    "A": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
+          "front_is_whole_scan": (NOT_HELD, "lab_beside"),
+          "ignores_safety_distance": (r"turned late: it crept on 0\.[12]\d m", "safety_distance=0.7"),
+          "spins_360": (r"turned 3[5-7]\d deg \w+; the Randomizer needs 80-190 deg", None),
+          "spins_until_clear": (r"turned \d+ deg \w+; the Randomizer needs 80-190 deg", "lab_object|lab_dead_end")},
+    "B": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
+          "half_angle": (r"turned [89]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
+          "left_or_right": (r"turned although its trigger did not hold \(left", "lab_hallway"),
+          "ignores_safety_distance": (r"turned late: it crept on", "safety_distance=0.7"),
+          "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
+          "respins_forever": (r"never moved on: \d+ Retreats back to back \(\d+ deg in place\)", "lab_dead_end")},
+    "C": {**_EVERY_CHOICE, **{name: (LAB_C[name], None) for name in (
+              "hardcoded_indices", "zero_is_obstacle", "half_angle", "no_trigger")},
+          "wrong_side": (LAB_C["wrong_side"], "lab_beside"),  # lab_dead_end's sides are alike at the pivot
+          "side_as_front": (NOT_HELD, "lab_beside"),
+          "spins_360": (r"turned 3[5-7]\d deg \w+; the Smart Pivot needs 90 \+- 10 deg", None)},
+}
 #: Homework mistakes and their reasons.
 HOMEWORK_MISTAKES = {
     "moves_before_activation": r"moved before it was activated",
@@ -108,6 +134,37 @@ def test_the_lab_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -
     page = {s["name"]: s for s in result["page"]["students"]}
     assert page["correct"]["passed"] == page["correct"]["runs"] == 2 and result["code"] == 1
     assert (tmp_path / "class" / "class.html").read_text().count('href="') >= len(students)
+
+
+#: The mistakes each choice's default grid is made to catch: a trigger that fires where it must not (a side or the
+#: whole scan for front; left OR right), the side, and safety_distance passed but not read (its cells give 0.7 m).
+DEFAULT_GRID_MISTAKES = {"A": ("front_is_whole_scan", "ignores_safety_distance"),
+                         "B": ("left_or_right", "ignores_safety_distance"), "C": ("side_as_front", "wrong_side")}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("choice", sorted(DEFAULT_GRID_MISTAKES))
+def test_each_choice_s_default_grid_fails_its_trigger_mistakes(tmp_path: Path, choice: str) -> None:
+    """Graded as a class is by default (``--maneuvers X``, no ``--worlds``: the choice's cells, one LiDAR, one seed):
+    the right node passes every cell and applied the parameters each cell passed it; each mistake fails in the cells
+    made for it, for its reason."""
+    from bt_nav.grading.grid import cell_label
+
+    names = DEFAULT_GRID_MISTAKES[choice]
+    students = {"correct": f"{LAB} --choice {choice} --seed 1",
+                **{name: f"{LAB} --choice {choice} --seed 1 --mistake {name}" for name in names}}
+    result = _class(tmp_path, students, "--profile", "lab", "--maneuvers", choice, "--lidars", "lds01")
+    correct = result["grades"]["correct"]["runs"]
+    assert len(correct) == 2 and all(row["passed"] for row in correct), [row["reason"] for row in correct]
+    for row in correct:
+        given = row["parameters"]["given"]
+        assert set(given) == set(row["cell_params"]) and all(p["applied"] for p in given.values()), row["parameters"]
+        assert "safety_distance" in row["parameters"]["nodes"][0]["names"]
+    for name in names:
+        pattern, cells = LAB_BY_CHOICE[choice][name]
+        runs = [row for row in result["grades"][name]["runs"] if cells is None or re.search(cells, cell_label(row))]
+        assert runs and all(not row["passed"] and re.search(pattern, row["reason"]) for row in runs), \
+            [(cell_label(row), row["reason"]) for row in result["grades"][name]["runs"]]
 
 
 @pytest.mark.slow
