@@ -58,7 +58,7 @@ from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this 
 )
 from bt_nav.grading.scores import tests as scored_tests
 
-#: How many failed checks of a run its test's output lists before "and N more".
+#: How many failed checks of a run its test's output lists before "and N more" (and failures, the summary).
 CHECKS_SHOWN = 5
 #: The lines of a crashed node's output its test quotes.
 NODE_LOG_LINES = 12
@@ -195,7 +195,10 @@ def _overall_text(record: dict[str, Any], runs: Sequence[dict[str, Any]], checks
     else:
         judged = [r for r in runs if not unscored(r)]
         lines = [f"**{sum(1 for r in judged if r.get('passed'))}/{len(judged)} runs passed.**"]
-        lines += [f"- {runs_label(group)}: {_md(student_words(reason))}" for reason, group in failure_groups(judged)]
+        groups = failure_groups(judged)
+        lines += [f"- {runs_label(group)}: {_md(student_words(reason))}" for reason, group in groups[:CHECKS_SHOWN]]
+        if len(groups) > CHECKS_SHOWN:
+            lines.append(f"- and {len(groups) - CHECKS_SHOWN} more (each failed test below)")
         errors = len(runs) - len(judged)
         if errors:
             lines.append(f"\n{errors} run(s) without a grade (not your node's failure; not scored): ask for a "
