@@ -67,8 +67,10 @@ ENDING_HINTS = (
 
 #: A file the grader wrote, named in a reason: ``(see node.log)``, ``; see node.log)``.
 _SEE_FILE = re.compile(r"\s*\(see [^()]*\)|;\s*see [\w.-]+\.\w+(?: and [\w.-]+\.\w+)?(?=\))")
-#: An absolute path: said by its last part (a student's own file keeps its name; the grader's folders go).
-_ABSOLUTE = re.compile(r"(?<![\w.])/(?:[^\s/'\"():,;]+/)+([^\s/'\"():,;]+)")
+#: An absolute path in a file system (not a ROS name such as ``/reactive_control/evaluate_mission``): said by its
+#: last part (a student's own file keeps its name; the grader's folders go).
+_ABSOLUTE = re.compile(r"(?<![\w.])/(?:tmp|home|root|autograder|work|usr|opt|var|mnt|srv|Users)/"
+                       r"(?:[^\s/'\"():,;]+/)*([^\s/'\"():,;]+)")
 
 
 def student_words(text: str) -> str:

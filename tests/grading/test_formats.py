@@ -286,3 +286,5 @@ def test_student_words_drop_the_grader_s_files() -> None:
     assert student_words("ValueError: x (node.py:3 in cb; see node.log)") == "ValueError: x (node.py:3 in cb)"
     assert student_words("/autograder/submission/pkg/reactive_navigator.py does not exist") == \
         "reactive_navigator.py does not exist"
+    assert student_words("no call of /reactive_control/evaluate_mission") == \
+        "no call of /reactive_control/evaluate_mission"  # a ROS name is no file
