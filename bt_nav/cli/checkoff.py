@@ -5,7 +5,10 @@
 - from a bag (``--bag BAG``): a real TurtleBot's recording (rosbag2 sqlite3 or MCAP, or a ROS 1 .bag), judged
   offline without DDS from /odom (the pose's yaw, never the twist), /scan as recorded and /cmd_vel
   (:mod:`bt_nav.media.robotbag`, :mod:`bt_nav_sim.recorded`). Same rules, same words; what the bag cannot show
-  (the service calls, unless it holds their events; contact) is listed as not judged.
+  (the service calls, unless it holds their events; contact) is listed as not judged;
+- live beside a real robot (``--robot``): it listens to the same topics for ``--duration`` s or until Ctrl-C
+  (:mod:`bt_nav.ros.nodes.robotcheck`, never publishing, never calling the service), then judges what it heard as
+  a bag of it would be judged.
 
 Exit 0 when the check-off passed, 1 when it failed, 2 on a refused option or an unreadable bag.
 """
@@ -17,9 +20,11 @@ import json
 import sys
 from pathlib import Path
 
-#: Options only a bag can honour, and only the DDS judge.
-BAG_ONLY = ("--bag", "--node", "--from", "--to", "--armed-at", "--odom-topic", "--scan-topic", "--cmd-topic",
-            "--service-topic", "--namespace")
+#: Options of a real robot's data (a bag, or live), of a bag only, of live listening only, and of the DDS judge only.
+ROBOT_ONLY = ("--bag", "--robot", "--node", "--from", "--to", "--armed-at", "--odom-topic", "--scan-topic",
+              "--cmd-topic", "--service-topic", "--namespace", "--duration")
+BAG_ONLY = ("--from", "--to")
+LIVE_ONLY = ("--duration",)
 DDS_ONLY = ("--world", "--seed", "--timeout")
 
 
@@ -38,8 +43,11 @@ def parser() -> argparse.ArgumentParser:
     dds.add_argument("--world", help="the simulator's world (parameter world)")
     dds.add_argument("--seed", type=int, help="the simulator's seed (parameter seed)")
     dds.add_argument("--timeout", type=float, help="wall-clock limit, s (parameter timeout)")
-    bag = p.add_argument_group("from a real robot's bag (no DDS)")
+    bag = p.add_argument_group("a real robot: from its bag (no DDS), or live (--robot)")
     bag.add_argument("--bag", help="the recording: a rosbag2 directory (.db3 or .mcap) or file, or a ROS 1 .bag")
+    bag.add_argument("--robot", action="store_true", help="listen to the robot's topics live (this ROS_DOMAIN_ID), "
+                     "then judge what was heard")
+    bag.add_argument("--duration", type=float, default=0.0, help="with --robot: listen this many s (0: until Ctrl-C)")
     bag.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
     bag.add_argument("--from", dest="start", type=float,
                      help="the check-off starts this many s after t=0 (the first message judged)")
@@ -66,20 +74,25 @@ def main(argv: list[str] | None = None) -> int:
     if "-h" in own or "--help" in own:
         parser().print_help()
         return 0
-    if not _given(own, "--bag"):
-        refused = [o for o in BAG_ONLY if _given(own, o)]
+    modes = [o for o in ("--bag", "--robot") if _given(own, o)]
+    if not modes:
+        refused = [o for o in ROBOT_ONLY if _given(own, o)]
         if refused:
-            print(f"bt-nav checkoff: {', '.join(refused)} only with --bag (a recording to judge)", file=sys.stderr)
+            print(f"bt-nav checkoff: {', '.join(refused)} only with --bag or --robot (a real robot's data to judge)",
+                  file=sys.stderr)
             return 2
         from bt_nav.ros.nodes.checkoff import main as node_main
 
         return node_main(argv)
     refused = [o for o in DDS_ONLY if _given(own, o)] + (["--ros-args"] if own != argv else [])
-    if refused:
-        print(f"bt-nav checkoff: {', '.join(refused)} mean nothing on a bag (the robot's world is the one it "
-              "recorded)", file=sys.stderr)
+    refused += [o for o in (LIVE_ONLY if modes == ["--bag"] else BAG_ONLY) if _given(own, o)]
+    if len(modes) > 1 or refused:
+        what = "--bag and --robot exclude each other" if len(modes) > 1 else \
+            f"{', '.join(refused)} mean{'s' if len(refused) == 1 else ''} nothing with {modes[0]}"
+        why = " (the robot's world is the one it drove in)" if any(o in DDS_ONLY for o in refused) else ""
+        print(f"bt-nav checkoff: {what}{why}", file=sys.stderr)
         return 2
-    return _judge_bag(parser().parse_args(own))
+    return _judge_robot(parser().parse_args(own))
 
 
 def _maneuver(opts: argparse.Namespace) -> str:
@@ -100,25 +113,34 @@ def _maneuver(opts: argparse.Namespace) -> str:
     raise ValueError("which maneuver? give --maneuver X or --node FILE (its '# CHOICE: X' line)")
 
 
-def _judge_bag(opts: argparse.Namespace) -> int:
-    """Read, judge, print; the verdict JSON if asked."""
+def _judge_robot(opts: argparse.Namespace) -> int:
+    """Read the bag (or listen live), judge, print; the verdict JSON if asked."""
     from bt_nav_sim.checkoff_core import CheckoffConfig
     from bt_nav_sim.recorded import Window, judge_recording, odometry_config, report_lines
 
     from bt_nav.media.bag import BagError
-    from bt_nav.media.robotbag import Topics, read_robot_bag
+    from bt_nav.media.robotbag import Topics, read_robot_bag, recording_from
 
+    source = opts.bag or "the live robot"
     try:
         config = CheckoffConfig(maneuver=_maneuver(opts))
         topics = Topics(opts.odom_topic, opts.scan_topic, opts.cmd_topic, opts.service_topic, opts.namespace)
-        rec = read_robot_bag(opts.bag, topics)
+        if opts.robot:
+            from bt_nav.ros.nodes.robotcheck import listen
+
+            how_long = f"for {opts.duration:g} s" if opts.duration > 0 else "until Ctrl-C"
+            print(f"bt-nav checkoff: listening to {', '.join(topics.names().values())} ({how_long})", flush=True)
+            raw, notes = listen(topics.names(), opts.duration)
+            rec = recording_from(raw, topics.names(), notes, source)
+        else:
+            rec = read_robot_bag(opts.bag, topics)
         res = judge_recording(rec, config, Window(opts.start, opts.end, opts.armed_at))
     except (BagError, ValueError) as exc:
         print(f"bt-nav checkoff: {exc}", file=sys.stderr)
         return 2
     feed = res["feed"]
     first = f"{rec.topics['odom']}, {rec.topics['scan']} or {rec.topics['cmd']}"
-    print(f"check-off of maneuver {config.maneuver} from {opts.bag} (t=0: its first {first} message): window "
+    print(f"check-off of maneuver {config.maneuver} from {source} (t=0: its first {first} message): window "
           f"t={feed['window'][0]:.1f}-{feed['window'][1]:.1f} s; armed: {feed['arming']}")
     for note in feed["notes"]:
         print(f"note: {note}")
@@ -127,7 +149,7 @@ def _judge_bag(opts: argparse.Namespace) -> int:
     if opts.json:
         from dataclasses import asdict
 
-        res.update(report_lines=lines, config=asdict(odometry_config(config)), bag=str(opts.bag),
+        res.update(report_lines=lines, config=asdict(odometry_config(config)), bag=str(source),
                    exit_code=0 if res["passed"] else 1,
                    time_base="times and report lines: seconds from the window's start")
         try:

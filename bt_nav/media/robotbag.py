@@ -174,7 +174,8 @@ def _stream_decoded(path: Path, wanted: set[str], store: Any, notes: list[str]) 
         notes.append(f"read up to where the bag is cut: {status['reason']}")
 
 
-def _stamp_ns(msg: Any) -> int | None:
+def stamp_ns(msg: Any) -> int | None:
+    """A message's own header stamp (ns; None without a header or with a zero stamp)."""
     header = getattr(msg, "header", None)
     stamp = getattr(header, "stamp", None)
     if stamp is None:
@@ -197,7 +198,7 @@ def _aligned(rows: list[tuple[int, int | None, Any]], topic: str, notes: list[st
         median = float(np.median(lag))
         if abs(median) > 0.05:
             ahead = "behind" if median > 0 else "ahead of"
-            notes.append(f"{topic}: header stamps {abs(median):.2f} s {ahead} the bag's receive times (median); "
+            notes.append(f"{topic}: header stamps {abs(median):.2f} s {ahead} their receive times (median); "
                          f"placed on the recorder's clock by their fastest arrivals ({offset:+.3f} s)")
         out = [(s * 1e-9 + offset if s is not None else r * 1e-9, m) for r, s, m in rows]
     out.sort(key=lambda item: item[0])
@@ -273,23 +274,25 @@ def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  #
                     raise BagError(f"{p}: not a bag, or not one topic in it could be read")
                 _check_types(types, names, p)
                 continue
-            stamp = None if msgtype == SETBOOL_EVENT else _stamp_ns(msg)
+            stamp = None if msgtype == SETBOOL_EVENT else stamp_ns(msg)
             raw.setdefault(topic, []).append((t_ns, stamp, msg))
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - whatever a damaged or foreign file makes a reader raise
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise BagError(f"{p}: cannot read this bag ({type(exc).__name__}: {detail})") from exc
-    return _recording(raw, names, types, notes, p)
+    return recording_from(raw, names, notes, str(p))
 
 
-def _recording(raw: dict[str, list[tuple[int, int | None, Any]]], names: dict[str, str], types: dict[str, str],
-               notes: list[str], path: Path) -> Recording:
+def recording_from(raw: dict[str, list[tuple[int, int | None, Any]]], names: dict[str, str], notes: list[str],
+                   source: str) -> Recording:
+    """The :class:`Recording` of decoded messages, per topic (receive ns, own stamp ns or None, message): a bag's,
+    or what ``bt-nav checkoff --robot`` heard live (``source`` names it in errors). BagError: no /odom or /scan."""
     odom = _aligned(raw.get(names["odom"], []), names["odom"], notes)
     scans = _aligned(raw.get(names["scan"], []), names["scan"], notes)
     cmds = _aligned(raw.get(names["cmd"], []), names["cmd"], notes)
     if not odom or not scans:
-        raise BagError(f"{path}: {names['odom'] if not odom else names['scan']} holds no readable message")
+        raise BagError(f"{source}: {names['odom'] if not odom else names['scan']} holds no readable message")
     poses = []
     for t, m in odom:
         q, pos = m.pose.pose.orientation, m.pose.pose.position

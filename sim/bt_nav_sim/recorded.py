@@ -123,6 +123,7 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     res["feed"] = {"poses": f"{rec.topics['odom']} (pose x, y and yaw; the twist is not read)",
                    "readings": f"{rec.topics['scan']} as recorded ({len(source.t)} scans, {source.skipped} skipped)",
                    "commands": rec.topics["cmd"], "arming": arming, "window": [a - origin, b - origin],
+                   "t0": a,  # the report's time zero on the recording's clock (s; epoch seconds on a robot)
                    "forward_motion_max": cfg.forward_motion_max, "lidar_mount": list(rec.mount), "notes": rec.notes}
     return res
 
