@@ -119,6 +119,7 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     res = judge.results()
     armed = judge.activation_requested if judge.activation_requested is not None else a
     flags = _flags(rec, odom, a, b, armed)
+    flags.gaps = [g for g in flags.gaps if g.topic != rec.topics["cmd"] or _armed_over(judge, g)]
     _restate(res, rec, cfg, flags, a)
     res["feed"] = {"poses": f"{rec.topics['odom']} (pose x, y and yaw; the twist is not read)",
                    "readings": f"{rec.topics['scan']} as recorded ({len(source.t)} scans, {source.skipped} skipped)",
@@ -131,14 +132,7 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
 def _arm(judge: CheckoffJudge, rec: Recording, window: Window, a: float, b: float) -> str:
     """Set the judge's schedule from what the recording shows; the arming in words."""
     if rec.calls is not None:
-        for call in (c for c in rec.calls if a <= c.t <= b):
-            if call.data and judge.activation_requested is None:
-                judge.activation_requested = call.t
-            elif not call.data and judge.activated is not None and judge.deactivation_requested is None:
-                judge.deactivation_requested = call.t
-            answer = "answered" if call.answered is not None else "no response"
-            judge.on_activate_result(call.answered if call.answered is not None else call.t, call.data,
-                                     call.success, answer, call.message)
+        _replay_calls(judge, [c for c in rec.calls if a <= c.t <= b])
         return "toggle_navigation service events"
     if window.armed_at is not None:
         judge.activation_requested = judge.activated = rec.start + window.armed_at
@@ -148,6 +142,34 @@ def _arm(judge: CheckoffJudge, rec: Recording, window: Window, a: float, b: floa
         return "never: no non-zero command in the window"
     judge.activation_requested = judge.activated = first - 1e-3
     return f"the first non-zero command, t={first - a:.1f} s (service calls not visible)"
+
+
+def _armed_over(judge: CheckoffJudge, gap: Gap) -> bool:
+    """Whether the node was armed through ``gap`` (a disarmed node may fall silent: that is no gap in its commands),
+    by the calls the recording shows."""
+    off = [(judge.cycle_off_requested, judge.cycle_on_requested), (judge.deactivation_requested, None)]
+    for start, end in off:
+        if start is not None and gap.start >= start and (end is None or gap.end <= end + 1.0):
+            return False
+    return True
+
+
+def _replay_calls(judge: CheckoffJudge, calls: list[ServiceCall]) -> None:
+    """The recorded toggle_navigation calls as the judge's schedule, in order: the first true arms; a false then a
+    true while armed are a toggle cycle (the judge knows one; the TA may make it); the last false disarms."""
+    last_false = max((i for i, c in enumerate(calls) if not c.data), default=None)
+    for i, call in enumerate(calls):
+        if call.data and judge.activation_requested is None:
+            judge.activation_requested = call.t
+        elif not call.data and i == last_false and judge.activation_requested is not None:
+            judge.deactivation_requested = call.t
+        elif not call.data and judge.activation_requested is not None and judge.cycle_off_requested is None:
+            judge.cycle_off_requested = call.t
+        elif call.data and judge.cycle_off_requested is not None and judge.cycle_on_requested is None:
+            judge.cycle_on_requested = call.t
+        answer = "answered" if call.answered is not None else "no response"
+        judge.on_activate_result(call.answered if call.answered is not None else call.t, call.data, call.success,
+                                 answer, call.message)
 
 
 @dataclass

@@ -59,13 +59,19 @@ class Synth:
 
 def simulate(turn_deg: float = -120.0, rate: float = 0.6, creep: float = 0.05, trigger: float = 0.5,
              effects: Effects = Effects(), seed: int = 1, arm_at: float = 3.0, disarm_at: float = 28.0,  # noqa: B008
-             end: float = 31.0, forward_in_turn: float = 0.0) -> Synth:
+             end: float = 31.0, forward_in_turn: float = 0.0, pause: tuple[float, float] | None = None) -> Synth:
     """The template node on the lab_object arena: creep at ``creep`` once armed, turn ``turn_deg`` (odometry) at
-    ``rate`` when the front (+-15 deg) reads < ``trigger``, creep on; disarm and stop at ``disarm_at``."""
+    ``rate`` when the front (+-15 deg) reads < ``trigger``, creep on; disarm and stop at ``disarm_at``. ``pause``:
+    (false, true) times of a toggle cycle, the node stopped between them."""
     core = SimCore(SimConfig(world="lab_object", profile="lab", lidar="lds02", seed=seed, noise=True,
                              actuation_latency=0.1))
     rng = np.random.default_rng(seed + 100)
-    out = Synth(calls=[(arm_at, True), (disarm_at, False)])
+    cycle = [(pause[0], False), (pause[1], True)] if pause else []
+    out = Synth(calls=[(arm_at, True), *cycle, (disarm_at, False)])
+
+    def armed(t: float) -> bool:
+        return arm_at <= t < disarm_at and not (pause and pause[0] <= t < pause[1])
+
     state, target, yaw0 = "idle", 0.0, 0.0
     cmd = (0.0, 0.0)
     odom = [0.0, 0.0, 0.0]  # x, y, yaw of the robot's odometry (the sim's wheel odometry plus the effects)
@@ -95,15 +101,15 @@ def simulate(turn_deg: float = -120.0, rate: float = 0.6, creep: float = 0.05, t
             ranges[rng.random(ranges.size) < effects.nan_fraction] = np.nan
             lay = core.layout
             out.scans.append((t, lay.angle_min, lay.angle_increment, lay.num_beams, ranges))
-            if arm_at <= t < disarm_at:
+            if armed(t):
                 state, target, yaw0 = _decide(state, target, yaw0, odom[2], ranges, lay, trigger, turn_deg, out, t)
         if t >= next_cmd - 1e-9:
             next_cmd += 0.1
-            if arm_at <= t < disarm_at:
+            if armed(t):
                 cmd = _command(state, creep, rate, turn_deg, forward_in_turn)
                 out.cmds.append((t, *cmd))
-            elif t >= disarm_at and cmd != (0.0, 0.0) or (disarm_at <= t < disarm_at + 0.5):
-                cmd = (0.0, 0.0)
+            elif t >= arm_at and (cmd != (0.0, 0.0) or any(0 <= t - off < 0.5 for off, on in out.calls if not on)):
+                cmd, state = (0.0, 0.0), "creep"  # disarmed: stop (and creep again when armed again)
                 out.cmds.append((t, *cmd))
     return out
 

@@ -207,3 +207,16 @@ def test_a_turn_cut_by_the_disarm_is_not_failed_on_its_angle(tmp_path: Path) -> 
     (entry,) = [n for n in unseen["not_judged"] if n["name"] == "maneuver 1"]
     assert "ended with the run's last command" in entry["why"] and abs(unseen["maneuvers"][0]["angle_deg"]) < 80
     assert not unseen["passed"]  # no complete maneuver: never a pass
+
+
+def test_a_toggle_cycle_in_the_service_events_is_the_judges_toggle_cycle(tmp_path: Path) -> None:
+    """true, false, true, false: the robot stopped between the middle two is not armed there (its stop is no
+    "did not move on"), and the last false is the disarm."""
+    effects = Effects(service_events=True)
+    run = simulate(pause=(18.5, 22.0), effects=effects)
+    res = _judge(write_rosbag2(run, tmp_path / "run", "mcap", effects))
+    answered = next(c for c in res["checks"] if c["name"] == "toggle_navigation answered")
+    assert "toggle cycle" in answered["detail"] and answered["passed"], answered
+    assert res["passed"] and len(res["judged_maneuvers"]) == 1, report_lines(res)
+    assert res["times"]["deactivation_requested"] == pytest.approx(28.0 - res["feed"]["t0"], abs=0.05)
+    assert not res["flags"], res["flags"]  # a node disarmed by the cycle may fall silent
