@@ -37,8 +37,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace_stops
+
 from bt_nav.grading.exe.grid import ERROR, STOPPED, finished_runs, run_pool
-from bt_nav.grading.exe.log import pace_drops
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.ros.nodes.findings import CUT_OFF
@@ -195,7 +196,7 @@ def decisions_differ(failed: dict[str, Any] | None, again: dict[str, Any] | None
 
 def slipped_timing(verdict: dict[str, Any] | None, drops: list[float]) -> str | None:
     """The failed run's own evidence that its timing slipped, in words (None: none): the simulator stopped waiting
-    for the node's commands (``drops``, sim times: :func:`bt_nav.grading.exe.log.pace_drops`) while the node was
+    for the node's commands (``drops``, sim times: :func:`run_drops`) while the node was
     armed, before its first failed maneuver settled (a slip after it cannot have caused it), or at any time armed
     when no maneuver failed. Sim time waits for the node's commands (:data:`bt_nav.grading.exe.run.FOLLOW_NODE`)
     unless the node says nothing for a wall second; a node that keeps commanding on its sim-time timer or its scans
@@ -226,12 +227,20 @@ def slipped_timing(verdict: dict[str, Any] | None, drops: list[float]) -> str | 
     return f"{said}: the node sent nothing for a wall second"
 
 
+def run_drops(run_dir: str | Path) -> list[float]:
+    """The sim times (s, the simulator's clock) at which a run's simulator stopped waiting for the node's
+    ``cmd_vel``: the stops it wrote into the run directory's :data:`bt_nav_sim.pacing.PACE_FILE` at exit
+    (:class:`bt_nav_sim.pacing.PaceStops`); none when it wrote none."""
+    stops = read_pace_stops(Path(run_dir) / PACE_FILE) or []
+    return [stop.t for stop in stops if stop.who == CMD_VEL]
+
+
 def run_slipped(row: Row) -> str | None:
-    """:func:`slipped_timing` of a run, read from its directory (its ``sim.log``) and its verdict."""
-    log = Path(str(row.get("run_dir") or "")) / "sim.log"
-    if not row.get("run_dir") or not log.is_file():
+    """:func:`slipped_timing` of a run, read from its directory (the simulator's pace stops: :func:`run_drops`) and
+    its verdict."""
+    if not row.get("run_dir"):
         return None
-    return slipped_timing(row.get("verdict"), pace_drops(log.read_text(errors="replace")))
+    return slipped_timing(row.get("verdict"), run_drops(str(row["run_dir"])))
 
 
 def _judged(row: Row) -> bool:

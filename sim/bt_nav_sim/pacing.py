@@ -1,14 +1,25 @@
-"""Pacing bookkeeping of the simulator node: which followers sim time must wait for (pure: no ROS, no threads).
+"""Pacing bookkeeping of the simulator node: which followers sim time must wait for, and when it stopped waiting
+for one (pure: no ROS, no threads).
 
 The simulator node (:mod:`bt_nav.ros.nodes.simulator`, whose docstring explains following and pacing) keeps
-one :class:`Followers` under its lock; keeping the bookkeeping here lets it be tested without rclpy.
+one :class:`Followers` and one :class:`PaceStops` under its lock; keeping the bookkeeping here lets it be tested
+without rclpy. :class:`PaceStops` is also the data a grade reads of a run's pacing (:data:`PACE_FILE`, written by
+the node at exit, read by :func:`read_pace_stops`): the node's log line says the same to people, never to programs.
 """
 
 from __future__ import annotations
 
+import json
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+#: The follower name of a robot's ``cmd_vel`` publisher (``<robot name>/cmd_vel`` with several robots).
+CMD_VEL = "cmd_vel"
+#: The file the simulator writes its :class:`PaceStops` into, in the run directory (its ``pace_path`` parameter).
+PACE_FILE = "pace.json"
 
 
 @dataclass
@@ -120,3 +131,51 @@ class Followers:
                 elif blocker is None:
                     blocker = who
         return blocker, dropped
+
+
+@dataclass
+class PaceStop:
+    """One time sim time stopped waiting for a follower (:meth:`Followers.blocking` dropped it)."""
+
+    who: str  # the follower (:data:`CMD_VEL` for the robot's node)
+    t: float  # sim s (the simulator's clock, not from the judge's t0) at which it stopped waiting
+    why: str  # "silent" (nothing for follower_timeout wall s) or "holding" (a hold longer than hold_timeout)
+    resumed: float | None = None  # sim s of the follower's next message (waited for again); None: never
+
+
+class PaceStops:
+    """When the simulator stopped waiting for each follower and when it waited again, in sim time: the run's own
+    evidence of whether its pacing held (a grade's re-run rule reads it: :func:`bt_nav.grading.realtime.run_slipped`).
+    Whether the robot's node was armed then is the judge's to say (its verdict's times), not the simulator's."""
+
+    def __init__(self) -> None:
+        self.stops: list[PaceStop] = []
+
+    def stopped(self, who: str, t: float, holding: bool) -> None:
+        """Sim time no longer waits for ``who`` from sim ``t`` s on (silent, or ``holding`` too long)."""
+        self.stops.append(PaceStop(who, round(float(t), 4), "holding" if holding else "silent"))
+
+    def resumed(self, who: str, t: float) -> None:
+        """``who`` spoke again at sim ``t`` s: its latest stop, if still open, ends (a first message is none)."""
+        for stop in reversed(self.stops):
+            if stop.who == who:
+                if stop.resumed is None:
+                    stop.resumed = round(float(t), 4)
+                return
+
+    def record(self, **extra: Any) -> dict[str, Any]:
+        """The JSON of :data:`PACE_FILE`: ``stops`` (each :class:`PaceStop`'s fields) and ``extra`` (the node's
+        settings and its final sim time)."""
+        return {**extra, "stops": [asdict(stop) for stop in self.stops]}
+
+
+def read_pace_stops(path: str | Path) -> list[PaceStop] | None:
+    """The stops a simulator wrote into ``path`` (:data:`PACE_FILE`); None when it wrote none (no such file: killed
+    before its exit, or a simulator not asked to) or the file cannot be read. An empty list: it never stopped
+    waiting."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+        return [PaceStop(str(s["who"]), float(s["t"]), str(s["why"]),
+                         None if s.get("resumed") is None else float(s["resumed"])) for s in data["stops"]]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None

@@ -11,7 +11,6 @@ from typing import Any
 import pytest
 
 from bt_nav.grading import realtime
-from bt_nav.grading.exe.log import pace_drops
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job
 from bt_nav.ros.nodes import findings as kinds
@@ -333,28 +332,46 @@ def test_a_rerun_without_a_verdict_is_said_and_not_counted() -> None:
     assert "run again at 5x: no verdict (bt_nav error (not the node's): boom); at 1x: not run (stopped)" in said
 
 
-def test_pace_drops_are_read_from_the_simulators_log() -> None:
-    """The line as the simulator wrote it in a real run (lab_object A, seed 0, 5x): silent after the disarm."""
-    line = ("[INFO] [1795784742.318214010] [bt_nav_sim]: cmd_vel silent or holding too long (t=65.45 s): not waiting "
-            "for it until it speaks again\n[INFO] [1795784743.275132263] [bt_nav_sim]: following cmd_vel (t=69.37 s)")
-    assert pace_drops(line) == [65.45]
+def _pace_file(run_dir: Path, *stops: tuple[str, float, float | None]) -> Path:
+    """A run directory's ``pace.json`` as the simulator writes it at exit (``pace_path``): (who, t, resumed) each."""
+    run_dir.mkdir(parents=True, exist_ok=True)
+    record = {"follower_timeout": 1.0, "hold_timeout": 5.0, "t_end": 70.0,
+              "stops": [{"who": who, "t": t, "why": "silent", "resumed": resumed} for who, t, resumed in stops]}
+    (run_dir / "pace.json").write_text(json.dumps(record) + "\n", encoding="utf-8")
+    return run_dir
 
 
-def test_the_slip_of_a_real_stalled_run_is_found_before_the_maneuver_it_split() -> None:
+def test_pace_drops_are_read_from_the_simulators_pace_file(tmp_path: Path) -> None:
+    """The stops as the simulator recorded them in a real run (lab_object A, seed 0, 5x: silent after the disarm,
+    following again at 69.37), and a sim_sync follower's that is not the node's: only the node's ``cmd_vel`` counts.
+    No file (a simulator killed before its exit, a run from before pace.json): no drop, no slip."""
+    run = _pace_file(tmp_path / "run", ("cmd_vel", 65.45, 69.37), ("referee", 30.0, None))
+    assert realtime.run_drops(run) == [65.45]
+    assert realtime.run_drops(tmp_path / "none") == []
+    verdict = {"t0_sim": 0.0, "times": {"activated": 5.0, "deactivation_requested": 66.0}, "maneuvers": []}
+    assert realtime.run_slipped({"run_dir": str(run), "verdict": verdict}) == (
+        "the simulator stopped waiting for the node's commands at t=65.5 s while it was armed: the node sent nothing "
+        "for a wall second")
+    assert realtime.run_slipped({"run_dir": str(tmp_path / "none"), "verdict": verdict}) is None
+    assert realtime.run_slipped({"run_dir": None, "verdict": verdict}) is None
+
+
+def test_the_slip_of_a_real_stalled_run_is_found_before_the_maneuver_it_split(tmp_path: Path) -> None:
     """Recorded from a real run (2026-11-27, ``varying_node.py --odd stall --stall 1.5 --choice C``, lab_object, 5x):
     the node was not scheduled for 1.5 s wall right after its first turn command; the judge saw its one turn as
     maneuver 1 (89 deg, passed) and maneuver 2 (2 deg, failed). The simulator's drops (sim s, not from t0): 19.45
     (the stall, inside maneuver 1), 23.45 (after maneuver 2), 65.65 (after the disarm)."""
-    sim_log = "\n".join(f"[INFO] [1795785025.871338346] [bt_nav_sim]: cmd_vel silent or holding too long (t={t} s): "
-                        "not waiting for it until it speaks again" for t in ("19.45", "23.45", "65.65"))
     verdict = {"t0_sim": 0.26, "times": {"activated": 5.0, "deactivation_requested": 65.0},
                "maneuvers": [{"t": 18.97, "settled": 21.6, "side": "right", "angle_deg": -89.04, "passed": True},
                              {"t": 21.6, "settled": 21.74, "side": "right", "angle_deg": -2.02, "passed": False},
                              {"t": 62.99, "settled": 65.24, "side": "left", "angle_deg": 75.56, "passed": True}]}
-    assert realtime.slipped_timing(verdict, pace_drops(sim_log)) == (
+    stalled = _pace_file(tmp_path / "stalled", ("cmd_vel", 19.45, 19.7), ("cmd_vel", 23.45, 23.6),
+                         ("cmd_vel", 65.65, None))
+    assert realtime.run_slipped({"run_dir": str(stalled), "verdict": verdict}) == (
         "the simulator stopped waiting for the node's commands at t=19.2 s, before maneuver 2, which failed "
         "(t=21.6-21.7 s): the node sent nothing for a wall second")
-    assert realtime.slipped_timing(verdict, pace_drops(sim_log)[1:]) is None  # the other two are no slip
+    later = _pace_file(tmp_path / "later", ("cmd_vel", 23.45, 23.6), ("cmd_vel", 65.65, None))
+    assert realtime.run_slipped({"run_dir": str(later), "verdict": verdict}) is None  # the other two are no slip
 
 
 def test_decisions_are_compared_at_the_grades_speed() -> None:

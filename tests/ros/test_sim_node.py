@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -162,6 +165,36 @@ def test_a_thinned_clock_ticks_with_every_message_and_where_it_waits(sim: Callab
     time.sleep(0.6)
     assert probe.now() == pytest.approx(ahead + 0.05, abs=1e-6), "the instant it waits at must go out on /clock"
     probe.sync(who="test", leave=True)
+
+
+def test_its_pace_stops_are_written_as_data_at_exit(sim: Callable[..., tuple[Proc, Probe]], tmp_path: Path) -> None:
+    """``pace_path``: when sim time stopped waiting for a follower (silent, or holding too long) and when that
+    follower spoke again, in sim time, as the log lines say them to people (a grade reads the file, never the log)."""
+    pace = tmp_path / "pace.json"
+    proc, probe = sim("--ros-args", "-p", f"pace_path:={pace}", "-p", "follower_timeout:=0.3", "-p",
+                      "hold_timeout:=0.3")
+
+    def said(words: str, count: int = 1) -> list[float]:
+        wait_until(lambda: sum(words in line for line in proc.stderr) >= count, 20.0, words, proc.output)
+        return [float(m) for line in proc.stderr if words in line for m in re.findall(r"\(t=([\d.]+) s\)", line)]
+
+    probe.command = (0.0, 0.0)
+    said("following cmd_vel")
+    probe.command = None  # silent: dropped after 0.3 s wall
+    [dropped] = said("cmd_vel silent or holding too long")
+    probe.command = (0.0, 0.0)  # speaks again: waited for again
+    resumed = said("following cmd_vel", 2)[1]
+    probe.sync(who="test", t=probe.now(), hold=True)  # holds longer than hold_timeout: dropped too
+    [held] = said("test silent or holding too long")
+    assert not pace.exists()  # written on the way out
+    assert proc.stop() == 0, proc.output()
+    record = json.loads(pace.read_text(encoding="utf-8"))
+    assert record["follower_timeout"] == 0.3 and record["hold_timeout"] == 0.3 and record["t_end"] >= held
+    stops = record["stops"]
+    assert [(s["who"], s["why"]) for s in stops] == [("cmd_vel", "silent"), ("test", "holding")], stops
+    assert (stops[0]["t"], stops[0]["resumed"]) == pytest.approx((dropped, resumed), abs=0.006)
+    assert stops[1]["t"] == pytest.approx(held, abs=0.006) and stops[1]["resumed"] is None
+    assert dropped < resumed <= held
 
 
 def test_refuses_an_unknown_profile() -> None:

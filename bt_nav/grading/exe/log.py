@@ -145,17 +145,3 @@ def node_crash(text: str) -> Crash | None:
     starting = not spinning and (importing or any(function == "__init__" for _, _, function in own))
     quoted = exception if len(exception) <= QUOTE_LIMIT else exception[:QUOTE_LIMIT - 3] + "..."
     return Crash(quoted, where, starting)
-
-
-#: The simulator's line when its pace stops waiting for the graded node (``bt_nav.ros.nodes.simulator``,
-#: ``_wait_for_followers``): its ``cmd_vel`` was silent for ``follower_timeout`` wall seconds while sim time waited
-#: for it, and from then on sim time runs on without it. ``t`` is the sim time (s, not from t0) it happened at.
-_PACE_DROP = re.compile(r"\]: cmd_vel silent or holding too long \(t=(-?[\d.]+) s\)")
-
-
-def pace_drops(sim_log: str) -> list[float]:
-    """The sim times at which the simulator stopped waiting for the node's ``cmd_vel`` (its ``sim.log``): where
-    the pacing that keeps a verdict independent of the machine's load let go of the node. A node starved of CPU
-    for a wall second mid-turn is one; a node that is silent while disarmed (it has nothing to say) is another,
-    which the reader tells apart by when it came (:func:`bt_nav.grading.realtime.slipped_timing`)."""
-    return [float(t) for t in _PACE_DROP.findall(sim_log)]

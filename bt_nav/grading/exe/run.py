@@ -50,6 +50,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from bt_nav_sim.pacing import PACE_FILE
 from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.exe.bag import bag_row, start_recorder
@@ -141,7 +142,8 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
     assignment = assignment_of(settings.profile)
     lab = assignment.judge.executable == "checkoff"
-    sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False}
+    # its pace stops as data beside the verdict (bt_nav.grading.realtime reads them)
+    sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False, "pace_path": str(results_json.with_name(PACE_FILE))}
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
     sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them

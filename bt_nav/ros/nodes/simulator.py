@@ -60,7 +60,10 @@ period, if longer; a robot's ``cmd_vel`` at least until its next scan is out: se
 :class:`bt_nav_sim.pacing.Followers`) sim seconds behind, or holds; meanwhile it republishes
 ``/clock`` every 20 ms of wall time, so a lost best-effort sample cannot stall anyone. A follower
 silent for ``follower_timeout`` wall seconds (or holding for longer than ``hold_timeout``) is dropped
-with a log line until it speaks again, so a dead or absent process never stalls the simulation.
+with a log line until it speaks again, so a dead or absent process never stalls the simulation. With ``pace_path``
+set, the node writes when it stopped waiting for each follower and when it waited again (sim time) there as JSON on
+its way out (:class:`bt_nav_sim.pacing.PaceStops`; ``bt-nav grade --exe`` reads a run's ``pace.json`` to tell a
+node starved by the machine from a wrong one): the log line is for people.
 
 With followers a run is close to lock-step whatever the CPU load: the executive ticks on every one of
 its periods (measured: 20.0 ticks per sim second), its commands take effect within one tick, and the
@@ -84,7 +87,7 @@ import rclpy
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.multi import MultiSimCore, parse_starts
-from bt_nav_sim.pacing import Followers
+from bt_nav_sim.pacing import CMD_VEL, Followers, PaceStops
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
@@ -96,6 +99,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
+from bt_nav.mission.resources import written_whole
 from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
 
@@ -189,6 +193,8 @@ class SimulatorNode(QuietQosEvents, Node):
         "lead_margin": (0.0, "sim s added to a follower's learnt period (see Followers)"),
         "scan_floor": (False, "lead a robot's cmd_vel at least until the next scan it answers is out (a graded node)"),
         "hold_timeout": (5.0, "wall s after which a follower's hold is ignored"),
+        "pace_path": ("", "write when sim time stopped waiting for each follower, and when it waited again, as JSON "
+                          "to this file at exit (empty: nowhere)"),
         "idle_rtf": (10.0, "real_time_factor 0: speed while there is no follower"),
         "afap_max_rtf": (0.0, "real_time_factor 0: upper bound on the speed (0: none)"),
         "solo_rtf": (0.0, "real_time_factor 0: upper bound while only cmd_vel is followed, no sim_sync "
@@ -229,6 +235,8 @@ class SimulatorNode(QuietQosEvents, Node):
         self.followers = Followers(int(max(0.0, float(p["max_lag"])) * 1e9), max(0.0, float(p["follower_timeout"])),
                                    max(0.0, float(p["hold_timeout"])), int(max(0.0, float(p["lead_margin"])) * 1e9))
         self.scan_floor = bool(p["scan_floor"])
+        self.pace_stops = PaceStops()  # under _cond, as followers
+        self.pace_path = str(p["pace_path"])
         self.idle_rtf = max(0.0, float(p["idle_rtf"]))
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
@@ -295,6 +303,22 @@ class SimulatorNode(QuietQosEvents, Node):
             return
         self.stop()
         self.get_logger().info(self.stats())
+        self._write_pace()
+
+    def _write_pace(self) -> None:
+        """The pace stops as JSON into ``pace_path`` (:meth:`bt_nav_sim.pacing.PaceStops.record`, with the silence
+        and hold limits and the final sim time); a file that cannot be written is logged, never raised (this runs
+        on the way out)."""
+        if not self.pace_path:
+            return
+        with self._cond:
+            record = self.pace_stops.record(follower_timeout=self.followers.silence_s,
+                                            hold_timeout=self.followers.hold_s, t_end=round(self.sim.t, 4))
+        try:
+            with written_whole(self.pace_path) as stream:
+                stream.write(json.dumps(record) + "\n")
+        except OSError as exc:
+            self.get_logger().error(f"pace_path {self.pace_path}: {exc!r}")
 
     @property
     def exit_code(self) -> int:
@@ -324,6 +348,7 @@ class SimulatorNode(QuietQosEvents, Node):
             robot.arrival_ns = self.core.t_ns
             self.commands += 1
             if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, time.monotonic()):
+                self.pace_stops.resumed(robot.follower, self.core.t)
                 self.get_logger().info(f"following {robot.follower} (t={self.core.t:.2f} s)")
             self._cond.notify_all()
 
@@ -358,6 +383,7 @@ class SimulatorNode(QuietQosEvents, Node):
                 if self.followers.leave(who):
                     self.get_logger().info(f"{who} stopped following (t={self.core.t:.2f} s)")
             elif self.followers.report(who, t_ns, hold, time.monotonic()):
+                self.pace_stops.resumed(who, self.core.t)
                 self.get_logger().info(f"following {who} (t={self.core.t:.2f} s)")
             self._cond.notify_all()
 
@@ -446,6 +472,7 @@ class SimulatorNode(QuietQosEvents, Node):
                 now = time.monotonic()
                 blocker, dropped = self.followers.blocking(core.t_ns + core.step_ns, now)
                 for who in dropped:
+                    self.pace_stops.stopped(who, core.t, self.followers.members[who].hold)
                     self.get_logger().info(f"{who} silent or holding too long (t={core.t:.2f} s): not waiting "
                                            "for it until it speaks again")
                 if blocker is None:
@@ -496,7 +523,7 @@ class _RobotIO:
         self.node = node
         self.prefix = prefix
         self.core: SimCore = node.sim.cores[index]
-        self.follower = f"{prefix}cmd_vel"
+        self.follower = f"{prefix}{CMD_VEL}"
         self.cmd = (0.0, 0.0)
         self.arrival_ns = -1  # sim time at which the latest command arrived
         reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)

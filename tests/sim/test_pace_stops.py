@@ -1,0 +1,50 @@
+"""The simulator's record of its pace stops (:class:`bt_nav_sim.pacing.PaceStops`): when sim time stopped waiting
+for a follower and when it waited again, as the data a grade reads (``pace.json``), never the log's words."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from bt_nav_sim.pacing import PACE_FILE, Followers, PaceStop, PaceStops, read_pace_stops
+
+MS = 1_000_000
+
+
+def test_a_stop_is_closed_by_the_followers_next_message_only() -> None:
+    stops = PaceStops()
+    stops.resumed("cmd_vel", 1.0)  # a first message (joining) ends no stop
+    stops.stopped("cmd_vel", 19.45, holding=False)
+    stops.stopped("referee", 20.0, holding=True)
+    stops.resumed("cmd_vel", 19.7)
+    stops.resumed("cmd_vel", 19.9)  # already following again: the stop keeps its first resumption
+    stops.stopped("cmd_vel", 65.65, holding=False)
+    assert stops.stops == [PaceStop("cmd_vel", 19.45, "silent", 19.7), PaceStop("referee", 20.0, "holding"),
+                           PaceStop("cmd_vel", 65.65, "silent")]
+    assert stops.record(t_end=70.0) == {"t_end": 70.0, "stops": [
+        {"who": "cmd_vel", "t": 19.45, "why": "silent", "resumed": 19.7},
+        {"who": "referee", "t": 20.0, "why": "holding", "resumed": None},
+        {"who": "cmd_vel", "t": 65.65, "why": "silent", "resumed": None}]}
+
+
+def test_the_followers_drops_become_stops_as_the_node_records_them() -> None:
+    """The node's bookkeeping in its order: :meth:`Followers.blocking` drops a silent follower, its next message
+    (``report`` says it rejoined) resumes it."""
+    followers, stops = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0), PaceStops()
+    followers.report("cmd_vel", 1000 * MS, False, wall=0.0)
+    _, dropped = followers.blocking(1100 * MS, wall=1.5)
+    for who in dropped:
+        stops.stopped(who, 1.09, followers.members[who].hold)
+    if followers.report("cmd_vel", 1090 * MS, False, wall=2.0):
+        stops.resumed("cmd_vel", 1.09)
+    assert stops.stops == [PaceStop("cmd_vel", 1.09, "silent", 1.09)]
+
+
+def test_the_pace_file_reads_back_and_a_missing_or_broken_one_is_none(tmp_path: Path) -> None:
+    stops = PaceStops()
+    stops.stopped("cmd_vel", 3.5, holding=False)
+    (tmp_path / PACE_FILE).write_text(json.dumps(stops.record(t_end=9.0)), encoding="utf-8")
+    assert read_pace_stops(tmp_path / PACE_FILE) == [PaceStop("cmd_vel", 3.5, "silent")]
+    assert read_pace_stops(tmp_path / "missing.json") is None
+    (tmp_path / "broken.json").write_text('{"stops": [{"who": "cmd_vel"}]}', encoding="utf-8")
+    assert read_pace_stops(tmp_path / "broken.json") is None
