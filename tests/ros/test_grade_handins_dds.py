@@ -41,7 +41,7 @@ def test_four_hand_ins_get_four_verdicts_with_their_launch_lines(tmp_path: Path,
     assert "launch file: declares safety_distance (default 0.5): FAILED (no DeclareLaunchArgument(" \
            "'safety_distance', default_value='0.5'))" in lines["cy"]
     assert lines["dee"][0] == "launch file: FAILED (no launch file handed in (expected turtlebot_bringup.launch.py))"
-    assert all(": PASSED (line " in line for line in lines["ann"][:3]), lines["ann"]
+    assert all(": PASSED (turtlebot_bringup.launch.py:" in line for line in lines["ann"][:3]), lines["ann"]
     md = (out / "class.md").read_text()
     assert "| [cy](cy/report.html) | FAILED | 1/3 | 1/1 |" in md, md
     for name in page:
