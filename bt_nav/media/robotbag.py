@@ -35,6 +35,10 @@ from bt_nav.mission.scan import Scan
 
 ODOMETRY, LASERSCAN = "nav_msgs/msg/Odometry", "sensor_msgs/msg/LaserScan"
 TWISTS = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
+ROSOUT = "/rosout"  # the nodes' log lines: the judged node's are the judge's announcements (marks, never readings)
+#: Loggers of a TurtleBot3's own bringup and of the recorder, whose lines are no node's maneuver marks.
+INFRASTRUCTURE = ("turtlebot3", "diff_drive", "robot_state_publisher", "hlds", "ld08", "lds", "rplidar", "rosbag2",
+                  "_ros2cli", "launch", "rviz", "transform_listener", "bt_nav", "gazebo", "gz", "rosout")
 TF_TOPICS = ("/tf_static", "/tf")  # where the LiDAR's mount is read (also under the robot's namespace)
 SETBOOL_EVENT = "std_srvs/srv/SetBool_Event"
 #: service_msgs/ServiceEventInfo event types
@@ -174,10 +178,10 @@ def _stream_decoded(path: Path, wanted: set[str], store: Any, notes: list[str]) 
         notes.append(f"read up to where the bag is cut: {status['reason']}")
 
 
-def stamp_ns(msg: Any) -> int | None:
-    """A message's own header stamp (ns; None without a header or with a zero stamp)."""
+def stamp_ns(msg: Any, stamp: Any = None) -> int | None:
+    """A message's own header stamp, or ``stamp`` (a Log's) (ns; None without either or with a zero stamp)."""
     header = getattr(msg, "header", None)
-    stamp = getattr(header, "stamp", None)
+    stamp = getattr(header, "stamp", stamp)
     if stamp is None:
         return None
     ns = int(getattr(stamp, "sec", 0)) * 1_000_000_000 + int(getattr(stamp, "nanosec", getattr(stamp, "nsec", 0)))
@@ -262,7 +266,7 @@ def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  #
     if not p.exists():
         raise BagError(f"{p}: no such bag (a rosbag2 directory, an .mcap or .db3 file, or a ROS 1 .bag)")
     names = topics.names()
-    wanted = {*names.values(), *TF_TOPICS, *(topics.resolve(t.lstrip("/")) for t in TF_TOPICS)}
+    wanted = {*names.values(), *TF_TOPICS, *(topics.resolve(t.lstrip("/")) for t in TF_TOPICS), ROSOUT}
     notes: list[str] = []
     raw: dict[str, list[tuple[int, int | None, Any]]] = {}
     types: dict[str, str] = {}
@@ -274,7 +278,7 @@ def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  #
                     raise BagError(f"{p}: not a bag, or not one topic in it could be read")
                 _check_types(types, names, p)
                 continue
-            stamp = None if msgtype == SETBOOL_EVENT else stamp_ns(msg)
+            stamp = None if msgtype == SETBOOL_EVENT else stamp_ns(msg, getattr(msg, "stamp", None))
             raw.setdefault(topic, []).append((t_ns, stamp, msg))
     except BagError:
         raise
@@ -307,5 +311,7 @@ def recording_from(raw: dict[str, list[tuple[int, int | None, Any]]], names: dic
     mount = _mount(tf, frame)
     if mount is None:
         notes.append(f"no /tf from base_link to the scan's frame {frame!r}: the LiDAR taken at the robot's centre")
+    lines = [(t, str(m.name), str(m.msg)) for t, m in _aligned(raw.get(ROSOUT, []), ROSOUT, notes)
+             if not str(m.name).lstrip("/").startswith(INFRASTRUCTURE)]
     return Recording(poses, [(t, _scan(m)) for t, m in scans], commands, calls, mount or (0.0, 0.0),
-                     dict(names), notes)
+                     dict(names), notes, lines)

@@ -62,6 +62,7 @@ class Recording:
     mount: tuple[float, float] = (0.0, 0.0)  # the LiDAR's (x, y) on the robot (from /tf when recorded)
     topics: dict[str, str] = field(default_factory=lambda: {"odom": "/odom", "scan": "/scan", "cmd": "/cmd_vel"})
     notes: list[str] = field(default_factory=list)  # what the reader did (clock offsets, skipped messages)
+    announcements: list[tuple[float, str, str]] = field(default_factory=list)  # (t, logger, line) of /rosout
 
     @property
     def start(self) -> float:
@@ -115,6 +116,9 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     for t, v, w in rec.commands:
         if a <= t <= b:
             judge.on_command(t, v, w)
+    for t, logger, line in rec.announcements:  # the node's log lines: where it began a maneuver, as over DDS
+        if a <= t <= b:
+            judge.on_announcement(t, logger, line)
     judge._finish(b)  # noqa: SLF001 - the recording is the schedule: the report is at its end
     res = judge.results()
     armed = judge.activation_requested if judge.activation_requested is not None else a

@@ -227,6 +227,7 @@ def messages(run: Synth, store: Any, effects: Effects, rng_seed: int = 7,
                     t + 0.005, msg))
     if effects.service_events:
         out += _service_events(run, store)
+    out += _log_lines(run, store, lead)
     if layout.tf_mount:
         tr = _make(store, "geometry_msgs/msg/TransformStamped",
                    header=_make(store, "std_msgs/msg/Header", frame_id="base_link"), child_frame_id="base_scan",
@@ -238,6 +239,20 @@ def messages(run: Synth, store: Any, effects: Effects, rng_seed: int = 7,
     ns = layout.namespace.rstrip("/")
     return sorted([(ns + topic if ns and topic != "/synthetic" else topic, *rest) for topic, *rest in out],
                   key=lambda m: m[2])
+
+
+def _log_lines(run: Synth, store: Any, lead: float) -> list[tuple[str, str, float, Any]]:
+    """/rosout: the template's line at each turn's start (its node's), and the base's own line (infrastructure)."""
+    ros1 = "rosgraph_msgs/msg/Log" in store.fielddefs
+    typename = "rosgraph_msgs/msg/Log" if ros1 else "rcl_interfaces/msg/Log"
+    lines = [(t, "reactive_navigator", "Obstacle Detected! Executing rotation maneuver.") for t in run.turn_starts]
+    lines.append((2.0, "turtlebot3_node", "Run!"))
+    out = []
+    for t, name, text in lines:
+        when = _time(store, t + lead)
+        stamp = {"header": _make(store, "std_msgs/msg/Header", stamp=when)} if ros1 else {"stamp": when}
+        out.append(("/rosout", typename, t + 0.01, _make(store, typename, name=name, msg=text, level=20, **stamp)))
+    return out
 
 
 def _service_events(run: Synth, store: Any) -> list[tuple[str, str, float, Any]]:

@@ -49,6 +49,8 @@ def test_a_right_node_passes_in_every_format_within_3_deg_of_the_truth(tmp_path:
     assert {"static before activation", "toggle_navigation answered", "no collision"} <= names
     assert "service calls not visible" in res["feed"]["arming"]
     assert any("ahead of their receive times" in note for note in res["feed"]["notes"])
+    # the node's /rosout line at its turn reaches the judge as an announcement; the base's own line does not
+    assert res["announcements"] == 1
 
 
 def test_service_events_judge_the_static_checks(tmp_path: Path) -> None:

@@ -1,12 +1,12 @@
 """``bt-nav checkoff --robot``: the lab's check-off judged live, beside a real robot, from what its topics carry.
 
-A listener, nothing more: it never publishes and never calls ``toggle_navigation`` (the TA does, as the sheet
+A listener, nothing more: it sends no command and never calls ``toggle_navigation`` (the TA does, as the sheet
 says). For ``--duration`` seconds, or until Ctrl-C, it keeps every /odom, /scan and /cmd_vel message (Twist or
-TwistStamped, whichever the graph has) and the ``toggle_navigation`` service events, with the time it heard each
-and the message's own stamp; then it hands them to the same reading and judging as a bag of them
-(:func:`bt_nav.media.robotbag.recording_from`, :func:`bt_nav_sim.recorded.judge_recording`). So the live verdict
-and the verdict on the bag of the same run follow one rule; only the clock that times the arrivals is this
-process's (the wall clock).
+TwistStamped, whichever the graph has), the ``toggle_navigation`` service events and ``/rosout`` (the node's lines:
+the judge's announcements), with the time it heard each and the message's own stamp; then it hands them to the same
+reading and judging as a bag of them (:func:`bt_nav.media.robotbag.recording_from`,
+:func:`bt_nav_sim.recorded.judge_recording`). So the live verdict and the verdict on the bag of the same run follow
+one rule; only the clock that times the arrivals is this process's (the wall clock).
 
 QoS: best effort for the sensors and the commands (it hears a reliable publisher as well as a best-effort one, and
 never slows the robot down), reliable for the service events (rosbag2 records them so too).
@@ -21,12 +21,13 @@ from typing import Any
 import rclpy
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import LaserScan
 from std_srvs.srv import SetBool
 
-from bt_nav.media.robotbag import stamp_ns
+from bt_nav.media.robotbag import ROSOUT, stamp_ns
 
 NODE_NAME = "bt_nav_checkoff_listener"
 #: The command types a lab node may publish, by their graph names.
@@ -47,6 +48,7 @@ class RobotListener(Node):
         self.create_subscription(SetBool.Event, names["service"], partial(self._keep, names["service"], stamped=False),
                                  QoSProfile(depth=50))
         self._listen_tf()
+        self.create_subscription(Log, ROSOUT, partial(self._keep, ROSOUT), QoSProfile(depth=200))
         self._finder = self.create_timer(0.2, self._find_commands)
         self._find_commands()
 
@@ -62,7 +64,8 @@ class RobotListener(Node):
 
     def _keep(self, topic: str, msg: Any, stamped: bool = True) -> None:
         now = self.get_clock().now().nanoseconds
-        self.raw.setdefault(topic, []).append((now, stamp_ns(msg) if stamped else None, msg))
+        self.raw.setdefault(topic, []).append((now, stamp_ns(msg, getattr(msg, "stamp", None)) if stamped else None,
+                                               msg))
 
     def _find_commands(self) -> None:
         """Subscribe to the command topic once the graph says its type (a node may publish either)."""
