@@ -62,9 +62,32 @@ def domain_id_for(key: str | int, low: int = 100, high: int = 199) -> int:
     return low + zlib.crc32(key.encode()) % (high - low + 1)
 
 
+class NoFreeDomainError(ValueError):
+    """Every ROS domain of a range is claimed by another run on this machine (after waiting, if the claimer waited).
+
+    A ValueError, as a malformed ``BT_NAV_DOMAIN_RANGE`` is (:func:`launcher_domains`): the launchers report either
+    as why a run cannot start. Never a domain handed out unclaimed instead: it may be another run's, and two runs in
+    one domain see each other's topics and services."""
+
+    def __init__(self, low: int, high: int, waited: float = 0.0, range_name: str = "range") -> None:
+        self.low, self.high, self.waited, self.range_name = low, high, waited, range_name
+        waiting = f"; waited {waited:.1f} s" if waited > 0.0 else ""
+        super().__init__(f"no free ROS_DOMAIN_ID in {range_name} {low}-{high} (each one is claimed by another run "
+                         f"on this machine{waiting})")
+
+
+#: Wall seconds between two looks at the lock files while a claim waits (a claim of another process's ending is
+#: seen no later; one of this process's, at once: :func:`release_domain_id` wakes the waiters).
+_CLAIM_POLL = 0.25
+#: Woken (and counted) each time this process hands a domain back: a waiting claim takes it at once.
+_HANDED_BACK = threading.Condition()
+_handed_back = [0]
+
+
 def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None,
-                    lock_dir: str | os.PathLike[str] | None = None) -> int:
-    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way.
+                    lock_dir: str | os.PathLike[str] | None = None, wait: float = 0.0,
+                    stop: StopRequest | None = None, range_name: str = "range") -> int:
+    """A ROS domain in ``[low, high]`` that no other process on this machine has claimed this way, now claimed.
 
     A claim is an exclusive ``flock`` on ``<lock_dir>/bt_nav_ros_domains/domain-<id>.lock`` held until
     this process ends (the kernel drops it even after a crash, so nothing needs cleaning up). The
@@ -72,40 +95,71 @@ def claim_domain_id(low: int = 215, high: int = 232, *, start: int | None = None
     pick a domain another way (a fixed ``ROS_DOMAIN_ID``) are invisible here: give them a different
     range. 215-232 (the tests' default) lies above the Linux ephemeral ports (Fast DDS uses ports
     7400 + 250 * domain + ...; 102-214 overlap 32768-60999) and below 233, where the ports would pass
-    65535. When every domain is claimed, the first candidate is returned unclaimed.
-    """
-    import fcntl
-    import tempfile
+    65535.
 
-    directory = os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(),
-                             "bt_nav_ros_domains")
+    When every domain is claimed, the claim waits for one up to ``wait`` wall seconds, counted again from each
+    domain this process hands back (:func:`release_domain_id`): a grid with more workers than domains goes on for
+    as long as its own runs keep ending, while domains held by others for longer than ``wait`` end it. ``stop``
+    ends the wait early.
+
+    Raises:
+        NoFreeDomainError: none came free (``range_name`` names the range in its words: ``BT_NAV_DOMAIN_RANGE``).
+    """
+    directory = _lock_dir(lock_dir)
     os.makedirs(directory, exist_ok=True)
     span = high - low + 1
     first = (os.getpid() if start is None else start) % span
-    for offset in range(span):
-        domain = low + (first + offset) % span
-        handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # noqa: SIM115 - held open: the claim
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            handle.close()
-            continue
-        _DOMAIN_CLAIMS.append(handle)
-        return domain
-    return low + first
+    began = time.monotonic()
+    deadline, seen = began + max(0.0, wait), _handed_back[0]
+    while True:
+        for offset in range(span):
+            domain = low + (first + offset) % span
+            if _lock_domain(directory, domain):
+                return domain
+        with _HANDED_BACK:
+            now = time.monotonic()
+            if _handed_back[0] != seen:  # one of ours came back since the last look: try again, wait on afresh
+                deadline, seen = now + max(0.0, wait), _handed_back[0]
+                continue
+            if now >= deadline or (stop is not None and stop.requested):
+                raise NoFreeDomainError(low, high, now - began if wait > 0.0 else 0.0, range_name)
+            _HANDED_BACK.wait(min(_CLAIM_POLL, deadline - now))
 
 
-def release_domain_id(domain: int) -> bool:
-    """Give up this process's claim on ``domain`` (from :func:`claim_domain_id`); False when it held none.
+def _lock_dir(lock_dir: str | os.PathLike[str] | None) -> str:
+    """Where the domains' lock files are (``lock_dir``, default the temporary directory)."""
+    return os.path.join(os.fspath(lock_dir) if lock_dir is not None else tempfile.gettempdir(), "bt_nav_ros_domains")
+
+
+def _lock_domain(directory: str, domain: int) -> bool:
+    """Claim ``domain`` (its lock file in ``directory``) for this process, unless another open file holds it."""
+    import fcntl
+
+    handle = open(os.path.join(directory, f"domain-{domain}.lock"), "a+")  # noqa: SIM115 - held open: the claim
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        return False
+    _DOMAIN_CLAIMS.append(handle)
+    return True
+
+
+def release_domain_id(domain: int, lock_dir: str | os.PathLike[str] | None = None) -> bool:
+    """Give up this process's claim on ``domain`` (from :func:`claim_domain_id`, in the same ``lock_dir``); False
+    when it held none.
 
     A grid that runs many DDS missions in one process claims a domain per run and must hand it back when
-    the run ends, or a long grid would run out of domains.
+    the run ends, or a long grid would run out of domains; a claim of this process waiting for one takes it now.
     """
-    suffix = f"domain-{int(domain)}.lock"
+    path = os.path.join(_lock_dir(lock_dir), f"domain-{int(domain)}.lock")
     for handle in list(_DOMAIN_CLAIMS):
-        if os.path.basename(handle.name) == suffix:
+        if handle.name == path:
             _DOMAIN_CLAIMS.remove(handle)
             handle.close()  # closing the file drops the flock
+            with _HANDED_BACK:
+                _handed_back[0] += 1
+                _HANDED_BACK.notify_all()
             return True
     return False
 
@@ -127,14 +181,17 @@ def launcher_domains(env: Mapping[str, str] | None = None) -> tuple[int, int]:
 
 def choose_domain_id(requested: int | None = None) -> int:
     """The run's ROS domain: ``requested``, else ``$ROS_DOMAIN_ID`` (the user's choice is kept), else a
-    domain of :func:`launcher_domains` claimed for this process, so concurrent runs never share one."""
+    domain of :func:`launcher_domains` claimed for this process, so concurrent runs never share one.
+
+    Raises:
+        NoFreeDomainError: every domain of the range is claimed (a ValueError, as a malformed range)."""
     if requested is not None:
         return int(requested)
     env = os.environ.get("ROS_DOMAIN_ID", "").strip()
     if env.isdigit():
         return int(env)
     low, high = launcher_domains()
-    return claim_domain_id(low, high, start=random.randrange(high - low + 1))
+    return claim_domain_id(low, high, start=random.randrange(high - low + 1), range_name=DOMAIN_RANGE_ENV)
 
 
 def dds_env(domain_id: int, base: Mapping[str, str] | None = None) -> dict[str, str]:

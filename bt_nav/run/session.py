@@ -6,7 +6,8 @@ its lab check-off (:class:`bt_nav.run.rosmission.RosMission`), ``bt-nav sim-run`
 stop their processes here, so "which domain, which files, which processes, is there a verdict yet" is written once:
 
 - :class:`DomainLease`: the run's ROS domain (the user's, or one claimed for the run alone, handed back at the end;
-  a run that finds its domain shared claims another while still holding the first);
+  a run that finds its domain shared claims another while still holding the first; with every domain claimed, it
+  waits for one or gets none, never another run's);
 - :class:`MissionSession`: the children's environment in that domain, the run directory's log files (one
   ``<name>.log`` per process, :class:`bt_nav.run.rundir.LogFiles`), one :class:`bt_nav.ros.supervise.Launcher`, the
   one verdict wait (:meth:`MissionSession.wait`) and the stop of everything (:meth:`MissionSession.close`);
@@ -27,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.ros.supervise import (
+    DOMAIN_RANGE_ENV,
     Child,
     Launcher,
     LineSink,
@@ -61,10 +63,17 @@ class DomainLease:
         self.user_env = user_env
         self.held: list[int] = []  # claimed by this lease, handed back by release()
 
-    def claim(self) -> int:
+    def claim(self, wait: float = 0.0, stop: StopRequest | None = None) -> int:
         """The run's domain: the user's (``requested``, else ``$ROS_DOMAIN_ID`` with ``user_env``), else one of
         :func:`bt_nav.ros.supervise.launcher_domains` no other run on this machine holds, claimed until
-        :meth:`release` (every domain claimed before is still held, so no other run takes a shared one)."""
+        :meth:`release` (every domain claimed before is still held, so no other run takes a shared one). With every
+        one claimed, waits for one up to ``wait`` wall seconds (:func:`bt_nav.ros.supervise.claim_domain_id`; a
+        ``stop`` ends the wait).
+
+        Raises:
+            NoFreeDomainError: none came free (a ValueError; its words name ``BT_NAV_DOMAIN_RANGE``): never a domain
+                this lease did not claim.
+        """
         if self.requested is not None:
             return int(self.requested)
         env = os.environ.get("ROS_DOMAIN_ID", "").strip()
@@ -72,7 +81,8 @@ class DomainLease:
             return int(env)
         low, high = launcher_domains()
         start = random.randrange(high - low + 1) if self.start is None else self.start
-        domain = claim_domain_id(low, high, start=start + len(self.held))
+        domain = claim_domain_id(low, high, start=start + len(self.held), wait=wait, stop=stop,
+                                 range_name=DOMAIN_RANGE_ENV)
         self.held.append(domain)
         return domain
 

@@ -32,7 +32,8 @@ from typing import Any
 
 from bt_nav.ros.rosutil import claim_domain_id, dds_env
 
-DOMAIN_ID = claim_domain_id(215, 232)  # not 100-200: bt-nav demo/sim-run pick random domains there
+# not 100-200: bt-nav demo/sim-run pick random domains there; with all 18 held by other test processes, wait for one
+DOMAIN_ID = claim_domain_id(215, 232, wait=600.0)
 os.environ.update(dds_env(DOMAIN_ID))
 os.environ.update({"RCUTILS_COLORIZED_OUTPUT": "0", "RCUTILS_LOGGING_BUFFERED_STREAM": "0",
                    "PYTHONUNBUFFERED": "1"})

@@ -27,6 +27,7 @@ from bt_nav.ros.rosutil import (
     route_py_trees_logging,
 )
 from bt_nav.ros.safety import ClockWatchdog
+from bt_nav.ros.supervise import NoFreeDomainError
 from bt_nav.ros.tick_stats import TickStats
 
 
@@ -109,7 +110,8 @@ def test_domain_ids_stay_in_range() -> None:
 def test_claimed_domains_are_exclusive(tmp_path: Any) -> None:
     claimed = [claim_domain_id(220, 222, start=0, lock_dir=tmp_path) for _ in range(3)]
     assert sorted(claimed) == [220, 221, 222]  # each one locked: the next claim moves on
-    assert claim_domain_id(220, 222, start=1, lock_dir=tmp_path) == 221  # all taken: unclaimed fallback
+    with pytest.raises(NoFreeDomainError, match=r"no free ROS_DOMAIN_ID in range 220-222 \(each one is claimed"):
+        claim_domain_id(220, 222, start=1, lock_dir=tmp_path)  # all taken: none handed out unclaimed
 
 
 def _log_either(log: Any, ok: bool) -> None:

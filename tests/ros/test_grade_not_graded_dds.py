@@ -1,7 +1,8 @@
 """Issue 44 over real DDS: another program on the only domain a grade may take (``BT_NAV_DOMAIN_RANGE`` of one
 domain) leaves the run not graded, never failed. The guard names the program; the run does not claim to have moved
 ("another domain" when it was the same one); it is not re-run at 1x; the grade counts it apart (not 0/1 passed) and
-exits 3 (runs without a verdict, ``--resume`` runs them)."""
+exits 3 (runs without a verdict, ``--resume`` runs them). A grade whose only domain another run holds waits for it, then
+is not graded either: it never takes a domain it did not claim."""
 
 from __future__ import annotations
 
@@ -14,16 +15,19 @@ from pathlib import Path
 import pytest
 from ros_harness import DOMAIN_ID
 
+from bt_nav.ros.supervise import claim_domain_id, release_domain_id
+
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 RUN = "lab_object C lds01 seed 0"
 
 
 @pytest.mark.slow
 def test_a_foreign_program_on_the_only_domain_leaves_the_run_not_graded(tmp_path: Path) -> None:
-    domain = DOMAIN_ID  # this test process's own domain: no other test or helper uses it
+    domain = claim_domain_id(215, 232, wait=120.0)  # one of this test's own, besides the harness's
     foreign = subprocess.Popen([sys.executable, str(FIXTURES / "noservice_node.py"), "--drive", "0.1"],
                                env={**os.environ, "ROS_DOMAIN_ID": str(domain)}, start_new_session=True)
     out = tmp_path / "grid"
+    release_domain_id(domain)  # for the grade to claim (the foreign program sets it, as a fixed ROS_DOMAIN_ID does)
     try:
         done = subprocess.run([sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--exe",
                                f"{sys.executable} {FIXTURES / 'lab_student_node.py'} --choice C",
@@ -48,3 +52,25 @@ def test_a_foreign_program_on_the_only_domain_leaves_the_run_not_graded(tmp_path
     assert "0/0 passed, 1 without a verdict apart (not the node's: not graded" in done.stdout, done.stdout
     assert done.returncode == 3, done.stdout
     assert "not graded (not yours)" in (out / "feedback.md").read_text()
+
+
+@pytest.mark.slow
+def test_a_grade_whose_only_domain_another_run_holds_waits_then_is_not_graded(tmp_path: Path) -> None:
+    """``BT_NAV_DOMAIN_RANGE`` of one domain, held by this test process all along (the harness's claim): the grade
+    waits for it (``--timeout 4``: 4 s and the shutdown margin, :func:`bt_nav.grading.exe.run.domain_wait`), starts
+    nothing, and says why."""
+    out = tmp_path / "grid"
+    done = subprocess.run([sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--exe",
+                           f"{sys.executable} {FIXTURES / 'lab_student_node.py'} --choice C", "--worlds", "lab_object",
+                           "--maneuvers", "C", "--lidars", "lds01", "--seeds", "1", "--record", "off", "--progress",
+                           "off", "--timeout", "4", "--out", str(out)],
+                          env={**os.environ, "BT_NAV_DOMAIN_RANGE": f"{DOMAIN_ID}-{DOMAIN_ID}"},
+                          capture_output=True, text=True, check=False, timeout=300)
+    print(done.stdout, done.stderr)
+    [row] = json.loads((out / "grade.json").read_text())["runs"]
+    said = row["not_graded"]
+    assert said.startswith(f"not graded: no free ROS_DOMAIN_ID in BT_NAV_DOMAIN_RANGE {DOMAIN_ID}-{DOMAIN_ID} (each "
+                           "one is claimed by another run on this machine; waited 34."), said
+    assert row["outcome"] == "bt_nav error" and row["run_dir"] == "" and row["domains"] == []
+    assert f"{RUN}: NOT GRADED (not graded: no free ROS_DOMAIN_ID in BT_NAV_DOMAIN_RANGE" in done.stdout, done.stdout
+    assert done.returncode == 3, done.stdout

@@ -4,14 +4,17 @@ log files, launcher, verdict wait), and the paths that run a mission all go thro
 from __future__ import annotations
 
 import re
+import subprocess
 import sys
 import tempfile
+import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
-from bt_nav.ros.supervise import StopRequest
+from bt_nav.ros.supervise import NoFreeDomainError, StopRequest
 from bt_nav.run.session import EXITED, STOPPED, TIMEOUT, VERDICT, DomainLease, MissionSession, files_written
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -48,6 +51,58 @@ def test_a_lease_keeps_the_users_domain_and_claims_one_otherwise(lock_dir: Path,
     assert DomainLease(start=0, user_env=False).claim() == 152  # nobody else gets a held one
     lease.release()
     assert lease.held == [] and DomainLease(start=0, user_env=False).claim() == 150
+
+
+def test_a_lease_never_hands_out_a_domain_it_did_not_claim(lock_dir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``BT_NAV_DOMAIN_RANGE`` of one domain, held by another run: a claim that may not wait fails at once with the
+    range in its words; one that waits gets the domain as soon as the other run hands it back."""
+    monkeypatch.setenv("BT_NAV_DOMAIN_RANGE", "150-150")
+    other = DomainLease(user_env=False)
+    assert other.claim() == 150
+    with pytest.raises(NoFreeDomainError, match=r"^no free ROS_DOMAIN_ID in BT_NAV_DOMAIN_RANGE 150-150 \(each one "
+                                                r"is claimed by another run on this machine\)$"):
+        DomainLease(user_env=False).claim()
+    waiting = DomainLease(user_env=False)
+    got: list[tuple[int, float]] = []
+    began = time.monotonic()
+    thread = threading.Thread(target=lambda: got.append((waiting.claim(wait=20.0), time.monotonic() - began)))
+    thread.start()
+    time.sleep(0.5)
+    assert not got and thread.is_alive()  # waiting, not sharing
+    other.release()
+    thread.join(10.0)
+    assert got and got[0][0] == 150 and 0.5 <= got[0][1] < 1.5 and waiting.held == [150], got
+    waiting.release()
+
+
+def test_a_claim_waits_for_another_process_and_its_wait_is_bounded(lock_dir: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """Another process's claim is seen to end by polling; with nothing handed back the wait ends at its bound, and
+    a stop request ends it early."""
+    monkeypatch.setenv("BT_NAV_DOMAIN_RANGE", "151-151")
+    lock = lock_dir / "bt_nav_ros_domains" / "domain-151.lock"
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    holder = subprocess.Popen([sys.executable, "-c", f"import fcntl, sys, time; f = open({str(lock)!r}, 'a+'); "
+                               "fcntl.flock(f, fcntl.LOCK_EX); print('held', flush=True); time.sleep(1.5)"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+        began = time.monotonic()
+        with pytest.raises(NoFreeDomainError, match=r"BT_NAV_DOMAIN_RANGE 151-151 \(.*; waited 0\.[67] s\)$"):
+            DomainLease(user_env=False).claim(wait=0.6)
+        assert 0.6 <= time.monotonic() - began < 1.4
+        stop = StopRequest()
+        stop.signum = 2
+        began = time.monotonic()
+        with pytest.raises(NoFreeDomainError):
+            DomainLease(user_env=False).claim(wait=30.0, stop=stop)
+        assert time.monotonic() - began < 1.0
+        lease = DomainLease(user_env=False)
+        assert lease.claim(wait=30.0) == 151 and holder.poll() is not None  # the holder's exit freed it
+        lease.release()
+    finally:
+        holder.kill()
+        holder.wait()
 
 
 def test_a_session_logs_each_process_and_waits_for_the_verdict(tmp_path: Path) -> None:

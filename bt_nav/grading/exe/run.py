@@ -46,6 +46,7 @@ import shlex
 import signal
 import time
 from collections.abc import Callable
+from contextlib import suppress
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -58,7 +59,7 @@ from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shu
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
-from bt_nav.ros.supervise import DOMAIN_RANGE_ENV, Child, StopRequest, launcher_domains
+from bt_nav.ros.supervise import DOMAIN_RANGE_ENV, Child, NoFreeDomainError, StopRequest, launcher_domains
 from bt_nav.run.rundir import make_run_dir
 from bt_nav.run.session import EXITED, STOPPED, VERDICT, DomainLease, MissionSession, files_written, read_verdict
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -287,20 +288,29 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     ends, so no attempt picks it again), up to :data:`DOMAIN_MOVES` times, and its row's ``notes`` say which. With
     no free domain left (``BT_NAV_DOMAIN_RANGE`` of one domain, every other one claimed) the run is not graded
     (:func:`not_graded_row`): never the node's failure, never re-run at 1x, run again by ``--resume``.
+
+    A run that finds every domain claimed before it starts (more ``--jobs`` than domains, other grades) waits for
+    one (:func:`domain_wait`); none coming free, it is not graded either (:func:`no_domain_row`).
     """
     moves: list[str] = []
     tried: list[int] = []
     # the domains claimed, held until the job ends: the last the run's, the others found shared
     with DomainLease(start=hash(job.key), user_env=False) as lease:
-        domain = lease.claim()
+        try:
+            domain = lease.claim(domain_wait(settings), stop)
+        except NoFreeDomainError as exc:
+            return no_domain_row(job, settings, exc, stop)
         while True:
             tried.append(domain)
             row = _attempt(job, settings, domain, stop, sink, on_start, on_verdict)
             if row["outcome"] != SHARED_DOMAIN:
                 break
-            following = lease.claim() if len(moves) < DOMAIN_MOVES else None
-            if following is None or following in tried:
-                row = not_graded_row(row, tried, following is None)
+            following = None
+            if len(moves) < DOMAIN_MOVES:
+                with suppress(NoFreeDomainError):  # none free now: not graded, never another run's domain
+                    following = lease.claim()
+            if following is None:
+                row = not_graded_row(row, tried, len(moves) >= DOMAIN_MOVES)
                 break
             aside = _set_aside(Path(row["run_dir"]))
             moves.append(f"{row['reason']}: the run started again on ROS_DOMAIN_ID {following} (that attempt on "
@@ -310,6 +320,32 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
         row["notes"] = [*moves, *row.get("notes", [])]
         (Path(row["run_dir"]) / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row
+
+
+#: Wall seconds a run waits for a free domain beyond its own limit: another run's shutdown (its processes get
+#: :data:`STOP_GRACE` and 2 s each, the node first) and its bag's closing.
+DOMAIN_WAIT_MARGIN = 30.0
+
+
+def domain_wait(settings: ExeSettings) -> float:
+    """How long a run waits for a free domain: a run's limit and :data:`DOMAIN_WAIT_MARGIN`, counted again from
+    each domain this process's runs hand back (:func:`bt_nav.ros.supervise.claim_domain_id`), so a grid with more
+    ``--jobs`` than domains grades them all as its runs end, and domains held elsewhere for longer end the wait."""
+    return settings.limit + DOMAIN_WAIT_MARGIN
+
+
+def no_domain_row(job: Job, settings: ExeSettings, exc: NoFreeDomainError, stop: StopRequest | None) -> dict[str, Any]:
+    """The row of a run that never started for want of a domain: not graded (:data:`ERROR`, as
+    :func:`not_graded_row`: counted apart, never the node's failure, run again by ``--resume``), or stopped when a
+    stop ended its wait. No run directory (nothing ran)."""
+    row = {"passed": False, "verdict": None, "findings": [], "job": job.key, "world": job.world,
+           "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed, "profile": settings.profile,
+           "run_dir": "", "wall_time": round(exc.waited, 2), "domains": []}
+    if stop is not None and stop.requested:
+        return {**row, "outcome": "stopped", "reason": f"stopped by {stop.name or 'a stop request'} while waiting "
+                                                       "for a free ROS domain"}
+    said = f"not graded: {exc}: not the node's failure, --resume runs it again"
+    return {**row, "outcome": ERROR, "reason": said, "not_graded": said}
 
 
 def not_graded_row(row: dict[str, Any], tried: list[int], moved_enough: bool) -> dict[str, Any]:
