@@ -7,6 +7,11 @@ PNG and ``--plot`` the trajectory picture (:func:`bt_nav.media.plot.plot_run`) f
 shown, and ``--at``, counts sim seconds since the bag's first /clock (:data:`bt_nav.media.video.TIME_BASE`). Every
 frame says it is a simulation (:data:`bt_nav.media.console.SIM_LABEL`); a hand-in's film, with the student's
 terminal as its console, is ``bt-nav demo --exe``'s (:mod:`bt_nav.grading.handin_film`).
+
+A bag with no ground truth (a real TurtleBot's: rosbag2 sqlite3 or MCAP, or a ROS 1 .bag) is filmed from what the
+robot recorded (:mod:`bt_nav.media.robotfilm`): its odometry path, its scans laid out into a picture of the room,
+its command and, with ``--maneuver`` (or ``--node``), the check-off's lines at the times they were decided; every
+frame says where the data came from ("real robot bag", or a simulated bag that says so on /synthetic).
 """
 
 from __future__ import annotations
@@ -28,9 +33,22 @@ def main(argv: list[str] | None = None) -> int:
                         "(the time every frame shows; default: mid-bag)")
     parser.add_argument("--plot", metavar="PNG", help="also write the trajectory picture")
     parser.add_argument("--no-video", action="store_true", help="only --still / --plot")
+    robot = parser.add_argument_group("a robot's bag (no ground truth)")
+    robot.add_argument("--maneuver", help="judge the run as this maneuver and show the check-off's lines")
+    robot.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
+    robot.add_argument("--console-log", action="store_true", help="also write every frame's texts beside the "
+                       "video (<video>.console.json)")
     args = parser.parse_args(argv)
     if args.fps <= 0:
         parser.error("--fps must be positive")
+    from bt_nav.media.robotrun import is_robot_bag
+
+    if is_robot_bag(args.bag):
+        return _robot(args)
+    if args.maneuver or args.node:
+        print(f"bt-nav video: --maneuver/--node judge a robot's bag; {args.bag} is a simulator's (the check-off "
+              "is in its /rosout lines)", file=sys.stderr)
+        return 2
     from bt_nav.media.bagread import read_bag
     from bt_nav.media.video import TIME_BASE, plot_bag, renderer_for, world_of, write_video
 
@@ -53,4 +71,36 @@ def main(argv: list[str] | None = None) -> int:
         stats = write_video(record, args.output, args.fps, world)
         print(f"video: {stats.path}: {stats.frames} frames at {stats.fps:g} fps "
               f"({record.duration:.1f} s of sim time) rendered in {stats.seconds:.1f} s")
+    return 0
+
+
+def _robot(args: argparse.Namespace) -> int:
+    """Film a robot's bag (module docstring); exit 2 for an unreadable bag or an unknown maneuver."""
+    from bt_nav.cli.checkoff import _maneuver
+    from bt_nav.media.console import console_log_path
+    from bt_nav.media.robotfilm import RobotFilmRenderer, write_robot_video
+    from bt_nav.media.robotrun import load_robot_run
+
+    try:
+        maneuver = _maneuver(args) if args.maneuver or args.node else None
+        run = load_robot_run(args.bag, maneuver)
+    except (BagError, ValueError) as exc:
+        print(f"bt-nav video: {exc}", file=sys.stderr)
+        return 2
+    print(f"bt-nav video: {args.bag}: {run.source}; {len(run.rec.odom)} poses, {len(run.rec.scans)} scans, "
+          f"{len(run.rec.commands)} commands over {run.end - run.origin:.1f} s")
+    for note in run.notes:
+        print(f"note: {note}")
+    if args.plot:
+        print("bt-nav video: --plot draws a simulator's bag; a robot's film shows its path", file=sys.stderr)
+    if args.still:
+        at = args.at if args.at is not None else (run.end - run.origin) / 2
+        RobotFilmRenderer(run).frame(run.origin + at).save(args.still)
+        print(f"still: {args.still} (t = {at:.2f} s since the bag's first message)")
+    if not args.no_video:
+        sidecar = console_log_path(args.output) if args.console_log else None
+        stats = write_robot_video(run, args.output, args.fps, sidecar)
+        print(f"video: {stats.path}: {stats.frames} frames at {stats.fps:g} fps "
+              f"({run.end - run.origin:.1f} s of the robot's time) rendered in {stats.seconds:.1f} s"
+              + (f"; texts per frame: {sidecar}" if sidecar else ""))
     return 0

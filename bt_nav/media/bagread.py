@@ -8,7 +8,9 @@ Two ways in, both through maintained libraries:
    the ``mcap`` package's stream reader walks the file record by record and stops at the cut, so
    everything up to the last complete chunk is kept; :attr:`MissionRecord.truncated` says so.
 
-Either way the CDR payloads are decoded by rosbags' typestore. A file that yields nothing raises
+Either way the CDR payloads are decoded by rosbags' typestore. A sqlite3 rosbag2 bag or a ROS 1 .bag is read by
+:func:`bt_nav.media.bagformats.decoded_messages` (the one home of reading bag formats; this module re-exports
+:func:`~bt_nav.media.bagformats.iter_messages` and :func:`~bt_nav.media.bagformats.bag_files`). A file that yields nothing raises
 :class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
 
 Times: a message's time is its own header stamp where it has one on the bag's clock, else its bag time
@@ -29,7 +31,7 @@ import bisect
 import contextlib
 import json
 import math
-from collections.abc import Collection, Iterator
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -55,6 +57,7 @@ from bt_nav.media.bag import (
     split_namespace,
     typestore,
 )
+from bt_nav.media.bagformats import bag_files, decoded_messages, is_mcap_only, iter_messages  # noqa: F401
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.snapshot import read_event, read_snapshot, snapshot_time
 
@@ -193,72 +196,6 @@ class MissionRecord:
         return stamp, x + r[ok] * np.cos(a), y + r[ok] * np.sin(a)
 
 
-def bag_files(path: str | Path) -> tuple[Path, list[Path]]:
-    """(bag directory or file, its .mcap files); BagError naming ``path`` when there is none."""
-    p = Path(path)
-    if p.is_file():
-        return p, [p]
-    if p.is_dir():
-        files = sorted(p.glob("*.mcap"))
-        if files:
-            return p, files
-        raise BagError(f"{p}: no .mcap file in this directory (not an MCAP rosbag2 bag)")
-    raise BagError(f"{p}: no such bag (directory or .mcap file)")
-
-
-def _rosbags_messages(bag: Path) -> Iterator[tuple[str, str, int, bytes]]:
-    """(topic, msgtype, t_ns, cdr) through the rosbags reader (complete bags only)."""
-    from rosbags.rosbag2 import Reader
-
-    with Reader(bag) as reader:
-        for conn, t_ns, data in reader.messages():
-            yield conn.topic, conn.msgtype, t_ns, bytes(data)
-
-
-def _stream_messages(files: list[Path], status: dict[str, Any]) -> Iterator[tuple[str, str, int, bytes]]:
-    """(topic, msgtype, t_ns, cdr) record by record with the ``mcap`` stream reader, stopping at a cut."""
-    from mcap.exceptions import McapError
-    from mcap.records import Channel, Message, Schema
-    from mcap.stream_reader import StreamReader
-
-    for file in files:
-        schemas: dict[int, str] = {}
-        channels: dict[int, tuple[str, str]] = {}
-        with file.open("rb") as stream:
-            try:
-                for record in StreamReader(stream, skip_magic=False).records:
-                    if isinstance(record, Schema):
-                        schemas[record.id] = record.name
-                    elif isinstance(record, Channel):
-                        channels[record.id] = (record.topic, schemas.get(record.schema_id, ""))
-                    elif isinstance(record, Message) and record.channel_id in channels:
-                        topic, msgtype = channels[record.channel_id]
-                        yield topic, msgtype, record.log_time, record.data
-            except (McapError, EOFError, ValueError, OSError) as exc:
-                status["truncated"] = True
-                detail = str(exc) or "the file ends inside a record"
-                status["reason"] = f"{file}: cut short or damaged ({type(exc).__name__}: {detail})"
-
-
-def iter_messages(path: str | Path, status: dict[str, Any] | None = None) -> Iterator[tuple[str, str, int, bytes]]:
-    """Every message of a bag as (topic, msgtype, t_ns, cdr), complete or cut short (see the module docstring).
-
-    ``status`` (a dict) receives ``truncated`` and ``reason`` when the stream reader had to stop early.
-    """
-    from rosbags.rosbag2 import ReaderError
-
-    bag, files = bag_files(path)
-    status = status if status is not None else {}
-    if bag.is_dir() and (bag / "metadata.yaml").is_file():
-        try:
-            yield from _rosbags_messages(bag)
-            return
-        except (ReaderError, OSError, ValueError, KeyError) as exc:
-            status["reason"] = f"{bag}: {exc}"  # fall through: read what the file holds
-    status.setdefault("truncated", True)  # no (usable) metadata: the writer did not finish
-    yield from _stream_messages(files, status)
-
-
 def _pose_row(t: float, msg: Any) -> tuple[float, ...]:
     p, q, tw = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
     return t, p.x, p.y, yaw_from_quaternion(q.x, q.y, q.z, q.w), tw.linear.x, tw.angular.z
@@ -395,6 +332,8 @@ def read_bag(path: str | Path, skip: Collection[str] = ()) -> MissionRecord:
     Raises:
         BagError: no such bag, not MCAP, or not one message could be read (the message names the file).
     """
+    if not is_mcap_only(path):
+        return _read_other_format(Path(path), skip)
     ts = typestore()
     status: dict[str, Any] = {}
     rec = _Collector()
@@ -416,3 +355,22 @@ def read_bag(path: str | Path, skip: Collection[str] = ()) -> MissionRecord:
         why = status.get("reason", "no messages")
         raise BagError(f"{path}: no readable message in this bag ({why})")
     return rec.record(Path(path), bool(status.get("truncated")))
+
+
+def _read_other_format(path: Path, skip: Collection[str]) -> MissionRecord:
+    """A sqlite3 rosbag2 bag or a ROS 1 bag, decoded by the one reader of those formats
+    (:func:`bt_nav.media.robotbag.decoded_messages`); times by the same rule as an MCAP's."""
+    from bt_nav.media.robotbag import stamp_ns
+
+    rec = _Collector()
+    try:
+        for topic, _, t_ns, msg in decoded_messages(path):
+            if topic and topic not in skip:
+                rec.add(topic, message_time_ns(stamp_ns(msg), t_ns) * 1e-9, msg)
+    except BagError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - whatever a damaged file makes a library raise
+        raise BagError(f"{path}: cannot read this bag: {exc}") from exc
+    if not rec.counts:
+        raise BagError(f"{path}: no readable message in this bag")
+    return rec.record(path, False)

@@ -6,7 +6,7 @@ time). A TurtleBot3's bag is whatever ``ros2 bag record`` (sqlite3 or MCAP) or `
 the robot: an LDS-02 scan has its own beam count every time, the robot's clock is not the recorder's, and types
 vary (Twist or TwistStamped). ``rosbags``' ``AnyReader`` reads all three formats and decodes with the bag's own
 message definitions (the Jazzy types where a rosbag2 bag has none); a cut-short MCAP without its summary is walked
-record by record as :func:`bt_nav.media.bagread.iter_messages` does.
+record by record (:mod:`bt_nav.media.bagformats`, the one home of reading bag formats).
 
 Times: every series on the recorder's clock. A stamped message (Odometry, LaserScan, TwistStamped) keeps its own
 stamp's spacing (Wi-Fi bunches messages up on arrival; the robot stamped them when they happened), shifted onto the
@@ -21,7 +21,6 @@ not a bag, damaged, no /odom or /scan, a topic of an unexpected type.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +29,7 @@ import numpy as np
 from bt_nav_sim.recorded import Recording, ServiceCall
 
 from bt_nav.media.bag import BagError
+from bt_nav.media.bagformats import SETBOOL_EVENT, bag_topics, decoded_messages, robot_typestore  # noqa: F401
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.scan import Scan
 
@@ -40,18 +40,12 @@ ROSOUT = "/rosout"  # the nodes' log lines: the judged node's are the judge's an
 INFRASTRUCTURE = ("turtlebot3", "diff_drive", "robot_state_publisher", "hlds", "ld08", "lds", "rplidar", "rosbag2",
                   "_ros2cli", "launch", "rviz", "transform_listener", "bt_nav", "gazebo", "gz", "rosout")
 TF_TOPICS = ("/tf_static", "/tf")  # where the LiDAR's mount is read (also under the robot's namespace)
-SETBOOL_EVENT = "std_srvs/srv/SetBool_Event"
+#: A bag that was simulated, not recorded on a robot, says so on this std_msgs/String topic (tests/media/robotsynth.py)
+SYNTHETIC = "/synthetic"
 #: service_msgs/ServiceEventInfo event types
 REQUEST_SENT, REQUEST_RECEIVED, RESPONSE_SENT, RESPONSE_RECEIVED = 0, 1, 2, 3
 #: The percentile of (receive - stamp) taken as a stamped topic's clock offset (its fastest arrivals).
 OFFSET_PERCENTILE = 5.0
-
-#: std_srvs/SetBool's request, response and service event (rosbag2's service introspection), which rosbags lacks.
-_SETBOOL_TYPES = {"std_srvs/srv/SetBool_Request": "bool data\n",
-                  "std_srvs/srv/SetBool_Response": "bool success\nstring message\n",
-                  SETBOOL_EVENT: "service_msgs/msg/ServiceEventInfo info\nstd_srvs/srv/SetBool_Request[<=1] request\n"
-                                 "std_srvs/srv/SetBool_Response[<=1] response\n"}
-
 
 @dataclass(frozen=True)
 class Topics:
@@ -71,111 +65,6 @@ class Topics:
 
     def names(self) -> dict[str, str]:
         return {role: self.resolve(getattr(self, role)) for role in ("odom", "scan", "cmd", "service")}
-
-
-def robot_typestore() -> Any:
-    """The Jazzy types plus std_srvs/SetBool's service event (rosbags has no service event types)."""
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
-    store = get_typestore(Stores.ROS2_JAZZY)
-    parsed: dict[str, Any] = {}
-    for name, text in _SETBOOL_TYPES.items():
-        parsed.update(get_types_from_msg(text, name))
-    # the parser files a srv's types under std_srvs/srv/msg/; rosbag2 names them std_srvs/srv/SetBool_Event
-    store.register({key.replace("/srv/msg/", "/srv/"): _renamed(value) for key, value in parsed.items()})
-    return store
-
-
-def _renamed(value: Any) -> Any:
-    """A parsed type definition with ``std_srvs/srv/msg/`` references as ``std_srvs/srv/``."""
-    if isinstance(value, str):
-        return value.replace("/srv/msg/", "/srv/")
-    if isinstance(value, tuple | list):
-        return type(value)(_renamed(v) for v in value)
-    return value
-
-
-def _decoded(path: Path, wanted: set[str], notes: list[str]) -> Iterator[tuple[str, str, int, Any]]:
-    """(topic, msgtype, receive ns, message) of the ``wanted`` topics, any bag format; the bag's topic table first
-    as ("", "", 0, {topic: type})."""
-    store = robot_typestore()
-    if path.is_file() and path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").exists():
-        path = path.parent  # a rosbag2 bag's file: the bag is its directory
-    if path.is_file() and path.suffix == ".bag":
-        from rosbags.rosbag1 import Reader as Reader1
-        from rosbags.typesys import Stores, get_typestore
-
-        reader, store, decode = Reader1(path), get_typestore(Stores.ROS1_NOETIC), "deserialize_ros1"
-    elif path.is_dir() and (path / "metadata.yaml").exists():
-        from rosbags.rosbag2 import Reader
-
-        reader, decode = Reader(path), "deserialize_cdr"
-    else:
-        yield from _stream_decoded(path, wanted, store, notes)
-        return
-    try:
-        reader.open()
-    except Exception as exc:  # noqa: BLE001 - a cut MCAP (no summary) is still read record by record
-        if not (path.is_dir() and any(path.glob("*.mcap"))):
-            raise
-        notes.append(f"the bag's index is unreadable ({type(exc).__name__}: {exc}): read record by record")
-        yield from _stream_decoded(path, wanted, store, notes)
-        return
-    try:
-        yield "", "", 0, {c.topic: c.msgtype for c in reader.connections}
-        conns = [c for c in reader.connections if c.topic in wanted]
-        if decode == "deserialize_ros1":
-            _register_bag_types(store, conns)
-        skipped = 0
-        for conn, t_ns, raw in reader.messages(connections=conns):
-            try:
-                msg = getattr(store, decode)(bytes(raw), conn.msgtype)
-            except Exception:  # noqa: BLE001 - a damaged payload or a type the store lacks: skip it
-                skipped += 1
-                continue
-            yield conn.topic, conn.msgtype, t_ns, msg
-        if skipped:
-            notes.append(f"{skipped} messages could not be decoded and were skipped")
-    finally:
-        reader.close()
-
-
-def _register_bag_types(store: Any, conns: list[Any]) -> None:
-    """A ROS 1 bag's own message definitions (Noetic's store lacks tf2_msgs, for one): each connection's type
-    registered from the definition text the bag carries, where the store does not have it."""
-    from rosbags.typesys import get_types_from_msg
-
-    for conn in conns:
-        text = getattr(conn.msgdef, "data", "")
-        if conn.msgtype in store.fielddefs or not text:
-            continue
-        try:
-            store.register(get_types_from_msg(text, conn.msgtype))
-        except Exception:  # noqa: BLE001 - a definition rosbags cannot parse: its messages are skipped, and counted
-            continue
-
-
-def _stream_decoded(path: Path, wanted: set[str], store: Any, notes: list[str]) -> Iterator[tuple[str, str, int, Any]]:
-    """A cut-short rosbag2 MCAP (no metadata.yaml or no summary), record by record."""
-    from bt_nav.media.bagread import iter_messages
-
-    status: dict[str, Any] = {}
-    types: dict[str, str] = {}
-    rows = []
-    for topic, msgtype, t_ns, data in iter_messages(path, status):
-        types[topic] = msgtype
-        if topic in wanted:
-            rows.append((topic, msgtype, t_ns, data))
-    if not types and status.get("reason"):
-        raise BagError(f"nothing readable before the damage: {status['reason']}")
-    yield "", "", 0, types
-    for topic, msgtype, t_ns, data in rows:
-        try:
-            yield topic, msgtype, t_ns, store.deserialize_cdr(data, msgtype)
-        except Exception:  # noqa: BLE001 - unknown type or damaged payload
-            continue
-    if status.get("reason"):
-        notes.append(f"read up to where the bag is cut: {status['reason']}")
 
 
 def stamp_ns(msg: Any, stamp: Any = None) -> int | None:
@@ -260,18 +149,21 @@ def _mount(tf_rows: list[Any], frame: str) -> tuple[float, float] | None:
     return None
 
 
-def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  # noqa: B008 - frozen
-    """A real robot's bag as a :class:`Recording` (see the module docstring). Raises BagError (one line)."""
+def read_robot_bag(path: str | Path, topics: Topics = Topics(),  # noqa: B008 - frozen
+                   about: dict[str, Any] | None = None) -> Recording:
+    """A real robot's bag as a :class:`Recording` (see the module docstring). Raises BagError (one line).
+    ``about`` (a dict) receives the bag's ``types`` ({topic: type}) and ``synthetic``: the text of its
+    :data:`SYNTHETIC` topic (a simulated bag says so there), or None."""
     p = Path(path)
     if not p.exists():
         raise BagError(f"{p}: no such bag (a rosbag2 directory, an .mcap or .db3 file, or a ROS 1 .bag)")
     names = topics.names()
-    wanted = {*names.values(), *TF_TOPICS, *(topics.resolve(t.lstrip("/")) for t in TF_TOPICS), ROSOUT}
+    wanted = {*names.values(), *TF_TOPICS, *(topics.resolve(t.lstrip("/")) for t in TF_TOPICS), ROSOUT, SYNTHETIC}
     notes: list[str] = []
     raw: dict[str, list[tuple[int, int | None, Any]]] = {}
     types: dict[str, str] = {}
     try:
-        for topic, msgtype, t_ns, msg in _decoded(p, wanted, notes):
+        for topic, msgtype, t_ns, msg in decoded_messages(p, wanted, notes):
             if not topic:
                 types = msg
                 if not types:
@@ -285,6 +177,9 @@ def read_robot_bag(path: str | Path, topics: Topics = Topics()) -> Recording:  #
     except Exception as exc:  # noqa: BLE001 - whatever a damaged or foreign file makes a reader raise
         detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise BagError(f"{p}: cannot read this bag ({type(exc).__name__}: {detail})") from exc
+    if about is not None:
+        said = [str(getattr(m, "data", "")) for _, _, m in raw.get(SYNTHETIC, [])]
+        about.update(types=types, synthetic=said[0] if said else (SYNTHETIC if SYNTHETIC in types else None))
     return recording_from(raw, names, notes, str(p))
 
 

@@ -1,0 +1,103 @@
+"""``bt-nav video BAG`` of a robot's bag (no ground truth, no world file): a SIMULATED real-robot bag
+(tests/media/robotsynth.py) filmed to an MP4 whose frames, decoded back, show the room built up from the scans, the
+odometry path and the check-off's lines at their times, each frame saying where its data came from; and the
+simulator's bag reader opening sqlite3 and ROS 1 bags through the one reader of those formats."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bt_nav.cli.video import main as video_main
+from bt_nav.media.bagread import read_bag
+from bt_nav.media.console import SIM_LABEL, read_console_log
+from bt_nav.media.robotfilm import MAP_H, MAP_W
+from bt_nav.media.robotrun import REAL_LABEL, SYNTHETIC_LABEL, load_robot_run, source_label
+from tests.media.robotsynth import Effects, simulate, write_rosbag1, write_rosbag2
+
+FPS = 5
+
+
+@pytest.fixture(scope="module")
+def synth_bags(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """One simulated run (a 120 deg right turn: maneuver A's range) in the three formats."""
+    root = tmp_path_factory.mktemp("robotfilm")
+    run = simulate(effects=Effects(service_events=True))
+    return {"sqlite3": write_rosbag2(run, root / "db3", "sqlite3", Effects(service_events=True)),
+            "mcap": write_rosbag2(run, root / "mcap", "mcap", Effects(service_events=True)),
+            "ros1": write_rosbag1(run, root / "run.bag")}
+
+
+def _frames(path: Path) -> list[np.ndarray]:
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    w, h = meta["size"]
+    frames = [np.frombuffer(f, dtype=np.uint8).reshape(h, w, 3) for f in reader]
+    return frames
+
+
+def _count(img: np.ndarray, rgb: tuple[int, int, int], tol: int = 40) -> int:
+    """Pixels of the map panel within ``tol`` of ``rgb`` in every channel."""
+    region = img[46:MAP_H - 30, :MAP_W].astype(int)
+    return int((np.abs(region - np.asarray(rgb)).max(axis=2) <= tol).sum())
+
+
+def test_a_robot_bag_is_filmed_with_the_room_the_path_and_the_checkoff_lines(synth_bags: dict[str, Path],
+                                                                             tmp_path: Path) -> None:
+    out = tmp_path / "run.mp4"
+    assert video_main([str(synth_bags["sqlite3"]), "-o", str(out), "--fps", str(FPS), "--maneuver", "A",
+                       "--console-log"]) == 0
+    frames = _frames(out)
+    log = read_console_log(tmp_path / "run.console.json")
+    assert len(frames) == len(log) > 100
+    run = load_robot_run(synth_bags["sqlite3"], "A")
+    # every frame says where its data came from
+    assert all(rows[0] == SYNTHETIC_LABEL for _, rows in log)
+    # the maneuver's line appears when its turn settled, never before; the verdict only at the end
+    settled = run.verdict["feed"]["t0"] + run.verdict["maneuvers"][0]["settled"] - run.origin
+    assert run.verdict["maneuvers"][0]["passed"], run.lines
+    first = [t for t, rows in log if any("maneuver 1 (" in r and r.endswith("PASSED") for r in rows)]
+    assert first and settled - 1.0 / FPS <= first[0] <= settled + 1.0 / FPS
+    assert not any("overall:" in r for _, rows in log[:-2] for r in rows)
+    assert any(r.endswith("overall: PASSED") for r in log[-1][1])
+    early, late = frames[2], frames[-1]
+    # the room grows from the scans (grey returns), the scan (red) is drawn, the path (blue) appears after moving
+    assert _count(late, (150, 150, 150), 25) > 2 * _count(early, (150, 150, 150), 25) > 0
+    assert _count(early, (230, 40, 40)) > 100 and _count(late, (230, 40, 40)) > 100
+    assert _count(early, (31, 119, 180)) < 20 < 100 < _count(late, (31, 119, 180))
+    # the check-off panel: empty of verdict colours before the maneuver ended, green lines after
+    k_before, k_after = int((settled - 1.0) * FPS), int((settled + 1.0) * FPS)
+    green = (30, 140, 50)
+    panel = [f[40:MAP_H, MAP_W + 4:].astype(int) for f in (frames[k_before], frames[k_after])]
+    counts = [int((np.abs(p - np.asarray(green)).max(axis=2) <= 40).sum()) for p in panel]
+    assert counts[0] == 0 < 50 < counts[1]
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "ros1"])
+def test_every_format_films_the_same_run(synth_bags: dict[str, Path], tmp_path: Path, fmt: str) -> None:
+    still = tmp_path / "still.png"
+    assert video_main([str(synth_bags[fmt]), "--no-video", "--still", str(still), "--at", "20"]) == 0
+    from PIL import Image
+
+    img = np.asarray(Image.open(still).convert("RGB"))
+    assert _count(img, (31, 119, 180), 10) > 100 and _count(img, (150, 150, 150), 10) > 300
+
+
+def test_the_source_label_and_the_simulators_reader_of_other_formats(synth_bags: dict[str, Path]) -> None:
+    assert source_label({"/odom": "nav_msgs/msg/Odometry"}, None) == REAL_LABEL
+    assert source_label({"/ground_truth_odom": "nav_msgs/msg/Odometry"}, None) == SIM_LABEL
+    assert source_label({"/synthetic": "std_msgs/msg/String"}, "simulated") == SYNTHETIC_LABEL
+    counts = [read_bag(synth_bags[fmt]).counts for fmt in ("mcap", "sqlite3", "ros1")]
+    for topic in ("/odom", "/scan", "/cmd_vel"):
+        assert counts[0][topic] == counts[1][topic] == counts[2][topic] > 10
+
+
+def test_a_maneuver_for_a_simulators_bag_and_an_unreadable_bag_are_refused(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture) -> None:
+    (tmp_path / "junk.bag").write_bytes(b"not a bag")
+    assert video_main([str(tmp_path / "junk.bag"), "-o", str(tmp_path / "x.mp4")]) == 2
+    assert "junk.bag" in capsys.readouterr().err
