@@ -84,7 +84,8 @@ def test_the_verdict_file_and_the_exit_code_say_the_same(passed: bool, missing: 
     results = {"passed": passed, "checks": []}
     judge = SimpleNamespace(
         json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_PASSED if passed else judging.EXIT_FAILED,
-        audit=SimpleNamespace(finding_records=lambda exclude: [], parameter_findings=lambda: missing),
+        audit=SimpleNamespace(finding_records=lambda exclude: [], parameter_findings=lambda: missing,
+                               parameter_report=lambda: []),
         judge=SimpleNamespace(results=lambda: dict(results), t0=1.0), not_started=None,
         required_parameters=("safety_distance",), findings=[], timed_out=False, foreign=None, config=Config(),
         wall_start=0.0, calls=[], get_logger=lambda: None, started=True, t0_wall=None)
