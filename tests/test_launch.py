@@ -36,7 +36,7 @@ def run_launch_file(path: Path, monkeypatch: pytest.MonkeyPatch):
 
 def test_there_are_the_four_launch_files() -> None:
     assert {f.name for f in FILES} == {"turtlebot_bringup.launch.py", "sim.launch.py", "eval.launch.py",
-                                       "lab_checkoff.launch.py"}
+                                       "lab_checkoff.launch.py", "checkoff_robot.launch.py"}
 
 
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)
@@ -62,6 +62,8 @@ def test_every_argument_is_declared_used_and_typed(path: Path, monkeypatch: pyte
                 used.add(value.args[0].args[0])
         if type(node.kwargs.get("namespace")).__name__ == "LaunchConfiguration":
             used.add(node.kwargs["namespace"].args[0])
+        # a command's options and the condition that picks the node (checkoff_robot: bt-nav checkoff --robot)
+        used |= _configurations([node.kwargs.get("arguments", []), node.kwargs.get("condition")])
     assert used == set(declared), "every declared argument reaches a node, and only declared ones"
     own_defaults = getattr(module, "DEFAULTS", {})  # a launch file's own defaults (the lab check-off's arena)
     for name, kwargs in declared.items():
@@ -71,6 +73,15 @@ def test_every_argument_is_declared_used_and_typed(path: Path, monkeypatch: pyte
         elif name in SPECS:
             expected = SPECS[name].default
             assert kwargs["default_value"] == (str(expected).lower() if isinstance(expected, bool) else str(expected))
+
+
+def _configurations(value: object) -> set[str]:
+    """The names of every LaunchConfiguration inside ``value`` (stand-ins' args, lists, nested)."""
+    if type(value).__name__ == "LaunchConfiguration":
+        return {value.args[0]}
+    if isinstance(value, list | tuple):
+        return set().union(*(_configurations(v) for v in value)) if value else set()
+    return _configurations(list(getattr(value, "args", ()))) if hasattr(value, "args") else set()
 
 
 def test_lab_bringup_is_the_labs_interface(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -198,3 +209,26 @@ def test_bringup_publishes_the_cmd_vel_type_the_turtlebot3_jazzy_stack_expects(
     # the TurtleBot3 params file says the same (one story for launch and file users)
     tb3 = file_parameters(ROOT / "config" / "turtlebot3.yaml")
     assert (tb3["cmd_vel_stamped"], tb3["frame_id"]) == (stamped, "base_footprint")
+
+
+def test_checkoff_robot_launch_starts_the_live_listener_as_asked(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ros2 launch bt_nav checkoff_robot.launch.py maneuver:=C call_toggle:=... duration:=...``: exactly one
+    listener node starts (its condition picks the spelling), with --robot and the arguments as options that
+    ``bt-nav checkoff`` accepts (the node's --ros-args follow them)."""
+    from types import SimpleNamespace
+
+    from bt_nav.cli.checkoff import parser
+    from bt_nav.grading.launch_standins import perform
+
+    module, description = run_launch_file(LAUNCH / "checkoff_robot.launch.py", monkeypatch)
+    nodes = [e for e in description.args[0] if type(e).__name__ == "Node"]
+    assert {n.kwargs["executable"] for n in nodes} == {"checkoff"}
+    for toggle, json_path in (("true", ""), ("false", ""), ("True", "/tmp/v.json"), ("false", "/tmp/v.json")):
+        context = SimpleNamespace(launch_configurations={**module.DEFAULTS, "maneuver": "B", "duration": "45.0",
+                                                         "call_toggle": toggle, "results_json": json_path})
+        started = [n for n in nodes if n.kwargs["condition"].evaluate(context)]
+        assert len(started) == 1, (toggle, json_path)
+        argv = [perform(context, a) for a in started[0].kwargs["arguments"]]
+        opts = parser().parse_args(argv)
+        assert (opts.robot, opts.maneuver, opts.duration) == (True, "B", 45.0)
+        assert opts.call_toggle is (toggle.lower() == "true") and opts.json == (json_path or None)

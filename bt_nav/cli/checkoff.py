@@ -8,7 +8,10 @@
   (the service calls, unless it holds their events; contact) is listed as not judged;
 - live beside a real robot (``--robot``): it listens to the same topics for ``--duration`` s or until Ctrl-C
   (:mod:`bt_nav.ros.nodes.robotcheck`, never publishing, never calling the service), then judges what it heard as
-  a bag of it would be judged.
+  a bag of it would be judged; each maneuver's line is printed as soon as it is decided, the verdict at the end.
+  It joins the user's own ROS_DOMAIN_ID and discovery range (the robot's); ``--call-toggle`` makes it call
+  toggle_navigation itself (true after 3 s of listening, false at the end); ``--ros-args`` after the options are the
+  listener node's (``ros2 launch bt_nav checkoff_robot.launch.py``).
 
 Exit 0 when the check-off passed, 1 when it failed, 2 on a refused option or an unreadable bag.
 """
@@ -22,9 +25,9 @@ from pathlib import Path
 
 #: Options of a real robot's data (a bag, or live), of a bag only, of live listening only, and of the DDS judge only.
 ROBOT_ONLY = ("--bag", "--robot", "--node", "--from", "--to", "--armed-at", "--odom-topic", "--scan-topic",
-              "--cmd-topic", "--service-topic", "--namespace", "--duration")
+              "--cmd-topic", "--service-topic", "--namespace", "--duration", "--call-toggle")
 BAG_ONLY = ("--from", "--to")
-LIVE_ONLY = ("--duration",)
+LIVE_ONLY = ("--duration", "--call-toggle")
 DDS_ONLY = ("--world", "--seed", "--timeout")
 
 
@@ -48,6 +51,8 @@ def parser() -> argparse.ArgumentParser:
     bag.add_argument("--robot", action="store_true", help="listen to the robot's topics live (this ROS_DOMAIN_ID), "
                      "then judge what was heard")
     bag.add_argument("--duration", type=float, default=0.0, help="with --robot: listen this many s (0: until Ctrl-C)")
+    bag.add_argument("--call-toggle", action="store_true", help="with --robot: call toggle_navigation true after 3 s "
+                     "and false at the end (default: the TA calls it)")
     bag.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
     bag.add_argument("--from", dest="start", type=float,
                      help="the check-off starts this many s after t=0 (the first message judged)")
@@ -84,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         from bt_nav.ros.nodes.checkoff import main as node_main
 
         return node_main(argv)
-    refused = [o for o in DDS_ONLY if _given(own, o)] + (["--ros-args"] if own != argv else [])
+    refused = [o for o in DDS_ONLY if _given(own, o)] + (["--ros-args"] if own != argv and modes == ["--bag"] else [])
     refused += [o for o in (LIVE_ONLY if modes == ["--bag"] else BAG_ONLY) if _given(own, o)]
     if len(modes) > 1 or refused:
         what = "--bag and --robot exclude each other" if len(modes) > 1 else \
@@ -92,7 +97,9 @@ def main(argv: list[str] | None = None) -> int:
         why = " (the robot's world is the one it drove in)" if any(o in DDS_ONLY for o in refused) else ""
         print(f"bt-nav checkoff: {what}{why}", file=sys.stderr)
         return 2
-    return _judge_robot(parser().parse_args(own))
+    opts = parser().parse_args(own)
+    opts.ros_args = argv[argv.index("--ros-args") + 1:] if own != argv else []
+    return _judge_robot(opts)
 
 
 def _maneuver(opts: argparse.Namespace) -> str:
@@ -113,25 +120,66 @@ def _maneuver(opts: argparse.Namespace) -> str:
     raise ValueError("which maneuver? give --maneuver X or --node FILE (its '# CHOICE: X' line)")
 
 
+def _listen_live(opts: argparse.Namespace, topics: object, config: object) -> object:
+    """Listen to the robot (module docstring), printing each maneuver's line once decided; the Recording heard."""
+    from bt_nav.media.robotbag import recording_from
+    from bt_nav.ros.nodes.robotcheck import LINE_MARGIN, graph_words, listen
+
+    names = topics.names()  # type: ignore[attr-defined]
+    how_long = f"for {opts.duration:g} s" if opts.duration > 0 else "until Ctrl-C"
+    print(f"bt-nav checkoff: listening to {', '.join(names.values())} on {graph_words()} ({how_long})", flush=True)
+    printed: set[str] = set()
+
+    def progress(raw: dict, calls: list) -> None:
+        for line in _decided_lines(raw, calls, names, config):
+            key = line.text.split(" (", 1)[0]
+            if line.text.startswith("maneuver ") and key not in printed and line.t <= _latest(raw) - LINE_MARGIN:
+                printed.add(key)
+                print(f"bt-nav checkoff: {line.text}", flush=True)
+
+    raw, notes, calls = listen(names, opts.duration, opts.call_toggle, progress, opts.ros_args)
+    rec = recording_from(raw, names, notes, "the live robot")
+    if rec.calls is None and calls is not None:
+        rec.calls = calls
+    return rec
+
+
+def _latest(raw: dict) -> float:
+    """The newest receive time heard (s)."""
+    return max((rows[-1][0] for rows in raw.values() if rows), default=0) * 1e-9
+
+
+def _decided_lines(raw: dict, calls: list, names: dict, config: object) -> list:
+    """The check-off's lines of what was heard so far, at their times (none while there is too little to judge)."""
+    from bt_nav_sim.recorded import judge_recording
+
+    from bt_nav.media.bag import BagError
+    from bt_nav.media.robotbag import recording_from
+    from bt_nav.media.robotrun import checkoff_timeline
+
+    try:
+        rec = recording_from({k: list(v) for k, v in raw.items()}, names, [], "the live robot")
+        if rec.calls is None and calls:
+            rec.calls = calls
+        return checkoff_timeline(judge_recording(rec, config))  # type: ignore[arg-type]
+    except (BagError, ValueError):
+        return []
+
+
 def _judge_robot(opts: argparse.Namespace) -> int:
     """Read the bag (or listen live), judge, print; the verdict JSON if asked."""
     from bt_nav_sim.checkoff_core import CheckoffConfig
     from bt_nav_sim.recorded import Window, judge_recording, odometry_config, report_lines
 
     from bt_nav.media.bag import BagError
-    from bt_nav.media.robotbag import Topics, read_robot_bag, recording_from
+    from bt_nav.media.robotbag import Topics, read_robot_bag
 
     source = opts.bag or "the live robot"
     try:
         config = CheckoffConfig(maneuver=_maneuver(opts))
         topics = Topics(opts.odom_topic, opts.scan_topic, opts.cmd_topic, opts.service_topic, opts.namespace)
         if opts.robot:
-            from bt_nav.ros.nodes.robotcheck import listen
-
-            how_long = f"for {opts.duration:g} s" if opts.duration > 0 else "until Ctrl-C"
-            print(f"bt-nav checkoff: listening to {', '.join(topics.names().values())} ({how_long})", flush=True)
-            raw, notes = listen(topics.names(), opts.duration)
-            rec = recording_from(raw, topics.names(), notes, source)
+            rec = _listen_live(opts, topics, config)
         else:
             rec = read_robot_bag(opts.bag, topics)
         res = judge_recording(rec, config, Window(opts.start, opts.end, opts.armed_at))

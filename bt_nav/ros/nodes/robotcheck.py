@@ -1,7 +1,14 @@
 """``bt-nav checkoff --robot``: the lab's check-off judged live, beside a real robot, from what its topics carry.
 
-A listener, nothing more: it sends no command and never calls ``toggle_navigation`` (the TA does, as the sheet
-says). For ``--duration`` seconds, or until Ctrl-C, it keeps every /odom, /scan and /cmd_vel message (Twist or
+A listener: it sends no command, and calls ``toggle_navigation`` only when told to (``--call-toggle``: true once it
+has heard the robot for :data:`STATIC_BEFORE` s, false at the end, then it listens :data:`STATIC_AFTER` s more for the
+static check; its own calls are then the check-off's schedule, timed as it made them). Otherwise the TA calls it, as
+the sheet says. It runs on the user's own ROS_DOMAIN_ID and discovery range (the robot's: never bt_nav's localhost
+lease), and ``--ros-args`` after the options are this node's (a launch file's remaps and name). While it listens, each
+maneuver's line is printed the moment the judge can decide it (:data:`LINE_MARGIN` s after its turn settled: the
+heard data judged again every :data:`REJUDGE_EVERY` s).
+
+For ``--duration`` seconds, or until Ctrl-C, it keeps every /odom, /scan and /cmd_vel message (Twist or
 TwistStamped, whichever the graph has), the ``toggle_navigation`` service events and ``/rosout`` (the node's lines:
 the judge's announcements), with the time it heard each and the message's own stamp; then it hands them to the same
 reading and judging as a bag of them (:func:`bt_nav.media.robotbag.recording_from`,
@@ -14,7 +21,9 @@ never slows the robot down), reliable for the service events (rosbag2 records th
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -30,6 +39,12 @@ from std_srvs.srv import SetBool
 from bt_nav.media.robotbag import ROSOUT, stamp_ns
 
 NODE_NAME = "bt_nav_checkoff_listener"
+#: s heard before calling toggle_navigation(true), and after calling it false (the static checks' spans).
+STATIC_BEFORE, STATIC_AFTER = 3.0, 3.0
+#: s between two live judgings of what was heard; s after a turn settled before its line is printed.
+REJUDGE_EVERY, LINE_MARGIN = 1.0, 2.0
+#: s to wait for toggle_navigation to be offered, and for each answer.
+SERVICE_WAIT = 10.0
 #: The command types a lab node may publish, by their graph names.
 COMMAND_TYPES = {"geometry_msgs/msg/Twist": Twist, "geometry_msgs/msg/TwistStamped": TwistStamped}
 
@@ -82,23 +97,95 @@ class RobotListener(Node):
                 return
 
 
-def listen(names: dict[str, str], duration: float) -> tuple[dict[str, list[tuple[int, int | None, Any]]], list[str]]:
-    """Listen for ``duration`` seconds (0: until Ctrl-C); what was heard, and notes on it."""
-    rclpy.init()
+def graph_words() -> str:
+    """The DDS graph this process joins, in words: the user's ROS_DOMAIN_ID and discovery range."""
+    domain = os.environ.get("ROS_DOMAIN_ID", "").strip() or "0"
+    reach = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip() or "SUBNET"
+    return f"ROS_DOMAIN_ID {domain}, discovery range {reach}"
+
+
+class Toggler:
+    """``toggle_navigation`` called by the listener itself (``--call-toggle``); :attr:`calls` as the check-off's
+    schedule: (request ns, data, answer ns or None, success, message)."""
+
+    def __init__(self, node: Node, service: str) -> None:
+        self.node = node
+        self.client = node.create_client(SetBool, service)
+        self.service = service
+        self.calls: list[tuple[int, bool, int | None, bool, str]] = []
+
+    def call(self, data: bool) -> str:
+        """Call and wait (spinning) for the answer; the outcome in words."""
+        if not self.client.wait_for_service(timeout_sec=SERVICE_WAIT):
+            self.calls.append((self.node.get_clock().now().nanoseconds, data, None, False, ""))
+            return f"no {self.service} service within {SERVICE_WAIT:g} s ({graph_words()})"
+        asked = self.node.get_clock().now().nanoseconds
+        future = self.client.call_async(SetBool.Request(data=data))
+        end = time.monotonic() + SERVICE_WAIT
+        while not future.done() and time.monotonic() < end:
+            rclpy.spin_once(self.node, timeout_sec=0.05)
+        if not future.done():
+            self.calls.append((asked, data, None, False, ""))
+            return f"{self.service}({str(data).lower()}): no answer within {SERVICE_WAIT:g} s"
+        answer = future.result()
+        self.calls.append((asked, data, self.node.get_clock().now().nanoseconds, bool(answer.success),
+                           str(answer.message)))
+        return f"{self.service}({str(data).lower()}): success={answer.success} {answer.message!r}"
+
+
+Raw = dict[str, list[tuple[int, int | None, Any]]]
+
+
+def listen(names: dict[str, str], duration: float, call_toggle: bool = False,
+           on_progress: Callable[[Raw, list[Any]], None] | None = None,
+           ros_args: list[str] | None = None) -> tuple[Raw, list[str], list[Any] | None]:
+    """Listen for ``duration`` seconds (0: until Ctrl-C), calling toggle_navigation if told to; what was heard,
+    notes on it, and the listener's own calls (:class:`bt_nav_sim.recorded.ServiceCall`; None when it made
+    none). ``on_progress(raw, calls)`` is called every :data:`REJUDGE_EVERY` s with what was heard so far."""
+    from bt_nav_sim.recorded import ServiceCall
+
+    rclpy.init(args=["bt_nav_checkoff", *(["--ros-args", *ros_args] if ros_args else [])])
     node = RobotListener(names)
+    toggler = Toggler(node, names["service"].removesuffix("/_service_event")) if call_toggle else None
     notes: list[str] = []
-    end = time.monotonic() + duration if duration > 0 else float("inf")
+    began = time.monotonic()
+    end = began + duration if duration > 0 else float("inf")
+    armed = False
+    next_progress = began + REJUDGE_EVERY
+
+    def own_calls() -> list[Any] | None:
+        if toggler is None:
+            return None
+        return [ServiceCall(t * 1e-9, data, None if a is None else a * 1e-9, ok, msg)
+                for t, data, a, ok, msg in toggler.calls]
+
     try:
         while time.monotonic() < end and rclpy.ok():
             rclpy.spin_once(node, timeout_sec=0.1)
+            if toggler is not None and not armed and time.monotonic() >= began + STATIC_BEFORE:
+                armed = True
+                print(f"bt-nav checkoff: {toggler.call(True)}", flush=True)
+            if on_progress is not None and time.monotonic() >= next_progress:
+                next_progress = time.monotonic() + REJUDGE_EVERY
+                on_progress(node.raw, own_calls() or [])
     except KeyboardInterrupt:
         notes.append("stopped by Ctrl-C")
     finally:
+        try:
+            if toggler is not None and armed and rclpy.ok():
+                print(f"bt-nav checkoff: {toggler.call(False)}", flush=True)
+                after = time.monotonic() + STATIC_AFTER
+                while time.monotonic() < after and rclpy.ok():
+                    rclpy.spin_once(node, timeout_sec=0.1)
+        except KeyboardInterrupt:
+            notes.append("the static check after deactivation was cut short by a second Ctrl-C")
         raw, command_type = node.raw, node.command_type
         node.destroy_node()
         rclpy.try_shutdown()
     if not command_type:
         notes.append(f"no {names['cmd']} publisher was seen (Twist or TwistStamped)")
     heard = ", ".join(f"{topic} {len(rows)}" for topic, rows in sorted(raw.items())) or "nothing"
-    notes.append(f"heard live: {heard}")
-    return raw, notes
+    notes.append(f"heard live ({graph_words()}): {heard}")
+    if toggler is not None:
+        notes.append("toggle_navigation called by this listener: its own calls are the check-off's schedule")
+    return raw, notes, own_calls()
