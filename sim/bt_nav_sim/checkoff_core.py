@@ -577,8 +577,14 @@ class CheckoffJudge(Verdict):
         held = start - self._t[k]
         episode["trigger_held_for"] = round(held, 2)
         if crept >= cfg.late_distance and held >= cfg.late_time:
-            episode["late"] = True
-            episode["passed"] = False
+            episode.update(late=True, passed=False, late_at=self._fired_at(self._readings[i]))
+
+    def _fired_at(self, r: Reading | None) -> str:
+        """Where a late trigger fired, in the figures a student compares with their parameter."""
+        trigger, cfg = self.config.spec.trigger, self.config
+        at = "" if r is None else (f"left {r.left:.2f} m and right {r.right:.2f} m" if trigger.reads == "sides"
+                                   else f"front {r.front:.2f} m")
+        return f"triggered at {at or 'an unknown reading'} with {trigger.distance} {cfg.distance(trigger.distance):.2f}"
 
     def _judge_episode(self, a: int, b: int, settle: float, next_start: float, now: float,
                        begin: float | None = None) -> dict[str, Any]:

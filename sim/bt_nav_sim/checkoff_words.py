@@ -47,7 +47,8 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
     if not e["trigger"]:
         out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
     if e.get("late"):
-        out.append(f"turned late: it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
+        at = f"{e['late_at']}: " if e.get("late_at") else ""
+        out.append(f"turned late: {at}it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
                    "after its trigger held (does it read its distance parameter, and its sectors at their angles "
                    "from angle_min and angle_increment?)")
     if not e["angle_ok"]:

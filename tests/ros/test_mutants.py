@@ -55,13 +55,15 @@ _EVERY_CHOICE = {name: (LAB_C[name], None) for name in (
 LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
     "A": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
           "front_is_whole_scan": (NOT_HELD, "lab_beside"),
-          "ignores_safety_distance": (r"turned late: it crept on 0\.[12]\d m", "safety_distance=0.7"),
+          "ignores_safety_distance": (r"turned late: triggered at front 0\.[3-5]\d m with safety_distance 0\.70: "
+                                      r"it crept on 0\.[12]\d m", "safety_distance=0.7"),
           "spins_360": (r"turned 3[5-7]\d deg \w+; the Randomizer needs 80-190 deg", None),
           "spins_until_clear": (r"turned \d+ deg \w+; the Randomizer needs 80-190 deg", "lab_object|lab_dead_end")},
     "B": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
           "half_angle": (r"turned [89]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
           "left_or_right": (r"turned although its trigger did not hold \(left", "lab_hallway"),
-          "ignores_safety_distance": (r"turned late: it crept on", "safety_distance=0.7"),
+          "ignores_safety_distance": (r"turned late: triggered at left 0\.\d\d m and right 0\.\d\d m with "
+                                      r"safety_distance 0\.70: it crept on", "safety_distance=0.7"),
           "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
           "respins_forever": (r"never moved on: \d+ Retreats back to back \(\d+ deg in place\)", "lab_dead_end")},
     "C": {**_EVERY_CHOICE, **{name: (LAB_C[name], None) for name in (
@@ -178,7 +180,7 @@ def test_a_node_ignoring_its_safety_distance_triggers_late(tmp_path: Path) -> No
     [ok] = result["grades"]["correct"]["runs"]
     [late] = result["grades"]["ignores"]["runs"]
     assert ok["passed"], ok["reason"]
-    assert not late["passed"] and "turned late: it crept on" in late["reason"], late["reason"]
+    assert not late["passed"] and "with safety_distance 0.60: it crept on" in late["reason"], late["reason"]
     assert "does it read its distance parameter, and its sectors at their angles" in late["reason"]
 
 
