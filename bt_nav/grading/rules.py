@@ -34,6 +34,7 @@ from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, ex
 from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
 from bt_nav.mission.params import LAB_MANEUVERS
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, param_arg
+from bt_nav.run.terminal import shell_text
 
 #: The page's name in a grade's directory (its summary.md and report.html link it).
 RULES_FILE = "rules.md"
@@ -268,8 +269,8 @@ def _lab_parameters(cfg: CheckoffConfig, node_params: Mapping[str, Any]) -> list
             f"| `{LAB_PARAMETERS[0]}` | declares it (the check-off's `ros2 param list`: a node without it fails "
             f"\"parameters declared\") and triggers at it | its judge triggers at the node's value when the grade "
             f"passes one (`--node-param {LAB_PARAMETERS[0]}=0.6`), else at {cfg.safety_distance:g} m |",
-            f"| `maneuver` | may read it | passes `-p {param_arg('maneuver', 'X')}`: X is your file's `# CHOICE: X` "
-            "or `--maneuvers X` |",
+            f"| `maneuver` | may read it | passes `-p {shell_text([param_arg('maneuver', 'X')])}`: X is your file's "
+            "`# CHOICE: X` or `--maneuvers X` |",
             "| `use_sim_time` | passes its arguments to `rclpy.init` | passes `true` |"] + (
         [f"| {given} | | passed by this grade (`--node-param`) |"] if given else [])
 
@@ -389,7 +390,7 @@ def _run(profile: str, setup: GradeSetup) -> list[str]:
     where = "this grade's" if setup.worlds else "by default" + ("; those that check your maneuver off" if
                                                                  profile == "lab" else "")
     return ["```console", f"$ bt-nav grade --exe \"python3 {example}\" --profile {profile}", "```", "",
-            f"Appended to your command: `{' '.join(appended)}`"
+            f"Appended to your command: `{shell_text(appended)}`"
             + (" (X: your file's `# CHOICE: X`, or `--maneuvers X`)" if profile == "lab" else "")
             + ". Remapping changes only a name your node uses: " + ", ".join(
                 f"`{src}` becomes `{dst}`" for src, dst in profile_remaps(profile)) + ".", "",
