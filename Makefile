@@ -11,7 +11,7 @@ STAMP := $(VENV)/.bt_nav-installed
 # (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: all venv test test-quick lint demo bench faults tree-svg colcon-check clean browser docs grader-suite wheel autograder-zip
+.PHONY: all venv test test-quick lint demo bench faults judge-agreement tree-svg colcon-check clean browser docs grader-suite wheel autograder-zip
 
 all: test
 
@@ -75,6 +75,11 @@ autograder-zip: wheel
 
 faults: $(STAMP)
 	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults
+
+# The check-off's two judges on the same simulator runs with a real robot's effects: ground truth against the
+# odometry alone (bench/judge_agreement.py; the table in docs/grading.md, "two judges agree").
+judge-agreement: $(STAMP)
+	$(BIN)/python -m bench.judge_agreement --seeds 4
 
 clean:
 	rm -rf build install log runs .pytest_cache docs/_build docs/reference

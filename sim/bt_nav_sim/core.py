@@ -82,6 +82,10 @@ class SimConfig:
     # Sim s between a command and the wheels (a real base's serial link and motor controller; 0.1-0.15 s
     # on real TurtleBot3s): a command given at t drives the physics from t + latency on (see SimCore.move).
     actuation_latency: float = 0.0
+    # A real base's wheel odometry in a pivot (TurtleBot3 bags): it reads every turn this much too far (1.015:
+    # 1.5 % over) and drifts sideways this many metres per radian turned, while ground truth stays exact.
+    odom_yaw_scale: float = 1.0
+    odom_turn_drift: float = 0.0
     # A real LiDAR of bt_nav_sim.lidar.LIDARS by name (lds01, lds02, rplidar, ...); empty: the world file's
     # ``lidar``, else the profile's own.
     lidar: str = ""
@@ -115,6 +119,9 @@ class SimConfig:
             raise ValueError(f"cmd_vel_timeout must be >= 0, got {self.cmd_vel_timeout}")
         if not (math.isfinite(self.actuation_latency) and 0.0 <= self.actuation_latency <= MAX_LATENCY):
             raise ValueError(f"actuation_latency must be in [0, {MAX_LATENCY}] s, got {self.actuation_latency}")
+        if not (0.5 <= self.odom_yaw_scale <= 1.5 and 0.0 <= self.odom_turn_drift <= 0.1):
+            raise ValueError(f"odom_yaw_scale must be in [0.5, 1.5] and odom_turn_drift in [0, 0.1] m/rad, got "
+                             f"{self.odom_yaw_scale} and {self.odom_turn_drift}")
         if self.kinematics and self.kinematics not in KINEMATICS:
             raise ValueError(f"kinematics must be one of {', '.join(KINEMATICS)}, got {self.kinematics!r}")
         self.lidar_model()
@@ -352,6 +359,9 @@ class SimCore:
             slip_s, slip_yaw = self.odom_rng.normal(0.0, ODOM_SLIP_SIGMA, 2)
             forward *= 1.0 + slip_s
             dyaw *= 1.0 + slip_yaw
+        if dyaw:  # the real-robot pivot effects (1.0 and 0.0 by default: none)
+            lateral += self.config.odom_turn_drift * abs(dyaw)
+            dyaw *= self.config.odom_yaw_scale
         oc, os_ = math.cos(self.odom_yaw), math.sin(self.odom_yaw)
         self.odom_x += oc * forward - os_ * lateral
         self.odom_y += os_ * forward + oc * lateral

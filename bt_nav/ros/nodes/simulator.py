@@ -147,6 +147,7 @@ def _sim_config(p: dict[str, Any]) -> SimConfig:
         max_wheel_speed=float(p["max_wheel_speed"]), wheel_separation=float(p["wheel_separation"]),
         spawn_jitter_m=float(p["spawn_jitter_m"]), spawn_jitter_deg=float(p["spawn_jitter_deg"]),
         actuation_latency=float(p["actuation_latency"]), lidar=str(p["lidar"]),
+        odom_yaw_scale=float(p["odom_yaw_scale"]), odom_turn_drift=float(p["odom_turn_drift"]),
     )
 
 
@@ -187,6 +188,9 @@ class SimulatorNode(QuietQosEvents, Node):
                   "profile's"),
         "actuation_latency": (0.0, "sim s between a command (as _live holds it, after cmd_vel_timeout) and the "
                                    "wheels, like a real base's serial and motor-controller delay (0.1-0.15 s)"),
+        "odom_yaw_scale": (1.0, "/odom reads each turn this many times its true angle (a real base's pivot slip: "
+                                "1.015); ground truth stays exact"),
+        "odom_turn_drift": (0.0, "/odom drifts sideways this many m per rad turned (a real base's pivot: ~0.01)"),
         "follow": (True, "wait for the followers (cmd_vel publishers, sim_sync senders) to keep up"),
         "max_lag": (0.05, "sim s that sim time may lead an active follower (at least; see Followers)"),
         "follower_timeout": (1.0, "wall s of silence after which a follower is no longer waited for"),
