@@ -194,7 +194,9 @@ def test_marks_ignore_a_closed_loop_slowing_down_but_not_a_rise_or_a_new_steady_
     drop to a rate kept for a turn of its own (``min_turn``)."""
     slowing = [(k * 0.05, 0.0, w) for k, w in enumerate([0.6, 0.6, 0.5, 0.4, 0.3, 0.2, 0.15, 0.15, 0.6, 0.6])]
     assert marks(slowing, 0, len(slowing) - 1, [], min_turn=0.6) == [(8, "rate change")]
-    assert marks(slowing, 0, len(slowing) - 1, [0.05], min_turn=0.6) == [(1, "announcement"), (8, "rate change")]
+    # a node that announced the rotation's first maneuver marks its maneuvers by its announcements alone
+    assert marks(slowing, 0, len(slowing) - 1, [0.05], min_turn=0.6) == [(1, "announcement")]
+    assert marks(slowing, 0, len(slowing) - 1, [0.05, 0.4], min_turn=0.6) == [(1, "announcement"), (8, "announcement")]
     assert marks(slowing, 0, len(slowing) - 1, [0.3], min_turn=0.6) == [(8, "announcement")]  # the step it names
     dropping = [(k * 0.05, 0.0, 1.0 if k < 5 else 0.5) for k in range(60)]
     assert marks(dropping, 0, 59, [], min_turn=0.6) == [(5, "rate change")]
@@ -232,3 +234,15 @@ def test_no_toggle_cycle_without_a_maneuver_or_too_late_for_one() -> None:
     assert judge.results()["times"]["cycle_off_requested"] is None
     judge = _play(_judge("A", WALL_AHEAD), A_SCRIPT)  # the first maneuver ends at 17.2 s, the disarm is at 25 s
     assert judge.results()["times"]["cycle_off_requested"] is None and judge.passed, judge.report_lines()
+
+
+def test_a_silence_a_busy_machine_leaves_inside_an_announced_turn_marks_nothing() -> None:
+    """Measured on a loaded machine: a right Randomizer's one announced 176 deg turn read as 125 + 50 deg. A silence
+    the paced simulator allows a delayed node (up to a command or scan period plus 0.1 s) is no pause, and inside
+    a turn the node announced only its own announcements mark."""
+    times = [k * 0.05 for k in range(40)] + [2.35 + k * 0.05 for k in range(40)]  # 0.4 s silent after t = 1.95
+    turn = [(t, 0.0, 0.6) for t in times]
+    assert marks(turn, 0, len(turn) - 1, [], min_turn=0.6) == []
+    longer = [(t if t < 2.0 else t + 0.4, 0.0, 0.6) for t in times]  # 0.8 s: a pause, where nothing was announced
+    assert marks(longer, 0, len(longer) - 1, [], min_turn=0.6) == [(40, "pause")]
+    assert marks(longer, 0, len(longer) - 1, [0.0], min_turn=0.6) == [(1, "announcement")]  # its own start
