@@ -2,7 +2,9 @@
 
 Live (default): a private node taps the graph (:class:`bt_nav.ros.graphtap.GraphTap`) and feeds
 :class:`bt_nav.media.view.LiveScene`; the world is the one the simulator's parameters name. With
-``--bag BAG`` the page plays the recorded mission back with a time slider instead (no ROS needed).
+``--bag BAG`` the page plays the recorded mission back with a time slider instead (no ROS needed); a robot's bag
+(no ground truth: rosbag2 sqlite3 or MCAP, or ROS 1) is played back from its odometry and scans, the room as its
+scans saw it, with the check-off's lines given ``--maneuver`` or ``--node`` (:mod:`bt_nav.media.robotview`).
 The page is served on 127.0.0.1 unless ``--host`` says otherwise (standard-library HTTP server,
 server-sent events; :mod:`bt_nav.media.view`).
 
@@ -17,6 +19,7 @@ import argparse
 import signal
 import sys
 import threading
+from pathlib import Path
 from typing import Any
 
 from bt_nav.media.bag import TOPICS, BagError
@@ -64,9 +67,12 @@ def _live(args: argparse.Namespace, feeds: list[Any]) -> tuple[Any, Any]:
 
 def _bag(args: argparse.Namespace, feeds: list[Any]) -> Any:
     from bt_nav.media.bagread import iter_messages, read_bag
+    from bt_nav.media.robotrun import is_robot_bag
     from bt_nav.media.video import world_of
     from bt_nav.media.view import BagScene
 
+    if is_robot_bag(args.bag):
+        return _robot_bag(args, feeds)
     record = read_bag(args.bag)
     for feed in feeds:  # Foxglove gets the whole bag at once (its own player shows the time line)
         for topic, msgtype, t_ns, data in iter_messages(args.bag):
@@ -74,6 +80,30 @@ def _bag(args: argparse.Namespace, feeds: list[Any]) -> Any:
                 feed(topic, msgtype, t_ns, data)
     world = _world(args.world, args.seed or 0) if args.world else world_of(record)
     return BagScene(record, world)
+
+
+def _robot_bag(args: argparse.Namespace, feeds: list[Any]) -> Any:
+    """A robot's bag played back (module docstring); Foxglove gets its rosbag2 messages as recorded."""
+    from bt_nav.cli.checkoff import _maneuver
+    from bt_nav.media.bagformats import iter_messages
+    from bt_nav.media.robotrun import load_robot_run
+    from bt_nav.media.robotview import RobotScene
+
+    try:
+        maneuver = _maneuver(args) if args.maneuver or args.node else None
+    except ValueError as exc:
+        raise BagError(str(exc)) from exc
+    run = load_robot_run(args.bag, maneuver)
+    for note in run.notes:
+        print(f"bt-nav view: {note}", file=sys.stderr)
+    if feeds and Path(args.bag).suffix == ".bag":
+        print("bt-nav view: --foxglove forwards rosbag2 bags only (a ROS 1 bag's payloads are not CDR)",
+              file=sys.stderr)
+    elif feeds:
+        for feed in feeds:
+            for topic, msgtype, t_ns, data in iter_messages(args.bag):
+                feed(topic, msgtype, t_ns, data)
+    return RobotScene(run)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -88,6 +118,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=None, help="seed of a generated --world")
     parser.add_argument("--foxglove", action="store_true", help="also serve Foxglove's WebSocket protocol")
     parser.add_argument("--foxglove-port", type=int, default=8765, help="Foxglove WebSocket port (default 8765)")
+    parser.add_argument("--maneuver", help="a robot's bag: judge it as this maneuver and show the check-off's lines")
+    parser.add_argument("--node", help="a robot's bag: the node file whose '# CHOICE: X' line names the maneuver")
     args = parser.parse_args(argv)
     bridge = FoxgloveBridge(args.host, args.foxglove_port) if args.foxglove else None
     feeds = [bridge.feed] if bridge else []

@@ -101,3 +101,43 @@ def test_a_maneuver_for_a_simulators_bag_and_an_unreadable_bag_are_refused(tmp_p
     (tmp_path / "junk.bag").write_bytes(b"not a bag")
     assert video_main([str(tmp_path / "junk.bag"), "-o", str(tmp_path / "x.mp4")]) == 2
     assert "junk.bag" in capsys.readouterr().err
+
+
+def test_the_browser_view_plays_a_robot_bag_back(synth_bags: dict[str, Path]) -> None:
+    """``bt-nav view --bag``'s scene of a robot's bag: the room as scanned is the page's world, the robot moves on
+    its odometry, the source is the first log line and the check-off's lines appear once decided."""
+    import http.client
+    import json
+
+    from bt_nav.cli.view import _bag
+    from bt_nav.media.view import ViewServer
+
+    args = type("Args", (), {"bag": str(synth_bags["ros1"]), "maneuver": "A", "node": None, "world": None,
+                             "seed": None})()
+    scene = _bag(args, [])
+    srv = ViewServer(scene, "127.0.0.1", 0)
+    srv.start()
+
+    def call(method: str, path: str, body: bytes | None = None) -> dict:
+        conn = http.client.HTTPConnection(*srv.server_address[:2], timeout=5)
+        try:
+            conn.request(method, path, body=body)
+            return json.loads(conn.getresponse().read())
+        finally:
+            conn.close()
+
+    try:
+        world = call("GET", "/world")
+        assert world["name"].startswith("the room as scanned") and len(world["circles"]) > 300
+        start = scene.run.origin
+        call("POST", "/control", json.dumps({"t": start + 2.0}).encode())
+        early = call("GET", "/state")
+        call("POST", "/control", json.dumps({"t": scene.run.end}).encode())
+        late = call("GET", "/state")
+    finally:
+        srv.close()
+        scene.close()
+    assert early["events"][0] == late["events"][0] == SYNTHETIC_LABEL
+    assert early["pose"] != late["pose"] and len(late["trail"]) > len(early["trail"]) and late["scan"]
+    assert not any("check-off:" in e for e in early["events"])
+    assert any("check-off: overall: PASSED" in e for e in late["events"])
