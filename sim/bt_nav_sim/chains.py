@@ -28,6 +28,7 @@ disarm failed its purpose ("never moved on").
 
 from __future__ import annotations
 
+import bisect
 import math
 import statistics
 from collections.abc import Sequence
@@ -212,3 +213,19 @@ def chain_check(judge: Any, episodes: Sequence[dict[str, Any]], now: float) -> t
     if failed:
         check["reason"] = failed[0]
     return check, findings
+
+
+def turning_point(judge: Any, last: float, nxt: float, now: float, w_before: float, w_after: float) -> float:
+    """Where one turn ends and the next, begun before the robot settled, starts: the yaw's extremum when the
+    next turns the other way (the robot coasts on for up to a fifth of a second first), else the slowest
+    moment of the rotation between them."""
+    sign = 1.0 if w_before > 0 else -1.0
+    ts, uy = judge._t, judge._uyaw
+    i, j = bisect.bisect_left(ts, last), bisect.bisect_right(ts, min(nxt + 0.5, now))
+    if j - i < 2:
+        return nxt
+    if w_before * w_after < 0:
+        k = max(range(i, j), key=lambda n: sign * uy[n])
+        return ts[k]
+    k = min(range(i + 1, j), key=lambda n: sign * (uy[n] - uy[n - 1]) / max(ts[n] - ts[n - 1], 1e-9))
+    return ts[k - 1]

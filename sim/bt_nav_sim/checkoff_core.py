@@ -58,7 +58,7 @@ import numpy as np
 from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
-from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run
+from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
@@ -523,8 +523,8 @@ class CheckoffJudge(Verdict):
                 settle = min(nxt, self._settled_at(last, limit))
                 joined = None
                 if k + 1 < len(runs) and settle >= nxt and self._t:  # back to back: split where the rotation turned
-                    joined = self._turning_point(last, nxt, now, self.commands[b][2],
-                                                 self.commands[runs[k + 1][0]][2])
+                    joined = turning_point(self, last, nxt, now, self.commands[b][2],
+                                           self.commands[runs[k + 1][0]][2])
                     settle = joined
             episode = self._judge_episode(a, b, settle, nxt, now, begin)
             if begin is not None and runs[k - 1][2] is not None:
@@ -539,21 +539,6 @@ class CheckoffJudge(Verdict):
             out.append(episode)
             since = settle
         return out
-
-    def _turning_point(self, last: float, nxt: float, now: float, w_before: float, w_after: float) -> float:
-        """Where one turn ends and the next, begun before the robot settled, starts: the yaw's extremum when the
-        next turns the other way (the robot coasts on for up to a fifth of a second first), else the slowest
-        moment of the rotation between them."""
-        sign = 1.0 if w_before > 0 else -1.0
-        ts, uy = self._t, self._uyaw
-        i, j = bisect.bisect_left(ts, last), bisect.bisect_right(ts, min(nxt + 0.5, now))
-        if j - i < 2:
-            return nxt
-        if w_before * w_after < 0:
-            k = max(range(i, j), key=lambda n: sign * uy[n])
-            return ts[k]
-        k = min(range(i + 1, j), key=lambda n: sign * (uy[n] - uy[n - 1]) / max(ts[n] - ts[n - 1], 1e-9))
-        return ts[k - 1]
 
     def _judge_lateness(self, episode: dict[str, Any], since: float, start: float) -> None:
         """A maneuver whose trigger held by every reasonable reading (:meth:`_trigger_all`) while the robot crept
@@ -604,6 +589,7 @@ class CheckoffJudge(Verdict):
         interrupted = last >= self.next_disarm(start) - INTERRUPT_SLACK
         turn_from = start if begin is None else max(begin, start - 0.5)  # a turn begun while the last one coasted
         angle = math.degrees(self._interp(self._uyaw, settle) - self._interp(self._uyaw, turn_from)) if self._t else 0.0
+        swung = self._swung(start, turn_from, angle)
         # the commands and the motion of one window: the turn's commands (those the node sent between its turning
         # ones too, in the order they came: several may share a stamp), and where they (not the creep that follows
         # the turn, from its first forward command on) can have moved the robot
@@ -611,7 +597,7 @@ class CheckoffJudge(Verdict):
         end = min(settle, last + cfg.brake_allowance, self._next_forward(b))
         motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
-        angle_ok, rule = self._judged_angle(angle, candidates, interrupted)
+        angle_ok, rule = self._judged_angle(angle + math.copysign(swung, angle), candidates, interrupted)
         moved_on, moved_text = self._moved_on(settle, next_start, now, start)
         as_maneuver = trigger and angle_ok and forward_ok and moved_on
         recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
@@ -620,11 +606,19 @@ class CheckoffJudge(Verdict):
                 "recovery" if recovery else "maneuver", "passed": forward_ok if recovery else as_maneuver,
                 "trigger": trigger, "interrupted": interrupted,
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
-                "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule,
+                "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule, "swung_deg": swung,
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items() if k != "sides"}}
+
+    def _swung(self, start: float, turn_from: float, angle: float) -> float:
+        """Degrees the robot swung on the old way after this turn's first command, when it reversed a turn still
+        under way (the base's inertia and latency, not the node: credited to the new turn's angle)."""
+        if turn_from <= start or not self._t:
+            return 0.0
+        old_way = math.degrees(self._interp(self._uyaw, turn_from) - self._interp(self._uyaw, start))
+        return round(abs(old_way), 2) if old_way * angle < 0 else 0.0
 
     def _next_forward(self, b: int) -> float:
         """When the node first commands forward speed after the turn's last command (``inf`` if never): the robot

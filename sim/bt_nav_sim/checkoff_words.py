@@ -52,7 +52,7 @@ def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
                    "after its trigger held (does it read its distance parameter, and its sectors at their angles "
                    "from angle_min and angle_increment?)")
     if not e["angle_ok"]:
-        out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}; {name} needs {e['rule']}"
+        out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}{_swung_text(e)}; {name} needs {e['rule']}"
                    + (f" ({SPLIT_HINT})" if e.get("unsplit") else ""))
     if not e["forward_ok"]:
         out.append(_forward_text(e))
@@ -79,12 +79,19 @@ def performed_check(cfg: Any, maneuvers: list[dict[str, Any]],
             "required": cfg.min_maneuvers, "detail": detail}
 
 
+def _swung_text(e: dict[str, Any]) -> str:
+    """A reversed turn's swing the old way after its first command, which its angle rule counted for it."""
+    swung = e.get("swung_deg") or 0.0
+    return f" (+{swung:.0f} deg swung on the old way after its first command: counted)" if swung >= 0.5 else ""
+
+
 def maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:
     """The report line of one maneuver episode: every rule it was held to, what is wrong with it in words."""
     sim = f" (sim {e['t'] + e['t0']:.2f} s)" if e.get("t0") else ""  # the terminal's and the video's clock
     problems = maneuver_problems(maneuver, e)
     detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
-              f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}, "
+              f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}"
+              f"{_swung_text(e)}, "
               f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
               f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e, maneuver)}; " + "; ".join(problems)
                                                      if problems else ""))

@@ -246,3 +246,36 @@ def test_a_silence_a_busy_machine_leaves_inside_an_announced_turn_marks_nothing(
     longer = [(t if t < 2.0 else t + 0.4, 0.0, 0.6) for t in times]  # 0.8 s: a pause, where nothing was announced
     assert marks(longer, 0, len(longer) - 1, [], min_turn=0.6) == [(40, "pause")]
     assert marks(longer, 0, len(longer) - 1, [0.0], min_turn=0.6) == [(1, "announcement")]  # its own start
+
+
+def test_a_turn_reversed_at_once_is_credited_the_swing_the_base_owed_the_last_one() -> None:
+    """An open-loop node at 2 rad/s reverses at once (a Randomizer drawing the other side in a dead end): a base
+    limited to 10 rad/s^2 swings on the old way for 0.2 s after the new turn's first command (~11 deg), and ramps
+    up again: a commanded 100 deg turn measures ~78 deg from the yaw's extremum. The swing is counted for it."""
+    judge = _judge("A", DEAD_END)
+    judge.start(0.0)
+    script = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.radians(120) / 2, 0.0, 2.0), (math.radians(100) / 2, 0.0, -2.0),
+              (30.0, 0.05, 0.0)]
+    x = y = yaw = w_now = 0.0
+    ends = [sum(s[0] for s in script[:k + 1]) for k in range(len(script))]
+    for k in range(round(60.0 / DT) + 1):
+        t = k * DT
+        if k % 50 == 0:
+            for action in judge.step(t):
+                judge.on_activate_result(t, action.data, True)
+        i = next((n for n, end in enumerate(ends) if t < end), len(script) - 1)
+        v, w = script[i][1], script[i][2]
+        if i == 2 and t - ends[1] < DT:
+            judge.on_announcement(t, "reactive_navigator", "Executing rotation maneuver A: 120 deg left")
+        if i == 3 and t - ends[2] < DT:
+            judge.on_announcement(t, "reactive_navigator", "Executing rotation maneuver A: 100 deg right")
+        if k % 5 == 0:
+            judge.on_command(t, v, w)
+        if k % 3 == 0:
+            judge.observe(t, x, y, yaw)
+        w_now += max(-10.0 * DT, min(10.0 * DT, w - w_now))
+        x, y = x + v * DT * math.cos(yaw), y + v * DT * math.sin(yaw)
+        yaw = math.remainder(yaw + w_now * DT, 2 * math.pi)
+    right = next(m for m in judge.results()["maneuvers"] if m["angle_deg"] < 0)
+    assert 70 < -right["angle_deg"] < 80 and 8 < right["swung_deg"] < 14, right
+    assert right["angle_ok"], right
