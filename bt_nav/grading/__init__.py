@@ -16,5 +16,13 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
 - :mod:`bt_nav.grading.report`, :mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`: the grid's report
   (``grade.json``, ``summary.md``, ``report.html``) with its pictures and videos.
 - :mod:`bt_nav.grading.formats`: a finished grade in the formats platforms and CI read (Gradescope's
-  ``results.json``, JUnit XML), from its ``grade.json`` / ``class.json``.
+  ``results.json``, JUnit XML, a gradebook's CSV), from its ``grade.json`` / ``class.json``; its points and verdicts
+  from :mod:`bt_nav.grading.scores`, its fix hints from :mod:`bt_nav.grading.hints`; :mod:`bt_nav.grading.classpage`
+  the class page (``class.html``).
+- :mod:`bt_nav.grading.handins`: a folder of hand-ins; their launch files checked by
+  :mod:`bt_nav.grading.launchfile` (``bt-nav check-launch``): the file evaluated as ``ros2 launch`` would run it
+  (:mod:`bt_nav.grading.launch_eval`, in a child process, against :mod:`bt_nav.grading.launch_standins`), the static
+  reader :mod:`bt_nav.grading.launch_static` its fallback; the hand-in video's stand-in line
+  (:mod:`bt_nav.grading.handin_film`).
+- :mod:`bt_nav.grading.rules`: what a node must do, from the judges' own rules (``bt-nav rules``, ``rules.md``).
 """
