@@ -34,6 +34,7 @@ from bt_nav.grading.classroom import NAME, Student, read_class_page
 from bt_nav.grading.exe.grid import declared_choice
 from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
 from bt_nav.grading.report import read_grade
+from bt_nav.grading.scores import NOT_GRADED_VERDICT, unscored
 
 #: The lab sheet's name for the node file.
 NODE_NAME = "reactive_navigator.py"
@@ -205,7 +206,9 @@ def add_verdicts(rows: list[dict[str, Any]], handins: dict[str, dict[str, Any]])
         launch = LaunchReport.from_dict(record["launch"])
         passed, why = verdict(row, launch)
         row["handin"] = {**record, "lines": [*launch.lines(), *(f"note: {n}" for n in launch.notes)]}
-        row["verdict"], row["verdict_reasons"] = "PASSED" if passed else "FAILED", why
+        left = not passed and bool(row.get("errors"))  # runs without a verdict: none of the node's doing
+        row["verdict"] = "PASSED" if passed else NOT_GRADED_VERDICT if left else "FAILED"
+        row["verdict_reasons"] = why
 
 
 @dataclass
@@ -225,6 +228,14 @@ class StudentResult:
     refused: str | None
     passed: bool
     reasons: list[str] = field(default_factory=list)
+
+    @property
+    def verdict(self) -> str:
+        """PASSED, FAILED, or NOT GRADED: runs left without a verdict that are none of the node's doing (the class
+        page, the CSV and Gradescope say the same: :func:`bt_nav.grading.scores.handin_verdict`)."""
+        if self.passed:
+            return "PASSED"
+        return NOT_GRADED_VERDICT if any(unscored(r) for r in self.runs) else "FAILED"
 
 
 def _runs(grid: Path) -> list[dict[str, Any]]:

@@ -176,7 +176,7 @@ def _class_verdicts(out: Path, handins: dict[str, Any]) -> bool:
     for result in results:
         write_feedback(result)
         if handins:
-            print(f"  {result.name}: hand-in {'PASSED' if result.passed else 'FAILED'}"
+            print(f"  {result.name}: hand-in {result.verdict}"
                   + (f" ({'; '.join(result.reasons)})" if result.reasons else ""), flush=True)
     print(f"wrote {len(results)} feedback.md: {out}/<student>/feedback.md", flush=True)
     return all(r.passed for r in results)
