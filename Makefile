@@ -77,9 +77,10 @@ faults: $(STAMP)
 	BT_NAV_FAULTS_LONG=1 $(BIN)/python -m pytest -q tests/faults
 
 # The check-off's two judges on the same simulator runs with a real robot's effects: ground truth against the
-# odometry alone (bench/judge_agreement.py; the table in docs/grading.md, "two judges agree").
+# odometry alone (bench/judge_agreement.py; the table in docs/grading.md, "two judges agree"): 108 lock-step runs
+# (~5 min) and 12 of the grader suite's lab nodes graded over DDS (~15 min on 2 cores), each in a directory of its own.
 judge-agreement: $(STAMP)
-	$(BIN)/python -m bench.judge_agreement --seeds 4
+	$(BIN)/python -m bench.judge_agreement --seeds 4 --nodes "$$(mktemp -d /tmp/bt_nav-judge-agreement.XXXXXX)"
 
 clean:
 	rm -rf build install log runs .pytest_cache docs/_build docs/reference

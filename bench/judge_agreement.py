@@ -15,7 +15,10 @@ motion. A run the odometry passes and ground truth fails is listed with its caus
 Collisions: a robot's recording has no contact sensor, so a run that fails from ground truth only on "no collision"
 is counted apart (the TA sees contact), not as an agreement or a disagreement of the verdicts' rules.
 
-    python -m bench.judge_agreement [--seeds 4] [--out docs-table.md]
+``--nodes DIR`` adds a subset of the grader suite's lab nodes (right variants and mistakes), graded over DDS with the
+same effects and judged twice (:mod:`bench.judge_agreement_nodes`).
+
+    python -m bench.judge_agreement [--seeds 4] [--nodes DIR] [--out table.md]
 """
 
 from __future__ import annotations
@@ -118,15 +121,18 @@ def run_once(world: str, maneuver: str, seed: int) -> Row:
     return compare(f"{world} {maneuver} seed {seed}", truth, odo)
 
 
-def compare(cell: str, truth: dict[str, Any], odo: dict[str, Any]) -> Row:
-    """The two verdicts side by side, maneuvers matched by their start (within 1 s)."""
+def compare(cell: str, truth: dict[str, Any], odo: dict[str, Any], truth_t0: float = 0.0,
+            odo_t0: float | None = None) -> Row:
+    """The two verdicts side by side, maneuvers matched by their start (within 1 s) on one clock: each verdict's
+    times count from its own time zero (``truth_t0``; the odometry verdict's ``feed.t0`` by default)."""
+    shift = (float(odo["feed"]["t0"]) if odo_t0 is None else odo_t0) - truth_t0
     collided = any(c["name"] == "no collision" and not c["passed"] for c in truth["checks"])
     rules_truth = all(c["passed"] for c in truth["checks"] if c["name"] != "no collision") and \
         len(truth["maneuvers"]) >= 1
     row = Row(cell, bool(truth["passed"]), bool(odo["passed"]), collided)
     judged = list(odo["judged_maneuvers"])
     for m in truth["maneuvers"]:
-        twin = [o for o in judged if abs(o["t"] - m["t"]) <= 1.0]
+        twin = [o for o in judged if abs(o["t"] + shift - m["t"]) <= 1.0]
         if not twin:
             row.unmatched += 1
             continue
@@ -177,12 +183,42 @@ def table(rows: list[Row], seconds: float) -> str:
     return "\n".join(out)
 
 
+def _nodes_table(out: Path) -> str:
+    """The grader suite's subset (:mod:`bench.judge_agreement_nodes`), graded and judged twice, as a table."""
+    from bench.judge_agreement_nodes import NODES, grade_one
+
+    started = time.perf_counter()
+    rows = []
+    for label, maneuver, world, options in NODES:
+        row = grade_one(label, maneuver, world, options, out, EFFECTS)
+        rows.append(row)
+        print(f"{row.cell}: truth {'PASSED' if row.truth else 'FAILED'}, odometry "
+              f"{'PASSED' if row.odometry else 'FAILED'}" + (f" ({row.cause})" if row.cause else ""),
+              file=sys.stderr, flush=True)
+    lines = ["| lab node (grader suite) | ground truth | odometry | maneuvers: same verdict | largest angle / motion "
+             "difference |", "|---|---|---|---|---|"]
+    for r in rows:
+        same = sum(a == b for a, b, _, _ in r.maneuvers)
+        angle = max((d for _, _, d, _ in r.maneuvers), default=0.0)
+        move = max((m for _, _, _, m in r.maneuvers), default=0.0)
+        lines.append(f"| {r.cell} | {'PASSED' if r.truth else 'FAILED'} | {'PASSED' if r.odometry else 'FAILED'} | "
+                     f"{same}/{len(r.maneuvers)}" + (f" (+{r.unmatched} not judged from odometry)" if r.unmatched
+                                                     else "") + f" | {angle:.2f} deg / {move:.3f} m |")
+    agree = sum(r.truth == r.odometry for r in rows)
+    causes = [f"- {r.cell}: {r.cause}" for r in rows if r.cause]
+    lines += ["", f"{agree}/{len(rows)} verdicts agree; {len(rows)} graded runs (DDS, seed 0, the same effects) in "
+              f"{time.perf_counter() - started:.0f} s.", *causes]
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the grid, print the table (and write it with ``--out``)."""
     parser = argparse.ArgumentParser(prog="python -m bench.judge_agreement", description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=4, help="seeds per arena and maneuver (default 4)")
     parser.add_argument("--worlds", default="", help="comma-separated lab arenas (default: every lab_* world)")
     parser.add_argument("--maneuvers", default="ABC")
+    parser.add_argument("--nodes", metavar="DIR", help="also grade the grader suite's subset of lab nodes over DDS "
+                        "(bench/judge_agreement_nodes.py) into this directory (about 30 s a node)")
     parser.add_argument("--out", help="also write the Markdown table here")
     args = parser.parse_args(argv)
     worlds = [w for w in args.worlds.split(",") if w] or list_worlds("lab")
@@ -197,6 +233,8 @@ def main(argv: list[str] | None = None) -> int:
                       f"{'PASSED' if row.odometry else 'FAILED'}" + (f" ({row.cause})" if row.cause else ""),
                       file=sys.stderr, flush=True)
     text = table(rows, time.perf_counter() - started)
+    if args.nodes:
+        text += "\n\n" + _nodes_table(Path(args.nodes))
     print(text)
     if args.out:
         Path(args.out).write_text(text + "\n")

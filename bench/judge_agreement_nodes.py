@@ -1,0 +1,77 @@
+"""The two check-off judges on a subset of the grader suite's lab nodes (tests/fixtures/lab_student_node.py: right
+variants and mistakes), graded over DDS by ``bt-nav grade --exe`` with the real-robot effects on (see
+:mod:`bench.judge_agreement`): the grader's verdict is the simulator's judge's (ground truth), and each run's bag is
+judged again from its /odom, /scan, /cmd_vel and /rosout alone, with the grader's toggle_navigation calls as the
+schedule (as ``bt-nav checkoff --robot --call-toggle`` knows its own).
+
+The grader's bag leaves /odom out (:data:`bt_nav.grading.exe.bag.RUN_TOPICS`: its pictures draw ground truth);
+this benchmark records it too, by adding it to that tuple in this process before grading.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import shlex
+import sys
+from pathlib import Path
+from typing import Any
+
+from bt_nav_sim.checkoff_core import CheckoffConfig
+from bt_nav_sim.recorded import ServiceCall, judge_recording
+
+#: (label, maneuver, arena, the fixture's options): right variants and mistakes the grader must fail.
+NODES = [
+    ("right c_beams", "C", "lab_object", "--variant c_beams"),
+    ("right c_clock_timed", "C", "lab_object", "--variant c_clock_timed"),
+    ("right a_short_turns", "A", "lab_object", "--variant a_short_turns"),
+    ("right a_stands_first", "A", "lab_object", "--variant a_stands_first"),
+    ("right b_spins_left", "B", "lab_dead_end", "--variant b_spins_left"),
+    ("right b_clock_timed", "B", "lab_dead_end", "--variant b_clock_timed"),
+    ("mistake half_angle C", "C", "lab_object", "--choice C --mistake half_angle"),
+    ("mistake wrong_side C", "C", "lab_object", "--choice C --mistake wrong_side"),
+    ("mistake forward_while_turning C", "C", "lab_object", "--choice C --mistake forward_while_turning"),
+    ("mistake half_angle B", "B", "lab_dead_end", "--choice B --mistake half_angle"),
+    ("mistake spins_360 A", "A", "lab_object", "--choice A --mistake spins_360"),
+    ("mistake ignores_toggle_off C", "C", "lab_object", "--choice C --mistake ignores_toggle_off"),
+]
+#: The verdict's (request, answer) time names of each toggle_navigation call, and the data sent.
+CALL_TIMES = [("activation_requested", "activated", True), ("cycle_off_requested", "cycle_off", False),
+              ("cycle_on_requested", "cycle_on", True), ("deactivation_requested", "deactivated", False)]
+
+
+def calls_of(verdict: dict[str, Any]) -> list[ServiceCall]:
+    """The grader's toggle_navigation calls on the sim clock (its verdict's times are from t0_sim)."""
+    t0, times = float(verdict["t0_sim"]), verdict["times"]
+    out = []
+    for asked, answered, data in CALL_TIMES:
+        if times.get(asked) is not None:
+            done = times.get(answered)
+            out.append(ServiceCall(t0 + times[asked], data, None if done is None else t0 + done, done is not None))
+    return out
+
+
+def grade_one(label: str, maneuver: str, world: str, options: str, out: Path, effects: dict[str, Any]) -> Any:
+    """Grade one node in one cell (seed 0, LDS-02, the effects); the :class:`bench.judge_agreement.Row`."""
+    from bench.judge_agreement import compare
+    from bt_nav.cli.grade import main as grade_main
+    from bt_nav.media.bag import ODOM
+    from bt_nav.media.robotbag import read_robot_bag
+
+    command = f"{shlex.quote(sys.executable)} tests/fixtures/lab_student_node.py {options}"
+    params = [a for name, value in effects.items() if name != "lidar" for a in ("--sim-param", f"{name}={value}")]
+    run_dir = out / label.replace(" ", "_")
+    argv = ["--profile", "lab", "--exe", command, "--maneuvers", maneuver, "--worlds", world, "--seeds", "1",
+            "--lidars", str(effects["lidar"]), "--videos", "off", "--record", "on", "--out", str(run_dir), *params]
+    import bt_nav.grading.exe.bag as grader_bag
+
+    if ODOM not in grader_bag.RUN_TOPICS:
+        grader_bag.RUN_TOPICS = (*grader_bag.RUN_TOPICS, ODOM)  # this benchmark's bags hold /odom (docstring)
+    with contextlib.redirect_stdout(sys.stderr):  # the grader's own report: progress, not this table
+        grade_main(argv)
+    (cell,) = [p for p in run_dir.iterdir() if (p / "verdict.json").is_file()]
+    truth = json.loads((cell / "verdict.json").read_text())
+    rec = read_robot_bag(cell / "bag")
+    rec.calls = calls_of(truth)
+    odo = judge_recording(rec, CheckoffConfig(maneuver=maneuver, lidar=str(effects["lidar"])))
+    return compare(f"{label} ({world})", truth, odo, float(truth["t0_sim"]), float(odo["feed"]["t0"]))
