@@ -8,8 +8,10 @@ So the picture of the room is the scans laid out from the odometry (:meth:`Robot
 check-off's lines come from the same judge as ``bt-nav checkoff --bag`` (:func:`bt_nav_sim.recorded.judge_recording`).
 
 Where the data came from, said on every frame (:attr:`RobotRun.source`): :data:`REAL_LABEL`, or
-:data:`SYNTHETIC_LABEL` for a bag with a ``/synthetic`` topic (tests/media/robotsynth.py writes one), or
-:data:`bt_nav.media.console.SIM_LABEL` for a bag bt_nav's simulator recorded (it has a ground truth topic).
+:data:`SYNTHETIC_LABEL` for a bag with a ``/synthetic`` topic (tests/media/robotsynth.py writes one),
+:data:`bt_nav.media.console.SIM_LABEL` for a bag bt_nav's simulator recorded (it has a ground truth topic),
+:data:`GAZEBO_LABEL` for Gazebo's (its /gazebo or /gz topics), :data:`CLOCK_LABEL` for any other bag with a /clock
+(simulated time: a robot's own graph has none). Only a bag with none of these is called a real robot's.
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from bt_nav.media.console import SIM_LABEL
 
 REAL_LABEL = "real robot bag"
 SYNTHETIC_LABEL = "simulated bag (its /synthetic topic says so): not a real robot"
+GAZEBO_LABEL = "simulated bag (Gazebo: its /gazebo or /gz topics say so): not a real robot"
+CLOCK_LABEL = "bag on simulated time (it has /clock): not known to be a real robot"
 #: The time base of every time a robot's film shows.
 ROBOT_TIME_BASE = "s since the bag's first /odom, /scan or /cmd_vel message"
 
@@ -37,6 +41,10 @@ def source_label(types: dict[str, str], synthetic: str | None) -> str:
         return SYNTHETIC_LABEL
     if any(topic.endswith(TRUTH) for topic in types):
         return SIM_LABEL
+    if any(topic.startswith(("/gazebo/", "/gz/")) for topic in types):
+        return GAZEBO_LABEL
+    if "/clock" in types:  # a robot's own graph has no /clock; a simulator's does
+        return CLOCK_LABEL
     return REAL_LABEL
 
 

@@ -14,7 +14,14 @@ from bt_nav.cli.video import main as video_main
 from bt_nav.media.bagread import read_bag
 from bt_nav.media.console import SIM_LABEL, read_console_log
 from bt_nav.media.robotfilm import MAP_H, MAP_W
-from bt_nav.media.robotrun import REAL_LABEL, SYNTHETIC_LABEL, load_robot_run, source_label
+from bt_nav.media.robotrun import (
+    CLOCK_LABEL,
+    GAZEBO_LABEL,
+    REAL_LABEL,
+    SYNTHETIC_LABEL,
+    load_robot_run,
+    source_label,
+)
 from tests.media.robotsynth import Effects, simulate, write_rosbag1, write_rosbag2
 
 FPS = 5
@@ -91,6 +98,10 @@ def test_the_source_label_and_the_simulators_reader_of_other_formats(synth_bags:
     assert source_label({"/odom": "nav_msgs/msg/Odometry"}, None) == REAL_LABEL
     assert source_label({"/ground_truth_odom": "nav_msgs/msg/Odometry"}, None) == SIM_LABEL
     assert source_label({"/synthetic": "std_msgs/msg/String"}, "simulated") == SYNTHETIC_LABEL
+    gazebo = {"/odom": "nav_msgs/msg/Odometry", "/clock": "rosgraph_msgs/msg/Clock",
+              "/gazebo/model_states": "gazebo_msgs/msg/ModelStates"}
+    assert source_label(gazebo, None) == GAZEBO_LABEL
+    assert source_label({"/odom": "nav_msgs/msg/Odometry", "/clock": "rosgraph_msgs/msg/Clock"}, None) == CLOCK_LABEL
     counts = [read_bag(synth_bags[fmt]).counts for fmt in ("mcap", "sqlite3", "ros1")]
     for topic in ("/odom", "/scan", "/cmd_vel"):
         assert counts[0][topic] == counts[1][topic] == counts[2][topic] > 10
