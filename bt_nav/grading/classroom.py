@@ -26,11 +26,14 @@ from collections import Counter, defaultdict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
 from bt_nav.grading.grid import cell_label, failure_groups, runs_label
+
+if TYPE_CHECKING:
+    from bt_nav.grading.exe.grid import Workers
 
 #: What a student's name may hold (it names their grid's directory).
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")
@@ -288,11 +291,13 @@ def _said(row: dict[str, Any]) -> list[str]:
 
 
 def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, Sequence[Any]]],
-              workers: int, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
+              workers: Workers, stop: Any = None, on_row: Callable[[str, dict[str, Any]], None] | None = None,
               resume: bool = False, say: Callable[[str], None] | None = None) -> dict[str, list[dict[str, Any]]]:
     """Every student's grid into ``out/<name>``, all their runs in one pool of ``workers`` (a student with fewer
     runs than workers leaves no slot idle), each grid's report written as ``bt-nav grade --exe`` writes it as soon
-    as its last run ends. Returns the rows that ended, per student reached.
+    as its last run ends. Returns the rows that ended, per student reached. ``workers`` is a count of runs at once
+    here, or a :class:`~bt_nav.grading.exe.grid.Cluster`: then every run and every re-run of the 1x check is a Dask
+    task there (:func:`~bt_nav.grading.exe.grid.run_pool`), the verdicts as here.
 
     ``plan(student)`` gives the student's :class:`bt_nav.grading.exe.run.ExeSettings` (its command, its
     directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
@@ -323,7 +328,7 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
     return out
 
 
-def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]], workers: int,
+def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]], workers: Workers,
                         stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None,
                         say: Callable[[str], None] | None = None) -> None:
     """Every student's failures checked at 1x as ``--exe`` checks one node's (:mod:`bt_nav.grading.realtime`), in one
@@ -358,7 +363,7 @@ def _write_student_report(settings: Any, jobs: Sequence[Any], rows: dict[str, di
 
 
 def _run_pooled(todo: list[tuple[str, Any, Any]], grids: dict[str, tuple[Any, Sequence[Any], dict[str, Any]]],
-                workers: int, stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
+                workers: Workers, stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None) -> None:
     """Every (student, settings, job) of ``todo`` in one thread pool; a student's report when their last run ends,
     and for every student with a run left when the class stops."""
     from bt_nav.grading.exe.grid import run_pool

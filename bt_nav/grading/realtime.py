@@ -39,7 +39,7 @@ from typing import Any
 
 from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace_stops
 
-from bt_nav.grading.exe.grid import ERROR, STOPPED, finished_runs, run_pool
+from bt_nav.grading.exe.grid import ERROR, STOPPED, Workers, finished_runs, run_pool
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.ros.nodes.findings import CUT_OFF
@@ -333,7 +333,7 @@ Grid = tuple[Sequence[Job], ExeSettings, dict[str, Row], Callable[[Row], None] |
 Say = Callable[[int, str], None]
 
 
-def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row], workers: int,
+def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row], workers: Workers,
                          stop: StopRequest | None = None, on_row: Callable[[Row], None] | None = None,
                          say: Callable[[str], None] | None = None) -> int:
     """Run one grid's failures again (see the module docstring), replacing ``rows`` (job key -> row) in place with
@@ -344,11 +344,12 @@ def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[
     return confirm_grids([(jobs, settings, rows, on_row)], workers, stop, heard)[0]
 
 
-def confirm_grids(grids: Sequence[Grid], workers: int, stop: StopRequest | None = None,
+def confirm_grids(grids: Sequence[Grid], workers: Workers, stop: StopRequest | None = None,
                   say: Say | None = None) -> list[int]:
     """:func:`confirm_at_real_time` for several grids (a class) in one pool: every grid's probe (its first failure
     to check, at both speeds) at once, then the other failures of the grids whose probe did not fail both re-runs;
-    how many failures each grid had overturned."""
+    how many failures each grid had overturned. ``workers``: where the re-runs go, as the grids' runs went
+    (:func:`~bt_nav.grading.exe.grid.run_pool`: threads here, or a Dask cluster's tasks)."""
     plans = []  # per grid: its failed jobs, its settings at its speed and at 1x, the re-runs finished there
     for jobs, settings, rows, _on_row in grids:
         failed = failed_jobs(jobs, settings, rows)
@@ -405,7 +406,7 @@ def _finished(settings: ExeSettings, failed: Sequence[Job]) -> dict[str, Row]:
     return finished_runs(settings.out, failed) if failed and settings.out.is_dir() else {}
 
 
-def _run_missing(tasks: Sequence[tuple[Job, ExeSettings, dict[str, Row]]], workers: int,
+def _run_missing(tasks: Sequence[tuple[Job, ExeSettings, dict[str, Row]]], workers: Workers,
                  stop: StopRequest | None) -> dict[tuple[str, str], Row]:
     """Each (job, re-run settings, finished re-runs): the finished row, else the job run now (all in one pool); by
     (re-run directory, job key), nothing for a run that never started."""

@@ -78,7 +78,7 @@ def _parser() -> argparse.ArgumentParser:
                         "profile's own); default profile, --exe: " + ",".join(EXE_LIDARS) + " (a node reading the "
                         "scan by fixed indices passes one and fails another)")
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
-    parser.add_argument("--jobs", type=jobs_arg, default="auto", metavar="N|auto",
+    parser.add_argument("--jobs", type=jobs_arg, default=None, metavar="N|auto",
                         help="runs at once on this machine (without --scheduler); auto: one per usable core, and "
                         "for --exe up to two per core while the cores stay idle (default auto)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -153,8 +153,12 @@ def main(argv: list[str] | None = None) -> int:
         check_format_options(args)  # a bad weights file refuses the grade before any run
         if args.launch is not None and args.exe is None:
             raise ValueError("--launch goes with --exe (with --class, each hand-in's own launch file is checked)")
+        from bt_nav.grading.exe.grid import check_node_options
+
+        check_node_options(args)  # --class, --exe, --scheduler: what they cannot honour is refused
     except ValueError as exc:
         parser.error(str(exc))
+    args.jobs = jobs_arg("auto") if args.jobs is None else args.jobs  # the default, unless --scheduler
     if args.klass is not None:
         from bt_nav.cli.grade.exe import grade_class
 

@@ -8,7 +8,6 @@ grade's directory, fails every run alike or mixes two grades; both are refused w
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from collections.abc import Sequence
@@ -19,25 +18,6 @@ from tqdm import tqdm
 
 from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
 from bt_nav.grading.grid import Job, format_lidars, run_label
-from bt_nav.run.settings import DEFAULT_JITTER
-
-
-def _settings(args: argparse.Namespace, maneuvers: bool, command: str | None = None) -> Any:
-    """The grid's :class:`ExeSettings`: the program resolved (``command``: resolved already), the command run in
-    this directory, ``--out`` absolute for a cluster (its workers may start elsewhere; both must be on a filesystem
-    they share)."""
-    from bt_nav.grading.exe.grid import resolve_program
-    from bt_nav.grading.exe.run import ExeSettings
-
-    if args.resume and not args.out:
-        raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
-    out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
-    from bt_nav.mission.params import parse_assignments
-
-    node_params = tuple(parse_assignments(args.node_param).items())
-    return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
-                       args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
-                       args.videos, os.getcwd(), node_params, args.realtime_check == "on")
 
 
 def _show(row: dict[str, Any]) -> None:
@@ -55,20 +35,28 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     """``bt-nav grade --exe``: every run over DDS (:mod:`bt_nav.grading.exe.run`); exit 0 only if every run passed,
     2 for options refused before any run, 128 + the signal after SIGINT/SIGTERM (every process of the runs
     stopped; the report holds the runs that ended, ``--resume`` runs the others)."""
-    from bt_nav.grading.admission import describe
-    from bt_nav.grading.exe.grid import STOPPED, prepare_out, run_exe_grid
+    from bt_nav.grading.exe.grid import (
+        STOPPED,
+        close_workers,
+        connect_workers,
+        describe_workers,
+        exe_settings,
+        prepare_out,
+        run_exe_grid,
+    )
     from bt_nav.grading.launch_target import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
 
     try:
-        settings = _settings(args, maneuvers)
-        done = prepare_out(settings, jobs, args.resume)
+        settings = exe_settings(args, maneuvers)
         launch = exe_launch(args.launch, settings.command)  # --launch FILE: its checks, shown before any run
+        workers = connect_workers(args.jobs, args.scheduler)  # a cluster out of reach refuses the grade
+        done = prepare_out(settings, jobs, args.resume)
     except ValueError as exc:
         parser.error(str(exc))
-    where = f"on {args.scheduler}" if args.scheduler else describe(args.jobs)
+    where = describe_workers(workers)
     print(f"bt-nav grade: {len(jobs)} runs of {settings.command!r} ({args.profile} profile, {where}, "
           f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {settings.out}/", flush=True)
     if args.resume:
@@ -85,10 +73,10 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
 
     rows: list[dict[str, Any]] = []
     try:
-        rows = run_exe_grid(jobs, settings, args.jobs, stop, ended_run, scheduler=args.scheduler, done=done,
-                            progress=progress)
-        rows = _check_at_real_time(jobs, settings, rows, args.jobs, stop)
+        rows = run_exe_grid(jobs, settings, workers, stop, ended_run, done=done, progress=progress)
+        rows = _check_at_real_time(jobs, settings, rows, workers, stop)  # re-runs where the runs ran
     finally:
+        close_workers(workers)
         stop.closing = True
         stop.restore()
         ended = [row for row in rows if row["outcome"] != STOPPED]
@@ -108,7 +96,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     return _verdict(args, ended, len(jobs), settings, time.perf_counter() - started, stop, (json_path, md_path))
 
 
-def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: int,
+def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: Any,
                         stop: Any) -> list[dict[str, Any]]:
     """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying which runs go again and which
     not (and why)."""
@@ -189,7 +177,7 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     import copy
 
     from bt_nav.grading.classroom import admit, run_class, write_class_page
-    from bt_nav.grading.exe.grid import resolve_program
+    from bt_nav.grading.exe.grid import close_workers, connect_workers, exe_settings, resolve_program
     from bt_nav.grading.feedback import drop_stale_feedback
     from bt_nav.grading.handins import read_class
     from bt_nav.grading.plan import build_jobs, grid_axes
@@ -211,13 +199,15 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
             own = copy.copy(args)
             own.exe, own.out, own.json = student.command, str(out / student.name), None
             jobs = build_jobs(own, worlds, seeds, left_out)
-            plans[student.name] = (_settings(own, own.profile == "lab" or own.maneuvers is not None,
-                                             commands[student.name]), jobs)
+            plans[student.name] = (exe_settings(own, own.profile == "lab" or own.maneuvers is not None,
+                                                commands[student.name]), jobs)
+        workers = connect_workers(args.jobs, args.scheduler)  # runs and re-runs there; out of reach: refused
     except ValueError as exc:
         parser.error(str(exc))
     if left_out:
         print("not checked off there: " + ", ".join(sorted(left_out)), file=sys.stderr)
-    print(f"bt-nav grade: a class of {len(students)} in {out}/: " + ", ".join(
+    where = f" on {args.scheduler}" if args.scheduler else ""
+    print(f"bt-nav grade: a class of {len(students)} in {out}/{where}: " + ", ".join(
         f"{s.name} (not run)" if s.name in refused else f"{s.name} ({_runs(len(plans[s.name][1]))})"
         for s in students), flush=True)
     for name, reason in refused.items():
@@ -227,12 +217,13 @@ def grade_class(args: argparse.Namespace, parser: argparse.ArgumentParser) -> in
     stop = StopRequest().install()
     started = time.perf_counter()
     try:
-        done = run_class([s for s in students if s.name in plans], lambda s: plans[s.name], args.jobs, stop,
+        done = run_class([s for s in students if s.name in plans], lambda s: plans[s.name], workers, stop,
                          lambda name, row: _show({**row, "world": f"{name}: {row['world']}"}), args.resume,
                          lambda line: print(f"  {line}", flush=True))
     except ValueError as exc:  # a student's directory holds another grade
         parser.error(str(exc))
     finally:
+        close_workers(workers)
         stop.closing = True
         stop.restore()
     from bt_nav.grading.handins import add_verdicts

@@ -2,16 +2,19 @@
 :func:`bt_nav.grading.exe.run.run_exe_job`, here or on a Dask cluster, resumable, with the checks that refuse
 a grid before any run starts.
 
-Where runs go: ``workers`` threads of this process (each thread only supervises its run's three process
-groups: no py_trees in-process, so threads are enough), or, with ``scheduler``, one Dask task per run on the
-cluster's workers. A worker claims the domains of its runs itself (per machine, :mod:`bt_nav.ros.supervise`),
-and writes each run's directory under the grid's ``out``, which must therefore be a path every worker sees
-(a shared filesystem) and is made absolute before the tasks leave. A worker that dies loses its running runs,
-which the scheduler reruns elsewhere (in a run directory ``NAME-2``); rows are collected per job key, so each
-job is counted once. A worker thread per run: ``dask worker --nthreads N`` runs N at a time.
+Where runs go (:data:`Workers`, :func:`run_pool`, the one place that starts runs for a grid, a class and their
+re-runs alike): ``workers`` threads of this process (each thread only supervises its run's three process
+groups: no py_trees in-process, so threads are enough), or a :class:`Cluster`: one Dask task per run on the
+cluster's workers, through one connection per grade, made before any run (an unreachable scheduler refuses the
+grade; it never falls back to this machine). A worker claims the domains of its runs itself (per machine,
+:mod:`bt_nav.ros.supervise`: two workers on one machine never share one), and writes each run's directory under
+the grid's ``out``, which must therefore be a path every worker sees (a shared filesystem) and is made absolute
+before the tasks leave. A worker that dies loses its running runs, which the scheduler reruns elsewhere (in a run
+directory ``NAME-2``); rows are collected per task, so each run is counted once. A worker thread per run:
+``dask worker --nthreads N`` runs N at a time.
 
 Stops: this process's :class:`~bt_nav.ros.supervise.StopRequest` stops local runs directly; on a cluster it
-sets a Dask :class:`distributed.Event` of the grid that every running task polls (:class:`ClusterStop`), and
+sets a Dask :class:`distributed.Event` of the grade that every running task polls (:class:`ClusterStop`), and
 tasks not yet started return without starting anything. A stopped run's row has outcome ``stopped``.
 
 Resume: the grid's directory holds ``grid.json`` (what every run shares) and each run's ``result.json``;
@@ -37,7 +40,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.admission import Admission
+from bt_nav.grading.admission import Admission, describe
 from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
@@ -110,6 +113,46 @@ def _check_interpreter(program: str) -> None:
         raise ValueError(f"--exe: {program} cannot import rclpy (no ROS 2 for that Python): run the node with "
                          f"{ours.parent / 'python'} (this venv's, which has it), or source a ROS 2 install "
                          "first") from None
+
+
+def exe_settings(args: Any, maneuvers: bool, command: str | None = None) -> ExeSettings:
+    """A grid's :class:`ExeSettings` from ``bt-nav grade``'s options: the program resolved (``command``: resolved
+    already, a class's student), the command run in this directory, ``--out`` absolute for a cluster (its workers
+    may start elsewhere; both must be on a filesystem they share)."""
+    from bt_nav.mission.params import parse_assignments
+    from bt_nav.run.settings import DEFAULT_JITTER
+
+    if args.resume and not args.out:
+        raise ValueError("--resume with --exe needs --out DIR (the grade to continue)")
+    out = Path(args.out or f"runs/grade-exe-{time.strftime('%Y%m%d-%H%M%S')}")
+    node_params = tuple(parse_assignments(args.node_param).items())
+    return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
+                       args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
+                       args.videos, os.getcwd(), node_params, args.realtime_check == "on")
+
+
+def check_node_options(args: Any) -> None:
+    """Refuse the ``bt-nav grade`` options a grade cannot honour with ``--class``, ``--exe`` or ``--scheduler``
+    (an option is refused, never silently ignored). ``args.jobs`` is None unless ``--jobs`` was given.
+
+    Raises:
+        ValueError: naming the option and what to do instead.
+    """
+    mode = "--class" if args.klass is not None else "--exe" if args.exe is not None else None
+    if args.scheduler and args.jobs is not None:
+        raise ValueError("--jobs counts the runs at once on this machine; with --scheduler the cluster's workers run "
+                         "them (each dask worker's --nthreads sets how many at once there): leave --jobs out")
+    if mode and args.overrides:
+        raise ValueError(f"--set sets the parameters of bt_nav's own tree in lock-step; {mode} grades a node of its "
+                         "own: give it parameters with --node-param NAME=VALUE")
+    if mode and args.kinematics:
+        raise ValueError(f"--kinematics sets the lock-step robot; {mode} runs the profile's simulated robot "
+                         "(--sim-param sets the simulator)")
+    if mode == "--class" and args.json:
+        raise ValueError("--json is one grid's results file; a class writes class.json (and each student's "
+                         "grade.json) in --out")
+    if mode == "--class" and args.progress == "on":
+        raise ValueError("--class prints a line per run, no progress bar: leave --progress out")
 
 
 def _grid_doc(settings: ExeSettings, jobs: Sequence[Job]) -> dict[str, Any]:
@@ -300,12 +343,15 @@ def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:
     return path
 
 
-def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: int,
+def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: Workers,
              stop: StopRequest | None) -> Iterator[tuple[int, Row | None]]:
     """Every (job, its grid's settings), ``workers`` at a time in threads (``--jobs auto``: as many as
-    :class:`~bt_nav.grading.admission.Admission` lets start; one grid's, or a whole class's); yields
-    (the task's index, its row) as each ends, None for a run that never started. A stop cancels the runs not
-    started."""
+    :class:`~bt_nav.grading.admission.Admission` lets start; one grid's, or a whole class's), or each a task on a
+    :class:`Cluster` given as ``workers``; yields (the task's index, its row) as each ends, None for a run that
+    never started. A stop cancels the runs not started."""
+    if isinstance(workers, Cluster):
+        yield from workers.run(tasks, stop)
+        return
     admission = Admission.for_jobs(workers)
     # With an admission a run's place is free at its verdict, while its thread still stops its processes.
     threads = 2 * admission.limit if admission is not None else max(1, workers)
@@ -342,15 +388,8 @@ def _admitted(admission: Admission | None, job: Job, settings: ExeSettings, stop
         release()
 
 
-def _run_local(jobs: Sequence[Job], settings: ExeSettings, workers: int, stop: StopRequest | None) -> Iterator[Row]:
-    """Every job of one grid (:func:`run_pool`); rows as runs end."""
-    for _, row in run_pool([(job, settings) for job in jobs], workers, stop):
-        if row is not None:
-            yield row
-
-
 class ClusterStop(StopRequest):
-    """A stop request read on a Dask worker from the grid's :class:`distributed.Event` (at most once per
+    """A stop request read on a Dask worker from the grade's :class:`distributed.Event` (at most once per
     ``poll`` s: each read is a round trip to the scheduler). Installs no signal handler."""
 
     def __init__(self, event: str, poll: float = 1.0) -> None:
@@ -378,64 +417,145 @@ class ClusterStop(StopRequest):
 
 
 def run_cluster_task(job: Job, settings: ExeSettings, event: str) -> Row | None:
-    """What a Dask worker runs for one job: :func:`run_unless_stopped` with the grid's :class:`ClusterStop`."""
+    """What a Dask worker runs for one job: :func:`run_unless_stopped` with the grade's :class:`ClusterStop`."""
     return run_unless_stopped(job, settings, ClusterStop(event))
 
 
 def grid_token(settings: ExeSettings) -> str:
-    """A short name of the grid (its directory and command): two grades on one cluster never share a task key."""
+    """A short name of the grid (its directory and command): two grids on one cluster, or a grid and its re-runs
+    (another directory), never share a task key."""
     return f"{zlib.crc32(json.dumps(asdict(settings), default=str, sort_keys=True).encode()):08x}"
 
 
-def _run_dask(jobs: Sequence[Job], settings: ExeSettings, scheduler: str, stop: StopRequest | None,
-              retries: int = 3) -> Iterator[Row]:
-    """Every job as a Dask task on the cluster of ``scheduler`` (tcp://host:port or a scheduler file); rows as
-    runs end, each job once. A stop sets the grid's event and waits up to :data:`CLUSTER_STOP_WAIT` s for the
-    running tasks' stopped rows."""
-    from distributed import Client, Event
+#: Wall seconds a grade waits to reach its Dask scheduler before it refuses to start.
+CONNECT_TIMEOUT = 20.0
 
-    kwargs = {"scheduler_file": scheduler} if scheduler.endswith(".json") else {"address": scheduler}
-    token = grid_token(settings)
-    with Client(**kwargs, timeout="30s") as client:
-        event = Event(f"bt-nav-exe-stop-{token}", client=client)
-        event.clear()
-        futures = {client.submit(run_cluster_task, job, settings, event.name, key=f"bt-nav-exe-{token}-{job.key}",
-                                 pure=False, retries=retries): job for job in jobs}
+
+class Cluster:
+    """Where a grade's runs go instead of this machine's threads: the Dask cluster of a scheduler, one connection
+    for the whole grade (a grid or a class, their runs and re-runs alike). Pass it where a count of local runs
+    goes (:func:`run_pool`'s ``workers``): every run becomes a task (:func:`run_cluster_task`). Open it with
+    :meth:`connect`, before any run, so that an unreachable scheduler refuses the grade instead of grading here."""
+
+    def __init__(self, scheduler: str, client: Any, retries: int = 3) -> None:
+        from distributed import Event
+
+        self.scheduler, self.client, self.retries = scheduler, client, retries
+        self.event = Event(f"bt-nav-exe-stop-{os.getpid()}-{time.time_ns():x}", client=client)
+        self.event.clear()
+
+    @classmethod
+    def connect(cls, scheduler: str, timeout: float | None = None) -> Cluster:
+        """The cluster of ``scheduler`` (``tcp://HOST:PORT`` or a scheduler file ``.json``), connected, waiting up to
+        ``timeout`` s (default :data:`CONNECT_TIMEOUT`).
+
+        Raises:
+            ValueError: the scheduler file is not there, or the scheduler does not answer within ``timeout`` s:
+                the grade is refused (it never falls back to this machine unasked).
+        """
+        from distributed import Client
+
+        by_file = scheduler.endswith(".json")
+        if by_file and not Path(scheduler).is_file():  # Client would wait for it forever
+            raise ValueError(f"--scheduler {scheduler}: no such scheduler file (dask scheduler --scheduler-file "
+                             "writes it)")
+        try:
+            client = Client(**({"scheduler_file": scheduler} if by_file else {"address": scheduler}),
+                            timeout=f"{timeout or CONNECT_TIMEOUT:g}s", set_as_default=False)
+        except (OSError, ValueError, TypeError) as exc:
+            raise ValueError(f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc}); start it with "
+                             "'dask scheduler', or leave --scheduler out to grade on this machine") from None
+        return cls(scheduler, client)
+
+    def __enter__(self) -> Cluster:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Let go of the scheduler (the cluster keeps running)."""
+        self.client.close()
+
+    def describe(self) -> str:
+        """For a grade's first line: where its runs go."""
+        return f"on {self.scheduler}"
+
+    def run(self, tasks: Sequence[tuple[Job, ExeSettings]],
+            stop: StopRequest | None) -> Iterator[tuple[int, Row | None]]:
+        """Every (job, its grid's settings) as a task; yields (the task's index, its row) as each ends, each task
+        once whichever worker ran it (a task lost with its worker the scheduler runs again elsewhere, in a run
+        directory ``NAME-2``; retried ``retries`` times), None for a run that never started. A stop sets the
+        grade's event, which every running task polls, and waits up to :data:`CLUSTER_STOP_WAIT` s for their
+        stopped rows; what is left then is cancelled."""
+        futures = {self.client.submit(run_cluster_task, job, settings, self.event.name, pure=False,
+                                      key=f"bt-nav-exe-{grid_token(settings)}-{job.key}",
+                                      retries=self.retries): i for i, (job, settings) in enumerate(tasks)}
         pending, deadline = set(futures), None
         while pending:
             ended = [future for future in pending if future.done()]
             for future in ended:
                 pending.discard(future)
-                if future.status == "finished":
-                    row = future.result()
-                elif future.status == "cancelled":
-                    continue
-                else:  # its workers kept dying (KilledWorker), or it could not be unpickled there
-                    row = error_row(futures[future], repr(future.exception()))
-                if row is not None:
-                    yield row
+                yield futures[future], self._row(future, tasks[futures[future]][0])
             if stop is not None and stop.requested and deadline is None:
-                event.set()
+                self.event.set()
                 deadline = time.monotonic() + CLUSTER_STOP_WAIT
             if deadline is not None and time.monotonic() > deadline:
-                client.cancel(list(pending))
+                self.client.cancel(list(pending))
+                for future in pending:
+                    yield futures[future], None
                 return
             if not ended:
                 time.sleep(0.2)
 
+    @staticmethod
+    def _row(future: Any, job: Job) -> Row | None:
+        """An ended task's row: its result; None when cancelled; an :func:`error_row` when its workers kept dying
+        (KilledWorker) or it could not be unpickled there."""
+        if future.status == "finished":
+            return future.result()
+        if future.status == "cancelled":
+            return None
+        return error_row(job, repr(future.exception()))
 
-def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: int = 2, stop: StopRequest | None = None,
+
+#: Where a grade's runs go: a count of runs at once on this machine (``--jobs``), or a :class:`Cluster`.
+Workers = int | Cluster
+
+
+def connect_workers(jobs: int, scheduler: str | None) -> Workers:
+    """``--jobs`` here, or with ``--scheduler`` its :class:`Cluster`, connected (ValueError: unreachable)."""
+    return Cluster.connect(scheduler) if scheduler else jobs
+
+
+def close_workers(workers: Workers) -> None:
+    """Let go of a :class:`Cluster` (nothing to do for local runs)."""
+    if isinstance(workers, Cluster):
+        workers.close()
+
+
+def describe_workers(workers: Workers) -> str:
+    """Where a grade's runs go, for its first line: ``on tcp://...`` or ``2 at a time``."""
+    return workers.describe() if isinstance(workers, Cluster) else describe(workers)
+
+
+def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: Workers = 2, stop: StopRequest | None = None,
                  on_row: Callable[[Row], None] | None = None, *, scheduler: str | None = None,
                  done: dict[str, Row] | None = None, progress: bool = False) -> list[Row]:
-    """Every job not in ``done`` (job key -> row), here (``workers`` threads) or on the Dask cluster of
-    ``scheduler``; ``on_row`` sees each new row as its run ends. Returns the rows in the jobs' order: those of
-    ``done``, then what ran (on a stop: stopped runs too, and nothing for the runs never started)."""
+    """Every job not in ``done`` (job key -> row), here (``workers`` threads) or on a :class:`Cluster` (``workers``,
+    or one connected to ``scheduler`` for this grid alone); ``on_row`` sees each new row as its run ends. Returns
+    the rows in the jobs' order: those of ``done``, then what ran (on a stop: stopped runs too, and nothing for the
+    runs never started)."""
+    if scheduler:
+        with Cluster.connect(scheduler) as cluster:
+            return run_exe_grid(jobs, settings, cluster, stop, on_row, done=done, progress=progress)
     rows = dict(done or {})
     todo = [job for job in jobs if job.key not in rows]
-    stream = _run_dask(todo, settings, scheduler, stop) if scheduler else _run_local(todo, settings, workers, stop)
     passed = sum(1 for row in rows.values() if row["passed"])
     with progress_bar(len(jobs), len(jobs) - len(todo), progress, "run") as bar:
-        for row in stream:
+        for _, row in run_pool([(job, settings) for job in todo], workers, stop):
+            if row is None:
+                continue
             rows[row["job"]] = row
             if on_row is not None:
                 on_row(row)
