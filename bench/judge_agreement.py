@@ -183,14 +183,14 @@ def table(rows: list[Row], seconds: float) -> str:
     return "\n".join(out)
 
 
-def _nodes_table(out: Path) -> str:
+def _nodes_table(out: Path, rtf: float) -> str:
     """The grader suite's subset (:mod:`bench.judge_agreement_nodes`), graded and judged twice, as a table."""
     from bench.judge_agreement_nodes import NODES, grade_one
 
     started = time.perf_counter()
     rows = []
     for label, maneuver, world, options in NODES:
-        row = grade_one(label, maneuver, world, options, out, EFFECTS)
+        row = grade_one(label, maneuver, world, options, out, EFFECTS, rtf)
         rows.append(row)
         print(f"{row.cell}: truth {'PASSED' if row.truth else 'FAILED'}, odometry "
               f"{'PASSED' if row.odometry else 'FAILED'}" + (f" ({row.cause})" if row.cause else ""),
@@ -206,8 +206,8 @@ def _nodes_table(out: Path) -> str:
                                                      else "") + f" | {angle:.2f} deg / {move:.3f} m |")
     agree = sum(r.truth == r.odometry for r in rows)
     causes = [f"- {r.cell}: {r.cause}" for r in rows if r.cause]
-    lines += ["", f"{agree}/{len(rows)} verdicts agree; {len(rows)} graded runs (DDS, seed 0, the same effects) in "
-              f"{time.perf_counter() - started:.0f} s.", *causes]
+    lines += ["", f"{agree}/{len(rows)} verdicts agree; {len(rows)} graded runs (DDS at {rtf:g}x real time, seed 0, "
+              f"the same effects) in {time.perf_counter() - started:.0f} s.", *causes]
     return "\n".join(lines)
 
 
@@ -218,7 +218,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--worlds", default="", help="comma-separated lab arenas (default: every lab_* world)")
     parser.add_argument("--maneuvers", default="ABC")
     parser.add_argument("--nodes", metavar="DIR", help="also grade the grader suite's subset of lab nodes over DDS "
-                        "(bench/judge_agreement_nodes.py) into this directory (about 30 s a node)")
+                        "(bench/judge_agreement_nodes.py) into this directory (about 80 s a node at 1x)")
+    parser.add_argument("--node-rtf", type=float, default=1.0, help="the graded nodes' real-time factor (default 1: "
+                        "a bag's unstamped /cmd_vel is timed by its arrival, as on a robot)")
     parser.add_argument("--out", help="also write the Markdown table here")
     args = parser.parse_args(argv)
     worlds = [w for w in args.worlds.split(",") if w] or list_worlds("lab")
@@ -234,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
                       file=sys.stderr, flush=True)
     text = table(rows, time.perf_counter() - started)
     if args.nodes:
-        text += "\n\n" + _nodes_table(Path(args.nodes))
+        text += "\n\n" + _nodes_table(Path(args.nodes), args.node_rtf)
     print(text)
     if args.out:
         Path(args.out).write_text(text + "\n")
