@@ -47,3 +47,25 @@ def test_the_robot_judge_agrees_with_the_simulators_judge_on_one_run(tmp_path: P
               f"{theirs['angle_deg']:+.2f} deg {theirs['forward_motion']:.4f} m")
     out = "\n".join(listener.stdout)
     assert "maneuver 1 (" in out.split("check-off of maneuver C from the live robot")[0], out  # printed live
+
+
+def test_the_listener_calls_toggle_navigation_itself(tmp_path: Path) -> None:
+    """``--call-toggle``: beside ``sim-run --profile lab`` (the simulator and bt_nav's executive, no judge) the
+    listener arms the robot after 3 s and disarms it at the end; its own calls are the schedule, so the service
+    checks are judged (not "not judged" as when the TA calls and no service event is recorded)."""
+    verdict = tmp_path / "live.json"
+    robot = Proc("sim-run", "--profile", "lab", "--maneuver", "C", "--world", "lab_object", "--rtf", "1")
+    try:
+        wait_until(lambda: any("ROS_DOMAIN_ID" in line for line in robot.stdout), 60.0, "the simulated robot runs")
+        listener = Proc("checkoff", "--robot", "--call-toggle", "--duration", "32", "--maneuver", "C",
+                        "--json", str(verdict))
+        code = listener.wait(120.0)
+    finally:
+        robot.stop()
+    res = json.loads(verdict.read_text())
+    out = "\n".join(listener.stdout)
+    assert "toggle_navigation(true): success=True" in out and "toggle_navigation(false): success=True" in out, out
+    names = {c["name"]: c["passed"] for c in res["checks"]}
+    assert names["toggle_navigation answered"] and names["static before activation"], res["report_lines"]
+    assert not any(n["name"] == "toggle_navigation answered" for n in res["not_judged"])
+    assert res["passed"] and code == 0 and len(res["judged_maneuvers"]) >= 1, res["report_lines"]
