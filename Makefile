@@ -80,7 +80,8 @@ faults: $(STAMP)
 # odometry alone (bench/judge_agreement.py; the table in docs/grading.md, "two judges agree"): 108 lock-step runs
 # (~5 min) and 12 of the grader suite's lab nodes graded over DDS (~15 min on 2 cores), each in a directory of its own.
 judge-agreement: $(STAMP)
-	$(BIN)/python -m bench.judge_agreement --seeds 4 --nodes "$$(mktemp -d /tmp/bt_nav-judge-agreement.XXXXXX)"
+	$(BIN)/python -m bench.judge_agreement --seeds 4
+	$(BIN)/python -m bench.judge_agreement_nodes "$$(mktemp -d /tmp/bt_nav-judge-agreement.XXXXXX)"
 
 clean:
 	rm -rf build install log runs .pytest_cache docs/_build docs/reference

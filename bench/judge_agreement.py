@@ -15,10 +15,10 @@ motion. A run the odometry passes and ground truth fails is listed with its caus
 Collisions: a robot's recording has no contact sensor, so a run that fails from ground truth only on "no collision"
 is counted apart (the TA sees contact), not as an agreement or a disagreement of the verdicts' rules.
 
-``--nodes DIR`` adds a subset of the grader suite's lab nodes (right variants and mistakes), graded over DDS with the
-same effects and judged twice (:mod:`bench.judge_agreement_nodes`).
+A subset of the grader suite's lab nodes (right variants and mistakes), graded over DDS with the same effects and
+judged twice, is :mod:`bench.judge_agreement_nodes` (``make judge-agreement`` runs both).
 
-    python -m bench.judge_agreement [--seeds 4] [--nodes DIR] [--out table.md]
+    python -m bench.judge_agreement [--seeds 4] [--out table.md]
 """
 
 from __future__ import annotations
@@ -183,44 +183,12 @@ def table(rows: list[Row], seconds: float) -> str:
     return "\n".join(out)
 
 
-def _nodes_table(out: Path, rtf: float) -> str:
-    """The grader suite's subset (:mod:`bench.judge_agreement_nodes`), graded and judged twice, as a table."""
-    from bench.judge_agreement_nodes import NODES, grade_one
-
-    started = time.perf_counter()
-    rows = []
-    for label, maneuver, world, options in NODES:
-        row = grade_one(label, maneuver, world, options, out, EFFECTS, rtf)
-        rows.append(row)
-        print(f"{row.cell}: truth {'PASSED' if row.truth else 'FAILED'}, odometry "
-              f"{'PASSED' if row.odometry else 'FAILED'}" + (f" ({row.cause})" if row.cause else ""),
-              file=sys.stderr, flush=True)
-    lines = ["| lab node (grader suite) | ground truth | odometry | maneuvers: same verdict | largest angle / motion "
-             "difference |", "|---|---|---|---|---|"]
-    for r in rows:
-        same = sum(a == b for a, b, _, _ in r.maneuvers)
-        angle = max((d for _, _, d, _ in r.maneuvers), default=0.0)
-        move = max((m for _, _, _, m in r.maneuvers), default=0.0)
-        lines.append(f"| {r.cell} | {'PASSED' if r.truth else 'FAILED'} | {'PASSED' if r.odometry else 'FAILED'} | "
-                     f"{same}/{len(r.maneuvers)}" + (f" (+{r.unmatched} not judged from odometry)" if r.unmatched
-                                                     else "") + f" | {angle:.2f} deg / {move:.3f} m |")
-    agree = sum(r.truth == r.odometry for r in rows)
-    causes = [f"- {r.cell}: {r.cause}" for r in rows if r.cause]
-    lines += ["", f"{agree}/{len(rows)} verdicts agree; {len(rows)} graded runs (DDS at {rtf:g}x real time, seed 0, "
-              f"the same effects) in {time.perf_counter() - started:.0f} s.", *causes]
-    return "\n".join(lines)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the grid, print the table (and write it with ``--out``)."""
     parser = argparse.ArgumentParser(prog="python -m bench.judge_agreement", description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=4, help="seeds per arena and maneuver (default 4)")
     parser.add_argument("--worlds", default="", help="comma-separated lab arenas (default: every lab_* world)")
     parser.add_argument("--maneuvers", default="ABC")
-    parser.add_argument("--nodes", metavar="DIR", help="also grade the grader suite's subset of lab nodes over DDS "
-                        "(bench/judge_agreement_nodes.py) into this directory (about 80 s a node at 1x)")
-    parser.add_argument("--node-rtf", type=float, default=1.0, help="the graded nodes' real-time factor (default 1: "
-                        "a bag's unstamped /cmd_vel is timed by its arrival, as on a robot)")
     parser.add_argument("--out", help="also write the Markdown table here")
     args = parser.parse_args(argv)
     worlds = [w for w in args.worlds.split(",") if w] or list_worlds("lab")
@@ -235,8 +203,6 @@ def main(argv: list[str] | None = None) -> int:
                       f"{'PASSED' if row.odometry else 'FAILED'}" + (f" ({row.cause})" if row.cause else ""),
                       file=sys.stderr, flush=True)
     text = table(rows, time.perf_counter() - started)
-    if args.nodes:
-        text += "\n\n" + _nodes_table(Path(args.nodes), args.node_rtf)
     print(text)
     if args.out:
         Path(args.out).write_text(text + "\n")
