@@ -22,6 +22,7 @@ from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
@@ -122,7 +123,14 @@ def run_dask(jobs: Sequence[Job], scheduler: str, retries: int = 3) -> Iterator[
     from distributed import as_completed as dask_completed
 
     kwargs = {"scheduler_file": scheduler} if scheduler.endswith(".json") else {"address": scheduler}
-    with Client(**kwargs, timeout="30s") as client:
+    if "scheduler_file" in kwargs and not Path(scheduler).is_file():  # Client would wait for it forever
+        raise ValueError(f"--scheduler {scheduler}: no such scheduler file (dask scheduler --scheduler-file writes it)")
+    try:
+        client = Client(**kwargs, timeout="30s")
+    except OSError as exc:  # never a traceback, never a silent local run
+        raise ValueError(f"--scheduler {scheduler}: cannot reach the Dask scheduler ({exc}); start it with 'dask "
+                         "scheduler', or leave --scheduler out to grade on this machine") from None
+    with client:
         futures = [client.submit(run_job, job, key=f"bt-nav-grade-{job.key}", pure=False, retries=retries)
                    for job in jobs]
         by_key = {future.key: job for future, job in zip(futures, jobs, strict=True)}

@@ -86,3 +86,11 @@ def test_an_unreachable_scheduler_refuses_an_exe_grid(tmp_path: Path, capsys: py
     err = _refused(["--exe", f"{sys.executable} {FIXTURE} --choice C", *LAB, "--out", str(out), "--scheduler",
                     "tcp://127.0.0.1:9"], capsys)
     assert "cannot reach the Dask scheduler" in err and not out.exists(), err
+
+
+def test_a_lock_step_grid_with_no_scheduler_file_is_refused_without_a_traceback(tmp_path: Path,
+                                                                                capsys: pytest.CaptureFixture) -> None:
+    """bt_nav's own grid on a cluster whose scheduler file is not there: exit 2, the reason in one line."""
+    code = grade.main(["--worlds", "stage_4", "--seeds", "1", "--scheduler", str(tmp_path / "nowhere.json")])
+    err = capsys.readouterr().err
+    assert code == 2 and "no such scheduler file" in err and "Traceback" not in err, err

@@ -198,7 +198,11 @@ def main(argv: list[str] | None = None) -> int:
     if done:
         print(f"resuming: {len(done)} of {len(jobs)} missions already in {path}", file=sys.stderr)
     started = time.perf_counter()
-    rows = run_grid(jobs, args.jobs, args.scheduler, done, progress, save_partial)
+    try:
+        rows = run_grid(jobs, args.jobs, args.scheduler, done, progress, save_partial)
+    except ValueError as exc:  # an unreachable scheduler: refused, never a traceback
+        print(f"bt-nav grade: error: {exc}", file=sys.stderr)
+        return 2
     elapsed = time.perf_counter() - started
     summary = summarize(rows)
     print(format_table(summary))
