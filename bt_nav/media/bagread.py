@@ -10,8 +10,8 @@ Two ways in, both through maintained libraries:
 
 Either way the CDR payloads are decoded by rosbags' typestore. A sqlite3 rosbag2 bag or a ROS 1 .bag is read by
 :func:`bt_nav.media.bagformats.decoded_messages` (the one home of reading bag formats; this module re-exports
-:func:`~bt_nav.media.bagformats.iter_messages` and :func:`~bt_nav.media.bagformats.bag_files`). A file that yields nothing raises
-:class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
+:func:`~bt_nav.media.bagformats.iter_messages` and :func:`~bt_nav.media.bagformats.bag_files`). A file that yields
+nothing raises :class:`~bt_nav.media.bag.BagError` naming the file. No rclpy.
 
 Times: a message's time is its own header stamp where it has one on the bag's clock, else its bag time
 (:func:`bt_nav.media.bag.message_time_ns`, the recorder's rule too; a tree snapshot's own stamp is its ``t``,
