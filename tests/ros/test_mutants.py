@@ -54,6 +54,10 @@ _EVERY_CHOICE = {name: (LAB_C[name], None) for name in (
     "never_stops_turning", "wrong_topic", "twist_stamped", "no_safety_param")}
 LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
     "A": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
+          # in lab_dead_end a Randomizer turns back to back with no creep between, so the schedule has no toggle
+          # cycle there, and the one disarm may find it between two turns, standing on its last zero twist: the
+          # robot does stop then, as a TA would see it do
+          "no_stop_on_toggle_off": (LAB_C["no_stop_on_toggle_off"], "lab_beside"),
           "front_is_whole_scan": (NOT_HELD, "lab_beside"),
           "ignores_safety_distance": (r"turned late: triggered at front 0\.[3-5]\d m with safety_distance 0\.70: "
                                       r"it crept on 0\.[12]\d m", "safety_distance=0.7"),
