@@ -14,6 +14,10 @@ The rule (:func:`decide`), for a failed run at ``rtf`` > 1 that a speed can chan
 - **load**: the failed run's own evidence shows its timing slipped (:func:`slipped_timing`: the simulator stopped
   waiting for the node's commands inside a failed maneuver, or while it was armed for any other failure) and a
   re-run passed: graded by the re-run, with a finding that names the load;
+- **load** too: both re-runs passed, turning alike (a node that decides the same each time), the one at the
+  grade's speed made the failed run's decisions, and the failed maneuver lasted
+  longer (or shorter) in sim time than its twin and turned more (or less) for it (:func:`stretched_turn`): the
+  node's timing slipped behind sim time, which a busy machine moves within the pace's bound;
 - **wall clock**: its turns lasted about ``rtf`` times longer in sim time than at 1x, or its evaluation call came at
   1x only (:func:`wall_clock_evidence`), and the 1x run passed: graded at 1x, with a finding that names the wall
   clock;
@@ -169,6 +173,11 @@ def wall_clock_evidence(slow: dict[str, Any] | None, fast: dict[str, Any] | None
 #: Degrees two runs' turns may differ and still be the same decision: twice the check-off's tolerance (each run's
 #: turn may be off by that much from what the node meant).
 SAME_ANGLE_DEG = 20.0
+#: sim s: a failed turn that lasted this much longer or shorter than the same decision when run again was timed by
+#: a node behind sim time (a 1 rad/s turn at 0.1 s is 6 deg; the jitter of a run's settling is a few hundredths)
+STRETCH_MIN_S = 0.1
+#: Degrees two re-runs' turns may differ to be a node that decides the same each time (half the check-off's tolerance)
+CONSISTENT_DEG = 5.0
 
 
 def _turns(verdict: dict[str, Any] | None) -> list[tuple[str, float]]:
@@ -192,6 +201,38 @@ def decisions_differ(failed: dict[str, Any] | None, again: dict[str, Any] | None
             return f"maneuver {number} turned {angle1:.0f} deg {side1} in the failed run, {angle2:.0f} deg {side2} " \
                    f"when run again (turns: {_turn_words(first)}; again: {_turn_words(second)})"
     return None
+
+
+def stretched_turn(failed: dict[str, Any] | None, again: dict[str, Any] | None,
+                   slow: dict[str, Any] | None) -> str | None:
+    """The failed run's first failed maneuver set beside the same maneuver of a passing re-run at the same speed
+    that made the same decisions (:func:`decisions_differ` found none), in words (None: no such evidence): it lasted
+    :data:`STRETCH_MIN_S` or more longer (or shorter) in sim time, and turned more (or less) for it. A node's turn
+    lasts its own clock's or its odometry's time plus the change of its lag behind sim time, which the paced
+    simulator bounds but a busy machine moves (measured: a 1 rad/s Retreat timed on the ROS clock turned 195 deg
+    beside a test suite, 180 when run again); the same decision turned another way by its length alone is the
+    machine's timing, not the node's choice. A node that draws its angles would look the same, so the two re-runs
+    (``again`` and ``slow``, at 1x) must have turned alike up to that maneuver, within :data:`CONSISTENT_DEG`: a
+    node that decides the same each time."""
+    mine = next(((n, m) for n, m in enumerate((failed or {}).get("maneuvers") or [], start=1)
+                 if not m.get("passed")), None)
+    theirs = (again or {}).get("maneuvers") or []
+    if mine is None or len(theirs) < mine[0] or "settled" not in mine[1] or "settled" not in theirs[mine[0] - 1]:
+        return None
+    first, second = _turns(again)[:mine[0]], _turns(slow)[:mine[0]]
+    if len(second) < mine[0] or any(s1 != s2 or abs(a1 - a2) > CONSISTENT_DEG
+                                    for (s1, a1), (s2, a2) in zip(first, second, strict=True)):
+        return None
+    number, m = mine
+    other = theirs[number - 1]
+    longer = (float(m["settled"]) - float(m["t"])) - (float(other["settled"]) - float(other["t"]))
+    more = abs(float(m.get("angle_deg", 0.0))) - abs(float(other.get("angle_deg", 0.0)))
+    if abs(longer) < STRETCH_MIN_S or longer * more <= 0.0:
+        return None
+    return (f"maneuver {number} lasted {float(m['settled']) - float(m['t']):.2f} sim s and turned "
+            f"{abs(float(m['angle_deg'])):.0f} deg, the same turn {float(other['settled']) - float(other['t']):.2f} "
+            f"s and {abs(float(other['angle_deg'])):.0f} deg when run again at the same speed: the node's timing "
+            "slipped behind sim time")
 
 
 def slipped_timing(verdict: dict[str, Any] | None, drops: list[float]) -> str | None:
@@ -290,6 +331,12 @@ def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: 
     # only when the run at the grade's speed did not end with a verdict
     twin = again if again is not None else slow
     differed = decisions_differ(fast.get("verdict"), twin.get("verdict")) if twin is not None else None
+    stretched = stretched_turn(fast.get("verdict"), again.get("verdict"), slow.get("verdict")) \
+        if differed is None and again is not None and again["passed"] and slow is not None and slow["passed"] else None
+    if stretched is not None:
+        said = (f"{head}: {stretched}, so the failure is put down to the machine's load, not to the node; graded by "
+                "the re-run that passed")
+        return _regraded(again, fast, {**record, "decision": "load", "said": said}, said), said
     if differed is not None:
         why = (f"the runs differed ({differed}): a re-run that passes does not overturn a failure of a node whose "
                "decisions change from run to run" if passing else f"the runs differed ({differed})")
