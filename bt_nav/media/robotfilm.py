@@ -41,6 +41,7 @@ from bt_nav.media.video import (
     WIDTH,
     MapView,
     _fonts,
+    open_mp4,
 )
 
 ROOM, SCAN, PATH, ROBOT = (150, 150, 150), (230, 40, 40), (31, 119, 180), (40, 40, 40)
@@ -244,17 +245,9 @@ def frame_times(run: RobotRun, fps: float) -> np.ndarray:
 def write_robot_video(run: RobotRun, out: str | Path, fps: float = 10.0,
                       sidecar: str | Path | None = None) -> RobotVideoStats:
     """Render ``run`` to an H.264 MP4 (yuv420p) at ``out``; ``sidecar``: also write every frame's texts there."""
-    import imageio_ffmpeg
-
     started = time.perf_counter()
     path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    writer = imageio_ffmpeg.write_frames(str(path), (WIDTH, HEIGHT), fps=fps, codec="libx264",
-                                         pix_fmt_out="yuv420p", quality=None, bitrate=None,
-                                         ffmpeg_log_level="error", macro_block_size=16,
-                                         output_params=["-preset", "veryfast", "-crf", "23",
-                                                        "-movflags", "+faststart"])
-    writer.send(None)
+    writer = open_mp4(path, fps)
     renderer = RobotFilmRenderer(run)
     log = ConsoleLog(path, ROBOT_TIME_BASE) if sidecar else None
     frames = 0

@@ -612,17 +612,11 @@ def iter_frames(record: MissionRecord, fps: float, world: Any = None,
         yield float(t), renderer.frame(float(t)), renderer.console_rows(float(t))
 
 
-def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world: Any = None,
-                script: ConsoleScript | None = None, console_log: str | Path | None = None) -> VideoStats:
-    """Render ``record`` to an H.264 MP4 (yuv420p) at ``out``; returns the frame count and wall time.
-
-    ``script``: a hand-in's console (:class:`bt_nav.media.console.ConsoleScript`) in place of the bag's events;
-    ``console_log``: also write there, per frame, the console rows drawn (:class:`bt_nav.media.console.ConsoleLog`).
-    """
+def open_mp4(path: Path, fps: float) -> Any:
+    """An H.264 MP4 (yuv420p, fast start) writer at ``path`` for frames of the film's size, primed for frames
+    (``send`` RGB bytes, ``close`` to finish): one encoding for the simulator's films and a robot's."""
     import imageio_ffmpeg
 
-    started = time.perf_counter()
-    path = Path(out)
     path.parent.mkdir(parents=True, exist_ok=True)
     writer = imageio_ffmpeg.write_frames(str(path), (WIDTH, HEIGHT), fps=fps, codec="libx264",
                                          pix_fmt_out="yuv420p", quality=None, bitrate=None,
@@ -630,6 +624,19 @@ def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world
                                          output_params=["-preset", "veryfast", "-crf", "23",
                                                         "-movflags", "+faststart"])
     writer.send(None)
+    return writer
+
+
+def write_video(record: MissionRecord, out: str | Path, fps: float = 10.0, world: Any = None,
+                script: ConsoleScript | None = None, console_log: str | Path | None = None) -> VideoStats:
+    """Render ``record`` to an H.264 MP4 (yuv420p) at ``out``; returns the frame count and wall time.
+
+    ``script``: a hand-in's console (:class:`bt_nav.media.console.ConsoleScript`) in place of the bag's events;
+    ``console_log``: also write there, per frame, the console rows drawn (:class:`bt_nav.media.console.ConsoleLog`).
+    """
+    started = time.perf_counter()
+    path = Path(out)
+    writer = open_mp4(path, fps)
     log = ConsoleLog(path, TIME_BASE if script is None else script.time_base) if console_log else None
     origin = record.origin if script is None else script.origin
     frames = 0
