@@ -44,3 +44,17 @@ class DaskProcesses:
             if proc.poll() is None:
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait(timeout=10)
+
+
+def marked(variable: str, mark: str) -> list:
+    """Every live process whose environment carries ``variable=mark`` (a test's own children, wherever they run)."""
+    import psutil
+
+    found = []
+    for proc in psutil.process_iter():
+        try:
+            if proc.environ().get(variable) == mark and proc.status() != psutil.STATUS_ZOMBIE:
+                found.append(proc)
+        except (psutil.Error, OSError):
+            continue
+    return found

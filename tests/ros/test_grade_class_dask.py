@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import psutil
-from dask_cluster import REPO, DaskProcesses
+from dask_cluster import REPO, DaskProcesses, marked
 
 from bt_nav.testing import wait_until
 
@@ -43,14 +43,8 @@ def _grade(manifest: Path, out: Path, *extra: str) -> list[str]:
 
 
 def _marked(mark: str) -> list[psutil.Process]:
-    found = []
-    for proc in psutil.process_iter():
-        try:
-            if proc.environ().get(MARK) == mark and proc.status() != psutil.STATUS_ZOMBIE:
-                found.append(proc)
-        except (psutil.Error, OSError):
-            continue
-    return found
+    """Every live process carrying ``mark`` in its environment."""
+    return marked(MARK, mark)
 
 
 def _nodes(root: psutil.Process) -> list[psutil.Process]:

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import psutil
-from dask_cluster import REPO, DaskProcesses
+from dask_cluster import REPO, DaskProcesses, marked
 
 from bt_nav.testing import wait_until
 
@@ -48,14 +48,7 @@ NO_DATA = "no ground truth"
 
 def _marked(mark: str) -> list[psutil.Process]:
     """Every live process carrying ``mark`` in its environment."""
-    found = []
-    for proc in psutil.process_iter():
-        try:
-            if proc.environ().get(MARK) == mark and proc.status() != psutil.STATUS_ZOMBIE:
-                found.append(proc)
-        except (psutil.Error, OSError):
-            continue
-    return found
+    return marked(MARK, mark)
 
 
 def _describe(procs: list[psutil.Process]) -> str:
