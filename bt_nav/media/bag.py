@@ -55,6 +55,9 @@ TREE, EVENTS, MISSION, COLLISIONS, ROSOUT = ("/bt_nav_executive/tree", "/bt_nav/
                                              "/collisions", "/rosout")
 ANNOUNCEMENTS = "/bt_nav_executive/events"  # the executive's ``~/events``: its leaves' events as JSON (fields)
 WALKERS = "/walkers"  # the simulator's people walking (JSON {"t", "circles"}), in worlds that have them
+#: The file in a bag's directory that says when each topic's first message arrived: ``{topic: sim s}``, written by
+#: its recorder as it happens (:mod:`bt_nav.run.bagrecorder`, :mod:`bt_nav.ros.nodes.hosted_bag`).
+FIRST_MESSAGES = "first_messages.json"
 
 
 @dataclass(frozen=True)

@@ -21,14 +21,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bt_nav.media.bag import EVENTS, MISSION, TOPICS, MissionBag
+from bt_nav.media.bag import EVENTS, FIRST_MESSAGES, MISSION, TOPICS, MissionBag
 from bt_nav.mission.resources import written_whole
 
 #: What ``bt-nav record`` records by default: the mission's topics and every node's log lines.
 DEFAULT_TOPICS = [t for t in TOPICS if t not in (EVENTS, MISSION)] + ["/rosout"]
 SIM_NODE = "/bt_nav_sim"
-#: The file in the bag directory that says when each topic's first message arrived: ``{topic: sim s}``.
-FIRST_MESSAGES = "first_messages.json"
 
 
 def first_messages(bag: str | Path) -> dict[str, float]:

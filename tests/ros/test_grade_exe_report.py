@@ -53,6 +53,7 @@ def test_a_failed_run_is_recorded_pictured_and_filmed(tmp_path: Path) -> None:
     assert record.truth.t[0] == pytest.approx(row["bag_truth_from"], abs=0.006)  # the recorder's line: 2 decimals
     assert record.truth.t[0] < t0 + activation, \
         "the bag holds the ground truth from before the robot was first activated (its first move)"
+    assert record.truth.t[0] <= t0 and row["bag_after_t0_s"] == 0.0, "the simulator records from its first step"
     assert row["bag_after_t0_s"] == pytest.approx(max(0.0, record.truth.t[0] - t0), abs=0.011)
     assert record.truth.t[-1] >= t0 + 55.0, "... to the verdict (the schedule's 55 s and more)"
     assert row["wall_time"] < 90.0
@@ -65,7 +66,9 @@ def test_a_failed_run_is_recorded_pictured_and_filmed(tmp_path: Path) -> None:
     text = page.read_text()
     assert "0/1 passed (0.0 %)" in text and 'src="stage_4_none_seed0/video.mp4"' in text
     assert (out / "distance.png").is_file() and doc["figures"] == ["distance.png"]
-    assert {"record.log", "sim.log", "result.json", "verdict.json"} <= {p.name for p in run_dir.iterdir()}
+    files = {p.name for p in run_dir.iterdir()}
+    assert {"sim.log", "result.json", "verdict.json"} <= files and "record.log" not in files, \
+        "the simulator's process writes the bag: no recorder process of its own"
     _no_children_left()
 
 
@@ -90,5 +93,4 @@ def test_recording_off_leaves_no_bag(tmp_path: Path) -> None:
     [row] = doc["runs"]
     assert row["bag"] is None and not (Path(row["run_dir"]) / "bag").exists()
     assert row["media"]["note"] == "no bag (recording off)"
-    assert "record.log" not in {p.name for p in Path(row["run_dir"]).iterdir()}
     _no_children_left()

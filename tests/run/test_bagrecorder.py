@@ -10,7 +10,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from bt_nav.grading.exe.bag import BAG, RecorderWatch, bag_row
+from bt_nav.grading.exe.bag import BAG, bag_row
 from bt_nav.media.bag import SCAN, TRUTH
 from bt_nav.run.bagrecorder import FIRST_MESSAGES, BagRecorder, first_messages
 
@@ -40,7 +40,7 @@ def test_the_first_messages_are_noted_in_the_bag_and_the_row_reads_them(tmp_path
     assert json.loads((tmp_path / BAG / FIRST_MESSAGES).read_text()) == {SCAN: 11.2, TRUTH: 12.3456789}
     # the lines for people are printed as before
     assert capsys.readouterr().out.splitlines() == [f"first {SCAN} at sim 11.20 s", f"first {TRUTH} at sim 12.35 s"]
-    row = bag_row(tmp_path, RecorderWatch(), 10.0)
+    row = bag_row(tmp_path, True, 10.0)
     assert row == {"bag": BAG, "bag_bytes": 100, "bag_truth_from": 12.35, "bag_after_t0_s": 2.35}
 
 
@@ -48,7 +48,7 @@ def test_a_bag_without_its_note_says_unknown(tmp_path: Path) -> None:
     """No note (the recorder heard no ground truth, or was killed before its first message), or one cut short."""
     recorder = _recorder(tmp_path / BAG)
     recorder._write(SCAN, "sensor_msgs/msg/LaserScan", 11_200_000_000, b"", None)
-    assert bag_row(tmp_path, RecorderWatch(), 10.0)["bag_truth_from"] is None
+    assert bag_row(tmp_path, True, 10.0)["bag_truth_from"] is None
     (tmp_path / BAG / FIRST_MESSAGES).write_text('{"/ground_truth_odom": 1')
     assert first_messages(tmp_path / BAG) == {}
-    assert bag_row(tmp_path, None, 10.0) == {"bag": None}
+    assert bag_row(tmp_path, False, 10.0) == {"bag": None}

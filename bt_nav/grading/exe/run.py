@@ -2,7 +2,7 @@
 around a command that is not bt_nav's, once per world x maneuver x seed, each run isolated.
 
 Per run (:func:`run_exe_job`): a ROS domain claimed for the run alone (a :class:`bt_nav.run.session.DomainLease`,
-handed back at its end), a run directory of its own, and three process groups started by one
+handed back at its end), a run directory of its own, and two process groups started by one
 :class:`bt_nav.run.session.MissionSession` (the one layer ``bt-nav demo``, ``sim-run`` and the bench run theirs on):
 
 - the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
@@ -26,9 +26,8 @@ handed back at its end), a run directory of its own, and three process groups st
   failed verdict naming it after :data:`START_WAIT` wall seconds, not a timeout) and its graph audit
   (:mod:`bt_nav.ros.nodes.audit`: no ``scan`` subscription, a QoS or type that cannot match, NaN commands, a
   flood ...);
-- unless ``record`` is off, ``bt-nav record`` into ``bag/`` of the run directory, started with them and stopped first
-  when the run ends (:mod:`bt_nav.grading.exe.bag`); the report draws each run's picture and
-  films the failed runs from it.
+- unless ``record`` is off, the run's bag in ``bag/`` of the run directory, written by the simulator's process as it
+  publishes (:mod:`bt_nav.grading.exe.bag`); the report draws each run's picture and films the failed runs from it.
 
 The run ends when the judge's JSON (the verdict) appears, when the node exits first with an error (the
 reason quotes the exception that ended it and where the node's code raised it, else names its exit code; a node
@@ -54,7 +53,7 @@ from typing import Any
 from bt_nav_sim.pacing import PACE_FILE
 from bt_nav_sim.referee_core import failure_reason
 
-from bt_nav.grading.exe.bag import bag_row, start_recorder
+from bt_nav.grading.exe.bag import bag_row, record_args
 from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shutdown_race
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
@@ -386,14 +385,13 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                           settings.profile, job.params_over(settings.node_params)))
     started = time.monotonic()
-    recorder = None
     node = None
     try:
         if on_start is not None:
             on_start(domain, run_dir)
         sim_spec = exe_graph(job, settings, results_json)
-        if settings.record != "off":  # with the others (bt_nav.grading.exe.bag says why)
-            recorder = start_recorder(session, session.sink, run_dir, job.world, job.seed, settings.profile)
+        if settings.record != "off":  # written by the simulator's process (bt_nav.grading.exe.bag says why)
+            sim_spec.arguments += record_args(run_dir)
         try:
             node = session.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
@@ -408,10 +406,9 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         if on_verdict is not None:
             on_verdict()
     finally:
-        # the verdict is in (or never will be): the node first, while its world and its recorder run on (the bag
-        # holds what the node sends on its way out); then the rest at once
-        session.close(STOP_GRACE, together=True, first=node,
-                      after_first=recorder.stop if recorder is not None else None)
+        # the verdict is in (or never will be): the node first, while its world runs on and records (the bag holds
+        # what the node sends on its way out); then the rest at once
+        session.close(STOP_GRACE, together=True, first=node)
     if row["outcome"] not in ("stopped", SHARED_DOMAIN):  # how its node ended is not the node's to answer for
         findings, notes = _ending_findings(node, run_dir / "node.log")
         _with_findings(row, findings)
@@ -421,6 +418,6 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
                 "cell_params": dict(job.node_params), "node_params": dict(job.params_over(settings.node_params)),
                 "profile": settings.profile, "command": list(argv), "domain": domain, "run_dir": str(run_dir),
                 "wall_time": round(time.monotonic() - started, 2)})
-    row.update(bag_row(run_dir, recorder, (row.get("verdict") or {}).get("t0_sim")))
+    row.update(bag_row(run_dir, settings.record != "off", (row.get("verdict") or {}).get("t0_sim")))
     (run_dir / "result.json").write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
     return row

@@ -100,7 +100,7 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from bt_nav.mission.resources import written_whole
-from bt_nav.ros.rosutil import QuietQosEvents, declare_node_parameters
+from bt_nav.ros.rosutil import ConfigError, QuietQosEvents, declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
 
 NODE_NAME = "bt_nav_sim"
@@ -268,6 +268,11 @@ class SimulatorNode(QuietQosEvents, Node):
         self._thread = threading.Thread(target=self._loop_guarded, name="sim-loop", daemon=True)
         #: Called from the loop thread with each step's outputs once published (a hosted judge: hosting.py).
         self.observers: list[Callable[[list[StepOutput]], None]] = []
+        #: Called with (absolute topic, message, sim ns) for every message this node publishes (loop thread) and every
+        #: robot command it takes (executor thread, at its arrival): a recorder hosted here (hosted_bag.py).
+        self.taps: list[Callable[[str, Any, int], None]] = []
+        #: Called once the loop has stopped, on the way out (a hosted recorder closes its bag).
+        self.closers: list[Callable[[], None]] = []
 
     def _describe(self) -> str:
         """The start-up log line: world, spawn, profile, kinematics, physics rate and pacing."""
@@ -308,6 +313,8 @@ class SimulatorNode(QuietQosEvents, Node):
         self.stop()
         self.get_logger().info(self.stats())
         self._write_pace()
+        for close in self.closers:
+            close()
 
     def _write_pace(self) -> None:
         """The pace stops as JSON into ``pace_path`` (:meth:`bt_nav_sim.pacing.PaceStops.record`, with the silence
@@ -517,6 +524,12 @@ class SimulatorNode(QuietQosEvents, Node):
         clock.clock.sec, clock.clock.nanosec = divmod(t_ns, 1_000_000_000)
         self.clock_pub.publish(clock)
         self._clock_sent_ns = t_ns
+        self.tap("/clock", clock, t_ns)
+
+    def tap(self, topic: str, msg: Any, t_ns: int) -> None:
+        """Hand one message to the :attr:`taps` (nothing to do without one)."""
+        for tap in self.taps:
+            tap(topic, msg, t_ns)
 
 
 class _RobotIO:
@@ -545,13 +558,15 @@ class _RobotIO:
         self.walkers_pub = None if self.walkers is None else node.create_publisher(
             String, f"{prefix}walkers", QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         warn = SubscriptionEventCallbacks()  # rclpy's warnings where a robot's node may not match
+        self.topic = {name: f"/{prefix}{name}" for name in ("scan", "odom", "ground_truth_odom", "collisions",
+                                                             "walkers", "cmd_vel")}
         if stamped:
             node.create_subscription(TwistStamped, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.twist.linear.x, m.twist.angular.z), cmd_qos,
+                                     lambda m: self._on_cmd(m, m.twist.linear.x, m.twist.angular.z), cmd_qos,
                                      event_callbacks=warn)
         else:
             node.create_subscription(Twist, f"{prefix}cmd_vel",
-                                     lambda m: node._set_cmd(self, m.linear.x, m.angular.z), cmd_qos,
+                                     lambda m: self._on_cmd(m, m.linear.x, m.angular.z), cmd_qos,
                                      event_callbacks=warn)
         if prefix:  # this robot's referee speaks on its own namespace's sim_sync
             node.create_subscription(String, f"{prefix}sim_sync", node._on_sync, QoSProfile(depth=50))
@@ -559,6 +574,12 @@ class _RobotIO:
         self._scan_msg = self._scan_template()
         self._odom_msg = self._odom_template("odom")
         self._truth_msg = self._odom_template("world")
+
+    def _on_cmd(self, msg: Any, v: float, w: float) -> None:
+        """A command from the robot's node (executor thread): taken, then tapped at the sim time it arrived."""
+        self.node._set_cmd(self, v, w)
+        if self.node.taps:
+            self.node.tap(self.topic["cmd_vel"], msg, self.arrival_ns)
 
     def _scan_template(self) -> LaserScan:
         m = self.core.model
@@ -600,11 +621,15 @@ class _RobotIO:
         if out.odom:
             core = self.core
             if self.walkers_pub is not None:  # before the pose it goes with: a judge reads it first
-                self.walkers_pub.publish(String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles())))
+                people = String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles()))
+                self.walkers_pub.publish(people)
+                self.node.tap(self.topic["walkers"], people, out.t_ns)
             self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
             self.odom_pub.publish(self._odom_msg)
             self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
             self.truth_pub.publish(self._truth_msg)
+            self.node.tap(self.topic["odom"], self._odom_msg, out.t_ns)
+            self.node.tap(self.topic["ground_truth_odom"], self._truth_msg, out.t_ns)
         if out.scan is not None:
             msg = self._scan_msg
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
@@ -614,12 +639,15 @@ class _RobotIO:
             ranges.frombytes(out.scan.astype(np.float32, copy=False).tobytes())
             msg.ranges = ranges
             self.scan_pub.publish(msg)
+            self.node.tap(self.topic["scan"], msg, out.t_ns)
 
     def _publish_collision(self, t_ns: int, state: RobotState) -> None:
         """One ``collisions`` message (JSON ``{"t", "x", "y", "yaw"}``) and a warning."""
         event = {"t": round(t_ns * 1e-9, 6), "x": round(state.x, 4), "y": round(state.y, 4),
                  "yaw": round(state.yaw, 4)}
-        self.collision_pub.publish(String(data=json.dumps(event)))
+        msg = String(data=json.dumps(event))
+        self.collision_pub.publish(msg)
+        self.node.tap(self.topic["collisions"], msg, t_ns)
         self.node.get_logger().warning(f"{self.prefix}collision at t={event['t']:.2f} s, "
                                        f"({state.x:.2f}, {state.y:.2f})")
 
@@ -654,6 +682,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--judge-args", default="[]", metavar="JSON",
                         help="the hosted judge's own ROS arguments, a JSON list (e.g. [\"--ros-args\", \"-p\", "
                              "\"json:=v.json\"])")
+    parser.add_argument("--record", metavar="BAG",
+                        help="write the run's bag from this process (bt_nav.ros.nodes.hosted_bag): a new directory")
+    parser.add_argument("--record-topics", metavar="T,T,...",
+                        help="what --record records, comma-separated absolute names (default: all it publishes but "
+                             "/clock, the commands, /rosout as events, bt_nav's tree)")
     return parser.parse_args(argv)
 
 
@@ -670,8 +703,23 @@ def _started(node: Node, opts: argparse.Namespace) -> Any:
         from bt_nav.ros.nodes.hosting import HostedJudge, make_hosted_judge, parse_judge_args
 
         wiring = HostedJudge(node, make_hosted_judge(opts.judge, parse_judge_args(opts.judge_args), time.monotonic()))
+    if opts.record:
+        _host_recorder(node, opts.record, opts.record_topics)
     node.start()
     return wiring
+
+
+def _host_recorder(node: SimulatorNode, bag: str, topics: str | None) -> None:
+    """``--record``: the run's bag written by this process (ConfigError when it cannot be written)."""
+    from bt_nav.media.bag import BagError
+    from bt_nav.ros.nodes.hosted_bag import RECORD_TOPICS, HostedRecorder
+
+    chosen = [t.strip() for t in topics.split(",") if t.strip()] if topics else list(RECORD_TOPICS)
+    mission = {name: node.get_parameter(name).value for name in ("world", "seed", "profile")}
+    try:
+        HostedRecorder(node, bag, chosen, mission)
+    except BagError as exc:
+        raise ConfigError(f"--record: {exc}") from None
 
 
 def _make(name: str) -> SimulatorNode:
