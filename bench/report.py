@@ -261,6 +261,15 @@ def exe_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
     return lines
 
 
+def gradespeed_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
+    """Benchmark 9 (issue 43), rendered by its module (:func:`bench.grade_speed.markdown`)."""
+    if "skipped" in result:
+        return [f"skipped: {result['skipped']}"]
+    from .grade_speed import markdown
+
+    return markdown(result)
+
+
 SECTIONS = (
     ("tick", "1. Tick cost: tree vs hand-written if/else", tick_section),
     ("latency", "2. Reaction latency over DDS (scan -> cmd_vel)", latency_section),
@@ -268,6 +277,7 @@ SECTIONS = (
     ("quality", "4. Mission quality (referee, lock-step)", quality_section),
     ("memory", "5. Memory of the executive during a mission", memory_section),
     ("exe", "7. Grading throughput over DDS (`bt-nav grade --exe`)", exe_section),
+    ("gradespeed", "9. Grading speed before and after issue 43 (`bt-nav grade`, lab grid)", gradespeed_section),
 )
 
 

@@ -11,6 +11,8 @@ Benchmarks (``--only`` picks some, comma-separated):
 ``exe``      DDS grading throughput: missions/min of ``bt-nav grade --exe "bt-nav executive" --jobs 2``
              (:mod:`bench.exe_throughput`)
 ``testquick`` wall time of ``make test-quick``, the contributor's loop of tests without DDS (:mod:`bench.quick_tests`)
+``gradespeed`` a lab grade's wall time and verdicts side by side with the commit before issue 43's work: a right
+             node, a wall-clock node, a class of 10 (:mod:`bench.grade_speed`; 30+ min)
 
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
 ``<out>/latest.md`` (the same as tables). With ``--only``, the sections not run this time are
@@ -42,9 +44,9 @@ from typing import Any
 
 from .common import DOMAIN_RANGE, REPO, Target, load_average, machine, now_iso
 
-BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video", "exe", "testquick")
+BENCHMARKS = ("tick", "latency", "sim", "quality", "memory", "video", "exe", "testquick", "gradespeed")
 #: The order they run in: the quiet single-process measurements first, the process pools last.
-ORDER = ("tick", "sim", "video", "latency", "memory", "exe", "quality", "testquick")
+ORDER = ("tick", "sim", "video", "latency", "memory", "exe", "quality", "testquick", "gradespeed")
 SCHEMA = 1
 DEFAULT_OUT = REPO / "bench" / "results"
 #: Runs of the history shown in latest.md.
@@ -55,7 +57,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     """Command-line options."""
     parser = argparse.ArgumentParser(prog="python -m bench.run", description=__doc__.splitlines()[0],
                                      formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog="\n".join(__doc__.splitlines()[2:13]))
+                                     epilog="\n".join(__doc__.splitlines()[2:15]))
     parser.add_argument("--quick", action="store_true", help="a fast smoke run: few repetitions and seeds")
     parser.add_argument("--only", default=",".join(BENCHMARKS),
                         help=f"comma-separated subset of {','.join(BENCHMARKS)} (default: all)")
@@ -163,6 +165,14 @@ class Session:
 
         return quick_tests.run(quick=self.quick)
 
+    def gradespeed(self) -> dict[str, Any]:
+        """Benchmark 9: issue 43's grades, before and after, side by side."""
+        if self.args.no_dds:
+            return {"skipped": "no DDS in this run (--no-dds)"}
+        from . import grade_speed
+
+        return grade_speed.run(quick=self.quick)
+
 
 def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
     """The targets of one benchmark's result (none for a skipped one)."""
@@ -182,6 +192,8 @@ def targets_of(name: str, result: dict[str, Any]) -> list[Target]:
         from .exe_throughput import targets
     elif name == "testquick":
         from .quick_tests import targets
+    elif name == "gradespeed":
+        from .grade_speed import targets
     else:
         return []
     return targets(result)
