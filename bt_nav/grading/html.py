@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
+from bt_nav.grading.exe.pace import achieved_text, speed_words
 from bt_nav.grading.exe.run import ExeSettings, exe_ros_args
 from bt_nav.grading.grid import (
     cell_label,
@@ -95,7 +96,8 @@ def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
             f"<tr><th>command</th><td><code>{html.escape(settings.command)}</code> + "
             f"<code>{html.escape(appended)}</code></td></tr>",
             f"<tr><th>profile</th><td>{html.escape(settings.profile)}</td></tr>",
-            f"<tr><th>real-time factor</th><td>{settings.rtf:g}x (sim seconds per wall second)</td></tr>",
+            f"<tr><th>real-time factor</th><td>{html.escape(speed_words(settings.rtf, settings.rtf_max))}"
+            f"{html.escape(achieved_text(rows))}</td></tr>",
             f"<tr><th>limit per run</th><td>{settings.limit:g} s wall</td></tr>",
             f"<tr><th>recording</th><td>bags {html.escape(settings.record)}, videos "
             f"{html.escape(settings.videos)}</td></tr>",

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.exe.grid import ERROR, parameters_lines
+from bt_nav.grading.exe.pace import achieved_text, speed_words
 from bt_nav.grading.exe.run import ExeSettings, exe_ros_args
 from bt_nav.grading.grid import (
     failure_groups,
@@ -28,7 +29,8 @@ from bt_nav.grading.rules import RULES_FILE, RULES_LINE_MD, grade_rules
 
 def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per world, maneuver and LiDAR: runs judged, passes, bt_nav errors (apart: never the node's failure), mean
-    wall time and the reasons of the failures (counted)."""
+    wall time, the median factor the runs achieved (:mod:`bt_nav.grading.exe.pace`) and the reasons of the failures
+    (counted)."""
     cells: dict[tuple[str, str, str, str], list[dict[str, Any]]] = defaultdict(list)
     for row in rows:  # a cell's own node parameters (lab_hallway B safety_distance=0.7) make a cell of their own
         cells[(row["world"], row["maneuver"], row.get("lidar", ""), params_text(row.get("cell_params")))].append(row)
@@ -39,9 +41,11 @@ def summarize_exe(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         for row in judged:
             if not row["passed"]:
                 reasons[row["reason"]] += 1
+        factors = sorted(float(r["rtf"]) for r in cell if r.get("rtf"))  # what each run achieved
         out.append({"world": world, "maneuver": maneuver, "lidar": lidar, "params": params, "runs": len(judged),
                     "passed": sum(1 for r in judged if r["passed"]), "errors": len(cell) - len(judged),
-                    "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons)})
+                    "wall_time_mean": sum(r["wall_time"] for r in cell) / len(cell), "reasons": dict(reasons),
+                    "rtf_median": factors[len(factors) // 2] if factors else None})
     return out
 
 
@@ -49,10 +53,11 @@ def format_exe_table(summary: Sequence[dict[str, Any]]) -> str:
     """The summary as a fixed-width table, like ``bt-nav grade``'s (a LiDAR column when the grid varies it)."""
     lidars = any(s.get("lidar") for s in summary)
     head = (f"{'world':<15} {'man':<4} " + (f"{'lidar':<9} " if lidars else "")
-            + f"{'pass':>7} {'wall/run':>8}  reasons of the failures")
+            + f"{'pass':>7} {'wall/run':>8} {'speed':>6}  reasons of the failures")
     rows = [f"{' '.join(filter(None, (s['world'], s.get('params')))):<15} {s['maneuver']:<4} "
             + (f"{s.get('lidar') or 'profile':<9} " if lidars else "")
-            + f"{s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s  "
+            + f"{s['passed']:>3}/{s['runs']:<3} {s['wall_time_mean']:>7.1f}s "
+            + (f"{s['rtf_median']:>5.1f}x  " if s.get("rtf_median") else f"{'-':>6}  ")
             + ("; ".join([*(f"{reason} x{n}" for reason, n in s["reasons"].items()),
                           *([f"bt_nav error x{s['errors']} (not the node's)"] if s.get("errors") else [])]) or "-")
             for s in summary]
@@ -68,8 +73,9 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     runs = sum(s["runs"] for s in summary)
     passed = sum(s["passed"] for s in summary)
     lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
-             f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; {settings.rtf:g}x real time, "
-             f"{settings.limit:g} s wall per run.", "",
+             f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; "
+             f"{speed_words(settings.rtf, settings.rtf_max)}{achieved_text(rows)}, {settings.limit:g} s wall per run.",
+             "",
              "| world | " + ("LiDAR | " if lidars else "") + " | ".join(maneuvers) + " |",
              "|---|" + ("---|" if lidars else "") + "---|" * len(maneuvers)]
     for world, lidar, cells in table:
@@ -131,8 +137,8 @@ def write_exe_report(rows: Sequence[dict[str, Any]], settings: ExeSettings, work
     figures = list(made["names"]) if made is not None else grid_figures(rows, settings.out)
     appended = exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params)
     doc = {"settings": {"command": settings.command, "profile": settings.profile, "limit_s": settings.limit,
-                        "rtf": settings.rtf, "appended": appended, "record": settings.record,
-                        "videos": settings.videos},
+                        "rtf": settings.rtf, "rtf_max": settings.rtf_max, "appended": appended,
+                        "record": settings.record, "videos": settings.videos},
            "summary": summary, "figures": figures,
            "per_lidar": {name or "profile": {"label": lidar_label(name), "passed": p, "runs": n}
                          for name, (p, n) in per_lidar(rows).items()},

@@ -30,6 +30,7 @@ from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
 from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
 
+from bt_nav.grading.exe.pace import speed_words
 from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
 from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
 from bt_nav.mission.params import LAB_MANEUVERS
@@ -106,6 +107,7 @@ class GradeSetup:
     rtf: float = ExeSettings.rtf
     limit: float = ExeSettings.limit  # wall seconds per run
     worlds: tuple[str, ...] = ()  # a grade's own; empty: the profile's default (plan.EXE_WORLDS)
+    rtf_max: float = ExeSettings.rtf_max  # --rtf-max: the cap of rtf 0
 
     @property
     def params(self) -> dict[str, Any]:
@@ -159,7 +161,7 @@ def grade_rules(settings: ExeSettings, rows: Sequence[dict[str, Any]]) -> str:
     maneuvers = sorted({r["maneuver"] for r in rows if r.get("maneuver") in LAB_MANEUVERS}) or None
     lidars = tuple(sorted({r["lidar"] for r in rows if r.get("lidar")})) or EXE_LIDARS
     worlds = tuple(sorted({r["world"] for r in rows if r.get("world")}))
-    setup = GradeSetup(tuple(settings.node_params), lidars, settings.rtf, settings.limit, worlds)
+    setup = GradeSetup(tuple(settings.node_params), lidars, settings.rtf, settings.limit, worlds, settings.rtf_max)
     return rules_markdown(settings.profile, maneuvers=maneuvers, setup=setup,
                           note="The rules this grade judged your node by (`bt-nav rules` prints them for any grade).")
 
@@ -376,7 +378,9 @@ _T0 = ("Sim seconds from t0, which comes once your node offers its service and h
 
 def _limits(service: str, setup: GradeSetup) -> str:
     """A grade's pace and wall-time limits, and what a node that never offers its service gets."""
-    return (f"A grade runs in sim time at {setup.rtf:g}x real time (`--rtf`), at most {setup.limit:g} s wall per run "
+    pace = f"at {speed_words(setup.rtf)} (`--rtf`)" if setup.rtf > 0 else \
+        f"{speed_words(0.0, setup.rtf_max)} (`--rtf 0`: sim time waits for your node's commands)"
+    return (f"A grade runs in sim time, {pace}, at most {setup.limit:g} s wall per run "
             f"(`--timeout`); a node that offers no `{service}` within {START_WAIT:g} s wall (less with a short "
             "`--timeout`) is not judged: the run fails.")
 

@@ -10,6 +10,7 @@ the node at exit, read by :func:`read_pace_stops`): the node's log line says the
 from __future__ import annotations
 
 import json
+import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -146,27 +147,65 @@ class PaceStop:
 class PaceStops:
     """When the simulator stopped waiting for each follower and when it waited again, in sim time: the run's own
     evidence of whether its pacing held (a grade's re-run rule reads it: :func:`bt_nav.grading.realtime.run_slipped`).
-    Whether the robot's node was armed then is the judge's to say (its verdict's times), not the simulator's."""
+    Whether the robot's node was armed then is the judge's to say (its verdict's times), not the simulator's.
 
-    def __init__(self) -> None:
+    Also how long sim time followed each follower, in sim and wall seconds (:meth:`followed`): at ``real_time_factor``
+    0 the simulator runs as fast as its followers keep up, so the sim seconds per wall second while it followed the
+    robot's ``cmd_vel`` are how fast the robot's node kept up (``bt-nav grade --exe`` reports it per run).
+
+    Args:
+        clock: the wall clock of the spans (the one the node passes :meth:`Followers.report`).
+    """
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self.stops: list[PaceStop] = []
+        self.clock = clock
+        self._open: dict[str, tuple[float, float]] = {}  # follower -> (sim s, wall s) where its current span began
+        self._spans: list[tuple[str, float, float, float, float, bool]] = []  # who, sim, wall, sim, wall, holding
 
     def stopped(self, who: str, t: float, holding: bool) -> None:
         """Sim time no longer waits for ``who`` from sim ``t`` s on (silent, or ``holding`` too long)."""
         self.stops.append(PaceStop(who, round(float(t), 4), "holding" if holding else "silent"))
+        began = self._open.pop(who, None)
+        if began is not None:
+            self._spans.append((who, *began, float(t), self.clock(), bool(holding)))
 
     def resumed(self, who: str, t: float) -> None:
-        """``who`` spoke again at sim ``t`` s: its latest stop, if still open, ends (a first message is none)."""
+        """``who`` spoke again at sim ``t`` s (or for the first time: it joins): it is followed from here, and its
+        latest stop, if still open, ends (a first message ends none)."""
+        self._open.setdefault(who, (float(t), self.clock()))
         for stop in reversed(self.stops):
             if stop.who == who:
                 if stop.resumed is None:
                     stop.resumed = round(float(t), 4)
                 return
 
-    def record(self, **extra: Any) -> dict[str, Any]:
-        """The JSON of :data:`PACE_FILE`: ``stops`` (each :class:`PaceStop`'s fields) and ``extra`` (the node's
-        settings and its final sim time)."""
-        return {**extra, "stops": [asdict(stop) for stop in self.stops]}
+    def followed(self, followers: Followers | None = None, t_end: float | None = None) -> dict[str, dict[str, float]]:
+        """Per follower, the sim and wall seconds sim time followed it (``sim_s``, ``wall_s``): from each (re)join to
+        its drop, less the silence (or hold) that dropped it, which the follower did not spend keeping up; a span
+        still open ends at the follower's latest message (``followers``' bookkeeping), else at ``t_end`` and now."""
+        silence, hold = (followers.silence_s, followers.hold_s) if followers is not None else (0.0, 0.0)
+        spans = [(who, s0, w0, s1, max(w0, w1 - (hold if holding else silence)))
+                 for who, s0, w0, s1, w1, holding in self._spans]
+        for who, (s0, w0) in self._open.items():
+            member = followers.members.get(who) if followers is not None else None
+            if member is not None and member.active:
+                spans.append((who, s0, w0, max(s0, member.t_ns * 1e-9), max(w0, member.seen)))
+            elif t_end is not None:
+                spans.append((who, s0, w0, max(s0, float(t_end)), max(w0, self.clock())))
+        out: dict[str, dict[str, float]] = {}
+        for who, s0, w0, s1, w1 in spans:
+            total = out.setdefault(who, {"sim_s": 0.0, "wall_s": 0.0})
+            total["sim_s"] += s1 - s0
+            total["wall_s"] += w1 - w0
+        return {who: {k: round(v, 3) for k, v in total.items()} for who, total in out.items()}
+
+    def record(self, followers: Followers | None = None, **extra: Any) -> dict[str, Any]:
+        """The JSON of :data:`PACE_FILE`: ``stops`` (each :class:`PaceStop`'s fields), ``followed``
+        (:meth:`followed`, ended by ``followers`` and ``extra``'s ``t_end``) and ``extra`` (the node's settings, its
+        final sim time ``t_end`` and its wall time ``wall_s``)."""
+        followed = self.followed(followers, extra.get("t_end"))
+        return {**extra, "followed": followed, "stops": [asdict(stop) for stop in self.stops]}
 
 
 def read_pace_stops(path: str | Path) -> list[PaceStop] | None:
@@ -179,3 +218,13 @@ def read_pace_stops(path: str | Path) -> list[PaceStop] | None:
                          None if s.get("resumed") is None else float(s["resumed"])) for s in data["stops"]]
     except (OSError, ValueError, KeyError, TypeError):
         return None
+
+
+def read_pace(path: str | Path) -> dict[str, Any] | None:
+    """The whole record a simulator wrote into ``path`` (:meth:`PaceStops.record`); None when there is none or it
+    cannot be read (see :func:`read_pace_stops`)."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None

@@ -219,8 +219,8 @@ def test_a_class_says_for_each_student_which_failures_go_again_and_how_they_ende
     monkeypatch.setattr(realtime, "run_pool", again)
     monkeypatch.setattr(classroom, "_write_student_report", lambda *args: None)
     job = Job("lab_object", "C", 0, "lab", sim_params=(("lidar", "lds01"),))
-    grids = {"ann": (ExeSettings("python3 a.py", "lab", tmp_path / "ann"), [job], {job.key: row(job, False)}),
-             "bob": (ExeSettings("python3 b.py", "lab", tmp_path / "bob"), [job], {job.key: row(job, True)})}
+    grids = {"ann": (ExeSettings("python3 a.py", "lab", tmp_path / "ann", rtf=5.0), [job], {job.key: row(job, False)}),
+             "bob": (ExeSettings("python3 b.py", "lab", tmp_path / "bob", rtf=5.0), [job], {job.key: row(job, True)})}
     said: list[str] = []
     classroom._check_at_real_time(grids, 2, None, None, said.append)
     assert len(said) == 2 and said[0].startswith("ann: lab_object C lds01 seed 0 again at 5x and at 1x real time"), said

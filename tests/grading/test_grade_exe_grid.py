@@ -144,7 +144,7 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
     out = tmp_path / "g"
     settings = _settings(out)
     exe_grid.prepare_out(settings, JOBS, resume=False)
-    with pytest.raises(ValueError, match="rtf 5.0 there, 8.0 now"):
+    with pytest.raises(ValueError, match="rtf 0.0 there, 8.0 now"):
         exe_grid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
     with pytest.raises(ValueError, match="command"):
         exe_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)

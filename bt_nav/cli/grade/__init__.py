@@ -106,9 +106,12 @@ def _parser() -> argparse.ArgumentParser:
                         "checks as --class gives each hand-in (see bt-nav check-launch); grade.json and feedback.md "
                         "carry them")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
-    parser.add_argument("--rtf", type=float, default=5.0, help="--exe: sim seconds per wall second (default 5)")
+    parser.add_argument("--rtf", type=float, default=0.0, help="--exe: sim seconds per wall second; 0 (default): as "
+                        "fast as the node keeps up, the factor each run achieved in its line")
+    parser.add_argument("--rtf-max", type=float, default=None, metavar="N", help="--exe, --rtf 0: at most N sim "
+                        "seconds per wall second (default: no cap)")
     parser.add_argument("--realtime-check", choices=("on", "off"), default="on",
-                        help="--exe: before failures at --rtf > 1 stand, one failed run is run again at 1x; if it "
+                        help="--exe: before failures at --rtf 0 or > 1 stand, one failed run is run again at 1x; if it "
                         "passes there (a node keeping time by the wall clock), every failed run is graded at 1x, "
                         "with a finding (default on)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "

@@ -24,8 +24,9 @@ def _show(row: dict[str, Any]) -> None:
     """One line per run as it ends (above the progress bar, when there is one)."""
     label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
     label = "NOT GRADED" if row.get("not_graded") else label  # another program on its domain: not the node's
+    factor = f", {row['rtf']:.1f}x" if row.get("rtf") else ""  # what the run achieved (bt_nav.grading.exe.pace)
     tqdm.write(f"  {run_label(row)}: {label} ({row['reason']}; "
-               f"{row['wall_time']:.1f} s wall) {row['run_dir']}", file=sys.stdout)
+               f"{row['wall_time']:.1f} s wall{factor}) {row['run_dir']}", file=sys.stdout)
     for note in row.get("notes", []):  # not the node's: a domain it had to leave, a lost SIGINT
         tqdm.write(f"    note: {note}", file=sys.stdout)
     sys.stdout.flush()
@@ -44,6 +45,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         prepare_out,
         run_exe_grid,
     )
+    from bt_nav.grading.exe.pace import speed_words
     from bt_nav.grading.launch_target import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
@@ -58,7 +60,8 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         parser.error(str(exc))
     where = describe_workers(workers)
     print(f"bt-nav grade: {len(jobs)} runs of {settings.command!r} ({args.profile} profile, {where}, "
-          f"{args.rtf:g}x real time, {args.timeout:g} s wall each) in {settings.out}/", flush=True)
+          f"{speed_words(settings.rtf, settings.rtf_max)}, {args.timeout:g} s wall each) in {settings.out}/",
+          flush=True)
     if args.resume:
         print(f"resuming: {len(done)} of {len(jobs)} runs already in {settings.out}", file=sys.stderr, flush=True)
     progress = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())

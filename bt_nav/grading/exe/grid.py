@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.admission import Admission, describe
+from bt_nav.grading.exe.pace import check_speed, with_speed
 from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
@@ -51,7 +52,9 @@ GRID_FILE = "grid.json"
 #: The outcome of a run cut short by a stop: no result; left out of the report, run again by a resume.
 STOPPED = "stopped"
 #: The settings a resumed grade must share with the grade it continues.
-SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter", "node_params")
+SHARED = ("command", "cwd", "profile", "limit", "rtf", "maneuvers", "jitter", "node_params", "rtf_max")
+#: What a grade written before a setting existed had instead (the setting's default then).
+SHARED_BEFORE = {"rtf_max": 0.0}
 #: Wall seconds a stopped cluster grid waits for its running tasks to report their stopped runs.
 CLUSTER_STOP_WAIT = 30.0
 
@@ -128,17 +131,23 @@ def exe_settings(args: Any, maneuvers: bool, command: str | None = None) -> ExeS
     node_params = tuple(parse_assignments(args.node_param).items())
     return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
-                       args.videos, os.getcwd(), node_params, args.realtime_check == "on")
+                       args.videos, os.getcwd(), node_params, args.realtime_check == "on", args.rtf_max or 0.0)
 
 
 def check_node_options(args: Any) -> None:
     """Refuse the ``bt-nav grade`` options a grade cannot honour with ``--class``, ``--exe`` or ``--scheduler``
-    (an option is refused, never silently ignored). ``args.jobs`` is None unless ``--jobs`` was given.
+    (an option is refused, never silently ignored), and a speed no run can keep
+    (:func:`bt_nav.grading.exe.pace.check_speed`; ``--rtf-max`` without them). ``args.jobs`` is None unless
+    ``--jobs`` was given.
 
     Raises:
         ValueError: naming the option and what to do instead.
     """
     mode = "--class" if args.klass is not None else "--exe" if args.exe is not None else None
+    if mode:
+        check_speed(args.rtf, args.rtf_max)
+    elif args.rtf_max is not None:
+        raise ValueError("--rtf-max caps the speed of --exe and --class runs; lock-step runs as fast as it can")
     if args.scheduler and args.jobs is not None:
         raise ValueError("--jobs counts the runs at once on this machine; with --scheduler the cluster's workers run "
                          "them (each dask worker's --nthreads sets how many at once there): leave --jobs out")
@@ -229,8 +238,8 @@ def prepare_out(settings: ExeSettings, jobs: Sequence[Job], resume: bool) -> dic
         except (OSError, json.JSONDecodeError) as exc:
             raise ValueError(f"--resume: {out} holds no grade to continue ({GRID_FILE}: {exc})") from None
         now = _grid_doc(settings, jobs)
-        differ = [f"{name} {before.get(name)!r} there, {now[name]!r} now" for name in SHARED
-                  if before.get(name) != now[name]]
+        had = {name: before.get(name, SHARED_BEFORE.get(name)) for name in SHARED}
+        differ = [f"{name} {had[name]!r} there, {now[name]!r} now" for name in SHARED if had[name] != now[name]]
         if differ:
             raise ValueError(f"--resume: the grade in {out} differs: " + "; ".join(differ))
         done = finished_runs(out, jobs)
@@ -325,10 +334,20 @@ def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None
         if stop is not None and stop.requested:
             return None
         try:
-            return with_parameters(run_exe_job(job, settings, stop, on_verdict=on_verdict))
+            return with_parameters(_with_speed(run_exe_job(job, settings, stop, on_verdict=on_verdict), settings))
         except Exception as exc:  # one broken run must not sink the grid
             error, where = repr(exc), str(_keep_traceback(job, settings, attempt))
     return error_row(job, error, where)
+
+
+def _with_speed(row: Row, settings: ExeSettings) -> Row:
+    """``row`` with the speed its run achieved (:func:`bt_nav.grading.exe.pace.with_speed`), also in its
+    ``result.json`` (a resumed grade reads it there)."""
+    with_speed(row, settings.rtf)
+    result = Path(row.get("run_dir") or "") / "result.json"
+    if row.get("run_dir") and result.is_file():
+        result.write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
+    return row
 
 
 def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:

@@ -6,8 +6,9 @@ handed back at its end), a run directory of its own, and two process groups star
 :class:`bt_nav.run.session.MissionSession` (the one layer ``bt-nav demo``, ``sim-run`` and the bench run theirs on):
 
 - the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
-  truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second (the node's sim-time
-  timers tick that much faster too) and *paced to the node* (``follow``, :data:`FOLLOW_NODE`): the node's
+  truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second, or at ``rtf`` 0 (the
+  default) as fast as the node keeps up (:mod:`bt_nav.grading.exe.pace`; the node's sim-time timers tick that much
+  faster too), and in any case *paced to the node* (``follow``, :data:`FOLLOW_NODE`): the node's
   ``cmd_vel`` publisher is a follower, so sim time never runs more than 0.05 s (or the node's own command period)
   ahead of its latest command, except to publish the next scan the node answers (:data:`FOLLOW_NODE`). A node
   starved of CPU on a busy machine then finds the world where it left it instead of a turn 20 deg further on,
@@ -55,6 +56,7 @@ from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.exe.bag import bag_row, record_args
 from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shutdown_race
+from bt_nav.grading.exe.pace import sim_pace
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
@@ -84,7 +86,7 @@ class ExeSettings:
     profile: str  # homework (the referee) or lab (the check-off judge)
     out: Path  # the grid's directory; one run directory per run below it
     limit: float = 150.0  # wall seconds per run
-    rtf: float = 5.0  # sim seconds per wall second
+    rtf: float = 0.0  # sim seconds per wall second; 0: as fast as the node keeps up (bt_nav.grading.exe.pace)
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
     record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.exe.bag.RECORD_MODES)
@@ -92,8 +94,9 @@ class ExeSettings:
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
     # Parameters given to the node as a TA's launch file would (-p NAME:=VALUE); safety_distance is the judge's too
     node_params: tuple[tuple[str, Any], ...] = ()
-    # A failure at rtf > 1 is checked at 1x before it stands (bt_nav.grading.realtime)
+    # A failure at rtf > 1 or 0 is checked at 1x before it stands (bt_nav.grading.realtime)
     realtime_check: bool = True
+    rtf_max: float = 0.0  # at rtf 0, the most sim seconds per wall second (0: no cap)
 
 
 @dataclass(frozen=True)
@@ -143,7 +146,8 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     assignment = assignment_of(settings.profile)
     lab = assignment.judge.executable == "checkoff"
     # its pace stops as data beside the verdict (bt_nav.grading.realtime reads them)
-    sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False, "pace_path": str(results_json.with_name(PACE_FILE))}
+    sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False, "pace_path": str(results_json.with_name(PACE_FILE)),
+                           **sim_pace(settings.rtf, settings.rtf_max)}  # at rtf 0 no cap but --rtf-max
     if settings.jitter:
         sim.update({"spawn_jitter_m": float(settings.jitter[0]), "spawn_jitter_deg": float(settings.jitter[1])})
     sim.update(dict(job.sim_params))  # --sim-param and the grid's LiDAR, as lock-step gets them

@@ -323,8 +323,9 @@ class SimulatorNode(QuietQosEvents, Node):
         if not self.pace_path:
             return
         with self._cond:
-            record = self.pace_stops.record(follower_timeout=self.followers.silence_s,
-                                            hold_timeout=self.followers.hold_s, t_end=round(self.sim.t, 4))
+            record = self.pace_stops.record(self.followers, follower_timeout=self.followers.silence_s,
+                                            hold_timeout=self.followers.hold_s, t_end=round(self.sim.t, 4),
+                                            wall_s=round(time.monotonic() - self._wall_start, 3))
         try:
             with written_whole(self.pace_path) as stream:
                 stream.write(json.dumps(record) + "\n")
