@@ -2,14 +2,17 @@
 speed can matter) at 1x; the grade says what each showed, and a failure stands unless the failed run's own evidence
 excuses it.
 
-Why: ``--exe`` runs the node's world faster than real time (``--rtf``, 5 by default) and gives the node sim time
-(``use_sim_time``). A node that times its turn or its 50 s with ``time.sleep`` or ``time.time`` is right on a robot
-at 1x and wrong in any faster simulation: at 5x its 90 deg pivot turns 450 deg. And a machine busy enough can starve
+Why: ``--exe`` runs the node's world faster than real time (``--rtf``: by default 0, as fast as the node keeps up,
+often 8-12x; or a fixed factor) and gives the node sim time (``use_sim_time``). A node that times its turn or its
+50 s with ``time.sleep`` or ``time.time`` is right on a robot at 1x and wrong in any faster simulation: at 5x its
+90 deg pivot turns 450 deg. And a machine busy enough can starve
 a right node for a wall second, long enough for the simulator's pace to stop waiting for it (its turn then runs on).
 Neither is the node's mistake. But a node whose decisions change from run to run (an angle drawn, a side chosen)
 can fail one run and pass the next for its own reasons: a passing re-run of it proves nothing.
 
-The rule (:func:`decide`), for a failed run at ``rtf`` > 1 that a speed can change (:func:`speed_cannot_matter`):
+The rule (:func:`decide`), for a failed run at ``rtf`` > 1 or 0 that a speed can change (:func:`speed_cannot_matter`;
+at ``rtf`` 0 each run's speed is the factor it achieved, :func:`bt_nav.grading.exe.pace.achieved`, and the words
+say it: "failed at 9.3x"):
 
 - **load**: the failed run's own evidence shows its timing slipped (:func:`slipped_timing`: the simulator stopped
   waiting for the node's commands inside a failed maneuver, or while it was armed for any other failure) and a
@@ -44,6 +47,7 @@ from typing import Any
 from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace_stops
 
 from bt_nav.grading.exe.grid import ERROR, STOPPED, Workers, finished_runs, run_pool
+from bt_nav.grading.exe.pace import achieved
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.ros.nodes.findings import CUT_OFF
@@ -95,19 +99,25 @@ def speed_cannot_matter(row: Row) -> str | None:
     return cut[0] if cut else None
 
 
+def checked(settings: ExeSettings) -> bool:
+    """Whether a grid's failures are checked at 1x: the check on, and its runs faster than real time (``rtf`` > 1,
+    or 0: as fast as the node keeps up, which is faster unless the node is too slow for the robot)."""
+    return settings.realtime_check and not 0.0 < settings.rtf <= 1.0
+
+
 def failed_jobs(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]) -> list[Job]:
     """The jobs whose failure the grid checks at 1x: the failed runs a speed can have failed
-    (:func:`speed_cannot_matter`); none at ``rtf <= 1`` or with the check off."""
-    if settings.rtf <= 1.0 or not settings.realtime_check:
+    (:func:`speed_cannot_matter`); none at ``0 < rtf <= 1`` or with the check off (:func:`checked`)."""
+    if not checked(settings):
         return []
     return [job for job in jobs if failed_at_speed(rows.get(job.key)) and speed_cannot_matter(rows[job.key]) is None]
 
 
 def check_plan(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row]) -> list[str]:
     """What the terminal says before the 1x check: the failed run that goes first at 1x (and that the others follow
-    if it passes there), then the failed runs not run again, grouped by why; nothing at ``rtf <= 1``, with the check
+    if it passes there), then the failed runs not run again, grouped by why; nothing at ``0 < rtf <= 1``, with the check
     off, or without a failure."""
-    if settings.rtf <= 1.0 or not settings.realtime_check:
+    if not checked(settings):
         return []
     again = failed_jobs(jobs, settings, rows)
     kept: dict[str, list[str]] = {}
@@ -121,8 +131,8 @@ def check_plan(jobs: Sequence[Job], settings: ExeSettings, rows: dict[str, Row])
         others = len(again) - 1
         then = f", then the {others} other failed run{'s' if others > 1 else ''} that may depend on speed unless it " \
             "fails at both" if others else ""
-        lines.append(f"bt-nav grade: {run_label(rows[again[0].key])} again at {settings.rtf:g}x and at 1x real time "
-                     f"before the failures stand{then} (--realtime-check off skips it): into "
+        lines.append(f"bt-nav grade: {run_label(rows[again[0].key])} again {_at_speed(settings.rtf)} and at 1x real "
+                     f"time before the failures stand{then} (--realtime-check off skips it): into "
                      f"{settings.out / RERUN_DIR}/ and {settings.out / REALTIME_DIR}/")
     if kept:
         head = "not re-run at 1x, no speed changes their verdict" if again else \
@@ -149,6 +159,11 @@ def _median(values: list[float]) -> float | None:
     return values[len(values) // 2] if values else None
 
 
+#: The least ratio of two runs' turn durations (or evaluation calls) that counts as a wall clock: a busy machine
+#: stretches a ROS-time turn by a few tenths of a second (measured: 0.1-0.3 s of a 2.6 s turn), never by 40 %.
+WALL_CLOCK_MIN_RATIO = 1.4
+
+
 def wall_clock_evidence(slow: dict[str, Any] | None, fast: dict[str, Any] | None, rtf: float) -> str | None:
     """What the two verdicts (at 1x and at ``rtf``) show of a node timing itself by the wall clock, in words; None
     where they show nothing of it. A wall-clock node's timed acts last the same *wall* time at every speed, so
@@ -156,16 +171,18 @@ def wall_clock_evidence(slow: dict[str, Any] | None, fast: dict[str, Any] | None
     late at ``rtf``). A ROS-time node that overshot a turn under load took about as long in sim time."""
     if not slow or not fast:
         return None
-    threshold = rtf ** 0.5  # the geometric midpoint of 1 (sim time) and rtf (wall time)
+    # the geometric midpoint of 1 (sim time) and rtf (wall time); at a factor near 1 (a slow node at --rtf 0) no
+    # less than WALL_CLOCK_MIN_RATIO, beyond what a load's stretch of a ROS-time turn reaches
+    threshold = max(rtf ** 0.5, WALL_CLOCK_MIN_RATIO)
     durations = [_median([m["settled"] - m["t"] for m in v.get("maneuvers") or [] if "settled" in m])
                  for v in (slow, fast)]
     if durations[0] and durations[1] is not None and durations[1] / durations[0] >= threshold:
-        return (f"its turns lasted {durations[1]:.1f} sim s at {rtf:g}x and {durations[0]:.1f} sim s at 1x: "
+        return (f"its turns lasted {durations[1]:.1f} sim s at {_factor(rtf)} and {durations[0]:.1f} sim s at 1x: "
                 "the same wall time")
     called_slow, called_fast = slow.get("evaluation_called"), fast.get("evaluation_called")
     if called_slow and (called_fast is None or called_fast / called_slow >= threshold):
         at = "never" if called_fast is None else f"at t={called_fast:.1f} s"
-        return f"its evaluation call came at t={called_slow:.1f} s at 1x and {at} at {rtf:g}x"
+        return f"its evaluation call came at t={called_slow:.1f} s at 1x and {at} at {_factor(rtf)}"
     return None
 
 
@@ -294,36 +311,56 @@ def _failed_both(again: Row | None, slow: Row | None) -> bool:
     return all(r is not None and _judged(r) and not r["passed"] for r in (again, slow))
 
 
-def _ended(row: Row | None, rtf: float) -> str:
-    """How one re-run ended, in words."""
-    speed = "1x" if rtf <= 1.0 else f"{rtf:g}x"
+def _at_speed(rtf: float) -> str:
+    """The grade's speed, before a run shows what it achieved: ``at 5x``, or ``as fast as the node keeps up``."""
+    return f"at {rtf:g}x" if rtf > 0 else "as fast as the node keeps up"
+
+
+def _factor(rtf: float) -> str:
+    """A speed in words, from a factor achieved or set (``9.3x``, ``5x``, ``1x``)."""
+    return f"{rtf:g}x" if rtf == round(rtf) else f"{rtf:.1f}x"
+
+
+def _speed_of(row: Row | None, rtf: float) -> str:
+    """A run's speed in words: ``at`` the grade's fixed ``rtf``, else what the run achieved (``at 9.3x``), else (no
+    record of it) the words of ``--rtf 0``."""
+    if rtf > 0 or ((row or {}).get("speed") or {}).get("rtf"):
+        return f"at {_factor(achieved(row, rtf))}"
+    return "as fast as the node kept up"
+
+
+def _ended(row: Row | None, speed: str) -> str:
+    """How one re-run at ``speed`` (:func:`_speed_of`: ``at 5x``) ended, in words."""
     if row is None:
-        return f"at {speed}: not run (stopped)"
+        return f"{speed}: not run (stopped)"
     if not _judged(row):
-        return f"at {speed}: no verdict ({row['reason']})"
+        return f"{speed}: no verdict ({row['reason']})"
     if row["passed"]:
-        return f"at {speed}: passed"
-    return f"at {speed}: failed ({row['reason']})"
+        return f"{speed}: passed"
+    return f"{speed}: failed ({row['reason']})"
 
 
 def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: str | None) -> tuple[Row, str]:
     """The row that stands for a failed run at ``rtf`` (``fast``) after its re-runs (``again`` at ``rtf``, ``slow``
     at 1x; None where one did not run), and the grade's words on it (see the module docstring for the rule).
     ``slipped``: :func:`slipped_timing` of the failed run. The row returned carries ``rerun``: each re-run's
-    verdict, the decision (``load``, ``wall clock`` or ``stands``) and the words."""
-    ended = "; ".join(_ended(r, speed) for r, speed in ((again, rtf), (slow, 1.0)))
+    verdict, the decision (``load``, ``wall clock`` or ``stands``) and the words. At ``rtf`` 0 each run's speed is
+    what it achieved (:func:`bt_nav.grading.exe.pace.achieved`): the words, the record and the wall clock's
+    threshold use it."""
+    failed_at, again_at = achieved(fast, rtf), achieved(again, rtf)
+    ended = "; ".join(_ended(r, speed) for r, speed in ((again, _speed_of(again, rtf)), (slow, "at 1x")))
     again, slow = (r if r is not None and _judged(r) else None for r in (again, slow))
-    runs = [(r, speed) for r, speed in ((again, rtf), (slow, 1.0)) if r is not None]
-    head = f"failed at {rtf:g}x ({fast['reason']}); run again {ended}"
+    runs = [(r, speed) for r, speed in ((again, again_at), (slow, 1.0)) if r is not None]
+    head = f"failed {_speed_of(fast, rtf)} ({fast['reason']}); run again {ended}"
     passing = [r for r, _ in runs if r["passed"]]
     record = {"runs": [{"rtf": speed, "passed": r["passed"], "reason": r["reason"], "run_dir": r["run_dir"]}
-                       for r, speed in runs], "failed": {"rtf": rtf, "reason": fast["reason"],
+                       for r, speed in runs], "failed": {"rtf": failed_at, "reason": fast["reason"],
                                                          "run_dir": fast["run_dir"]}}
     if slipped is not None and passing:
         said = (f"{head}: {slipped}, so the failure is put down to the machine's load, not to the node; graded by the "
                 "re-run that passed")
         return _regraded(passing[0], fast, {**record, "decision": "load", "said": said}, said), said
-    wall = wall_clock_evidence((slow or {}).get("verdict"), fast.get("verdict"), rtf)
+    wall = wall_clock_evidence((slow or {}).get("verdict"), fast.get("verdict"), failed_at)
     if wall is not None and slow is not None and slow["passed"]:
         said = f"{head}: {wall_clock_finding(wall)}; graded at 1x"
         return _regraded(slow, fast, {**record, "decision": "wall clock", "said": said}, said), said
@@ -371,7 +408,8 @@ def rerun_settings(settings: ExeSettings) -> ExeSettings:
 
 def realtime_settings(settings: ExeSettings) -> ExeSettings:
     """The grid's settings at 1x, into ``<out>/realtime``."""
-    return replace(settings, rtf=1.0, out=settings.out / REALTIME_DIR, limit=max(settings.limit, REALTIME_LIMIT))
+    return replace(settings, rtf=1.0, rtf_max=0.0, out=settings.out / REALTIME_DIR,
+                   limit=max(settings.limit, REALTIME_LIMIT))
 
 
 #: One grid to check: its jobs, settings and rows (job key -> row, replaced in place), and who sees a new row.
@@ -386,7 +424,7 @@ def confirm_at_real_time(jobs: Sequence[Job], settings: ExeSettings, rows: dict[
     """Run one grid's failures again (see the module docstring), replacing ``rows`` (job key -> row) in place with
     the row that stands for each; ``on_row`` sees each row a re-run overturned (its reason ends with the words),
     ``say`` hears the words on each failure that stands (``bt-nav grade: <run>: ...``). Returns how many failures
-    were overturned. Nothing runs at ``rtf <= 1``, with the check off, or without a failure."""
+    were overturned. Nothing runs at ``0 < rtf <= 1``, with the check off, or without a failure."""
     heard = None if say is None else (lambda _index, line: say(line))
     return confirm_grids([(jobs, settings, rows, on_row)], workers, stop, heard)[0]
 

@@ -50,7 +50,7 @@ def ran(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, float]]:
 
 
 def _settings(tmp_path: Path, **kw: Any) -> ExeSettings:
-    return ExeSettings("python3 node.py", "lab", tmp_path, **kw)
+    return ExeSettings("python3 node.py", "lab", tmp_path, **{"rtf": 5.0, **kw})  # the fixed factor these tests use
 
 
 def _turning(*turns: tuple[str, float], passed: bool = True, durations: float = 2.6) -> dict[str, Any]:
@@ -406,3 +406,45 @@ def test_the_same_turn_stretched_in_sim_time_is_put_down_to_the_load() -> None:
     same_length = _passed(0, _turning(("left", 180.0), durations=3.44), "again")
     row, _ = realtime.decide(fast, same_length, slow, 5.0, None)
     assert not row["passed"]  # not longer: nothing slipped
+
+
+# ---------------------------------------------------------------------------------------------- --rtf 0
+def _at(row: dict[str, Any], node_rtf: float) -> dict[str, Any]:
+    """``row`` of a run at ``--rtf 0`` whose node kept up with ``node_rtf`` (bt_nav.grading.exe.pace.with_speed)."""
+    return {**row, "rtf": node_rtf, "speed": {"set": 0.0, "rtf": node_rtf, "node_rtf": node_rtf}}
+
+
+def test_a_failure_as_fast_as_the_node_keeps_up_is_checked_at_its_speed_and_at_1x(tmp_path: Path, ran: list) -> None:
+    """At --rtf 0 the check is on (it used to be off at rtf <= 1, which 0 is): the probe runs again at the grade's
+    speed (0) and at 1x; the words say what the runs achieved, never "0x"."""
+    jobs = [_job(s) for s in (1, 3)]  # odd seeds: their re-runs fail too (SHOWN)
+    rows = {j.key: _at(_row(j, False), 9.3) for j in jobs}
+    settings = _settings(tmp_path, rtf=0.0)
+    assert realtime.failed_jobs(jobs, settings, rows) == jobs
+    plan = realtime.check_plan(jobs, settings, rows)
+    assert plan[0].startswith("bt-nav grade: lab_object C lds01 seed 1 again as fast as the node keeps up and at 1x "
+                              "real time before the failures stand"), plan
+    said: list[str] = []
+    assert realtime.confirm_at_real_time(jobs, settings, rows, 2, say=said.append) == 0
+    assert ran == [(1, 0.0), (1, 1.0)]  # failed at both: the other failure stands unchecked, as at 5x
+    assert said[0].startswith("bt-nav grade: lab_object C lds01 seed 1: failed at 9.3x (failed: angle); run again "
+                              "as fast as the node kept up: failed"), said  # its re-run here has no speed record
+    assert not any("0x" in line.replace("10x", "") for line in said), said
+
+
+def test_a_wall_clock_node_at_rtf_0_is_judged_by_the_factor_its_run_achieved() -> None:
+    """Threshold and words from the failed run's achieved factor: 24.2 sim s at 9.3x is 2.6 s of wall time."""
+    fast = _at(_failed(0, _turning(("left", 837.0), passed=False, durations=24.2),
+                       "failed: maneuver 1 turned 837 deg"), 9.3)
+    slow = _passed(0, _turning(("left", 91.0), durations=2.6), "slow")
+    again = _at(_failed(0, _turning(("left", 850.0), passed=False, durations=24.5),
+                        "failed: maneuver 1 turned 850 deg"), 9.5)
+    row, said = realtime.decide(fast, again, slow, 0.0, None)
+    assert row["passed"] and row["rerun"]["decision"] == "wall clock" and row["run_dir"] == "/slow/0"
+    assert said.startswith("failed at 9.3x (failed: maneuver 1 turned 837 deg); run again at 9.5x: failed (failed: "
+                           "maneuver 1 turned 850 deg); at 1x: passed: its turns lasted 24.2 sim s at 9.3x and 2.6 "
+                           "sim s at 1x: the same wall time"), said
+    assert row["realtime"]["rtf"] == 9.3 and [r["rtf"] for r in row["rerun"]["runs"]] == [9.5, 1.0]
+    # the same turns at a run that only reached 1.2x say nothing of a wall clock (1.2 < its threshold)
+    slow_node = _at(_failed(0, _turning(("left", 100.0), passed=False, durations=2.9)), 1.2)
+    assert realtime.wall_clock_evidence(slow["verdict"], slow_node["verdict"], 1.2) is None
