@@ -439,7 +439,10 @@ def confirm_grids(grids: Sequence[Grid], workers: Workers, stop: StopRequest | N
     for jobs, settings, rows, _on_row in grids:
         failed = failed_jobs(jobs, settings, rows)
         fast, slow = rerun_settings(settings), realtime_settings(settings)
-        plans.append((failed, fast, slow, _finished(fast, failed), _finished(slow, failed)))
+        done_fast, done_slow = _finished(fast, failed), _finished(slow, failed)
+        # a probe already run (a resumed grade, or bt_nav.grading.wallclock's beside the grid's runs) goes first
+        failed.sort(key=lambda job: not (job.key in done_fast and job.key in done_slow))
+        plans.append((failed, fast, slow, done_fast, done_slow))
 
     def tasks(index: int, chosen: Sequence[Job]) -> list[tuple[Job, ExeSettings, dict[str, Row]]]:
         _, fast, slow, done_fast, done_slow = plans[index]

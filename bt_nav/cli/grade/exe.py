@@ -43,12 +43,12 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         describe_workers,
         exe_settings,
         prepare_out,
-        run_exe_grid,
     )
     from bt_nav.grading.exe.pace import speed_words
     from bt_nav.grading.launch_target import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
+    from bt_nav.grading.wallclock import run_grid
     from bt_nav.ros.supervise import StopRequest
 
     try:
@@ -76,7 +76,8 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
 
     rows: list[dict[str, Any]] = []
     try:
-        rows = run_exe_grid(jobs, settings, workers, stop, ended_run, done=done, progress=progress)
+        rows = run_grid(jobs, settings, workers, stop, ended_run, done=done, progress=progress,  # a wall clock: 1x
+                        say=lambda line: tqdm.write(line, file=sys.stdout))
         rows = _check_at_real_time(jobs, settings, rows, workers, stop)  # re-runs where the runs ran
     finally:
         close_workers(workers)

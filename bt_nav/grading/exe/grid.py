@@ -363,15 +363,15 @@ def _keep_traceback(job: Job, settings: ExeSettings, attempt: int) -> Path:
 
 
 def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: Workers,
-             stop: StopRequest | None) -> Iterator[tuple[int, Row | None]]:
+             stop: StopRequest | None, admission: Admission | None = None) -> Iterator[tuple[int, Row | None]]:
     """Every (job, its grid's settings), ``workers`` at a time in threads (``--jobs auto``: as many as
-    :class:`~bt_nav.grading.admission.Admission` lets start; one grid's, or a whole class's), or each a task on a
-    :class:`Cluster` given as ``workers``; yields (the task's index, its row) as each ends, None for a run that
-    never started. A stop cancels the runs not started."""
+    :class:`~bt_nav.grading.admission.Admission` lets start, or ``admission`` when given; one grid's, or a whole
+    class's), or each a task on a :class:`Cluster` given as ``workers``; yields (the task's index, its row) as each
+    ends, None for a run that never started. A stop cancels the runs not started."""
     if isinstance(workers, Cluster):
         yield from workers.run(tasks, stop)
         return
-    admission = Admission.for_jobs(workers)
+    admission = admission or Admission.for_jobs(workers)
     # With an admission a run's place is free at its verdict, while its thread still stops its processes.
     threads = 2 * admission.limit if admission is not None else max(1, workers)
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="exe-run") as pool:

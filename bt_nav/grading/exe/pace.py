@@ -134,3 +134,15 @@ def achieved_text(rows: list[dict[str, Any]] | tuple[dict[str, Any], ...] | Any)
     if factors[0] == factors[-1] or len(factors) == 1:
         return f" (the runs went at {median:.1f}x)"
     return f" (the runs went at {factors[0]:.1f}-{factors[-1]:.1f}x, median {median:.1f}x)"
+
+
+def fell_behind(row: dict[str, Any] | None) -> float | None:
+    """The factor a run at 1x kept while it followed the node, when under 1x (None: it kept real time, or no
+    record): its simulation fell behind the wall clock, a machine too busy for it (or a node too slow for the
+    robot). A node timing itself by the wall clock then turns less than it means (measured: 55-76 deg of a 90 deg
+    turn at 0.92-0.99x, with 12 runs at 1x beside a test suite; 90-92 deg at 1.00-1.01x on a quiet machine)."""
+    speed = (row or {}).get("speed") or {}
+    if speed.get("set") != 1.0 or speed.get("node_rtf") is None:
+        return None
+    kept = float(speed["node_rtf"])
+    return kept if kept < ROBOT_RTF else None
