@@ -340,15 +340,18 @@ def _ended(row: Row | None, speed: str) -> str:
     return f"{speed}: failed ({row['reason']})"
 
 
-def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: str | None) -> tuple[Row, str]:
+def decide(fast: Row, again: Row | None, slow: Row | None, rtf: float, slipped: str | None,
+           again_planned: bool = True) -> tuple[Row, str]:
     """The row that stands for a failed run at ``rtf`` (``fast``) after its re-runs (``again`` at ``rtf``, ``slow``
     at 1x; None where one did not run), and the grade's words on it (see the module docstring for the rule).
     ``slipped``: :func:`slipped_timing` of the failed run. The row returned carries ``rerun``: each re-run's
     verdict, the decision (``load``, ``wall clock`` or ``stands``) and the words. At ``rtf`` 0 each run's speed is
     what it achieved (:func:`bt_nav.grading.exe.pace.achieved`): the words, the record and the wall clock's
-    threshold use it."""
+    threshold use it. ``again_planned`` False: no re-run at ``rtf`` was meant (a wall clock found early,
+    :mod:`bt_nav.grading.wallclock`), so the words do not name one that did not run."""
     failed_at, again_at = achieved(fast, rtf), achieved(again, rtf)
-    ended = "; ".join(_ended(r, speed) for r, speed in ((again, _speed_of(again, rtf)), (slow, "at 1x")))
+    said = [(again, _speed_of(again, rtf))] if again is not None or again_planned else []
+    ended = "; ".join(_ended(r, speed) for r, speed in (*said, (slow, "at 1x")))
     again, slow = (r if r is not None and _judged(r) else None for r in (again, slow))
     runs = [(r, speed) for r, speed in ((again, again_at), (slow, 1.0)) if r is not None]
     head = f"failed {_speed_of(fast, rtf)} ({fast['reason']}); run again {ended}"

@@ -309,7 +309,7 @@ class _Grading:
                                         f"({tried['reason']}), {tried['run_dir']}"]}
         if key == self.first["job"]:
             decided, self.said = decide(self.first, self.again.get(key), at_1x, self.settings.rtf,
-                                        run_slipped(self.first))
+                                        run_slipped(self.first), again_planned=False)
             self.confirmed = decided.get("rerun", {}).get("decision") == "wall clock"
         self.waiting.append((key, at_1x))
         if self.confirmed:
@@ -324,7 +324,8 @@ class _Grading:
     def _grade(self, key: str, at_1x: Row) -> None:
         fast = self.kept.get(key)
         if fast is not None:
-            self.rows[key], _ = decide(fast, self.again.get(key), at_1x, self.settings.rtf, run_slipped(fast))
+            self.rows[key], _ = decide(fast, self.again.get(key), at_1x, self.settings.rtf, run_slipped(fast),
+                                       again_planned=False)
         else:
             self.rows[key] = _only_at_1x(at_1x, self.first, self.said)
         if self.on_row is not None:

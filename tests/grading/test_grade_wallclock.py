@@ -174,3 +174,10 @@ def test_a_1x_run_that_fell_behind_real_time_runs_again_before_it_fails(tmp_path
                                                      "(0.93x") for n in row.get("notes", []))]
     assert len(again) == 3 and sum(1 for _, rtf in node.ran if rtf == 1.0) == 8 + 3
     assert "3 runs failed at 1x while the simulation fell behind real time (" in said[1] and "at 0.93x" in said[1]
+
+
+def test_the_words_name_no_fast_re_run_where_none_was_meant(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    rows, _ = _grade(tmp_path, WallClockNode(), monkeypatch)
+    failed_fast = [row for row in rows if "realtime" in row]
+    assert failed_fast and all("; run again at 1x: passed: its turns lasted" in row["reason"] for row in failed_fast)
+    assert not any("not run (stopped)" in row["reason"] for row in rows)
