@@ -48,7 +48,7 @@ from bt_nav_sim.checkoff_core import CheckoffConfig
 
 from bt_nav.grading.admission import Admission
 from bt_nav.grading.exe.grid import STOPPED, Cluster, Workers, finished_runs, run_exe_grid, run_pool
-from bt_nav.grading.exe.pace import achieved, fell_behind
+from bt_nav.grading.exe.pace import fell_behind, node_factor
 from bt_nav.grading.exe.run import ExeSettings
 from bt_nav.grading.grid import Job, run_label
 from bt_nav.grading.realtime import (
@@ -81,7 +81,7 @@ EARLY_MIN_RTF = 3.0
 def early_evidence(row: Row, rtf: float) -> str | None:
     """What one failed run at ``rtf`` (its achieved factor at 0) shows of a wall clock, in words (module docstring,
     2); None where it shows nothing of it: not the lab, no failed turn, a factor under :data:`EARLY_MIN_RTF`."""
-    factor = achieved(row, rtf)
+    factor = node_factor(row, rtf)  # the pace of its turns: while the node was followed
     verdict = row.get("verdict") or {}
     if factor < EARLY_MIN_RTF or not row.get("maneuver") or not verdict.get("maneuvers"):
         return None
@@ -102,8 +102,8 @@ def early_evidence(row: Row, rtf: float) -> str | None:
     if not turn.get("interrupted") and walled < least / FAR:
         return None
     cut = ", cut short by the disarm" if turn.get("interrupted") else ""
-    return (f"maneuver {number} turned {angle:.0f} deg in {lasted:.1f} sim s at {factor:.1f}x{cut}: {walled:.0f} deg "
-            f"in its {lasted / factor:.1f} s of wall time, where the assignment turns "
+    return (f"maneuver {number} turned {angle:.0f} deg in {lasted:.1f} sim s at {factor:.1f}x (the node's pace){cut}: "
+            f"{walled:.0f} deg in its {lasted / factor:.1f} s of wall time, where the assignment turns "
             f"{rule.words(tolerance).split(' deg')[0]} deg: a turn timed by the wall clock")
 
 

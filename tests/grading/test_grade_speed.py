@@ -89,7 +89,8 @@ def test_each_run_carries_the_factor_it_achieved(tmp_path: Path) -> None:
     row = pace.with_speed(_row(tmp_path / "r"), 0.0)
     assert row["rtf"] == 9.3 and row["speed"] == {"set": 0.0, "sim_s": 74.4, "wall_s": 8.0, "rtf": 9.3,
                                                    "node_sim_s": 60.0, "node_wall_s": 6.5, "node_rtf": 9.23}
-    assert row["findings"] == [] and pace.achieved(row, 0.0) == 9.23 and pace.achieved(row, 5.0) == 5.0
+    assert row["findings"] == [] and pace.achieved(row, 0.0) == 9.3 and pace.achieved(row, 5.0) == 5.0
+    assert pace.node_factor(row, 0.0) == 9.23 and pace.node_factor(row, 5.0) == 5.0
     assert pace.with_speed(row, 0.0) is row  # once only
     assert pace.factor_text(row) == "9.3x"
     missing = pace.with_speed(_row(tmp_path / "none"), 0.0)  # a simulator killed before its exit wrote nothing

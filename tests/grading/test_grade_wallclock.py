@@ -37,8 +37,8 @@ def test_one_failed_run_shows_a_wall_clock_a_right_ros_time_node_never_shows() -
     # until the disarm at 65 s
     real = _failed(1374.07, 40.0, 39.74, interrupted=True)
     assert wallclock.early_evidence(real, 0.0) == (
-        "maneuver 1 turned 1374 deg in 40.0 sim s at 39.7x, cut short by the disarm: 35 deg in its 1.0 s of wall "
-        "time, where the assignment turns 90 +- 10 deg: a turn timed by the wall clock")
+        "maneuver 1 turned 1374 deg in 40.0 sim s at 39.7x (the node's pace), cut short by the disarm: 35 deg in its "
+        "1.0 s of wall time, where the assignment turns 90 +- 10 deg: a turn timed by the wall clock")
     assert wallclock.early_evidence(_failed(450.0, 13.1, 5.0), 5.0) is not None  # at a fixed 5x, complete
     assert wallclock.early_evidence(_failed(900.0, 26.0, 10.0, "A"), 0.0) is not None  # A: 90-180 deg
     # none where a node on ROS time may be: an overshoot short of twice the most, a turn that is the right one in
@@ -128,7 +128,8 @@ def test_a_wall_clock_node_s_runs_go_at_1x_at_once_after_its_first_failure(tmp_p
     assert len([row for row in rows if row["rerun"]["said"].startswith("run at 1x only")]) == 8 - len(failed_fast)
     seeds = {row["seed"] for row in failed_fast}  # the first of them to end is the one the line names
     assert any(said[0].startswith(f"bt-nav grade: lab_dead_end C lds01 seed {seed}: maneuver 1 turned 900 deg in "
-                                  "26.0 sim s at 10.0x: 90 deg in its 2.6 s of wall time") for seed in seeds), said
+                                  "26.0 sim s at 10.0x (the node's pace): 90 deg in its 2.6 s of wall time")
+               for seed in seeds), said
     assert "the node's runs go at 1x" in said[0] and "up to " in said[0]
     assert node.most_at_once > 2  # 1x runs together, more than the grid's 2 at a time
     # the check afterwards has nothing left to run

@@ -110,12 +110,20 @@ def with_speed(row: dict[str, Any], rtf: float) -> dict[str, Any]:
 
 
 def achieved(row: dict[str, Any] | None, rtf: float) -> float:
-    """The factor a run went at, for words and the re-run rule: the grade's fixed ``rtf``, or at 0 what the node
-    kept up with (``node_rtf``, else the run's ``rtf``; 1 when neither is known: nothing faster is shown)."""
+    """The factor a run went at, for words and the re-run rule: the grade's fixed ``rtf``, or at 0 the run's own
+    (``rtf``: its line's figure, the simulator's sim seconds per wall second over the run; else ``node_rtf``; 1 when
+    neither is known: nothing faster is shown)."""
     if rtf > 0:
         return rtf
     speed = (row or {}).get("speed") or {}
-    return float(speed.get("node_rtf") or speed.get("rtf") or 1.0)
+    return float(speed.get("rtf") or speed.get("node_rtf") or 1.0)
+
+
+def node_factor(row: dict[str, Any] | None, rtf: float) -> float:
+    """How fast the node kept up while it was followed (``node_rtf``), the pace its turns ran at; else
+    :func:`achieved`."""
+    speed = (row or {}).get("speed") or {}
+    return float(speed["node_rtf"]) if rtf <= 0 and speed.get("node_rtf") else achieved(row, rtf)
 
 
 def factor_text(row: dict[str, Any]) -> str:
