@@ -23,14 +23,6 @@ CMD_VEL = "cmd_vel"
 PACE_FILE = "pace.json"
 
 
-#: Sim ns within which a follower's messages are one burst (a node that publishes twice in one callback).
-BURST_NS = 10_000_000
-#: A follower whose typical gap is at least this share of its sensor's period answers that sensor.
-SENSOR_SHARE = 0.75
-#: Gaps a follower must have shown before it is taken for a node on a timer faster than its sensor.
-GAPS_TO_KNOW = 3
-
-
 @dataclass
 class Follower:
     """One process the simulator's loop waits for (see :class:`Followers`)."""
@@ -113,31 +105,11 @@ class Followers:
 
     def limit_ns(self, who: str) -> int:
         """The sim time ``who`` keeps sim time from passing: its latest message plus its lead, and at least its
-        sensor's next message after it plus ``max_lag`` when it answers that sensor (:meth:`answers_sensor`)."""
+        sensor's next message after it plus ``max_lag`` when it answers one."""
         m = self.members[who]
         floor = self.floors.get(who)
         limit = m.t_ns + self.lead_ns(who)
-        if floor is None or not self.answers_sensor(who):
-            return limit
-        return max(limit, floor(m.t_ns) + self.max_lag_ns)
-
-    def answers_sensor(self, who: str) -> bool:
-        """Whether ``who`` speaks about once per message of its sensor (a node that publishes from its scan callback),
-        so that sim time must reach its next scan before it can say anything: its typical gap (the median of its
-        last gaps, a burst of messages within :data:`BURST_NS` counted as one) is at least
-        :data:`SENSOR_SHARE` of the sensor's period. Not yet known (fewer than :data:`GAPS_TO_KNOW` gaps): yes.
-
-        Why not every robot's node: a node on a timer faster than its LiDAR is led only its own period and the
-        margin; led to the next scan instead, it fell a scan period behind sim time whenever the simulator was faster
-        than it (at ``real_time_factor`` 0, always; at 5x, on a loaded machine), and its turns, timed on its ROS
-        clock or read from odometry, ran on by up to that long: 222 deg for a 50 Hz node's 170."""
-        floor = self.floors.get(who)
-        m = self.members[who]
-        gaps = sorted(g for g in m.intervals if g >= BURST_NS)
-        if floor is None or len(gaps) < GAPS_TO_KNOW:
-            return floor is not None
-        sensor = floor(floor(m.t_ns)) - floor(m.t_ns)
-        return gaps[len(gaps) // 2] >= SENSOR_SHARE * sensor
+        return limit if floor is None else max(limit, floor(m.t_ns) + self.max_lag_ns)
 
     def blocking(self, sim_ns: int, wall: float) -> tuple[str | None, list[str]]:
         """(who keeps sim time from reaching ``sim_ns``, or None; who was just dropped for silence or for a

@@ -129,25 +129,6 @@ def test_a_node_answering_its_scans_is_led_until_the_next_scan_is_out_and_no_fur
     assert g.blocking(1070 * MS, wall=0.1) == ("timer", [])
 
 
-def test_a_node_on_a_timer_faster_than_its_lidar_is_led_its_own_period_not_to_the_next_scan() -> None:
-    """A 50 Hz node of a 5 Hz LiDAR's robot: once it has shown its gaps, sim time may lead it its period and the
-    margin only (led to the next scan, its ROS-timed turns ran on by up to a scan period at high speed); a node that
-    answers each scan with a burst of two messages keeps the floor (it can say nothing before the next scan)."""
-    scans = lambda t: (t // (200 * MS) + 1) * 200 * MS  # noqa: E731 - the 5 Hz scan grid
-    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
-    f.floors["cmd_vel"] = scans
-    for k in range(4):
-        f.report("cmd_vel", 1000 * MS + k * 20 * MS, False, wall=0.0)
-    assert not f.answers_sensor("cmd_vel")
-    assert f.limit_ns("cmd_vel") == 1060 * MS + 70 * MS, "its period (20 ms) and the margin, not the 1.2 s scan"
-    g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
-    g.floors["cmd_vel"] = scans
-    for k in range(4):  # each scan answered twice within 2 ms
-        g.report("cmd_vel", 1005 * MS + k * 200 * MS, False, wall=0.0)
-        g.report("cmd_vel", 1007 * MS + k * 200 * MS, False, wall=0.0)
-    assert g.answers_sensor("cmd_vel") and g.limit_ns("cmd_vel") == 1800 * MS + 50 * MS
-
-
 def test_without_a_margin_the_learnt_period_is_the_lead_as_lock_step_predicts() -> None:
     """bt_nav's own executive (sim-run, demo): no margin, so a 20 Hz follower is led exactly its period."""
     f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0)
