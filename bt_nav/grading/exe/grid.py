@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.admission import Admission, describe
-from bt_nav.grading.exe.pace import check_speed, with_speed
+from bt_nav.grading.exe.pace import check_speed, rtf_cap, with_speed
 from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
@@ -131,7 +131,8 @@ def exe_settings(args: Any, maneuvers: bool, command: str | None = None) -> ExeS
     node_params = tuple(parse_assignments(args.node_param).items())
     return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
-                       args.videos, os.getcwd(), node_params, args.realtime_check == "on", args.rtf_max or 0.0)
+                       args.videos, os.getcwd(), node_params, args.realtime_check == "on",
+                       rtf_cap(args.rtf, args.rtf_max))
 
 
 def check_node_options(args: Any) -> None:

@@ -4,11 +4,12 @@
 Why a node sets the speed: the simulator is paced to the graded node (:data:`bt_nav.grading.exe.run.FOLLOW_NODE`):
 sim time never runs ahead of the node's latest command by more than its period and the next scan it answers, so a
 node on ROS time (``use_sim_time``) finds the world where it left it at any speed. At ``--rtf 0`` (the default) the
-simulator therefore runs as fast as the node keeps up (``afap_max_rtf``, capped by ``--rtf-max`` when given); the
-hosted judge sends no ``sim_sync`` of its own, so ``solo_rtf``, the cap while only ``cmd_vel`` is followed, is the
-same cap. While the node says nothing (before its arming, after its stop, a node that publishes only on change)
-nobody is followed and sim time runs at ``idle_rtf``: :data:`IDLE_RTF`, or ``--rtf-max`` when lower, so a silent
-node does not see sim time race away. ``--rtf N`` (N > 0) keeps a fixed factor, as before.
+simulator therefore runs as fast as the node keeps up (``afap_max_rtf``), capped by ``--rtf-max``
+(:data:`DEFAULT_RTF_MAX` unless given); the hosted judge sends no ``sim_sync`` of its own, so ``solo_rtf``, the cap
+while only ``cmd_vel`` is followed, is the same cap. While the node says nothing (before its arming, after its stop,
+a node that publishes only on change) nobody is followed and sim time runs at ``idle_rtf``: :data:`IDLE_RTF`, or
+``--rtf-max`` when lower, so a silent node does not see sim time race away. ``--rtf N`` (N > 0) keeps a fixed
+factor, as before.
 
 Each run's row carries what it achieved (:func:`with_speed`): ``rtf``, the simulator's sim seconds per wall second
 over the run, and ``speed``: those seconds, and the sim and wall seconds while the node's ``cmd_vel`` was followed
@@ -26,6 +27,13 @@ from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace
 
 #: Sim seconds per wall second at ``--rtf 0`` while the node is not followed (silent): the simulator's own default.
 IDLE_RTF = 10.0
+#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none). Why a cap: the pace bounds how far sim time
+#: may lead the node (its period and 0.05 s, or up to the next scan it answers), and uncapped the simulator is always
+#: faster than the node, so every command lagged by that bound: in the grader suite's right lab nodes at rtf 0 a 50 Hz
+#: node's ROS-timed Randomizer ran on to 222 and 190 deg for a 100-170 draw, four other right variants failed alike.
+#: Capped below what a light node keeps up with (the lab fixture: 16-44x while followed), the node is ahead of sim
+#: time again, and a grid of 12 runs on 2 cores is bound by its CPU near 10x anyway (7.4-12.3x achieved uncapped).
+DEFAULT_RTF_MAX = 10.0
 #: The factor a real robot runs at: a node that keeps up with less is too slow for it.
 ROBOT_RTF = 1.0
 #: Sim seconds of following below which a run's ``node_rtf`` says nothing of the node (a node that spoke once; a
@@ -49,6 +57,14 @@ def check_speed(rtf: float, rtf_max: float | None) -> None:
     if rtf > 0:
         raise ValueError(f"--rtf-max caps --rtf 0 (as fast as the node keeps up); --rtf {rtf:g} is a fixed factor "
                          "already: leave one of them out")
+
+
+def rtf_cap(rtf: float, rtf_max: float | None) -> float:
+    """The cap a grade runs with: ``--rtf-max`` as given (0: none), else :data:`DEFAULT_RTF_MAX` at ``--rtf 0`` and
+    none beside a fixed factor."""
+    if rtf_max is not None:
+        return float(rtf_max)
+    return DEFAULT_RTF_MAX if rtf == 0.0 else 0.0
 
 
 def sim_pace(rtf: float, rtf_max: float = 0.0) -> dict[str, float]:
