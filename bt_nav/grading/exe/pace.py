@@ -27,13 +27,14 @@ from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace
 
 #: Sim seconds per wall second at ``--rtf 0`` while the node is not followed (silent): the simulator's own default.
 IDLE_RTF = 10.0
-#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none). Why a cap: the pace bounds how far sim time
-#: may lead the node (its period and 0.05 s, or up to the next scan it answers), and uncapped the simulator is always
-#: faster than the node, so every command lagged by that bound: in the grader suite's right lab nodes at rtf 0 a 50 Hz
-#: node's ROS-timed Randomizer ran on to 222 and 190 deg for a 100-170 draw, four other right variants failed alike.
-#: Capped below what a light node keeps up with (the lab fixture: 16-44x while followed), the node is ahead of sim
-#: time again, and a grid of 12 runs on 2 cores is bound by its CPU near 10x anyway (7.4-12.3x achieved uncapped).
-DEFAULT_RTF_MAX = 10.0
+#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none): 5x, the speed every verdict of the grader
+#: suite was measured at. Why a cap: the pace bounds how far sim time may lead the node (its period and 0.05 s, or up to
+#: the next scan it answers), and the faster the simulator than the node, the more often every command lags by that
+#: whole bound. Measured in the grader suite's right lab nodes on a loaded machine (2026-11-27): uncapped, five
+#: variants failed (a 50 Hz node's ROS-timed Randomizer ran on to 222 deg for a 100-170 draw); capped at 10x, a 50 Hz
+#: Retreat turned 226-228 deg and a node publishing from a 5 Hz timer was given up for silent at 136 pace stops and
+#: timed out; at 5x they pass. Faster defaults wait for a tighter bound.
+DEFAULT_RTF_MAX = 5.0
 #: The factor a real robot runs at: a node that keeps up with less is too slow for it.
 ROBOT_RTF = 1.0
 #: Sim seconds of following below which a run's ``node_rtf`` says nothing of the node (a node that spoke once; a
