@@ -37,6 +37,7 @@ def test_the_spread_is_in_the_catalog_and_the_catalog_covers_the_readings() -> N
 
 
 @pytest.mark.slow
+@pytest.mark.suite
 def test_right_nodes_written_other_ways_pass_every_run(tmp_path: Path) -> None:
     suite = _suite()
     node = suite.fixture()

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import psutil
+import pytest
 from dask_cluster import REPO, DaskProcesses, marked
 
 from bt_nav.testing import wait_until
@@ -96,6 +97,7 @@ class LocalRunWatch(threading.Thread):
             time.sleep(0.2)
 
 
+@pytest.mark.suite
 def test_a_class_on_dask_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: Path) -> None:
     mark = uuid.uuid4().hex
     manifest = tmp_path / "class.yaml"

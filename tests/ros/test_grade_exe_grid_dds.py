@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 import psutil
+import pytest
 from dask_cluster import REPO, DaskProcesses, marked
 
 from bt_nav.testing import wait_until
@@ -143,6 +144,7 @@ def _same(dask: dict[str, Any], local: dict[str, Any]) -> bool:
     return True
 
 
+@pytest.mark.suite
 def test_a_dask_grid_gives_the_local_verdicts_despite_a_killed_worker(tmp_path: Path) -> None:
     mark = uuid.uuid4().hex
     cluster = DaskProcesses(tmp_path, workers=2, nthreads=1, env=_env(mark), cwd=tmp_path)  # not the grade's cwd

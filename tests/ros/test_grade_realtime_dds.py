@@ -28,6 +28,7 @@ RUN = "lab_object A lds01 seed 0"
 
 
 @pytest.mark.slow
+@pytest.mark.suite
 def test_reruns_tell_the_wall_clock_the_load_and_a_node_whose_runs_differed(tmp_path: Path,
                                                                              capsys: pytest.CaptureFixture) -> None:
     manifest = tmp_path / "class.yaml"

@@ -114,6 +114,7 @@ def _failed_for(doc: dict[str, Any], pattern: str) -> list[str]:
 
 
 @pytest.mark.slow
+@pytest.mark.suite
 def test_the_lab_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -> None:
     students = {"correct": f"{LAB} --choice C",
                 **{name: f"{LAB} --choice C --mistake {name}" for name in LAB_C}}
@@ -149,6 +150,7 @@ DEFAULT_GRID_MISTAKES = {"A": ("front_is_whole_scan", "ignores_safety_distance")
 
 
 @pytest.mark.slow
+@pytest.mark.suite
 @pytest.mark.parametrize("choice", sorted(DEFAULT_GRID_MISTAKES))
 def test_each_choice_s_default_grid_fails_its_trigger_mistakes(tmp_path: Path, choice: str) -> None:
     """Graded as a class is by default (``--maneuvers X``, no ``--worlds``: the choice's cells, one LiDAR, one seed):
