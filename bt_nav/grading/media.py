@@ -136,6 +136,15 @@ def _draw(row: dict[str, Any], record: Any, run_dir: Path, film: bool) -> dict[s
     return out
 
 
+def _no_record(path: Path) -> Any:
+    """An empty record (no message at all): what a run's picture draws when its bag was never written."""
+    from bt_nav.media.bagread import MissionRecord, Poses, Scans
+
+    none = Poses.from_rows([])
+    return MissionRecord(path, {}, none, none, Scans(np.zeros(0), np.zeros(0), np.zeros((0, 0), np.float32)),
+                         np.zeros((0, 3)))
+
+
 def _drawn(run_dir: Path, film: bool) -> bool:
     """Whether a run's files are there already (a report made again, a resumed grid): then it is not drawn again."""
     return (run_dir / PICTURE).is_file() and ((run_dir / VIDEO).is_file() or not film)
@@ -152,6 +161,10 @@ def render_run(row: dict[str, Any], film: bool, keep_bag: bool) -> dict[str, Any
     out: dict[str, Any] = {"job": row["job"], "note": ""}
     if _drawn(run_dir, film):
         out["note"] = "drawn before"
+    elif not bag.is_dir() and "bag_bytes" in row and row.get("world"):
+        # recorded, but the node ended before the simulator's process wrote a bag: the world alone, as for an empty bag
+        out.update(_draw(row, _no_record(bag), run_dir, False))
+        out["note"] = "no bag: the node ended before the simulator recorded; the world only, no video"
     elif not bag.is_dir():
         out["note"] = "no bag" if "bag_bytes" in row else "no bag (recording off)"
     else:
