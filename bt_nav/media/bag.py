@@ -60,6 +60,18 @@ WALKERS = "/walkers"  # the simulator's people walking (JSON {"t", "circles"}), 
 FIRST_MESSAGES = "first_messages.json"
 
 
+def write_first_messages(bag: Path, first: dict[str, float]) -> None:
+    """Rewrite :data:`FIRST_MESSAGES` in the bag directory ``bag`` whole; a file that cannot be written is skipped: the
+    bag matters more than its note."""
+    from bt_nav.mission.resources import written_whole
+
+    try:
+        with written_whole(Path(bag) / FIRST_MESSAGES) as stream:
+            json.dump(first, stream)
+    except OSError:
+        pass
+
+
 @dataclass(frozen=True)
 class TopicSpec:
     """Type and offered QoS of one topic (QoS as the publishing node offers it)."""

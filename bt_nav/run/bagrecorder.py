@@ -21,8 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bt_nav.media.bag import EVENTS, FIRST_MESSAGES, MISSION, TOPICS, MissionBag
-from bt_nav.mission.resources import written_whole
+from bt_nav.media.bag import EVENTS, FIRST_MESSAGES, MISSION, TOPICS, MissionBag, write_first_messages
 
 #: What ``bt-nav record`` records by default: the mission's topics and every node's log lines.
 DEFAULT_TOPICS = [t for t in TOPICS if t not in (EVENTS, MISSION)] + ["/rosout"]
@@ -115,11 +114,7 @@ class BagRecorder:
         is skipped: the bag matters more than its note."""
         with self._first_lock:
             self.first[topic] = t
-            try:
-                with written_whole(self.bag.path / FIRST_MESSAGES) as stream:
-                    json.dump(self.first, stream)
-            except OSError:
-                pass
+            write_first_messages(self.bag.path, self.first)
 
     def _flush(self) -> None:
         with self.lock:

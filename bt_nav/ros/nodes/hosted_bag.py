@@ -17,7 +17,6 @@ was stopped (its last zero twists are in it); a message arriving after that is d
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 from collections.abc import Iterable
@@ -32,7 +31,6 @@ from bt_nav.media.bag import (
     CMD,
     COLLISIONS,
     EVENTS,
-    FIRST_MESSAGES,
     ODOM,
     ROSOUT,
     SCAN,
@@ -41,8 +39,8 @@ from bt_nav.media.bag import (
     TRUTH,
     WALKERS,
     MissionBag,
+    write_first_messages,
 )
-from bt_nav.mission.resources import written_whole
 from bt_nav.ros.graphtap import OWN_NODES, event_text
 from bt_nav.ros.simclock import SimClock
 
@@ -133,11 +131,7 @@ class HostedRecorder:
         """Rewrite :data:`FIRST_MESSAGES` with ``topic`` (a file that cannot be written is skipped: the bag matters
         more than its note)."""
         self.first[topic] = round(t, 6)
-        try:
-            with written_whole(self.bag.path / FIRST_MESSAGES) as stream:
-                json.dump(self.first, stream)
-        except OSError:
-            pass
+        write_first_messages(self.bag.path, self.first)
 
     def close(self) -> None:
         """Close the bag (idempotent; the messages still arriving are dropped)."""
