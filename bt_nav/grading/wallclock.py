@@ -130,12 +130,17 @@ class _Switch(StopRequest):
         self.flipped.set()
 
     @property
+    def grade_requested(self) -> bool:
+        """The grade's own stop came (not the switch)."""
+        return self.grade is not None and self.grade.requested
+
+    @property
     def requested(self) -> bool:  # noqa: D102 - StopRequest's
-        return self.flipped.is_set() or (self.grade is not None and self.grade.requested)
+        return self.flipped.is_set() or self.grade_requested
 
     @property
     def name(self) -> str:  # noqa: D102 - StopRequest's
-        if self.grade is not None and self.grade.requested:
+        if self.grade_requested:
             return self.grade.name
         return "the switch to 1x (a wall clock)" if self.flipped.is_set() else ""
 
@@ -174,7 +179,7 @@ class _Watch:
         for index, rerun in run_pool([tasks[i] for i in todo], 2, self.switch.grade):
             ran[todo[index]] = rerun
         again, slow = ran
-        if slow is None or (self.switch.grade is not None and self.switch.grade.requested):
+        if slow is None or self.switch.grade_requested:
             return
         decided, said = decide(row, again, slow, self.settings.rtf, run_slipped(row))
         if decided.get("rerun", {}).get("decision") == "wall clock":
@@ -194,7 +199,7 @@ class _Watch:
 
     def grade_stopped(self) -> bool:
         """The grade's own stop came (not the switch)."""
-        return self.switch.grade is not None and self.switch.grade.requested
+        return self.switch.grade_requested
 
 
 def _reruns(jobs: Sequence[Job], settings: ExeSettings) -> tuple[dict[str, Row], dict[str, Row]]:
