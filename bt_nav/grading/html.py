@@ -185,6 +185,8 @@ def _media_cells(out: Path, row: dict[str, Any], media: dict[str, Any]) -> tuple
         thumb = f'<a href="{pic}"><img class="thumb" src="{pic}" loading="lazy" alt="trajectory"></a>'
         if row.get("bag_after_t0_s"):
             thumb += f'<br><span class="note">bag from t0 + {row["bag_after_t0_s"]:g} s</span>'
+        if media.get("note") and media["note"] != "drawn before":  # e.g. the world only: why no path is drawn
+            thumb += f'<br><span class="note">{html.escape(media["note"])}</span>'
     else:
         pic, thumb = "", f'<span class="note">no picture: {html.escape(media.get("note") or "not drawn")}</span>'
     video = ""

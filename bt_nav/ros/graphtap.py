@@ -14,13 +14,19 @@ bag's playback run one code path).
   line the sim time of its log call. Not the latest ``/clock`` on arrival, which ``ros2 bag record
   --use-sim-time`` takes: a recorder that falls behind (2.8 s of sim time at 11x, measured) would draw a turn
   late and then snap it. Without a ``/clock`` (``sim_time`` off) times are wall times.
+- With ``sim_time``, what arrives before the first ``/clock`` (discovery can join the tap to the node before the
+  simulator: 10 sim s at 20x on a loaded machine) waits and is handed on once that clock comes, timed against
+  it, instead of at sim time 0. A graph with no ``/clock`` at all (:data:`EARLY_WAIT` wall s of messages without
+  one) gets them at once, stamped 0 as before: a live view must not stay blank.
 - ``/rosout`` lines of the graph's nodes (the robot node's too, whatever its name; not this recorder's own)
   become mission events (``[INFO] text``), the form lock-step writes on ``/bt_nav/events``.
 """
 
 from __future__ import annotations
 
+import threading
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -32,6 +38,8 @@ from bt_nav.ros.simclock import SimClock
 Handler = Callable[[str, str, int, bytes, Any], None]
 _LEVELS = {10: "DEBUG", 20: "INFO", 30: "WARN", 40: "ERROR", 50: "FATAL"}
 EXECUTIVE_NODE = "bt_nav_executive"
+EARLY_MAX = 10_000  # messages kept while waiting for the first /clock (the oldest go beyond)
+EARLY_WAIT = 3.0  # wall s of messages without any /clock after which the graph is taken to have none
 
 
 def rosbags_qos(profile: Any) -> Any:
@@ -91,6 +99,10 @@ class GraphTap:
         self._serialize, self._String = serialize_message, String
         self.sim_time = sim_time
         self.message_info = message_info
+        # what arrived before the first /clock (sim_time only): each a call that hands it on, timed when it runs
+        self._early: deque[Callable[[], None]] | None = deque(maxlen=EARLY_MAX) if sim_time else None
+        self._early_lock = threading.Lock()
+        self._early_since: float | None = None  # monotonic s of the first message held
         self._clock_sub()
         if "/rosout" in self.wanted:
             self._rosout_sub()
@@ -136,8 +148,30 @@ class GraphTap:
             self.clock.add(sent or time.time_ns(), self.clock_ns)
             if self.first_clock is None:
                 self.first_clock = (sent or time.time_ns(), self.clock_ns)
+                self._release_early()
 
         self.node.create_subscription(Clock, "/clock", self._with_info(on_clock), qos)
+
+    def _deliver(self, hand_on: Callable[[], None]) -> None:
+        """Run ``hand_on`` now, or (sim time, no /clock yet) once the first /clock has come."""
+        if self._early is not None:
+            with self._early_lock:
+                if self._early is not None:
+                    self._early.append(hand_on)
+                    self._early_since = self._early_since or time.monotonic()
+                    if time.monotonic() - self._early_since < EARLY_WAIT:
+                        return
+            self.node.get_logger().warning(f"no /clock after {EARLY_WAIT:g} s of messages: times are 0 until one "
+                                           "comes (a graph without a simulator wants wall time)")
+            self._release_early()
+            return
+        hand_on()
+
+    def _release_early(self) -> None:
+        with self._early_lock:
+            early, self._early = self._early, None
+        for hand_on in early or ():
+            hand_on()
 
     def _rosout_sub(self) -> None:
         from rcl_interfaces.msg import Log
@@ -145,8 +179,9 @@ class GraphTap:
         def on_log(msg: Any, info: Any) -> None:
             if msg.level >= 20 and not msg.name.startswith(OWN_NODES):
                 data = self._serialize(self._String(data=event_text(msg.name, msg.level, msg.msg)))
-                when = self.sent_ns(msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec)  # the log call's wall time
-                self.handler(self.events_topic, "std_msgs/msg/String", when, data, None)
+                wall = msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec  # the log call's wall time
+                self._deliver(lambda: self.handler(self.events_topic, "std_msgs/msg/String", self.sent_ns(wall),
+                                                   data, None))
 
         self.subscribed["/rosout"] = "rcl_interfaces/msg/Log"
         # transient local, as Jazzy's /rosout publishers offer it: a node's lines logged before this recorder found it
@@ -190,6 +225,7 @@ class GraphTap:
 
     def _callback(self, topic: str, msgtype: str, offered: Any) -> Callable[[bytes, Any], None]:
         def on_message(data: bytes, info: Any) -> None:
-            self.handler(topic, msgtype, self.source_ns(msgtype, data, info), bytes(data), offered)
+            raw = bytes(data)
+            self._deliver(lambda: self.handler(topic, msgtype, self.source_ns(msgtype, raw, info), raw, offered))
 
         return on_message

@@ -1,8 +1,9 @@
 """``report.html`` of an ``--exe`` grid, from made-up rows around a real bag (lock-step; no DDS, no node).
 
 Three runs: one passed and one failed, each with a copy of the session's mission bag, and one whose node crashed
-before a bag was recorded. The grid is reported with ``record="failures"``, as ``bt-nav grade --exe --record
-failures`` would: the passed run's bag goes once its picture exists, the failed run keeps its bag and gets a video.
+before a bag was recorded (it gets a picture of its world alone, saying why). The grid is reported with
+``record="failures"``, as ``bt-nav grade --exe --record failures`` would: the passed run's bag goes once its
+picture exists, the failed run keeps its bag and gets a video.
 """
 
 from __future__ import annotations
@@ -92,7 +93,8 @@ def test_the_page_says_the_grade(grid: dict[str, Any]) -> None:
     assert f'background: {rate_colour(1, 3)}' in text and "1/3 (33 %)" in text, "the coloured pass-rate cell"
     assert text.count('class="FAILED"') == 2 and text.count('class="PASSED"') == 1
     assert "failed: minimum travelled distance" in text and 'href="#stage_4_none_seed1"' in text
-    assert "no picture: no bag" in text, "the crashed run says why it has no picture"
+    assert "no bag: the node ended before the simulator recorded; the world only" in text, \
+        "the crashed run says why its picture has no path"
     assert text.count("bag from t0 + ") == 1 and "bag from t0 + 2.5 s" in text, "a late bag says so"
 
 
@@ -103,7 +105,10 @@ def test_each_run_with_a_bag_has_its_picture_and_only_failures_a_video(grid: dic
         assert media[seed]["picture"] == "trajectory.png" and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert png.stat().st_size > 20_000, "a picture of the world and a path, not an empty canvas"
     assert media[0]["video"] is None and not (out / "stage_4_none_seed0" / "video.mp4").exists()
-    assert media[2] == {"job": "stage_4|none|2", "note": "no bag", "picture": None, "video": None}
+    crashed = media[2]
+    assert crashed["picture"] == "trajectory.png" and crashed["video"] is None, crashed
+    assert crashed["note"].startswith("no bag: the node ended before the simulator recorded"), crashed
+    assert (out / "stage_4_none_seed2" / "trajectory.png").stat().st_size > 10_000, "the world, drawn"
 
 
 def test_the_failed_run_s_video_starts_at_the_judge_s_t0(grid: dict[str, Any], mission_bag: Path) -> None:
@@ -201,7 +206,7 @@ def test_a_browser_shows_every_picture_and_plays_the_video(grid: dict[str, Any])
                                    " v.videoWidth, v.duration, v.error && v.error.code])")
         finally:
             browser.close()
-    assert len(images) == 3 and all(width > 0 for _, width in images), images  # histogram + two thumbnails
+    assert len(images) == 4 and all(width > 0 for _, width in images), images  # histogram + three thumbnails
     assert [(src, width, err) for src, width, _, err in videos] == [("stage_4_none_seed1/video.mp4", 1280, None)]
     assert videos[0][2] == pytest.approx(grid["media"][1]["frames"] / FPS, abs=0.2)
 
