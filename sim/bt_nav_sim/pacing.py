@@ -21,6 +21,15 @@ from typing import Any
 CMD_VEL = "cmd_vel"
 #: The file the simulator writes its :class:`PaceStops` into, in the run directory (its ``pace_path`` parameter).
 PACE_FILE = "pace.json"
+#: Sim ns within which a follower's messages are one burst (a node that publishes twice in one callback): such a
+#: gap says nothing of its period.
+BURST_NS = 10_000_000
+#: Gaps without a scan between them, among a follower's last ones, that show it speaks on a timer of its own (not
+#: only in answer to its sensor): it is no longer led to its sensor's next message (:meth:`Followers.limit_ns`).
+TIMER_EVIDENCE = 2
+#: Wall seconds a node on a timer of its own may stay silent at its lead before it is led to its sensor's next
+#: message after all: between two maneuvers such a node may wait for a scan (it says nothing until the next one).
+FLOOR_WAIT = 0.1
 
 
 @dataclass
@@ -32,25 +41,37 @@ class Follower:
     seen: float  # monotonic wall time of its latest message
     active: bool = True
     intervals: deque[int] = field(default_factory=lambda: deque(maxlen=20))  # between its messages, sim ns
+    unprompted: deque[bool] = field(default_factory=lambda: deque(maxlen=20))  # per gap: no sensor message in it
+    held_since: float | None = None  # monotonic wall time sim time began to wait for it since its latest message
 
 
 class Followers:
     """Bookkeeping of the followers (no threads, no ROS; the node guards it with its lock).
 
-    How far sim time may lead a follower: its own period (the shortest gap between its last 20 messages) plus
-    ``max_lag``. A follower that speaks once per period P (the executive's tick, the referee's heartbeat) must be
-    allowed to reach its next message time, which is up to P after its last one, and a little more: a gap is
-    measured between arrivals, and one that came late shortens the next, so P alone ratcheted down below the
-    follower's true period and gave a 5 Hz timer up for silent before every message. Learning P per follower keeps
-    a 10 Hz executive from stalling on a 0.05 s default.
+    How far sim time may lead a follower: its own period P plus the margin (at least ``max_lag``). A follower that
+    speaks once per period (the executive's tick, the referee's heartbeat, a node's timer) must be allowed to reach
+    its next message time, up to P after its last one, and a little more. P is the lower median of its last 20 gaps
+    (bursts within :data:`BURST_NS` left out), not the shortest: one stray message (a zero twist sent from a service
+    callback between two ticks) made the shortest gap a third of a 10 Hz node's period, and sim time then stopped
+    short of each of its ticks until it was given up for silent, a wall second per tick. A gap that ended while sim
+    time was held for this follower is its lead, not its period (a node slower than the simulator answers at the
+    limit): it counts less the margin, so the lead of a node that never keeps up does not grow by the margin
+    with each of its messages. A follower whose true period is longer than its lead is given up for silent once;
+    its next gap, run freely, teaches it.
 
     A follower that answers a sensor (a robot's ``cmd_vel``, answering its scans: :attr:`floors`) may in any case
     be led until that sensor's first message after its latest one is out, plus ``max_lag``: it can say nothing
     before it has it, so a scan-driven node is never given up for silent while sim time waits for it, and
-    ``max_lag`` can stay small. A small lead is what keeps a node that times its turns on the ROS clock within a
-    few degrees on a busy machine: its turn lasts its clock's duration plus the change of its lag behind sim time
-    from the turn's first command to its last, and the lag is bounded by the lead (0.25 s of lead cost a 1 rad/s
-    Retreat 13 deg).
+    ``max_lag`` can stay small. Once it has spoken :data:`TIMER_EVIDENCE` times of its last 20 gaps with no sensor
+    message in between, it speaks on a timer of its own and this floor applies only after it has been silent at its
+    lead for :data:`FLOOR_WAIT` wall seconds (between maneuvers, such a node may wait for a scan too): led to the
+    next scan at once, a 50 Hz node fell a scan period behind whenever the simulator was faster than it, and its
+    ROS-timed turns ran on (222 deg for a 100-170 deg draw, uncapped). A small lead is what keeps a node that times
+    its turns on the ROS clock within a few degrees on a busy machine: its turn lasts its clock's duration plus the
+    change of its lag behind sim time from the turn's first command to its last, and the lag is bounded by the lead
+    (0.25 s of lead cost a 1 rad/s Retreat 13 deg). A node that turns closed loop on odometry overshoots by its lag
+    too: while the simulator is faster than the node, the lag is the whole lead (a 2 rad/s Retreat on a 50 Hz loop:
+    190-213 deg uncapped), which is why ``bt-nav grade`` caps the speed (:mod:`bt_nav.grading.exe.pace`).
 
     Args:
         max_lag_ns: the smallest lead allowed, sim ns.
@@ -68,6 +89,7 @@ class Followers:
         self.members: dict[str, Follower] = {}
         #: follower -> when its sensor next publishes after a given sim ns (see the class docstring)
         self.floors: dict[str, Callable[[int], int]] = {}
+        self.held_for: str | None = None  # whom sim time waited for at the latest :meth:`blocking`
 
     def report(self, who: str, t_ns: int, hold: bool, wall: float) -> bool:
         """A message from ``who``; returns True when it (re)joins the active followers."""
@@ -76,13 +98,18 @@ class Followers:
             self.members[who] = Follower(int(t_ns), bool(hold), float(wall))
             return True
         joined = not member.active
-        if t_ns > member.t_ns:
+        gap = int(t_ns) - member.t_ns
+        if gap >= BURST_NS:
             # A gap that spans a silence counts too: the silence was in wall time, while sim time waited for this
             # follower, so a slow follower's first gap is its period (cleared, a node on a 5 Hz timer behind a
             # faster lead was given up for silent before every message and never learnt). A long gap before a
-            # follower's arming only widens the lead until its next, shorter one.
-            member.intervals.append(int(t_ns) - member.t_ns)
+            # follower's arming is one of 20: the median forgets it.
+            held = member.active and self.held_for == who  # it answered at the limit: the gap is its lead
+            member.intervals.append(max(0, gap - self.margin_ns) if held else gap)
+            floor = self.floors.get(who)
+            member.unprompted.append(floor is not None and floor(member.t_ns) > int(t_ns))
         member.t_ns, member.hold, member.seen, member.active = int(t_ns), bool(hold), float(wall), True
+        member.held_since = None
         return joined
 
     def leave(self, who: str) -> bool:
@@ -100,22 +127,34 @@ class Followers:
 
     def lead_ns(self, who: str) -> int:
         """How far sim time may lead ``who``'s latest message (its sensor's floor aside: :meth:`limit_ns`)."""
-        m = self.members[who]
-        return max(self.max_lag_ns, self.margin_ns + min(m.intervals, default=0))
+        gaps = sorted(self.members[who].intervals)
+        period = gaps[(len(gaps) - 1) // 2] if gaps else 0  # the lower median (see the class docstring)
+        return max(self.max_lag_ns, self.margin_ns + period)
 
-    def limit_ns(self, who: str) -> int:
-        """The sim time ``who`` keeps sim time from passing: its latest message plus its lead, and at least its
-        sensor's next message after it plus ``max_lag`` when it answers one."""
+    def limit_ns(self, who: str, wall: float | None = None) -> int:
+        """The sim time ``who`` keeps sim time from passing at wall time ``wall``: its latest message plus its lead,
+        and at least its sensor's next message after it plus ``max_lag`` when it answers one; a node on a timer of
+        its own (:meth:`on_timer`) only once it has been silent at its lead for :data:`FLOOR_WAIT` wall seconds."""
         m = self.members[who]
         floor = self.floors.get(who)
         limit = m.t_ns + self.lead_ns(who)
-        return limit if floor is None else max(limit, floor(m.t_ns) + self.max_lag_ns)
+        if floor is None:
+            return limit
+        if self.on_timer(who) and (m.held_since is None or wall is None or wall - m.held_since < FLOOR_WAIT):
+            return limit
+        return max(limit, floor(m.t_ns) + self.max_lag_ns)
+
+    def on_timer(self, who: str) -> bool:
+        """Whether ``who`` spoke :data:`TIMER_EVIDENCE` times (of its last 20 gaps) with no message of its sensor
+        since its previous one: a node on a timer of its own, not one that only answers its scans."""
+        return sum(self.members[who].unprompted) >= TIMER_EVIDENCE
 
     def blocking(self, sim_ns: int, wall: float) -> tuple[str | None, list[str]]:
         """(who keeps sim time from reaching ``sim_ns``, or None; who was just dropped for silence or for a
         hold that lasts too long)."""
         dropped: list[str] = []
         blocker = None
+        self.held_for = None
         for who, m in self.members.items():
             if not m.active:
                 continue
@@ -125,12 +164,14 @@ class Followers:
                     dropped.append(who)
                 elif blocker is None:
                     blocker = who
-            elif sim_ns > self.limit_ns(who):
+            elif sim_ns > self.limit_ns(who, wall):
+                m.held_since = wall if m.held_since is None else m.held_since
                 if wall - m.seen > self.silence_s:
                     m.active = False
                     dropped.append(who)
                 elif blocker is None:
                     blocker = who
+        self.held_for = blocker
         return blocker, dropped
 
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.pacing import Followers
+from bt_nav_sim.pacing import FLOOR_WAIT, Followers
 
 MS = 1_000_000
 
@@ -121,12 +121,69 @@ def test_a_node_answering_its_scans_is_led_until_the_next_scan_is_out_and_no_fur
     f.report("cmd_vel", 1010 * MS, False, wall=0.0)  # its answer to the scan of 1.0 s
     assert f.blocking(1250 * MS, wall=0.1) == (None, [])  # the 1.2 s scan must go out
     assert f.blocking(1260 * MS, wall=0.1) == ("cmd_vel", [])  # not past it before the node has answered
-    f.report("cmd_vel", 1215 * MS, False, wall=0.2)  # its period is now 205 ms: led 255 ms, past the next scan's 50
-    assert f.blocking(1470 * MS, wall=0.2) == (None, []) and f.blocking(1480 * MS, wall=0.2) == ("cmd_vel", [])
+    # it answers while sim time is held for it: its 205 ms gap counts less the margin (155 ms: a lead of 205 ms),
+    # and the next scan's floor leads it further, to 1.4 s plus 50 ms
+    f.report("cmd_vel", 1215 * MS, False, wall=0.2)
+    assert f.lead_ns("cmd_vel") == 205 * MS and not f.on_timer("cmd_vel")
+    assert f.blocking(1450 * MS, wall=0.2) == (None, []) and f.blocking(1460 * MS, wall=0.2) == ("cmd_vel", [])
     # no sensor floor: the small lead alone
     g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
     g.report("timer", 1010 * MS, False, wall=0.0)
     assert g.blocking(1070 * MS, wall=0.1) == ("timer", [])
+
+
+def test_one_stray_message_does_not_cut_a_timer_node_s_lead_short() -> None:
+    """A 10 Hz node that once sends a zero twist 30 ms after a tick (from a service callback): its lead stays its
+    period and the margin, so sim time still reaches its next tick (the shortest gap made it 80 ms: it stopped 20 ms
+    short of every tick and was given up for silent, a wall second each, until 20 gaps later)."""
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    for t in (0, 100, 200, 300, 330, 400, 500):
+        f.report("node", t * MS, False, wall=0.0)
+    assert f.lead_ns("node") == 150 * MS and f.blocking(600 * MS, wall=0.0) == (None, [])
+
+
+def test_a_node_slower_than_the_simulator_keeps_its_lead() -> None:
+    """A 20 Hz node that always answers at the limit (the simulator is faster than it): each gap is its lead, which
+    counts less the margin, so the lead stays 50 + 50 ms instead of growing by the margin message after message."""
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    t = 0
+    for _ in range(4):  # free gaps: its period
+        f.report("node", t, False, wall=0.0)
+        t += 50 * MS
+    for _ in range(60):  # held at its limit each time, answering there
+        limit = f.limit_ns("node")
+        assert f.blocking(limit + 10 * MS, wall=0.0) == ("node", [])
+        f.report("node", limit, False, wall=0.0)
+    assert f.lead_ns("node") == 100 * MS
+
+
+def test_a_node_on_a_timer_faster_than_its_lidar_is_led_its_own_period_not_to_the_next_scan() -> None:
+    """A 50 Hz node of a 5 Hz LiDAR's robot: once it has spoken twice with no scan in between, sim time may lead it
+    its period and the margin only (led to the next scan, its ROS-timed turns ran on by up to a scan period at high
+    speed); a node that answers each scan with a burst of two messages keeps the floor (it can say nothing before
+    the next scan)."""
+    scans = lambda t: (t // (200 * MS) + 1) * 200 * MS  # noqa: E731 - the 5 Hz scan grid
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    f.floors["cmd_vel"] = scans
+    f.report("cmd_vel", 1000 * MS, False, wall=0.0)
+    f.report("cmd_vel", 1020 * MS, False, wall=0.0)
+    assert not f.on_timer("cmd_vel") and f.limit_ns("cmd_vel") == 1250 * MS, "one gap: led to the next scan still"
+    f.report("cmd_vel", 1040 * MS, False, wall=0.0)
+    assert f.on_timer("cmd_vel")
+    assert f.limit_ns("cmd_vel", 0.0) == 1040 * MS + 70 * MS, "its period (20 ms) and the margin, not the 1.2 s scan"
+    assert f.blocking(1120 * MS, wall=0.5) == ("cmd_vel", [])
+    assert f.blocking(1120 * MS, wall=0.5 + FLOOR_WAIT * 0.9) == ("cmd_vel", [])
+    # silent at its lead for FLOOR_WAIT: it waits for a scan (after a maneuver), so it is led to the next one
+    assert f.blocking(1250 * MS, wall=0.5 + FLOOR_WAIT) == (None, [])
+    f.report("cmd_vel", 1205 * MS, False, wall=0.7)  # it answered the scan: its own lead again
+    assert f.limit_ns("cmd_vel", 0.7) == 1205 * MS + 70 * MS
+    g = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    g.floors["cmd_vel"] = scans
+    for k in range(6):  # each scan answered twice within 2 ms
+        g.report("cmd_vel", 1005 * MS + k * 200 * MS, False, wall=0.0)
+        g.report("cmd_vel", 1007 * MS + k * 200 * MS, False, wall=0.0)
+    # led past the next scan (2.2 s, plus 50 ms): its own period (198 ms between bursts) and the margin reach 2.255 s
+    assert not g.on_timer("cmd_vel") and g.limit_ns("cmd_vel") == 2007 * MS + 248 * MS
 
 
 def test_without_a_margin_the_learnt_period_is_the_lead_as_lock_step_predicts() -> None:
