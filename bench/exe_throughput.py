@@ -121,7 +121,8 @@ def grade_once(seeds: int, rtf: float | None = None, jobs: str = JOBS, world: st
 
 
 def run(quick: bool = False, rtfs: tuple[float, ...] | None = None) -> dict[str, Any]:
-    """The default grade (rtf 5) over 8 seeds (2 when quick), then the same at the other ``rtfs``, for the
+    """A grade at a fixed ``--rtf 5`` (issue 27's default; today's default, as fast as the node keeps up and at most
+    5x, is :mod:`bench.grade_speed`'s) over 8 seeds (2 when quick), then the same at the other ``rtfs``, for the
     speed-versus-verdicts trade."""
     seeds = 2 if quick else 8
     grades = []

@@ -33,10 +33,12 @@ from collections.abc import Callable, Sequence
 
 from bt_nav.ros.supervise import StopRequest, usable_cores
 
-#: Runs at most per usable core, with ``--jobs auto``. Three since a run is two processes (its bag written by the
-#: simulator's): the right C node's default lab grade (12 runs, 2 cores, 2026-11-27) took 55.4 s with up to six runs
-#: at once and 62.7 s with four, the same verdicts and turns within 2 deg of 90; 73 and 80 user CPU s.
-PER_CORE = 3
+#: Runs at most per usable core, with ``--jobs auto``. Not three: the right C node's default lab grade (12 runs, 2
+#: cores, 2026-11-27) took 55.4 s with up to six runs at once and 62.7 s with four, but six starve the nodes (each
+#: kept up 3.3-4.4x) and a right node turning at 1.5 rad/s closed loop on odometry (the grader suite's
+#: ``c_no_aeb_fast``) then overshot its 90 deg pivot to 103-121 deg in 4-5 of 8 runs; two at once passed 8 of 8 in
+#: the same 75 s wall.
+PER_CORE = 2
 #: The idle share of the cores an extra run needs: a run at the default rtf takes about a third of a core.
 IDLE_NEEDED = 0.4
 #: Below this idle share, with no run starting up, a place is taken away.

@@ -120,8 +120,8 @@ def test_only_auto_adapts(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr("bt_nav.grading.admission.usable_cores", lambda: 2)
     assert Admission.for_jobs(3) is None, "--jobs 3 is three runs, no more"
     gate = Admission.for_jobs(AutoJobs(2))
-    assert (gate.base, gate.limit) == (2, 6)
-    assert describe(AutoJobs(2)) == "2 at a time, up to 6 while the cores stay idle"
+    assert (gate.base, gate.limit) == (2, 4)
+    assert describe(AutoJobs(2)) == "2 at a time, up to 4 while the cores stay idle"
     assert describe(3) == "3 at a time"
     assert isinstance(jobs_arg("auto"), AutoJobs) and type(jobs_arg("2")) is int
 

@@ -30,7 +30,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-#: Sim seconds per wall second when ``--rtf 0``: the simulator does not wait for a foreign node (grade --exe's pace).
+#: Sim seconds per wall second when ``--rtf 0``: the demo's simulator does not wait for a foreign node (a grade's
+#: does, up to :data:`bt_nav.grading.exe.pace.DEFAULT_RTF_MAX`).
 EXE_RTF = 5.0
 #: Sim seconds a terminal line waits for earlier ones that come over DDS (:class:`bt_nav.run.terminal.NodeTerminal`).
 HOLD = 2.0
