@@ -35,6 +35,7 @@ def test_the_robot_judge_agrees_with_the_simulators_judge_on_one_run(tmp_path: P
         code = listener.wait(60.0)
     finally:
         listener.stop()
+    assert live.is_file(), f"the listener (exit code {code}) wrote no verdict\n{listener.output()}"
     sim, robot = json.loads(truth.read_text()), json.loads(live.read_text())
     assert code == (0 if robot["passed"] else 1), listener.output()
     assert sim["passed"] and robot["passed"], (sim["report_lines"], robot["report_lines"], listener.output())
