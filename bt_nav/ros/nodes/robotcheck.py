@@ -31,6 +31,7 @@ import rclpy
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import Log
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import LaserScan
@@ -168,7 +169,9 @@ def listen(names: dict[str, str], duration: float, call_toggle: bool = False,
             if on_progress is not None and time.monotonic() >= next_progress:
                 next_progress = time.monotonic() + REJUDGE_EVERY
                 on_progress(node.raw, own_calls() or [])
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
+        # Ctrl-C: as a KeyboardInterrupt, or (rclpy's own SIGINT handler shut the context down while the executor
+        # waited) as ExternalShutdownException, which once ended the listener with a traceback and no verdict
         notes.append("stopped by Ctrl-C")
     finally:
         try:
@@ -177,7 +180,7 @@ def listen(names: dict[str, str], duration: float, call_toggle: bool = False,
                 after = time.monotonic() + STATIC_AFTER
                 while time.monotonic() < after and rclpy.ok():
                     rclpy.spin_once(node, timeout_sec=0.1)
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, ExternalShutdownException):
             notes.append("the static check after deactivation was cut short by a second Ctrl-C")
         raw, command_type = node.raw, node.command_type
         node.destroy_node()
