@@ -190,6 +190,7 @@ def parse(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--seeds", default="1")
     parser.add_argument("--jobs", default="auto")
     parser.add_argument("--hogs", type=int, default=0, help="CPU hogs running during the grade")
+    parser.add_argument("--rtf-max", default=None, help="the grades' --rtf-max (default: theirs; 0: no cap)")
     parser.add_argument("--compare", type=Path, help="an earlier suite's confusion.json: name differing verdicts")
     return parser.parse_args(argv)
 
@@ -206,7 +207,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     # at the default speed only (--rtf 0, as fast as the node keeps up): a right node must pass there on its own (the
     # 1x re-run would hide a grader that fails it)
     options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
-               "--realtime-check", "off", "--progress", "off"]
+               "--realtime-check", "off", "--progress", "off",
+               *(["--rtf-max", args.rtf_max] if args.rtf_max is not None else [])]
     lines = []
     with cpu_hogs(args.hogs):
         for name, spec in todo.items():

@@ -10,6 +10,7 @@ the node at exit, read by :func:`read_pace_stops`): the node's log line says the
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections import deque
 from collections.abc import Callable
@@ -30,6 +31,14 @@ TIMER_EVIDENCE = 2
 #: Wall seconds a node on a timer of its own may stay silent at its lead before it is led to its sensor's next
 #: message after all: between two maneuvers such a node may wait for a scan (it says nothing until the next one).
 FLOOR_WAIT = 0.1
+#: :class:`StayBehind`: the speed a run starts at, its floor, its growth (x per wall second), its back-off factor, how
+#: often it may back off (wall s) and the steps the speed is used in (each change re-anchors the pace).
+STAY_START = 4.0
+STAY_FLOOR = 1.0
+STAY_GROWTH = 2.0
+STAY_BACKOFF = 0.75
+STAY_REFRACTORY = 0.2
+STAY_QUANTUM = 0.5
 
 
 @dataclass
@@ -43,6 +52,7 @@ class Follower:
     intervals: deque[int] = field(default_factory=lambda: deque(maxlen=20))  # between its messages, sim ns
     unprompted: deque[bool] = field(default_factory=lambda: deque(maxlen=20))  # per gap: no sensor message in it
     held_since: float | None = None  # monotonic wall time sim time began to wait for it since its latest message
+    at_limit: bool = False  # its latest message came while sim time waited for it (it was at its lead)
 
 
 class Followers:
@@ -99,13 +109,14 @@ class Followers:
             return True
         joined = not member.active
         gap = int(t_ns) - member.t_ns
+        member.at_limit = member.active and self.held_for == who
         if gap >= BURST_NS:
             # A gap that spans a silence counts too: the silence was in wall time, while sim time waited for this
             # follower, so a slow follower's first gap is its period (cleared, a node on a 5 Hz timer behind a
             # faster lead was given up for silent before every message and never learnt). A long gap before a
             # follower's arming is one of 20: the median forgets it.
-            held = member.active and self.held_for == who  # it answered at the limit: the gap is its lead
-            member.intervals.append(max(0, gap - self.margin_ns) if held else gap)
+            # it answered at the limit: the gap is its lead
+            member.intervals.append(max(0, gap - self.margin_ns) if member.at_limit else gap)
             floor = self.floors.get(who)
             member.unprompted.append(floor is not None and floor(member.t_ns) > int(t_ns))
         member.t_ns, member.hold, member.seen, member.active = int(t_ns), bool(hold), float(wall), True
@@ -173,6 +184,52 @@ class Followers:
                     blocker = who
         self.held_for = blocker
         return blocker, dropped
+
+
+class StayBehind:
+    """The simulator's speed at ``real_time_factor`` 0 kept just below the pace the robot's node keeps (``afap_adapt``):
+    it grows by :data:`STAY_GROWTH` x per wall second while the node answers before its limit and drops to
+    :data:`STAY_BACKOFF` of itself when it answers at its limit (sim time had to wait for it), at most once per
+    :data:`STAY_REFRACTORY` wall seconds.
+
+    Why: the followers' bound alone lets the simulator run ahead of a node that cannot keep up, and the node then
+    lags by its whole lead at every message; worse, the bound grants one message per lead (70 ms for a 50 Hz node),
+    while odometry comes every 33 ms, so the node's reliable odometry queue fills and it steers on readings a third
+    of a second old (a 2 rad/s Retreat closed loop on odometry turned 190-258 deg uncapped). A node that is
+    answered before its limit has time to spare: it drains its queues and its lag is its own latency.
+
+    Args:
+        cap: the highest speed (``afap_max_rtf``; 0: none).
+        start: the speed a run starts at.
+    """
+
+    def __init__(self, cap: float = 0.0, start: float = STAY_START) -> None:
+        self.cap = float(cap) if cap > 0.0 else math.inf
+        self.value = min(float(start), self.cap)
+        self.backoffs = 0
+        self._seen: float | None = None  # wall s of the latest :meth:`rate` while following
+        self._backed_off = -math.inf  # wall s of the latest back-off
+
+    def rate(self, wall: float) -> float:
+        """The speed for the next step at wall time ``wall`` (called while the node is followed), in steps of
+        :data:`STAY_QUANTUM` so the pace re-anchors only when it changes."""
+        if self._seen is not None:
+            self.value = min(self.cap, self.value + STAY_GROWTH * max(0.0, min(wall - self._seen, 1.0)))
+        self._seen = wall
+        return min(self.cap, max(STAY_FLOOR, round(self.value / STAY_QUANTUM) * STAY_QUANTUM))
+
+    def idle(self) -> None:
+        """The node is not followed: no growth until it is again (a silent node says nothing of its pace)."""
+        self._seen = None
+
+    def at_limit(self, wall: float) -> None:
+        """The node answered while sim time waited for it: slow down (once per :data:`STAY_REFRACTORY`)."""
+        if wall - self._backed_off >= STAY_REFRACTORY:
+            self.value = max(STAY_FLOOR, self.value * STAY_BACKOFF)
+            self._backed_off = wall
+            self.backoffs += 1
+        if self._seen is not None:  # it grows again from here: until now the node did not keep up
+            self._seen = max(self._seen, wall)
 
 
 @dataclass

@@ -6,7 +6,7 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.pacing import FLOOR_WAIT, Followers
+from bt_nav_sim.pacing import FLOOR_WAIT, STAY_BACKOFF, STAY_FLOOR, STAY_GROWTH, STAY_REFRACTORY, Followers, StayBehind
 
 MS = 1_000_000
 
@@ -184,6 +184,44 @@ def test_a_node_on_a_timer_faster_than_its_lidar_is_led_its_own_period_not_to_th
         g.report("cmd_vel", 1007 * MS + k * 200 * MS, False, wall=0.0)
     # led past the next scan (2.2 s, plus 50 ms): its own period (198 ms between bursts) and the margin reach 2.255 s
     assert not g.on_timer("cmd_vel") and g.limit_ns("cmd_vel") == 2007 * MS + 248 * MS
+
+
+def test_a_message_that_came_while_sim_time_waited_for_its_sender_is_at_the_limit() -> None:
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    f.report("node", 0, False, wall=0.0)
+    f.report("node", 20 * MS, False, wall=0.0)
+    assert not f.members["node"].at_limit, "answered before sim time reached its lead"
+    assert f.blocking(200 * MS, wall=0.0) == ("node", [])
+    f.report("node", 70 * MS, False, wall=0.01)
+    assert f.members["node"].at_limit, "sim time was waiting for it"
+    assert f.blocking(80 * MS, wall=0.01) == (None, [])
+    f.report("node", 90 * MS, False, wall=0.02)
+    assert not f.members["node"].at_limit
+
+
+def test_stay_behind_grows_while_the_node_keeps_up_and_backs_off_when_it_answers_at_its_limit() -> None:
+    pace = StayBehind(cap=0.0, start=4.0)
+    assert pace.rate(10.0) == 4.0
+    assert pace.rate(10.5) == 4.0 + 0.5 * STAY_GROWTH and pace.rate(11.0) == 4.0 + STAY_GROWTH, "keeping up"
+    assert pace.rate(14.5) == 4.0 + 2 * STAY_GROWTH, "a wall second at most between two steps (a stall says nothing)"
+    before = pace.value
+    pace.at_limit(14.6)
+    assert pace.value == pytest.approx(before * STAY_BACKOFF) and pace.backoffs == 1
+    pace.at_limit(14.6 + STAY_REFRACTORY / 2)  # each message of a 50 Hz node: once per refractory period only
+    assert pace.backoffs == 1
+    for k in range(1, 40):
+        pace.at_limit(14.6 + k * STAY_REFRACTORY)
+    assert pace.value == STAY_FLOOR and pace.rate(14.6 + 39 * STAY_REFRACTORY) == STAY_FLOOR, "no growth meanwhile"
+
+
+def test_stay_behind_keeps_under_its_cap_and_does_not_grow_while_the_node_is_not_followed() -> None:
+    pace = StayBehind(cap=5.0, start=4.0)
+    assert pace.rate(0.0) == 4.0 and pace.rate(1.0) == 5.0 and pace.rate(9.0) == 5.0
+    quiet = StayBehind(cap=0.0, start=4.0)
+    quiet.rate(0.0)
+    quiet.idle()
+    assert quiet.rate(30.0) == 4.0, "30 s of a silent node taught nothing"
+    assert StayBehind(cap=0.5).rate(0.0) == 0.5, "a cap under the floor wins"
 
 
 def test_without_a_margin_the_learnt_period_is_the_lead_as_lock_step_predicts() -> None:

@@ -68,14 +68,15 @@ def rtf_cap(rtf: float, rtf_max: float | None) -> float:
     return DEFAULT_RTF_MAX if rtf == 0.0 else 0.0
 
 
-def sim_pace(rtf: float, rtf_max: float = 0.0) -> dict[str, float]:
+def sim_pace(rtf: float, rtf_max: float = 0.0) -> dict[str, float | bool]:
     """The simulator's pacing parameters for a grade's speed (module docstring): none at a fixed factor (``rtf`` >
     0, ``real_time_factor`` says it all); at 0 the cap ``rtf_max`` (0: none) while the node is followed, alone or
-    not, and :data:`IDLE_RTF` (or the cap, when lower) while it is silent."""
+    not, the speed kept just behind the node's pace under it (``afap_adapt``:
+    :class:`bt_nav_sim.pacing.StayBehind`), and :data:`IDLE_RTF` (or the cap, when lower) while it is silent."""
     if rtf > 0:
         return {}
     idle = min(IDLE_RTF, rtf_max) if rtf_max > 0 else IDLE_RTF
-    return {"afap_max_rtf": float(rtf_max), "solo_rtf": float(rtf_max), "idle_rtf": float(idle)}
+    return {"afap_max_rtf": float(rtf_max), "solo_rtf": float(rtf_max), "idle_rtf": float(idle), "afap_adapt": True}
 
 
 def speed_words(rtf: float, rtf_max: float = 0.0) -> str:

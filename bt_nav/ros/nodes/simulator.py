@@ -87,7 +87,7 @@ import rclpy
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.multi import MultiSimCore, parse_starts
-from bt_nav_sim.pacing import CMD_VEL, Followers, PaceStops
+from bt_nav_sim.pacing import CMD_VEL, Followers, PaceStops, StayBehind
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
@@ -201,6 +201,9 @@ class SimulatorNode(QuietQosEvents, Node):
                           "to this file at exit (empty: nowhere)"),
         "idle_rtf": (10.0, "real_time_factor 0: speed while there is no follower"),
         "afap_max_rtf": (0.0, "real_time_factor 0: upper bound on the speed (0: none)"),
+        "afap_adapt": (False, "real_time_factor 0: keep the speed just below the pace the robot's node keeps (slow "
+                              "down when it answers at its limit, speed up while it does not; StayBehind), <= "
+                              "afap_max_rtf"),
         "solo_rtf": (0.0, "real_time_factor 0: upper bound while only cmd_vel is followed, no sim_sync "
                           "follower such as the referee (0: none)"),
         "duration": (0.0, "stop after this much sim time, s (0: run until shut down)"),
@@ -244,10 +247,17 @@ class SimulatorNode(QuietQosEvents, Node):
         self.idle_rtf = max(0.0, float(p["idle_rtf"]))
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
+        self.stay_behind = StayBehind(self.afap_max_rtf) if bool(p["afap_adapt"]) and self.rtf == 0.0 else None
         self.duration_ns = int(max(0.0, float(p["duration"])) * 1e9)
         rate = float(p["clock_rate_hz"])
         self.clock_period_ns = int(round(1e9 / rate)) if rate > 0.0 else 1
         self._clock_sent_ns = -1
+
+    def _stay_record(self) -> dict[str, Any]:
+        """What :data:`PACE_FILE` says of :class:`StayBehind` (nothing when off): its back-offs and last speed."""
+        if self.stay_behind is None:
+            return {}
+        return {"stay_behind": {"backoffs": self.stay_behind.backoffs, "rate": round(self.stay_behind.value, 2)}}
 
     def _create_publishers(self) -> None:
         # /clock as rclcpp's ClockQoS (best effort, depth 1), what every time source subscribes with: a
@@ -279,7 +289,8 @@ class SimulatorNode(QuietQosEvents, Node):
         c, m, w, config = self.core, self.core.model, self.core.world, self.core.config
         pace = f"{self.rtf:g}x real time" if self.rtf > 0 else \
             (f"as fast as the followers keep up ({self.idle_rtf:g}x without any"
-             + (f", <= {self.afap_max_rtf:g}x" if self.afap_max_rtf else "") + ")")
+             + (f", <= {self.afap_max_rtf:g}x" if self.afap_max_rtf else "")
+             + (", just behind the robot's node" if self.stay_behind is not None else "") + ")")
         spawns = "; ".join(f"{r.prefix or ''}spawn ({r.core.spawn[0]:.2f}, {r.core.spawn[1]:.2f}, "
                            f"{math.degrees(r.core.spawn[2]):.0f} deg)" for r in self.robots)
         return (f"world {w.name} {spawns}; "
@@ -325,7 +336,8 @@ class SimulatorNode(QuietQosEvents, Node):
         with self._cond:
             record = self.pace_stops.record(self.followers, follower_timeout=self.followers.silence_s,
                                             hold_timeout=self.followers.hold_s, t_end=round(self.sim.t, 4),
-                                            wall_s=round(time.monotonic() - self._wall_start, 3))
+                                            wall_s=round(time.monotonic() - self._wall_start, 3),
+                                            **self._stay_record())
         try:
             with written_whole(self.pace_path) as stream:
                 stream.write(json.dumps(record) + "\n")
@@ -359,9 +371,12 @@ class SimulatorNode(QuietQosEvents, Node):
             robot.cmd = (v, w)
             robot.arrival_ns = self.core.t_ns
             self.commands += 1
-            if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, time.monotonic()):
+            now = time.monotonic()
+            if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, now):
                 self.pace_stops.resumed(robot.follower, self.core.t)
                 self.get_logger().info(f"following {robot.follower} (t={self.core.t:.2f} s)")
+            if self.stay_behind is not None and self.followers.members[robot.follower].at_limit:
+                self.stay_behind.at_limit(now)
             self._cond.notify_all()
 
     def _on_sync(self, msg: String) -> None:
@@ -447,6 +462,13 @@ class SimulatorNode(QuietQosEvents, Node):
             rate = self.idle_rtf if not following else self.afap_max_rtf
             if following and not synced and self.solo_rtf > 0.0:
                 rate = min(rate, self.solo_rtf) if rate > 0.0 else self.solo_rtf
+            if self.stay_behind is not None:
+                with self._cond:
+                    if not following:
+                        self.stay_behind.idle()
+                    else:
+                        adapted = self.stay_behind.rate(time.monotonic())
+                        rate = min(rate, adapted) if rate > 0.0 else adapted
         return rate
 
     def _keep_pace(self, rate: float, following: bool = True) -> bool:
