@@ -25,12 +25,17 @@ def _sim(tmp_path: Path, **kw: Any) -> dict[str, Any]:
 
 def test_the_default_is_as_fast_as_the_node_keeps_up_with_a_bounded_idle_pace(tmp_path: Path) -> None:
     """rtf 0: no cap while the node is followed, alone (solo_rtf, which bringup sets to 5 for a graph with a judge)
-    or not; 10x while it is silent."""
-    assert grade._parser().parse_args([]).rtf == 0.0 and ExeSettings("n", "lab", tmp_path).rtf == 0.0
+    or not, the simulator kept just behind the node (afap_adapt) under any cap; 10x while it is silent."""
+    args = grade._parser().parse_args([])
+    assert args.rtf == 0.0 and ExeSettings("n", "lab", tmp_path).rtf == 0.0
+    assert pace.rtf_cap(args.rtf, args.rtf_max) == 0.0, "no cap unless --rtf-max"
     sim = _sim(tmp_path)
     assert (sim["real_time_factor"], sim["afap_max_rtf"], sim["solo_rtf"], sim["idle_rtf"]) == (0.0, 0.0, 0.0, 10.0)
+    assert sim["afap_adapt"] is True
     capped = _sim(tmp_path, rtf_max=4.0)
-    assert (capped["afap_max_rtf"], capped["solo_rtf"], capped["idle_rtf"]) == (4.0, 4.0, 4.0)
+    assert (capped["afap_max_rtf"], capped["solo_rtf"], capped["idle_rtf"], capped["afap_adapt"]) == (4.0, 4.0, 4.0,
+                                                                                                      True)
+    assert "afap_adapt" not in _sim(tmp_path, rtf=5.0), "a fixed factor is kept as it is"
     assert _sim(tmp_path, rtf_max=20.0)["idle_rtf"] == 10.0
 
 

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 #: Sim seconds per wall second when ``--rtf 0``: the demo's simulator does not wait for a foreign node (a grade's
-#: does, up to :data:`bt_nav.grading.exe.pace.DEFAULT_RTF_MAX`).
+#: does, and keeps just behind it: :mod:`bt_nav.grading.exe.pace`).
 EXE_RTF = 5.0
 #: Sim seconds a terminal line waits for earlier ones that come over DDS (:class:`bt_nav.run.terminal.NodeTerminal`).
 HOLD = 2.0

@@ -109,7 +109,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--rtf", type=float, default=0.0, help="--exe: sim seconds per wall second; 0 (default): as "
                         "fast as the node keeps up, the factor each run achieved in its line")
     parser.add_argument("--rtf-max", type=float, default=None, metavar="N", help="--exe, --rtf 0: at most N sim "
-                        "seconds per wall second (default 5; 0: no cap)")
+                        "seconds per wall second (default and 0: no cap; the simulator keeps just behind the node)")
     parser.add_argument("--realtime-check", choices=("on", "off"), default="on",
                         help="--exe: before failures at --rtf 0 or > 1 stand, one failed run is run again at 1x; if it "
                         "passes there (a node keeping time by the wall clock), every failed run is graded at 1x, "

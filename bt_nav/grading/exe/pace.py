@@ -5,8 +5,11 @@ Why a node sets the speed: the simulator is paced to the graded node (:data:`bt_
 sim time never runs ahead of the node's latest command by more than its period and the next scan it answers, so a
 node on ROS time (``use_sim_time``) finds the world where it left it at any speed. At ``--rtf 0`` (the default) the
 simulator therefore runs as fast as the node keeps up (``afap_max_rtf``), capped by ``--rtf-max``
-(:data:`DEFAULT_RTF_MAX` unless given); the hosted judge sends no ``sim_sync`` of its own, so ``solo_rtf``, the cap
-while only ``cmd_vel`` is followed, is the same cap. While the node says nothing (before its arming, after its stop,
+(:data:`DEFAULT_RTF_MAX` unless given), and under that cap just behind the pace the node keeps (``afap_adapt``:
+:class:`bt_nav_sim.pacing.StayBehind`), so the followers' bound is a safety net, not the pace: a simulator held at the
+bound makes every command of the node come that late; the hosted judge sends no ``sim_sync`` of its own, so
+``solo_rtf``, the cap while only ``cmd_vel`` is followed, is the same cap.
+While the node says nothing (before its arming, after its stop,
 a node that publishes only on change) nobody is followed and sim time runs at ``idle_rtf``: :data:`IDLE_RTF`, or
 ``--rtf-max`` when lower, so a silent node does not see sim time race away. ``--rtf N`` (N > 0) keeps a fixed
 factor, as before.
@@ -27,14 +30,13 @@ from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace
 
 #: Sim seconds per wall second at ``--rtf 0`` while the node is not followed (silent): the simulator's own default.
 IDLE_RTF = 10.0
-#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none): 5x, the speed every verdict of the grader
-#: suite was measured at. Why a cap: the pace bounds how far sim time may lead the node (its period and 0.05 s, or up to
-#: the next scan it answers), and the faster the simulator than the node, the more often every command lags by that
-#: whole bound. Measured in the grader suite's right lab nodes on a loaded machine (2026-11-27): uncapped, five
-#: variants failed (a 50 Hz node's ROS-timed Randomizer ran on to 222 deg for a 100-170 draw); capped at 10x, a 50 Hz
-#: Retreat turned 226-228 deg and a node publishing from a 5 Hz timer was given up for silent at 136 pace stops and
-#: timed out; at 5x they pass. Faster defaults wait for a tighter bound.
-DEFAULT_RTF_MAX = 5.0
+#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none): none. Until 2026-11-27 it was 5x: with the
+#: followers' bound alone the simulator ran at that bound whenever it was faster than the node, so every command came
+#: the whole bound late and a node on a fast timer steered on a full odometry queue (uncapped, five right variants of
+#: the grader suite failed; a 50 Hz Retreat on odometry turned 190-258 deg). Kept just behind the node
+#: (:class:`bt_nav_sim.pacing.StayBehind`), the suite's 40 right nodes passed 240 of 240 runs uncapped, two CPU hogs
+#: running.
+DEFAULT_RTF_MAX = 0.0
 #: The factor a real robot runs at: a node that keeps up with less is too slow for it.
 ROBOT_RTF = 1.0
 #: Sim seconds of following below which a run's ``node_rtf`` says nothing of the node (a node that spoke once; a

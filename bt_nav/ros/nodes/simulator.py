@@ -44,7 +44,10 @@ Pacing (``real_time_factor``): r > 0 advances sim time r times faster than wall 
 needed; after a hiccup of more than 0.25 s it re-anchors instead of bursting to catch up). r = 0 runs
 as fast as the *followers* keep up, at ``idle_rtf`` while there are none, and never faster than
 ``afap_max_rtf`` (0 = no cap); ``solo_rtf`` caps the speed while only ``cmd_vel`` is followed (the
-``eval`` bringup sets it, so the minutes before the referee joins cost little CPU).
+``eval`` bringup sets it, so the minutes before the referee joins cost little CPU). With ``afap_adapt`` (a graded
+node: ``bt-nav grade --exe``) the speed while a robot's node is followed is also kept just below the pace that node
+keeps (:class:`bt_nav_sim.pacing.StayBehind`: it grows while the node answers before its limit and backs off when it
+answers while sim time waited for it), so the followers' bound is a safety net rather than the pace.
 
 Followers (``follow``, on by default, in every pacing mode): wall-clock delays of other processes must
 not turn into sim-time delays, or a busy CPU changes the verdict of a run. A follower is
