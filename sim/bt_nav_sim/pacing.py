@@ -81,7 +81,7 @@ class Followers:
     change of its lag behind sim time from the turn's first command to its last, and the lag is bounded by the lead
     (0.25 s of lead cost a 1 rad/s Retreat 13 deg). A node that turns closed loop on odometry overshoots by its lag
     too: while the simulator is faster than the node, the lag is the whole lead (a 2 rad/s Retreat on a 50 Hz loop:
-    190-213 deg uncapped), which is why ``bt-nav grade`` caps the speed (:mod:`bt_nav.grading.exe.pace`).
+    190-258 deg uncapped), which is why ``bt-nav grade`` keeps the simulator just behind the node (:class:`StayBehind`).
 
     Args:
         max_lag_ns: the smallest lead allowed, sim ns.
