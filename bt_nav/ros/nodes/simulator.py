@@ -250,7 +250,9 @@ class SimulatorNode(QuietQosEvents, Node):
         self.idle_rtf = max(0.0, float(p["idle_rtf"]))
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
-        self.stay_behind = StayBehind(self.afap_max_rtf) if bool(p["afap_adapt"]) and self.rtf == 0.0 else None
+        # it keeps behind a followed node: without following (follow off) there is none, and no member to ask
+        adapt = bool(p["afap_adapt"]) and self.rtf == 0.0 and self.follow
+        self.stay_behind = StayBehind(self.afap_max_rtf) if adapt else None
         self.duration_ns = int(max(0.0, float(p["duration"])) * 1e9)
         rate = float(p["clock_rate_hz"])
         self.clock_period_ns = int(round(1e9 / rate)) if rate > 0.0 else 1
