@@ -136,7 +136,7 @@ def run(quick: bool = False, rtfs: tuple[float, ...] | None = None) -> dict[str,
 
 
 def _workers(jobs: str) -> int:
-    """How many runs ``--jobs`` lets run at once here at most (auto: two per core while the cores stay idle)."""
+    """How many runs ``--jobs`` lets run at once here at most (auto: PER_CORE per core while the cores stay idle)."""
     from bt_nav.grading.admission import PER_CORE
 
     return PER_CORE * usable_cores() if str(jobs) == "auto" else int(jobs)

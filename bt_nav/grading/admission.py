@@ -1,27 +1,31 @@
 """How many ``--exe`` runs at once with ``--jobs auto``: one per usable core, and more while the cores stay idle.
 
-Why not simply one per core: a run over DDS is three processes that spend most of a mission waiting for sim
-time, so at the default ``--rtf 5`` one run keeps about a third of a core busy (measured on this project's 2-core
-machine: 6.1 CPU s per 14 s run, the cores 39 % busy with two runs at once). Why not a fixed larger number: a run
-whose processes lack CPU answers late in sim time, so its verdict would change with the load (docs/grading.md).
+Why not simply one per core: a run over DDS is three processes that spend much of a mission waiting for each
+other (sim time waits for the node's answer), so one run alone leaves most of a core idle. Why not a fixed larger
+number: a run whose processes lack CPU answers late in sim time, so its verdict could change with the load
+(docs/grading.md).
 
 So :class:`Admission` keeps a number of *places* and lets a run start whenever one is free:
 
 - at the grid's start it looks at the cores for :data:`OPENING` wall seconds: nearly idle (``burst_idle``) they
-  get every place up to ``limit`` at once (eight runs in two waves of four, not a ramp whose last wave starts
+  get every place up to ``limit`` at once (twelve runs in two waves of six, not a ramp whose last wave starts
   late), otherwise ``base`` places (one per core);
 - a place is added, up to ``limit``, when the cores this process may use were at least ``idle_needed`` idle
   since the last look and the last start was ``gap`` wall seconds ago (a run's start-up is its busiest part, and
   the next look should see it running);
-- a place is taken away, down to ``base``, when the cores were less than ``idle_floor`` idle while no run was
-  starting up (no start for ``gap`` s): the runs in flight use more CPU than their places assumed, and a run
-  whose processes lack CPU answers late. Runs in flight go on; the next ones wait.
+- a place is taken away, down to ``base``, when *other programs* took more than ``foreign_max`` of the cores
+  while no run was starting up (no start for ``gap`` s): runs in flight go on, the next ones wait.
 
-A machine busy with something else (another grade, a build) sees no extra place; one whose runs use more CPU
-than bt_nav's own nodes loses them. The idle share comes from ``/proc/stat`` (Linux: what ROS 2 Jazzy runs on);
-where it cannot be read, no place beyond ``base`` is given. And a run that fails at ``--rtf`` above 1 is run
-again at 1x before its failure stands (:mod:`bt_nav.grading.realtime`), so a load that slipped through costs
-time, not a verdict.
+Why other programs' share and not the idle share: at ``--rtf 0`` the simulator keeps just behind its node
+(:class:`bt_nav_sim.pacing.StayBehind`), so the grade's own runs take whatever CPU is free and leave the cores
+busy however many places there are; a node short of CPU slows its simulator down rather than answering late. Read
+as "saturated", that busy share took places away mid-grid, and the second wave started run by run (the right C
+node's default grid: 55 s with up to six places, 49.6 s with six throughout). A program beside the grade does not
+slow down for it: that is the load to make room for. The grade's own share is its process tree's CPU time
+(:func:`tree_cpu`); the idle share comes from ``/proc/stat`` (Linux: what ROS 2 Jazzy runs on). Where either
+cannot be read, no place beyond ``base`` is given, and none is taken away. A run that fails at ``--rtf`` above 1
+is run again at 1x before its failure stands (:mod:`bt_nav.grading.realtime`), so a load that slipped through
+costs time, not a verdict.
 """
 
 from __future__ import annotations
@@ -33,16 +37,18 @@ from collections.abc import Callable, Sequence
 
 from bt_nav.ros.supervise import StopRequest, usable_cores
 
-#: Runs at most per usable core, with ``--jobs auto``. Not three: the right C node's default lab grade (12 runs, 2
-#: cores, 2026-11-27) took 55.4 s with up to six runs at once and 62.7 s with four, but six starve the nodes (each
-#: kept up 3.3-4.4x) and a right node turning at 1.5 rad/s closed loop on odometry (the grader suite's
-#: ``c_no_aeb_fast``) then overshot its 90 deg pivot to 103-121 deg in 4-5 of 8 runs; two at once passed 8 of 8 in
-#: the same 75 s wall.
-PER_CORE = 2
-#: The idle share of the cores an extra run needs: a run at the default rtf takes about a third of a core.
+#: Runs at most per usable core, with ``--jobs auto``. Three since the simulator keeps just behind its node: six
+#: at once on 2 cores (2026-11-28, quiet, 12 runs each, the default lab grid) ran each at 3.4-4.0x, and the right
+#: nodes most sensitive to lag stayed on the rule, ``c_no_aeb_fast`` (a 1.5 rad/s pivot closed loop on odometry)
+#: 12/12 at 89.1-90.4 deg and ``b_fast_spin`` (2 rad/s on a 50 Hz loop) 6/6 at 179.4-180.8 deg; the right C node's
+#: grade took 49.6 s against 75-80 s with four. Eight took as long (49-51 s); twelve starved the nodes at ~2x
+#: (``c_no_aeb_fast`` 112 deg once). Before :class:`bt_nav_sim.pacing.StayBehind`, six overshot that pivot to
+#: 103-121 deg in 4-5 of 8 runs (the simulator ran at the bound of the node's lead).
+PER_CORE = 3
+#: The idle share of the cores an extra run needs (beyond the opening look).
 IDLE_NEEDED = 0.4
-#: Below this idle share, with no run starting up, a place is taken away.
-IDLE_FLOOR = 0.1
+#: Above this share of the cores taken by other programs, with no run starting up, a place is taken away.
+FOREIGN_MAX = 0.25
 #: The idle share at the grid's start that opens every place at once.
 BURST_IDLE = 0.8
 #: Wall seconds of the opening look at the cores.
@@ -74,19 +80,61 @@ def cpu_times(cores: Sequence[int] | None = None, path: str = "/proc/stat") -> t
     return (idle, total) if total > 0 else None
 
 
+def tree_cpu(root: int | None = None, proc: str = "/proc") -> float | None:
+    """CPU jiffies (user and system, with those of its reaped children) that process ``root`` (None: this one) and
+    its live descendants used so far; None when ``proc`` cannot be listed or ``root`` is not in it.
+
+    A run's processes that ended were reaped by their parent in the tree (the grade, a launcher), whose
+    reaped-children times then hold theirs: the sum does not drop when they go."""
+    root = os.getpid() if root is None else int(root)
+    try:
+        names = os.listdir(proc)
+    except OSError:
+        return None
+    children: dict[int, list[int]] = {}
+    used: dict[int, float] = {}
+    for name in names:
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"{proc}/{name}/stat", encoding="ascii", errors="replace") as stream:
+                fields = stream.read().rpartition(")")[2].split()
+            used[int(name)] = sum(float(v) for v in fields[11:15])  # utime stime cutime cstime
+            children.setdefault(int(fields[1]), []).append(int(name))
+        except (OSError, ValueError, IndexError):
+            continue  # it ended meanwhile (its parent's reaped-children times will say it)
+    if root not in used:
+        return None
+    total, todo = 0.0, [root]
+    while todo:
+        pid = todo.pop()
+        total += used.get(pid, 0.0)
+        todo += children.get(pid, [])
+    return total
+
+
 class IdleMeter:
-    """The idle share of this process's cores over the last ``window`` wall seconds or more (None: unknown)."""
+    """The idle share of this process's cores over the last ``window`` wall seconds or more, and the share other
+    programs than this process and its descendants took (None: unknown).
+
+    Args:
+        read: (idle, total) jiffies of the cores since boot (:func:`cpu_times` of this process's cores).
+        own: jiffies this process tree used so far (:func:`tree_cpu`).
+    """
 
     def __init__(self, read: Callable[[], tuple[float, float] | None] | None = None, window: float = 1.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 own: Callable[[], float | None] | None = None) -> None:
         try:
             cores: Sequence[int] | None = sorted(os.sched_getaffinity(0))
         except (AttributeError, OSError):
             cores = None
         self._read = read or (lambda: cpu_times(cores))
+        self._own = own or tree_cpu
         self.window, self.clock = window, clock
-        self._last, self._at = self._read(), clock()
+        self._last, self._last_own, self._at = self._read(), self._own(), clock()
         self._share: float | None = None
+        self._foreign: float | None = None
         self._share_from = -float("inf")  # when the window of the current share began
 
     def idle_share(self) -> float | None:
@@ -94,14 +142,24 @@ class IdleMeter:
         that old: a share over a few milliseconds says nothing)."""
         if self.clock() - self._at < self.window:
             return self._share
-        now = self._read()
+        now, own = self._read(), self._own()
         last, self._last = self._last, now
+        last_own, self._last_own = self._last_own, own
         self._share_from, self._at = self._at, self.clock()
-        if now is None or last is None or now[1] <= last[1]:
-            self._share = None
-        else:
-            self._share = (now[0] - last[0]) / (now[1] - last[1])
+        self._share = self._foreign = None
+        if now is not None and last is not None and now[1] > last[1]:
+            total = now[1] - last[1]
+            self._share = (now[0] - last[0]) / total
+            if own is not None and last_own is not None:
+                busy = total - (now[0] - last[0])
+                self._foreign = min(1.0, max(0.0, (busy - (own - last_own)) / total))
         return self._share
+
+    def foreign_share(self) -> float | None:
+        """The share of the cores other programs took over the window of :meth:`idle_share` (read afresh when that
+        is ``window`` old): busy less what this process tree used."""
+        self.idle_share()
+        return self._foreign
 
     def fresh_since(self, when: float) -> bool:
         """Whether the window of the last :meth:`idle_share` began at or after ``when`` (it says nothing of before)."""
@@ -125,7 +183,8 @@ def auto_bounds(jobs: int) -> tuple[int, int] | None:
 
 
 def describe(jobs: int) -> str:
-    """What ``--jobs`` means for a grid's first line: ``2 at a time`` or ``2 at a time, up to 4 while idle``."""
+    """What ``--jobs`` means for a grid's first line: ``2 at a time``, or ``2 at a time, up to 6 while the cores stay
+    idle``."""
     bounds = auto_bounds(jobs)
     if bounds is None or bounds[0] == bounds[1]:
         return f"{int(jobs)} at a time"
@@ -136,11 +195,11 @@ class Admission:
     """Lets runs start while a place is free: ``base`` to ``limit`` places, by how idle the cores are (module
     docstring)."""
 
-    def __init__(self, base: int, limit: int, *, idle_needed: float = IDLE_NEEDED, idle_floor: float = IDLE_FLOOR,
+    def __init__(self, base: int, limit: int, *, idle_needed: float = IDLE_NEEDED, foreign_max: float = FOREIGN_MAX,
                  burst_idle: float = BURST_IDLE, gap: float = GAP, meter: IdleMeter | None = None,
                  clock: Callable[[], float] = time.monotonic, poll: float = 0.5, opening: float = OPENING) -> None:
         self.base, self.limit = max(1, base), max(1, base, limit)
-        self.idle_needed, self.idle_floor, self.burst_idle = idle_needed, idle_floor, burst_idle
+        self.idle_needed, self.foreign_max, self.burst_idle = idle_needed, foreign_max, burst_idle
         self.gap, self.poll, self.opening = gap, poll, opening
         self.meter = meter or IdleMeter()
         self.clock = clock
@@ -175,10 +234,10 @@ class Admission:
             self.places = self._open()
         now = self.clock()
         if self.places > self.base and self._settled(now):
-            idle = self.meter.idle_share()
-            # The window must begin after the runs started up: four runs starting at once on two cores keep them
-            # busy for ~3 s, longer than the gap.
-            if idle is not None and idle < self.idle_floor and self.meter.fresh_since(self._quiet_from()):
+            foreign = self.meter.foreign_share()
+            # The window must begin after the runs started up: a start-up is the busiest part of a run (and a
+            # run's processes are the grade's own only once started).
+            if foreign is not None and foreign > self.foreign_max and self.meter.fresh_since(self._quiet_from()):
                 self.places -= 1
                 self._last_change = now
         if self.running < self.places:

@@ -114,7 +114,7 @@ def realtime_admission(cores: int | None = None) -> Admission:
     start-up is its only busy part, and the last run to start is the grade's end (measured: waiting for idle cores
     between starts put the twelfth start 28 s after the first, the grade 113 s)."""
     count = cores or usable_cores()
-    return Admission(3 * count, REALTIME_PER_CORE * count, idle_needed=0.0, idle_floor=0.0, burst_idle=2.0,
+    return Admission(3 * count, REALTIME_PER_CORE * count, idle_needed=0.0, foreign_max=1.0, burst_idle=2.0,
                      gap=REALTIME_GAP)
 
 

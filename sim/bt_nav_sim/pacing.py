@@ -31,6 +31,9 @@ TIMER_EVIDENCE = 2
 #: Wall seconds a node on a timer of its own may stay silent at its lead before it is led to its sensor's next
 #: message after all: between two maneuvers such a node may wait for a scan (it says nothing until the next one).
 FLOOR_WAIT = 0.1
+#: Wall seconds a follower disarmed by its judge (:meth:`Followers.disarmed`) may stay silent while its latest
+#: command stands the robot still: it is not waited for longer (see :meth:`Followers.blocking`).
+DISARMED_SILENCE = 0.1
 #: :class:`StayBehind`: the speed a run starts at, its floor, its growth (x per wall second), its back-off factor, how
 #: often it may back off (wall s) and the steps the speed is used in (each change re-anchors the pace).
 STAY_START = 4.0
@@ -53,6 +56,8 @@ class Follower:
     unprompted: deque[bool] = field(default_factory=lambda: deque(maxlen=20))  # per gap: no sensor message in it
     held_since: float | None = None  # monotonic wall time sim time began to wait for it since its latest message
     at_limit: bool = False  # its latest message came while sim time waited for it (it was at its lead)
+    still: bool = False  # its latest message asked for no motion (a zero twist)
+    disarmed: bool = False  # its judge disarmed it (the arm service answered success to false) and did not rearm it
 
 
 class Followers:
@@ -101,11 +106,12 @@ class Followers:
         self.floors: dict[str, Callable[[int], int]] = {}
         self.held_for: str | None = None  # whom sim time waited for at the latest :meth:`blocking`
 
-    def report(self, who: str, t_ns: int, hold: bool, wall: float) -> bool:
-        """A message from ``who``; returns True when it (re)joins the active followers."""
+    def report(self, who: str, t_ns: int, hold: bool, wall: float, still: bool = False) -> bool:
+        """A message from ``who`` (``still``: a command for no motion); returns True when it (re)joins the active
+        followers."""
         member = self.members.get(who)
         if member is None:
-            self.members[who] = Follower(int(t_ns), bool(hold), float(wall))
+            self.members[who] = Follower(int(t_ns), bool(hold), float(wall), still=bool(still))
             return True
         joined = not member.active
         gap = int(t_ns) - member.t_ns
@@ -120,8 +126,23 @@ class Followers:
             floor = self.floors.get(who)
             member.unprompted.append(floor is not None and floor(member.t_ns) > int(t_ns))
         member.t_ns, member.hold, member.seen, member.active = int(t_ns), bool(hold), float(wall), True
-        member.held_since = None
+        member.held_since, member.still = None, bool(still)
         return joined
+
+    def disarmed(self, who: str, disarmed: bool) -> None:
+        """``who``'s judge disarmed it (True) or armed it (False). Disarmed with the robot standing still, its
+        silence ends the wait after :data:`DISARMED_SILENCE` wall seconds instead of ``silence_s``: a node that says
+        nothing once disarmed (most do) has no command to come that sim time should wait for, and the robot cannot
+        move meanwhile; a wrong node that moves again is followed again at its next command (sim time ran on at
+        most its latency). Not while its latest command moves the robot: a node short of CPU may still owe its stop,
+        and sim time must not run on with the robot turning."""
+        member = self.members.get(who)
+        if member is not None:
+            member.disarmed = bool(disarmed)
+
+    def silence_of(self, member: Follower) -> float:
+        """Wall seconds of silence after which ``member`` is dropped (see :meth:`disarmed`)."""
+        return min(self.silence_s, DISARMED_SILENCE) if member.disarmed and member.still else self.silence_s
 
     def leave(self, who: str) -> bool:
         """``who`` is done (the referee after its verdict); returns whether it was a follower."""
@@ -177,7 +198,7 @@ class Followers:
                     blocker = who
             elif sim_ns > self.limit_ns(who, wall):
                 m.held_since = wall if m.held_since is None else m.held_since
-                if wall - m.seen > self.silence_s:
+                if wall - m.seen > self.silence_of(m):
                     m.active = False
                     dropped.append(who)
                 elif blocker is None:
@@ -259,14 +280,16 @@ class PaceStops:
         self.stops: list[PaceStop] = []
         self.clock = clock
         self._open: dict[str, tuple[float, float]] = {}  # follower -> (sim s, wall s) where its current span began
-        self._spans: list[tuple[str, float, float, float, float, bool]] = []  # who, sim, wall, sim, wall, holding
+        # who, sim, wall, sim, wall, holding, the wall s of silence (or hold) that ended it (None: the followers')
+        self._spans: list[tuple[str, float, float, float, float, bool, float | None]] = []
 
-    def stopped(self, who: str, t: float, holding: bool) -> None:
-        """Sim time no longer waits for ``who`` from sim ``t`` s on (silent, or ``holding`` too long)."""
+    def stopped(self, who: str, t: float, holding: bool, quiet_s: float | None = None) -> None:
+        """Sim time no longer waits for ``who`` from sim ``t`` s on (silent, or ``holding`` too long; ``quiet_s``:
+        the wall seconds since its latest message, None: the followers' ``silence_s`` or ``hold_s``)."""
         self.stops.append(PaceStop(who, round(float(t), 4), "holding" if holding else "silent"))
         began = self._open.pop(who, None)
         if began is not None:
-            self._spans.append((who, *began, float(t), self.clock(), bool(holding)))
+            self._spans.append((who, *began, float(t), self.clock(), bool(holding), quiet_s))
 
     def resumed(self, who: str, t: float) -> None:
         """``who`` spoke again at sim ``t`` s (or for the first time: it joins): it is followed from here, and its
@@ -283,8 +306,8 @@ class PaceStops:
         its drop, less the silence (or hold) that dropped it, which the follower did not spend keeping up; a span
         still open ends at the follower's latest message (``followers``' bookkeeping), else at ``t_end`` and now."""
         silence, hold = (followers.silence_s, followers.hold_s) if followers is not None else (0.0, 0.0)
-        spans = [(who, s0, w0, s1, max(w0, w1 - (hold if holding else silence)))
-                 for who, s0, w0, s1, w1, holding in self._spans]
+        spans = [(who, s0, w0, s1, max(w0, w1 - (quiet if quiet is not None else hold if holding else silence)))
+                 for who, s0, w0, s1, w1, holding, quiet in self._spans]
         for who, (s0, w0) in self._open.items():
             member = followers.members.get(who) if followers is not None else None
             if member is not None and member.active:

@@ -1,6 +1,6 @@
 """``--jobs auto`` for ``--exe`` grids (bt_nav.grading.admission): every place at once on idle cores, else one run
-per core; a place more only while the cores stay idle (one per gap), a place less when they are saturated; a plain
-number is exactly that many. The meter and the clock are stand-ins
+per core; a place more only while the cores stay idle (one per gap), a place less when other programs take the
+cores (never for the grade's own busy cores); a plain number is exactly that many. The meter and the clock are stand-ins
 (the real grids run in tests/ros and in the bench)."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bt_nav.cli.options import jobs_arg
-from bt_nav.grading.admission import Admission, AutoJobs, IdleMeter, cpu_times, describe
+from bt_nav.grading.admission import Admission, AutoJobs, IdleMeter, cpu_times, describe, tree_cpu
 
 
 class Meter:
@@ -22,9 +22,13 @@ class Meter:
         self.share = share
         self.opening = opening
         self.fresh = True  # the share's window began after the runs started up
+        self.foreign: float | None = 0.0  # the share other programs took
 
     def idle_share(self) -> float | None:
         return self.share
+
+    def foreign_share(self) -> float | None:
+        return self.foreign
 
     def share_over(self, seconds: float) -> float | None:
         return self.opening
@@ -63,27 +67,42 @@ def test_base_runs_start_at_once_then_extra_ones_wait_for_idle_cores_and_the_gap
     assert gate._may_start() and gate.places == 4, "an earned place is taken again at once"
 
 
-def test_idle_cores_at_the_start_open_every_place_and_saturated_ones_take_places_away() -> None:
+def test_idle_cores_at_the_start_open_every_place_and_other_programs_take_places_away() -> None:
     meter, clock = Meter(0.3, opening=0.95), Clock()
     gate = _admission(meter, clock)
     assert all(gate.enter() for _ in range(4)) and gate.places == 4, "a quiet machine: four runs at once"
-    meter.share = 0.05
-    clock.now = 2.0
+    meter.share, clock.now = 0.0, 3.0
     gate.leave()
-    assert gate._may_start() and gate.places == 4, "a run started 2 s ago: its start-up, not the runs, fills the cores"
-    clock.now = 3.0
-    meter.fresh = False
+    assert gate._may_start() and gate.places == 4, "the grade's own runs fill the cores: they slow down, no place less"
+    assert gate.enter() and gate.running == 4
+    meter.foreign, clock.now = 0.5, 5.0
+    gate.leave()
+    assert gate._may_start() and gate.places == 4, "a run started 2 s ago: the share may be of its start-up"
+    meter.fresh, clock.now = False, 6.5
     assert gate._may_start() and gate.places == 4, "a share whose window began during the start-ups says nothing"
     meter.fresh = True
-    assert not gate._may_start() and gate.places == 3, "the runs in flight leave the cores 95 % busy: a place less"
-    clock.now = 4.0
+    assert not gate._may_start() and gate.places == 3, "another program takes half the cores: a place less"
+    clock.now = 7.5
     gate.leave()
     assert gate._may_start() and gate.places == 3, "one place less per gap"
-    clock.now = 6.0
+    assert gate.enter() and gate.running == 3
+    clock.now = 11.0
     gate.leave()
-    assert gate.places == 3 and gate._may_start() and gate.places == 2, "and down to one per core, no further"
+    assert not gate._may_start() and gate.places == 2, "and down to one per core ..."
     clock.now = 20.0
-    assert gate._may_start() and gate.places == 2
+    assert not gate._may_start() and gate.places == 2 and gate.running == 2, "... no further"
+    meter.foreign = 0.0
+    meter.share = 0.6
+    assert gate._may_start() and gate.places == 3, "the program gone and the cores idle: a place again"
+
+
+def test_an_unknown_share_of_other_programs_takes_no_place_away() -> None:
+    meter, clock = Meter(0.0, opening=0.95), Clock()
+    gate = _admission(meter, clock)
+    assert all(gate.enter() for _ in range(4))
+    meter.foreign, clock.now = None, 10.0
+    gate.leave()
+    assert gate._may_start() and gate.places == 4
 
 
 def test_a_busy_machine_at_the_start_opens_one_place_per_core() -> None:
@@ -120,8 +139,8 @@ def test_only_auto_adapts(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr("bt_nav.grading.admission.usable_cores", lambda: 2)
     assert Admission.for_jobs(3) is None, "--jobs 3 is three runs, no more"
     gate = Admission.for_jobs(AutoJobs(2))
-    assert (gate.base, gate.limit) == (2, 4)
-    assert describe(AutoJobs(2)) == "2 at a time, up to 4 while the cores stay idle"
+    assert (gate.base, gate.limit) == (2, 6)
+    assert describe(AutoJobs(2)) == "2 at a time, up to 6 while the cores stay idle"
     assert describe(3) == "3 at a time"
     assert isinstance(jobs_arg("auto"), AutoJobs) and type(jobs_arg("2")) is int
 
@@ -145,3 +164,34 @@ def test_the_idle_share_is_read_from_proc_stat(tmp_path: Path) -> None:
     looks = iter([(10.0, 100.0), (10.0, 100.0), (90.0, 200.0)])
     meter = IdleMeter(read=lambda: next(looks), clock=clock)
     assert meter.share_over(0.0) == pytest.approx(0.8)
+
+
+def test_other_programs_share_is_the_busy_share_less_the_grade_s_own() -> None:
+    clock = Clock()
+    readings = iter([(0.0, 100.0), (30.0, 200.0), (30.0, 300.0)])
+    owns = iter([5.0, 45.0, None])
+    meter = IdleMeter(read=lambda: next(readings), clock=clock, own=lambda: next(owns))
+    clock.now = 1.0
+    assert meter.foreign_share() == pytest.approx(0.3), "70 of 100 jiffies busy, 40 of them the grade's"
+    assert meter.idle_share() == pytest.approx(0.3)
+    clock.now = 2.0
+    assert meter.foreign_share() is None, "the grade's own time unknown: so is the rest"
+    assert meter.idle_share() == pytest.approx(0.0)
+
+
+def _stat(pid: int, ppid: int, utime: int, stime: int, cutime: int = 0, cstime: int = 0, name: str = "py thon") -> str:
+    rest = ["S", str(ppid)] + ["0"] * 9 + [str(utime), str(stime), str(cutime), str(cstime)] + ["0"] * 10
+    return f"{pid} ({name}) " + " ".join(rest) + "\n"
+
+
+def test_the_grade_s_own_cpu_is_its_process_tree_s(tmp_path: Path) -> None:
+    for pid, line in {10: _stat(10, 1, 5, 1, cutime=7, cstime=1), 11: _stat(11, 10, 20, 2, name="a) b"),
+                      12: _stat(12, 11, 3, 0), 13: _stat(13, 1, 50, 50)}.items():
+        (tmp_path / str(pid)).mkdir()
+        (tmp_path / str(pid) / "stat").write_text(line)
+    (tmp_path / "self").mkdir()
+    assert tree_cpu(10, proc=str(tmp_path)) == 39.0, "10 with its reaped children, 11 and 12; not the stranger 13"
+    assert tree_cpu(12, proc=str(tmp_path)) == 3.0
+    assert tree_cpu(99, proc=str(tmp_path)) is None, "not running"
+    assert tree_cpu(proc=str(tmp_path / "missing")) is None
+    assert (tree_cpu() or 0.0) >= 0.0 and tree_cpu() is not None, "this machine's /proc reads"

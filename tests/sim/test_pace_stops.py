@@ -86,6 +86,20 @@ def test_followed_counts_sim_and_wall_seconds_less_the_silence_that_dropped_the_
     assert stops.record(followers, t_end=31.0, wall_s=10.0)["followed"] == {"cmd_vel": {"sim_s": 28.0, "wall_s": 4.0}}
 
 
+def test_a_drop_after_a_shorter_silence_takes_off_that_silence_only() -> None:
+    """A disarmed node standing still is dropped after a tenth of a second (Followers.disarmed): the span ends at its
+    latest message, not a whole follower timeout before the drop."""
+    clock = _Clock()
+    followers, stops = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0), PaceStops(clock)
+    clock.now = 1.0
+    followers.report("cmd_vel", 2000 * MS, False, wall=clock.now)
+    stops.resumed("cmd_vel", 2.0)
+    followers.report("cmd_vel", 12000 * MS, False, wall=3.0)
+    clock.now = 3.1
+    stops.stopped("cmd_vel", 12.1, holding=False, quiet_s=0.1)
+    assert stops.followed(followers, t_end=31.0) == {"cmd_vel": {"sim_s": 10.1, "wall_s": 2.0}}
+
+
 def test_a_span_without_the_followers_bookkeeping_ends_at_the_end() -> None:
     clock = _Clock()
     stops = PaceStops(clock)

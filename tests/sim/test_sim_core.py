@@ -6,7 +6,7 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.pacing import FLOOR_WAIT, STAY_BACKOFF, STAY_FLOOR, STAY_GROWTH, STAY_REFRACTORY, Followers, StayBehind
+from bt_nav_sim.pacing import DISARMED_SILENCE, FLOOR_WAIT, STAY_BACKOFF, STAY_FLOOR, STAY_GROWTH, STAY_REFRACTORY, Followers, StayBehind
 
 MS = 1_000_000
 
@@ -86,6 +86,23 @@ def test_followers_bound_the_lead_and_time_out() -> None:
     assert f.report("cmd_vel", 1070 * MS, False, wall=1.3)  # speaks again: rejoins
     assert f.blocking(1190 * MS, wall=1.3) == (None, [])  # the 70 ms across its silence is its period now
     assert f.blocking(1200 * MS, wall=1.3) == ("cmd_vel", [])  # (plus the 50 ms lead)
+
+
+def test_a_disarmed_node_standing_still_is_not_waited_for_long() -> None:
+    """Disarmed by its judge with its latest command a stop, a silent node is dropped after DISARMED_SILENCE wall
+    seconds; moving, or armed again, after the whole silence (it may still owe its stop)."""
+    f = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0, margin_ns=50 * MS)
+    f.disarmed("cmd_vel", True)  # no such follower yet: nothing to do
+    assert f.report("cmd_vel", 1000 * MS, False, wall=0.0, still=False)
+    f.disarmed("cmd_vel", True)
+    quick = DISARMED_SILENCE + 0.01
+    assert f.blocking(1060 * MS, wall=quick) == ("cmd_vel", []), "its latest command turns the robot: waited for"
+    assert not f.report("cmd_vel", 1050 * MS, False, wall=0.05, still=True), "followed already"
+    assert f.blocking(1160 * MS, wall=0.05 + quick) == (None, ["cmd_vel"]), "standing still and disarmed: dropped"
+    assert f.report("cmd_vel", 1170 * MS, False, wall=0.5, still=True)
+    f.disarmed("cmd_vel", False)
+    assert f.blocking(1280 * MS, wall=0.5 + quick) == ("cmd_vel", []), "armed again: the whole silence"
+    assert f.blocking(1280 * MS, wall=1.51) == (None, ["cmd_vel"])
 
 
 def test_a_follower_slower_than_the_lead_learns_its_period_across_the_silence() -> None:

@@ -80,7 +80,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
     parser.add_argument("--jobs", type=jobs_arg, default=None, metavar="N|auto",
                         help="runs at once on this machine (without --scheduler); auto: one per usable core, and "
-                        "for --exe up to two per core while the cores stay idle (default auto)")
+                        "for --exe up to three per core while the cores stay idle (default auto)")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
     add_mission_options(parser, grid=True)

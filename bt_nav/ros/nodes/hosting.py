@@ -72,6 +72,7 @@ class HostedJudge:
         self.extra_nodes = (judge,)
         self._walkers = sim.sim.walkers if len(sim.sim.walkers) else None
         judge.sync_sink = sim.follow_report
+        judge.arm_sink = sim.robot_armed
         judge.start_gate = self._robot_followed
         judge.clock_matched = self._clock_matched
         sim.observers.append(self._on_outputs)

@@ -172,6 +172,7 @@ class JudgeNode(QuietQosEvents, Node):
         self.fed = fed
         self._fed_ns = 0  # a hosted judge's clock: the simulator's, at its latest step
         self.sync_sink: SyncSink | None = None  # a hosted judge's heartbeats (set by the host)
+        self.arm_sink: Callable[[bool], None] | None = None  # a hosted judge's arm answers that said success (host)
         self.start_gate: Callable[[], str | None] | None = None  # what t0 waits for in a hosting simulator (or None)
         # a hosting simulator: whether its /clock publisher has matched every /clock subscription on the graph
         self.clock_matched: Callable[[], bool] | None = None
@@ -491,6 +492,8 @@ class JudgeNode(QuietQosEvents, Node):
         self.get_logger().info(f"{self.stamp(now)}: {self.call_name}({str(data).lower()}) -> "
                                f"{'success' if success else 'failure'}: {message}")
         self._tell("reply", now, data, answered=response is not None, success=success, message=message)
+        if success and self.arm_sink is not None:
+            self.arm_sink(data)
         self.judge.on_activate_result(now, data, success, ANSWERED if response is not None else UNANSWERED, message)
 
     def _expire_calls(self) -> None:

@@ -377,7 +377,8 @@ class SimulatorNode(QuietQosEvents, Node):
             robot.arrival_ns = self.core.t_ns
             self.commands += 1
             now = time.monotonic()
-            if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, now):
+            still = v == 0.0 and w == 0.0
+            if self.follow and self.followers.report(robot.follower, self.core.t_ns, False, now, still):
                 self.pace_stops.resumed(robot.follower, self.core.t)
                 self.get_logger().info(f"following {robot.follower} (t={self.core.t:.2f} s)")
             if self.stay_behind is not None and self.followers.members[robot.follower].at_limit:
@@ -417,6 +418,15 @@ class SimulatorNode(QuietQosEvents, Node):
             elif self.followers.report(who, t_ns, hold, time.monotonic()):
                 self.pace_stops.resumed(who, self.core.t)
                 self.get_logger().info(f"following {who} (t={self.core.t:.2f} s)")
+            self._cond.notify_all()
+
+    def robot_armed(self, armed: bool) -> None:
+        """The robot's judge armed (True) or disarmed (False) its node: the answer to its arm service said success
+        (a hosted judge, any thread; :meth:`bt_nav_sim.pacing.Followers.disarmed` says what changes)."""
+        if not self.follow:
+            return
+        with self._cond:
+            self.followers.disarmed(self.robots[0].follower, not armed)
             self._cond.notify_all()
 
     # -------------------------------------------------------------- loop (sim thread)
@@ -511,7 +521,8 @@ class SimulatorNode(QuietQosEvents, Node):
                 now = time.monotonic()
                 blocker, dropped = self.followers.blocking(core.t_ns + core.step_ns, now)
                 for who in dropped:
-                    self.pace_stops.stopped(who, core.t, self.followers.members[who].hold)
+                    member = self.followers.members[who]
+                    self.pace_stops.stopped(who, core.t, member.hold, now - member.seen)
                     self.get_logger().info(f"{who} silent or holding too long (t={core.t:.2f} s): not waiting "
                                            "for it until it speaks again")
                 if blocker is None:
