@@ -6,7 +6,16 @@ import math
 
 import pytest
 from bt_nav_sim.core import SimConfig, SimCore
-from bt_nav_sim.pacing import DISARMED_SILENCE, FLOOR_WAIT, STAY_BACKOFF, STAY_FLOOR, STAY_GROWTH, STAY_REFRACTORY, Followers, StayBehind
+from bt_nav_sim.pacing import (
+    DISARMED_SILENCE,
+    FLOOR_WAIT,
+    STAY_BACKOFF,
+    STAY_FLOOR,
+    STAY_GROWTH,
+    STAY_REFRACTORY,
+    Followers,
+    StayBehind,
+)
 
 MS = 1_000_000
 
