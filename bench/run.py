@@ -64,6 +64,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-dds", action="store_true", help="skip every part that needs DDS")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="directory of latest.json / latest.md")
     parser.add_argument("--jobs", type=int, default=None, help="worker processes of the quality grid (default: cores)")
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="gradespeed: keep every grade's directory and log here (default: a removed temporary one)")
     args = parser.parse_args(argv)
     chosen = [name.strip() for name in args.only.split(",") if name.strip()]
     unknown = [name for name in chosen if name not in BENCHMARKS]
@@ -171,7 +173,7 @@ class Session:
             return {"skipped": "no DDS in this run (--no-dds)"}
         from . import grade_speed
 
-        return grade_speed.run(quick=self.quick)
+        return grade_speed.run(quick=self.quick, out=self.args.keep.absolute() if self.args.keep else None)
 
 
 def targets_of(name: str, result: dict[str, Any]) -> list[Target]:

@@ -63,7 +63,9 @@ period, if longer; a robot's ``cmd_vel`` at least until its next scan is out: se
 :class:`bt_nav_sim.pacing.Followers`) sim seconds behind, or holds; meanwhile it republishes
 ``/clock`` every 20 ms of wall time, so a lost best-effort sample cannot stall anyone. A follower
 silent for ``follower_timeout`` wall seconds (or holding for longer than ``hold_timeout``) is dropped
-with a log line until it speaks again, so a dead or absent process never stalls the simulation. With ``pace_path``
+with a log line until it speaks again, so a dead or absent process never stalls the simulation; a robot's node that
+its hosted judge disarmed and whose latest command stands the robot still, after
+:data:`bt_nav_sim.pacing.DISARMED_SILENCE` (:meth:`robot_armed`). With ``pace_path``
 set, the node writes when it stopped waiting for each follower and when it waited again (sim time) there as JSON on
 its way out (:class:`bt_nav_sim.pacing.PaceStops`; ``bt-nav grade --exe`` reads a run's ``pace.json`` to tell a
 node starved by the machine from a wrong one): the log line is for people.
