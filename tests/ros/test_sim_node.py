@@ -133,10 +133,11 @@ def test_sim_time_waits_for_a_holding_follower(sim: Callable[..., tuple[Proc, Pr
     held_at = probe.now()
     probe.sync(who="test", t=held_at, hold=True)
     wait_until(lambda: any("following test" in line for line in proc.stderr), 10.0, "the sim to follow", proc.output)
-    frozen = probe.now()
     import time
 
-    time.sleep(0.5)  # wall time passes, sim time must not (beyond what was in flight)
+    time.sleep(0.2)  # a step the loop had begun before the hold may still land (its /clock in flight)
+    frozen = probe.now()
+    time.sleep(0.5)  # wall time passes, sim time must not
     assert probe.now() == frozen
     assert frozen - held_at < 1.0
     probe.sync(who="test", t=frozen, hold=False)  # released, but lagging: at most max_lag (0.1 s) ahead
