@@ -62,15 +62,21 @@ class _Clock:
         return self.now
 
 
-def test_followed_counts_sim_and_wall_seconds_less_the_silence_that_dropped_the_follower() -> None:
-    """The node joins at sim 2 s (wall 1 s), keeps up until sim 12 s (wall 3 s), falls silent: the drop comes a
-    silence (1 s wall) later, at wall 4 s, and is not counted. It speaks again at sim 12.1 s (wall 5 s) and its latest
-    message, at sim 30 s and wall 7 s, ends the open span: 10.1 + 17.9 sim s in 2 + 2 wall s."""
+def _joined_at_sim_2_wall_1() -> tuple[_Clock, Followers, PaceStops]:
+    """A node followed (silence 1 s wall) from its first command at sim 2 s, wall 1 s."""
     clock = _Clock()
     followers, stops = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0), PaceStops(clock)
     clock.now = 1.0
     followers.report("cmd_vel", 2000 * MS, False, wall=clock.now)
     stops.resumed("cmd_vel", 2.0)
+    return clock, followers, stops
+
+
+def test_followed_counts_sim_and_wall_seconds_less_the_silence_that_dropped_the_follower() -> None:
+    """The node joins at sim 2 s (wall 1 s), keeps up until sim 12 s (wall 3 s), falls silent: the drop comes a
+    silence (1 s wall) later, at wall 4 s, and is not counted. It speaks again at sim 12.1 s (wall 5 s) and its latest
+    message, at sim 30 s and wall 7 s, ends the open span: 10.1 + 17.9 sim s in 2 + 2 wall s."""
+    clock, followers, stops = _joined_at_sim_2_wall_1()
     followers.report("cmd_vel", 11900 * MS, False, wall=2.9)
     followers.report("cmd_vel", 12000 * MS, False, wall=3.0)
     clock.now = 4.0
@@ -89,11 +95,7 @@ def test_followed_counts_sim_and_wall_seconds_less_the_silence_that_dropped_the_
 def test_a_drop_after_a_shorter_silence_takes_off_that_silence_only() -> None:
     """A disarmed node standing still is dropped after a tenth of a second (Followers.disarmed): the span ends at its
     latest message, not a whole follower timeout before the drop."""
-    clock = _Clock()
-    followers, stops = Followers(max_lag_ns=50 * MS, silence_s=1.0, hold_s=5.0), PaceStops(clock)
-    clock.now = 1.0
-    followers.report("cmd_vel", 2000 * MS, False, wall=clock.now)
-    stops.resumed("cmd_vel", 2.0)
+    clock, followers, stops = _joined_at_sim_2_wall_1()
     followers.report("cmd_vel", 12000 * MS, False, wall=3.0)
     clock.now = 3.1
     stops.stopped("cmd_vel", 12.1, holding=False, quiet_s=0.1)
