@@ -43,6 +43,7 @@ from typing import IO, Any, Protocol
 
 from bt_nav.mission.resources import written_whole
 from bt_nav.ros.domain_guard import RUN_MARK_ENV, run_mark
+from bt_nav.ros.forkserver import ForkedProcess, ForkServer, ForkServerError
 
 # ---------------------------------------------------------------------------------------------- DDS env
 #: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
@@ -402,7 +403,7 @@ class Startable(Protocol):
 class Child:
     """One started process: its spec, its Popen and the thread that forwards its output line by line."""
 
-    def __init__(self, spec: Startable, popen: subprocess.Popen, thread: threading.Thread) -> None:
+    def __init__(self, spec: Startable, popen: subprocess.Popen | ForkedProcess, thread: threading.Thread) -> None:
         self.spec = spec
         self.popen = popen
         self.thread = thread
@@ -451,11 +452,15 @@ class Launcher:
         stop: the process's :class:`StopRequest`; :meth:`wait_any` returns early once it is set.
         last_word: called at the end of :meth:`shutdown` when the ``driver`` child (the one that
             commands the robot) did not exit with 0, e.g. ``publish_zero_twist`` for it.
+        forker: a :class:`bt_nav.ros.forkserver.ForkServer` that forks bt_nav's own commands (``python -m bt_nav.cli``)
+            instead of starting an interpreter for each; None: every process is started.
     """
 
     def __init__(self, env: dict[str, str], sink: LineSink | None = None, *, stop: StopRequest | None = None,
-                 last_word: Callable[[], object] | None = None, driver: str = "executive") -> None:
+                 last_word: Callable[[], object] | None = None, driver: str = "executive",
+                 forker: ForkServer | None = None) -> None:
         self.env = env
+        self.forker = forker
         self.sink = sink or self.print_line
         self.stop = stop
         self.last_word = last_word
@@ -473,18 +478,32 @@ class Launcher:
     def start(self, spec: Startable, sink: LineSink | None = None, cwd: str | None = None) -> Child:
         """Start one process (in ``cwd``, default this process's); its stdout and stderr go line by line to ``sink``
         (default: the launcher's)."""
-        env = dict(self.env)
-        env[WATCHDOG_ENV] = str(self._watch_read)
-        popen = subprocess.Popen(spec.command(), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                                 stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
-                                 errors="replace", pass_fds=(self._watch_read,), cwd=cwd,
-                                 preexec_fn=child_preexec(os.getpid()))  # noqa: PLW1509 - see child_preexec
+        command = spec.command()
+        popen = self._forked(command, cwd)
+        if popen is None:
+            env = dict(self.env)
+            env[WATCHDOG_ENV] = str(self._watch_read)
+            popen = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                     stdin=subprocess.DEVNULL, start_new_session=True, text=True, bufsize=1,
+                                     errors="replace", pass_fds=(self._watch_read,), cwd=cwd,
+                                     preexec_fn=child_preexec(os.getpid()))  # noqa: PLW1509 - see child_preexec
         out = sink or self.sink
         thread = threading.Thread(target=self._pump, args=(spec.executable, popen.stdout, out), daemon=True)
         thread.start()
         child = Child(spec, popen, thread)
         self.children.append(child)
         return child
+
+    def _forked(self, command: list[str], cwd: str | None) -> ForkedProcess | None:
+        """``python -m bt_nav.cli ...`` forked from :attr:`forker` (:mod:`bt_nav.ros.forkserver`), with the same
+        environment, directory and watchdog pipe as a started one; None: start it the usual way (no fork server, not
+        one of bt_nav's commands, or the server is gone)."""
+        if self.forker is None or command[:3] != [sys.executable, "-m", "bt_nav.cli"]:
+            return None
+        try:
+            return self.forker.spawn(command[3:], self.env, cwd or os.getcwd(), {WATCHDOG_ENV: self._watch_read})
+        except ForkServerError:
+            return None
 
     @staticmethod
     def _pump(name: str, stream: IO[str], sink: LineSink) -> None:

@@ -25,7 +25,7 @@ import random
 import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from bt_nav.ros.supervise import (
     DOMAIN_RANGE_ENV,
@@ -40,6 +40,9 @@ from bt_nav.ros.supervise import (
     release_domain_id,
 )
 from bt_nav.run.rundir import LogFiles
+
+if TYPE_CHECKING:
+    from bt_nav.ros.forkserver import ForkServer
 
 #: What :meth:`MissionSession.wait` returns first: the verdict is in, a watched process ended before it, a stop
 #: request came, or the time ran out.
@@ -109,20 +112,21 @@ class MissionSession:
         logs: the run's log files when the caller made them (the demo's stamped :class:`~bt_nav.run.rundir.Logs`).
         sink: where lines go instead of ``logs`` (the lab's terminal, which writes them to ``logs`` itself);
             ``tee``: where every line also goes, after its log file (``bt-nav demo --exe``'s terminal).
-        stop, last_word, driver: as :class:`bt_nav.ros.supervise.Launcher`'s.
+        stop, last_word, driver, forker: as :class:`bt_nav.ros.supervise.Launcher`'s.
     """
 
     def __init__(self, domain: int, *, run_dir: Path | None = None, logs: LogFiles | None = None,
                  sink: LineSink | None = None, tee: LineSink | None = None, env: Mapping[str, str] | None = None,
                  stop: StopRequest | None = None, last_word: Callable[[], Any] | None = None,
-                 driver: str = "executive") -> None:
+                 driver: str = "executive", forker: ForkServer | None = None) -> None:
         self.domain = domain
         self.run_dir = run_dir
         self.logs = logs if logs is not None or run_dir is None else LogFiles(run_dir)
         self.env = {**child_env(domain), **(env or {})}
         self.stop = stop
         first = sink or (self.logs.sink if self.logs is not None else None)
-        self.launcher = Launcher(self.env, sink=_both(first, tee), stop=stop, last_word=last_word, driver=driver)
+        self.launcher = Launcher(self.env, sink=_both(first, tee), stop=stop, last_word=last_word, driver=driver,
+                                 forker=forker)
         self.sink = self.launcher.sink
 
     @property

@@ -99,10 +99,18 @@ class SectorReader:
         self._mean_right = np.abs(deg + 90.0) <= 30.0 + 1e-9
         self._masks = np.vstack([self._masks, self._mean_left, self._mean_right])
         self._has_means = bool(self._mean_left.any() and self._mean_right.any())  # beams beside the robot on both sides
+        # Each row's beams gathered into one array, row after row (and an inf at the end), so one
+        # np.minimum.reduceat takes every row's minimum without a (rows x beams) array per reading; a row without
+        # beams reads inf.
+        sizes = self._masks.sum(axis=1)
+        self._gather = np.nonzero(self._masks)[1]
+        self._starts = np.concatenate(([0], np.cumsum(sizes)[:-1])).astype(np.intp)
+        self._empty = sizes == 0
 
     def read(self, ranges: np.ndarray, ahead: float) -> Reading:
         """The family's readings of ``ranges`` (one per beam, inf: nothing) and the swept path's ``ahead``."""
-        nearest = np.where(self._masks, ranges[np.newaxis, :], np.inf).min(axis=1)
+        nearest = np.minimum.reduceat(np.append(ranges[self._gather], np.inf), self._starts)
+        nearest[self._empty] = np.inf
         n, p = self._centres, self._pairs
         per_side = 1 + n + p
         left, right = nearest[2:2 + per_side], nearest[2 + per_side:2 + 2 * per_side]

@@ -45,6 +45,7 @@ from bt_nav.grading.exe.pace import check_speed, rtf_cap, with_speed
 from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
+from bt_nav.ros import forkserver
 from bt_nav.ros.supervise import StopRequest
 
 #: The grid's own file in its directory: the settings every run shares, and the jobs.
@@ -375,7 +376,8 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: Workers,
     admission = admission or Admission.for_jobs(workers)
     # With an admission a run's place is free at its verdict, while its thread still stops its processes.
     threads = 2 * admission.limit if admission is not None else max(1, workers)
-    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="exe-run") as pool:
+    with forkserver.serving(forkserver.wanted()), \
+            ThreadPoolExecutor(max_workers=threads, thread_name_prefix="exe-run") as pool:
         index: dict[Future, int] = {pool.submit(_admitted, admission, job, settings, stop): i
                                     for i, (job, settings) in enumerate(tasks)}
         pending = set(index)

@@ -59,6 +59,7 @@ from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shu
 from bt_nav.grading.exe.pace import sim_pace
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
+from bt_nav.ros import forkserver
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
 from bt_nav.ros.supervise import DOMAIN_RANGE_ENV, Child, NoFreeDomainError, StopRequest, launcher_domains
 from bt_nav.run.rundir import make_run_dir
@@ -385,7 +386,8 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
     lidar = f"_{job.lidar}" if job.lidar else ""
     run_dir = make_run_dir(settings.out, f"{job.world}_{job.maneuver}{lidar}_seed{job.seed}")
     results_json = run_dir / "verdict.json"
-    session = MissionSession(domain, run_dir=run_dir, tee=sink, stop=stop, driver="node")
+    # the simulator forked from the grid's fork server when there is one (bt_nav.ros.forkserver); the node is started
+    session = MissionSession(domain, run_dir=run_dir, tee=sink, stop=stop, driver="node", forker=forkserver.current())
     argv = (*shlex.split(settings.command), *exe_ros_args(job.maneuver if settings.maneuvers else None,
                                                           settings.profile, job.params_over(settings.node_params)))
     started = time.monotonic()
