@@ -158,3 +158,49 @@ def test_arm_without_an_executive_says_where_it_looked() -> None:
                          text=True, timeout=60)
     assert arm.returncode == 2
     assert f"no service /nobody_here in ROS_DOMAIN_ID {DOMAIN} within 1 s" in arm.stderr
+
+
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_text().replace("\0", " ")
+    except OSError:
+        return ""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGKILL, signal.SIGTERM])
+def test_a_grade_ended_by_a_signal_leaves_no_fork_server_no_simulator_and_no_node(signum: int, tmp_path: Path) -> None:
+    """A grade's simulators are forked from its fork server (bt_nav.ros.forkserver): killed or terminated, the grade
+    takes the server, the forked simulators and the started nodes with it, as it takes processes it starts."""
+    node = REPO / "tests" / "fixtures" / "lab_student_node.py"
+    command = [sys.executable, "-m", "bt_nav.cli", "grade", "--exe", f"{sys.executable} {node} --choice C",
+               "--profile", "lab", "--maneuvers", "C", "--worlds", "lab_object", "--lidars", "lds01,rplidar",
+               "--seeds", "1", "--out", str(tmp_path / "grade"), "--progress", "off", "--jobs", "2"]
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env.pop("BT_NAV_WATCHDOG_FD", None)
+    proc = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        def forked() -> bool:  # a simulator below the fork server below the grade
+            return any("-m bt_nav.cli sim " in _cmdline(pid) and "forkserver" in _cmdline(_parent(pid))
+                       for pid in descendants(proc.pid))
+
+        wait_until(forked, 60, "a forked simulator", lambda: "\n".join(_cmdline(p) for p in descendants(proc.pid)))
+        children = descendants(proc.pid)
+        kinds = " ".join(_cmdline(pid) for pid in children)
+        assert "bt_nav.ros.forkserver" in kinds and "lab_student_node.py" in kinds, kinds
+        os.kill(proc.pid, signum)
+        wait_until(lambda: not alive(children), 15.0, f"every process of the grade gone after {signum!r}",
+                   lambda: "\n".join(f"{pid} {_cmdline(pid)}" for pid in alive(children)))
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+
+
+def _parent(pid: int) -> int:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return 0
+    return int(stat[stat.rindex(")") + 2:].split()[1])
