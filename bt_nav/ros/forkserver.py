@@ -41,6 +41,8 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import IO, Any
 
+from bt_nav.ros.parentdeath import PR_SET_PDEATHSIG, libc_prctl
+
 #: What the server imports before its first fork: the simulator's process with its hosted judges and recorder.
 PRELOAD = ("bt_nav.cli", "bt_nav.ros.nodes.simulator", "bt_nav.ros.nodes.hosting", "bt_nav.ros.nodes.checkoff",
            "bt_nav.ros.nodes.referee", "bt_nav.ros.nodes.hosted_bag", "bt_nav.media.bag")
@@ -409,8 +411,6 @@ def _standard_streams(unbuffered: bool) -> None:
 
 def _child(request: dict[str, Any], fds: list[int], server_fds: Sequence[int]) -> int:
     """In the forked child: become a process of its own run, then run the target; its exit code."""
-    from bt_nav.ros.supervise import _PR_SET_PDEATHSIG, _prctl
-
     server = os.getppid()
     signal.set_wakeup_fd(-1)
     signal.signal(signal.SIGCHLD, signal.SIG_DFL)
@@ -418,9 +418,9 @@ def _child(request: dict[str, Any], fds: list[int], server_fds: Sequence[int]) -
     for fd in server_fds:
         os.close(fd)
     os.setsid()
-    prctl = _prctl()
+    prctl = libc_prctl()
     if prctl is not None:
-        prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+        prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
     if os.getppid() != server:  # the server died between the fork and the prctl
         return 1
     output, *kept = fds

@@ -27,7 +27,6 @@ No rclpy at import: launch files and the dispatcher import this module cheaply. 
 
 from __future__ import annotations
 
-import ctypes
 import os
 import random
 import signal
@@ -44,6 +43,7 @@ from typing import IO, Any, Protocol
 from bt_nav.mission.resources import written_whole
 from bt_nav.ros.domain_guard import RUN_MARK_ENV, run_mark
 from bt_nav.ros.forkserver import ForkedProcess, ForkServer, ForkServerError
+from bt_nav.ros.parentdeath import PR_SET_PDEATHSIG, libc_prctl
 
 # ---------------------------------------------------------------------------------------------- DDS env
 #: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
@@ -329,15 +329,6 @@ class StopRequest:
 WATCHDOG_ENV = "BT_NAV_WATCHDOG_FD"
 #: Seconds an orphaned child may take to stop the robot before it kills itself.
 ORPHAN_GRACE = 3.0
-_PR_SET_PDEATHSIG = 1
-
-
-def _prctl() -> Callable[..., int] | None:
-    """libc's ``prctl``, looked up in the parent (nothing but the call itself may run after fork)."""
-    try:
-        return ctypes.CDLL(None, use_errno=True).prctl
-    except (OSError, AttributeError):  # not Linux: the watchdog pipe still covers the launcher's death
-        return None
 
 
 def child_preexec(parent_pid: int, death_signal: int = signal.SIGTERM) -> Callable[[], None]:
@@ -348,13 +339,13 @@ def child_preexec(parent_pid: int, death_signal: int = signal.SIGTERM) -> Callab
     Note ``PR_SET_PDEATHSIG`` fires when the *thread* that started the child ends, so start children
     from the main thread; the watchdog pipe does not have that caveat.
     """
-    prctl = _prctl()
+    prctl = libc_prctl()
 
     def preexec() -> None:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
         signal.signal(signal.SIGHUP, signal.SIG_DFL)
         if prctl is not None:
-            prctl(_PR_SET_PDEATHSIG, int(death_signal), 0, 0, 0)
+            prctl(PR_SET_PDEATHSIG, int(death_signal), 0, 0, 0)
         if os.getppid() != parent_pid:  # the launcher died between fork and prctl
             os.kill(os.getpid(), death_signal)
 
