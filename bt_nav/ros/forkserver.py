@@ -41,7 +41,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import IO, Any
 
-from bt_nav.ros.parentdeath import PR_SET_PDEATHSIG, libc_prctl
+from bt_nav.ros.parentdeath import die_with_parent, libc_prctl
 
 #: What the server imports before its first fork: the simulator's process with its hosted judges and recorder.
 PRELOAD = ("bt_nav.cli", "bt_nav.ros.nodes.simulator", "bt_nav.ros.nodes.hosting", "bt_nav.ros.nodes.checkoff",
@@ -141,8 +141,7 @@ class ForkServer:
             request = {"id": ident, "argv": list(argv), "env": dict(env), "cwd": cwd, "fd_env": names,
                        "target": target}
             try:
-                socket.send_fds(self.sock, [json.dumps(request).encode()],
-                                [write, *[int(fd_env[n]) for n in names]] if fd_env else [write])
+                socket.send_fds(self.sock, [json.dumps(request).encode()], [write, *(int(fd_env[n]) for n in names)])
             except OSError as exc:
                 os.close(read)
                 raise ForkServerError(f"the fork server did not take the request: {exc}") from None
@@ -418,10 +417,7 @@ def _child(request: dict[str, Any], fds: list[int], server_fds: Sequence[int]) -
     for fd in server_fds:
         os.close(fd)
     os.setsid()
-    prctl = libc_prctl()
-    if prctl is not None:
-        prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
-    if os.getppid() != server:  # the server died between the fork and the prctl
+    if not die_with_parent(libc_prctl(), signal.SIGTERM, server):  # the server died between the fork and the prctl
         return 1
     output, *kept = fds
     null = os.open(os.devnull, os.O_RDONLY)

@@ -4,6 +4,7 @@ bt_nav starts (:func:`bt_nav.ros.supervise.child_preexec`) or forks (:mod:`bt_na
 from __future__ import annotations
 
 import ctypes
+import os
 from collections.abc import Callable
 
 #: ``prctl``'s option: the signal this process gets when the thread that made it ends.
@@ -17,3 +18,12 @@ def libc_prctl() -> Callable[..., int] | None:
         return ctypes.CDLL(None, use_errno=True).prctl
     except (OSError, AttributeError):
         return None
+
+
+def die_with_parent(prctl: Callable[..., int] | None, death_signal: int, parent_pid: int) -> bool:
+    """In a child between fork and its work: ask for ``death_signal`` when its parent ends (``prctl`` from
+    :func:`libc_prctl`, looked up before the fork); False when the parent ``parent_pid`` has ended already (between
+    the fork and the request, which then comes too late)."""
+    if prctl is not None:
+        prctl(PR_SET_PDEATHSIG, int(death_signal), 0, 0, 0)
+    return os.getppid() == parent_pid

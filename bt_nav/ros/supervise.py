@@ -43,7 +43,7 @@ from typing import IO, Any, Protocol
 from bt_nav.mission.resources import written_whole
 from bt_nav.ros.domain_guard import RUN_MARK_ENV, run_mark
 from bt_nav.ros.forkserver import ForkedProcess, ForkServer, ForkServerError
-from bt_nav.ros.parentdeath import PR_SET_PDEATHSIG, libc_prctl
+from bt_nav.ros.parentdeath import die_with_parent, libc_prctl
 
 # ---------------------------------------------------------------------------------------------- DDS env
 #: Where launchers claim a domain when the user set none (override: ``BT_NAV_DOMAIN_RANGE=LOW-HIGH``).
@@ -344,9 +344,7 @@ def child_preexec(parent_pid: int, death_signal: int = signal.SIGTERM) -> Callab
     def preexec() -> None:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
         signal.signal(signal.SIGHUP, signal.SIG_DFL)
-        if prctl is not None:
-            prctl(PR_SET_PDEATHSIG, int(death_signal), 0, 0, 0)
-        if os.getppid() != parent_pid:  # the launcher died between fork and prctl
+        if not die_with_parent(prctl, death_signal, parent_pid):  # the launcher died between fork and prctl
             os.kill(os.getpid(), death_signal)
 
     return preexec

@@ -28,18 +28,27 @@ DOMAIN = claim_domain_id(140, 159)
 ORPHAN_LIMIT = 5.0
 
 
+def _stat(pid: int | str) -> list[str] | None:
+    """The fields of ``/proc/<pid>/stat`` after the command name (state first, then the parent), None: gone."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    return stat[stat.rindex(")") + 2:].split()
+
+
+def _parent(pid: int) -> int:
+    """``pid``'s parent (0: gone)."""
+    fields = _stat(pid)
+    return int(fields[1]) if fields is not None else 0
+
+
 def descendants(pid: int) -> set[int]:
     """Every live (non-zombie) process below ``pid``."""
     parents: dict[int, int] = {}
     for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-        except OSError:
-            continue
-        fields = stat[stat.rindex(")") + 2:].split()
-        if fields[0] != "Z":
+        fields = _stat(entry.name) if entry.name.isdigit() else None
+        if fields is not None and fields[0] != "Z":
             parents[int(entry.name)] = int(fields[1])
     found: set[int] = set()
     frontier = {pid}
@@ -51,15 +60,7 @@ def descendants(pid: int) -> set[int]:
 
 def alive(pids: set[int]) -> set[int]:
     """Those of ``pids`` still running (zombies count as gone)."""
-    left = set()
-    for pid in pids:
-        try:
-            state = Path(f"/proc/{pid}/stat").read_text()
-        except OSError:
-            continue
-        if state[state.rindex(")") + 2] != "Z":
-            left.add(pid)
-    return left
+    return {pid for pid in pids if (fields := _stat(pid)) is not None and fields[0] != "Z"}
 
 
 class CmdProbe:
@@ -196,11 +197,3 @@ def test_a_grade_ended_by_a_signal_leaves_no_fork_server_no_simulator_and_no_nod
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
         proc.wait(timeout=10)
-
-
-def _parent(pid: int) -> int:
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        return 0
-    return int(stat[stat.rindex(")") + 2:].split()[1])
