@@ -9,7 +9,15 @@ import time
 
 def main(argv: list[str]) -> int:
     """``say``: print the facts a child must get right, then exit with ``argv[1]``; ``sleep``: sleep ``argv[1]`` s;
-    ``watch``: the same, watching the launcher's watchdog pipe."""
+    ``watch``: the same, watching the launcher's watchdog pipe; ``ros``: start rclpy (its log file is named after the
+    program) and print the names in ``ROS_LOG_DIR``."""
+    if argv[0] == "ros":
+        import rclpy
+
+        rclpy.init(args=[])
+        rclpy.shutdown()
+        print(sorted(os.listdir(os.environ["ROS_LOG_DIR"])))
+        return 0
     if argv[0] in ("sleep", "watch"):
         if argv[0] == "watch":
             from bt_nav.ros.supervise import watch_parent_pipe

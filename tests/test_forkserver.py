@@ -14,7 +14,7 @@ import pytest
 
 from bt_nav.ros import forkserver
 from bt_nav.ros.forkserver import ForkedProcess, ForkServer, ForkServerError
-from bt_nav.ros.supervise import WATCHDOG_ENV, Launcher
+from bt_nav.ros.supervise import WATCHDOG_ENV, Launcher, child_env, choose_domain_id
 from bt_nav.testing import wait_until
 
 REPO = Path(__file__).resolve().parents[1]
@@ -72,6 +72,24 @@ def test_signals_end_a_child_as_they_end_a_started_process(server: ForkServer) -
     os.killpg(interrupted.pid, signal.SIGINT)  # KeyboardInterrupt: a traceback, then the end by SIGINT
     assert interrupted.wait(10) == -signal.SIGINT
     assert "KeyboardInterrupt" in interrupted.stdout.read()
+
+
+def test_a_retitled_child_names_its_ros_log_after_its_executable(tmp_path: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """rcutils names a log file after glibc's program name, which pointed into the retitled command line: the file was
+    named after the title's tail, and rclpy refused to start once that passed 255 bytes (a long server command line
+    leaves room for such a title)."""
+    monkeypatch.chdir(REPO)
+    started = ForkServer(preload=("bt_nav.cli",) * 40)  # a command line with room for a title of 400 characters
+    try:
+        env = {**child_env(choose_domain_id(), {"PATH": os.environ["PATH"]}), "ROS_LOG_DIR": str(tmp_path)}
+        child = started.spawn(["ros", "--option", "x" * 300], env, str(tmp_path), target=TARGET)
+        output = child.stdout.read()
+        assert child.wait(30) == 0, output
+    finally:
+        started.close()
+    names = eval(output.splitlines()[-1])  # noqa: S307 (the child's own repr of a list of str)
+    assert len(names) == 1 and names[0].startswith(f"{Path(sys.executable).name}_{child.pid}_"), names
 
 
 def test_a_target_that_raises_exits_with_1_and_its_traceback(server: ForkServer) -> None:

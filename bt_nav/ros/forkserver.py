@@ -45,7 +45,22 @@ from bt_nav.ros.parentdeath import die_with_parent, libc_prctl
 
 #: What the server imports before its first fork: the simulator's process with its hosted judges and recorder.
 PRELOAD = ("bt_nav.cli", "bt_nav.ros.nodes.simulator", "bt_nav.ros.nodes.hosting", "bt_nav.ros.nodes.checkoff",
-           "bt_nav.ros.nodes.referee", "bt_nav.ros.nodes.hosted_bag", "bt_nav.media.bag")
+           "bt_nav.ros.nodes.referee", "bt_nav.ros.nodes.hosted_bag", "bt_nav.media.bag", "bt_nav.ros.bringup",
+           "bt_nav.mission.profiles")
+#: What those import only once they run, imported too when present (a child listed what it imported after the fork:
+#: 0.12 CPU s a run): the bag writer and what it writes with, numpy's random generators, and the loader of rclpy's
+#: type supports (which imports the whole IDL parser on its first use).
+WARM_MODULES = ("rosbags.rosbag2", "ruamel.yaml", "numpy.random", "importlib.metadata",
+                "rosidl_generator_py.import_type_support_impl")
+#: The ROS interfaces whose C type support a simulator's process loads (``module:Name``): its topics, its judges'
+#: services and those every node serves (parameters, type descriptions).
+WARM_TYPES = ("rosgraph_msgs.msg:Clock", "sensor_msgs.msg:LaserScan", "nav_msgs.msg:Odometry",
+              "geometry_msgs.msg:Twist", "geometry_msgs.msg:TwistStamped", "std_msgs.msg:String",
+              "rcl_interfaces.msg:Log", "std_srvs.srv:SetBool", "std_srvs.srv:Trigger",
+              "rcl_interfaces.srv:DescribeParameters", "rcl_interfaces.srv:GetParameters",
+              "rcl_interfaces.srv:GetParameterTypes", "rcl_interfaces.srv:ListParameters",
+              "rcl_interfaces.srv:SetParameters", "rcl_interfaces.srv:SetParametersAtomically",
+              "type_description_interfaces.srv:GetTypeDescription")
 #: What a child runs unless told: ``bt-nav``'s dispatcher (``module:function``, called with the argument list).
 TARGET = "bt_nav.cli:main"
 #: ``BT_NAV_FORKSERVER=off`` (or 0, no, false): a grade starts every simulator as a process of its own, as before.
@@ -275,6 +290,24 @@ def lttng_fork_hooks() -> tuple[Any, Any, Any] | None:
     return None
 
 
+def _warm(modules: Sequence[str], types: Sequence[str]) -> None:
+    """Import ``modules`` and load the type supports of ``types`` where they exist (a missing one is the child's to
+    import, or to fail on, as without the server)."""
+    from rclpy.type_support import check_for_type_support
+
+    for name in modules:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            pass
+    for spec in types:
+        module, _, name = spec.partition(":")
+        try:
+            check_for_type_support(getattr(importlib.import_module(module), name))
+        except (ImportError, AttributeError):
+            pass
+
+
 def serve(fd: int, preload: Sequence[str]) -> int:
     """The server's life (see the module docstring): import, say ready, fork on request, reap, report."""
     sock = socket.socket(fileno=fd)
@@ -290,6 +323,7 @@ def serve(fd: int, preload: Sequence[str]) -> int:
         importlib.import_module(name)
     if "bt_nav.media.bag" in sys.modules:
         sys.modules["bt_nav.media.bag"].typestore()  # the bag's message types, built once for every child
+    _warm(WARM_MODULES, WARM_TYPES)
     threads = _threads()
     # forkable: one thread of ours, plus LTTng's listeners only when their fork protocol is there to take them along
     ready = threads == loaded and loaded - 1 in ((0, LTTNG_THREADS) if hooks is not None else (0,))
@@ -392,6 +426,31 @@ def _retitle(command: Sequence[str]) -> None:
     module = sys.modules.get("setproctitle")  # imported by the server, where it finds the command line's room
     if module is not None:
         module.setproctitle(" ".join(command))
+        _keep_invocation_name(command[0])
+
+
+#: glibc's ``program_invocation_name`` and ``program_invocation_short_name`` of a retitled child, holding the bytes
+#: they point to.
+_INVOCATION: list[ctypes.c_char_p] = []
+
+
+def _keep_invocation_name(executable: str) -> None:
+    """Point glibc's ``program_invocation_name`` (and its short form) at ``executable`` again.
+
+    Why: they point into the command line's memory, which ``setproctitle`` overwrites with one string; rcutils names a
+    process's log file in ``~/.ros/log`` after it (``<name>_<pid>_<ms>.log``), so a retitled child wrote its log to a
+    file named after the tail of its title, and refused to start once that name passed 255 bytes. A fresh interpreter's
+    is its executable's path, and so is this one's.
+    """
+    try:
+        libc = ctypes.CDLL(None)
+        full = ctypes.c_char_p.in_dll(libc, "program_invocation_name")
+        short = ctypes.c_char_p.in_dll(libc, "program_invocation_short_name")
+    except (OSError, ValueError):  # not glibc: nothing points there
+        return
+    name = os.fsencode(executable)
+    full.value, short.value = name, os.path.basename(name)
+    _INVOCATION[:] = [full, short]  # each holds its bytes: the pointers stay valid for the process's life
 
 
 def _standard_streams(unbuffered: bool) -> None:
