@@ -88,8 +88,9 @@ class HostedRecorder:
     def _now(self) -> int:
         return int(self.sim.core.t_ns)
 
-    def _tap(self, topic: str, msg: Any, t_ns: int) -> None:
-        """One message the simulator published or took (see :attr:`SimulatorNode.taps`)."""
+    def _tap(self, topic: str, msg: Any, t_ns: int, data: bytes | None = None) -> None:
+        """One message the simulator published or took (see :attr:`SimulatorNode.taps`; ``data``: its bytes, when the
+        simulator serialized it)."""
         if topic == CLOCK:
             wall = time.time_ns()
             self.clock.add(wall, t_ns)
@@ -97,7 +98,7 @@ class HostedRecorder:
                 self.first_clock = (wall, t_ns)
             return
         if topic in self.wanted:
-            self._write(topic, msgtype_of(msg), t_ns, serialize_message(msg))
+            self._write(topic, msgtype_of(msg), t_ns, serialize_message(msg) if data is None else data)
 
     def _rosout_sub(self) -> None:
         """The graph's log lines (the robot node's, the hosted judge's, the simulator's) as mission events."""
