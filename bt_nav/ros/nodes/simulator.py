@@ -100,6 +100,7 @@ from nav_msgs.msg import Odometry
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
@@ -285,9 +286,10 @@ class SimulatorNode(QuietQosEvents, Node):
         self._thread = threading.Thread(target=self._loop_guarded, name="sim-loop", daemon=True)
         #: Called from the loop thread with each step's outputs once published (a hosted judge: hosting.py).
         self.observers: list[Callable[[list[StepOutput]], None]] = []
-        #: Called with (absolute topic, message, sim ns) for every message this node publishes (loop thread) and every
-        #: robot command it takes (executor thread, at its arrival): a recorder hosted here (hosted_bag.py).
-        self.taps: list[Callable[[str, Any, int], None]] = []
+        #: Called with (absolute topic, message, sim ns, its serialized bytes or None) for every message this node
+        #: publishes (loop thread) and every robot command it takes (executor thread, at its arrival; no bytes): a
+        #: recorder hosted here (hosted_bag.py).
+        self.taps: list[Callable[[str, Any, int, bytes | None], None]] = []
         #: Called once the loop has stopped, on the way out (a hosted recorder closes its bag).
         self.closers: list[Callable[[], None]] = []
 
@@ -567,10 +569,20 @@ class SimulatorNode(QuietQosEvents, Node):
         self._clock_sent_ns = t_ns
         self.tap("/clock", clock, t_ns)
 
-    def tap(self, topic: str, msg: Any, t_ns: int) -> None:
-        """Hand one message to the :attr:`taps` (nothing to do without one)."""
+    def tap(self, topic: str, msg: Any, t_ns: int, data: bytes | None = None) -> None:
+        """Hand one message to the :attr:`taps` (nothing to do without one); ``data``: its bytes, when serialized."""
         for tap in self.taps:
-            tap(topic, msg, t_ns)
+            tap(topic, msg, t_ns, data)
+
+    def send(self, publisher: Any, topic: str, msg: Any, t_ns: int) -> None:
+        """Publish ``msg`` and tap it. With a tap it is serialized once, for both (measured: a recorded message cost
+        two conversions and two serializations, one in ``publish`` and one in the recorder)."""
+        if not self.taps:
+            publisher.publish(msg)
+            return
+        data = serialize_message(msg)
+        publisher.publish(data)
+        self.tap(topic, msg, t_ns, data)
 
 
 class _RobotIO:
@@ -663,14 +675,11 @@ class _RobotIO:
             core = self.core
             if self.walkers_pub is not None:  # before the pose it goes with: a judge reads it first
                 people = String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles()))
-                self.walkers_pub.publish(people)
-                self.node.tap(self.topic["walkers"], people, out.t_ns)
+                self.node.send(self.walkers_pub, self.topic["walkers"], people, out.t_ns)
             self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
-            self.odom_pub.publish(self._odom_msg)
+            self.node.send(self.odom_pub, self.topic["odom"], self._odom_msg, out.t_ns)
             self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
-            self.truth_pub.publish(self._truth_msg)
-            self.node.tap(self.topic["odom"], self._odom_msg, out.t_ns)
-            self.node.tap(self.topic["ground_truth_odom"], self._truth_msg, out.t_ns)
+            self.node.send(self.truth_pub, self.topic["ground_truth_odom"], self._truth_msg, out.t_ns)
         if out.scan is not None:
             msg = self._scan_msg
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
@@ -679,16 +688,14 @@ class _RobotIO:
             ranges = array.array("f")
             ranges.frombytes(out.scan.astype(np.float32, copy=False).tobytes())
             msg.ranges = ranges
-            self.scan_pub.publish(msg)
-            self.node.tap(self.topic["scan"], msg, out.t_ns)
+            self.node.send(self.scan_pub, self.topic["scan"], msg, out.t_ns)
 
     def _publish_collision(self, t_ns: int, state: RobotState) -> None:
         """One ``collisions`` message (JSON ``{"t", "x", "y", "yaw"}``) and a warning."""
         event = {"t": round(t_ns * 1e-9, 6), "x": round(state.x, 4), "y": round(state.y, 4),
                  "yaw": round(state.yaw, 4)}
         msg = String(data=json.dumps(event))
-        self.collision_pub.publish(msg)
-        self.node.tap(self.topic["collisions"], msg, t_ns)
+        self.node.send(self.collision_pub, self.topic["collisions"], msg, t_ns)
         self.node.get_logger().warning(f"{self.prefix}collision at t={event['t']:.2f} s, "
                                        f"({state.x:.2f}, {state.y:.2f})")
 
