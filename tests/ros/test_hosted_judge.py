@@ -84,3 +84,23 @@ def test_the_judge_moves_into_the_simulators_command_line() -> None:
     own = json.loads(sim.arguments[at + 3])
     assert own[:3] == ["--ros-args", "-r", "__node:=bt_nav_referee"]
     assert "use_sim_time:=false" in own and 'json:="/tmp/v.json"' in own, own
+
+
+def test_the_host_runs_at_its_unjudged_pace_before_t0_and_after_the_verdict() -> None:
+    """:meth:`HostedJudge.poll` tells the simulator whether its judge is judging (started, no verdict yet): the
+    simulator's pace between those instants is the only one a verdict depends on."""
+    from types import SimpleNamespace
+
+    from bt_nav.ros.nodes.hosting import HostedJudge
+
+    said: list[bool] = []
+    sim = SimpleNamespace(robots=[SimpleNamespace(prefix="")], sim=SimpleNamespace(walkers=[]), observers=[],
+                          follow_report=None, robot_armed=None, set_judging=said.append, poll=lambda: False)
+    judge = SimpleNamespace(started=False, finished=False, poll=lambda: None)
+    hosted = HostedJudge(sim, judge)  # type: ignore[arg-type]
+    hosted.poll()
+    judge.started = True
+    hosted.poll()
+    judge.finished = True
+    hosted.poll()
+    assert said == [False, False, True, False]

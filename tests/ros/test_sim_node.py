@@ -299,3 +299,29 @@ def test_refuses_an_unknown_cmd_vel_reliability() -> None:
     proc = Proc("sim", "--ros-args", "-p", "cmd_vel_reliability:=sometimes")
     assert proc.wait(20.0) == 2
     assert "cmd_vel_reliability must be auto, reliable or best_effort" in proc.output()
+
+
+def _sim_rate(probe: Probe, wall: float) -> float:
+    """Sim seconds per wall second over ``wall`` s, as the probe's /clock shows them."""
+    import time
+
+    began, first = time.monotonic(), probe.now()
+    time.sleep(wall)
+    return (probe.now() - first) / (time.monotonic() - began)
+
+
+def test_sim_time_runs_at_1x_until_its_hosted_judge_starts(sim: Callable[..., tuple[Proc, Probe]],
+                                                           tmp_path: Path) -> None:
+    """Before its t0 a hosted judge judges nothing: sim time runs at ``unjudged_rtf`` (1x, as a robot's world while
+    its node starts), not at ``idle_rtf`` (10x); from t0 on, with nobody to follow, at ``idle_rtf``."""
+    from std_srvs.srv import SetBool
+
+    judge = ["--ros-args", "-p", "use_sim_time:=false", "-p", "activate_service:=/paced/activate", "-p",
+             f"json:={tmp_path / 'verdict.json'}", "-p", "audit:=false", "-p", "timeout:=60.0"]
+    proc, probe = sim("--rtf", "0", "--judge", "referee", "--judge-args", json.dumps(judge))
+    before = _sim_rate(probe, 1.0)
+    assert 0.5 <= before <= 1.5, f"{before:.2f}x before t0\n{proc.output()}"
+    probe.node.create_service(SetBool, "/paced/activate", lambda _request, response: response)
+    wait_until(lambda: any("t0 = sim" in line for line in proc.stderr), 20.0, "the judge's t0", proc.output)
+    judged = _sim_rate(probe, 1.0)
+    assert judged >= 3.0, f"{judged:.2f}x after t0 (idle_rtf 10x)\n{proc.output()}"

@@ -11,8 +11,9 @@ bound makes every command of the node come that late; the hosted judge sends no 
 ``solo_rtf``, the cap while only ``cmd_vel`` is followed, is the same cap.
 While the node says nothing (before its arming, after its stop,
 a node that publishes only on change) nobody is followed and sim time runs at ``idle_rtf``: :data:`IDLE_RTF`, or
-``--rtf-max`` when lower, so a silent node does not see sim time race away. ``--rtf N`` (N > 0) keeps a fixed
-factor, as before.
+``--rtf-max`` when lower, so a silent node does not see sim time race away. Before the judge's t0 (the node starting
+up) and after its verdict (the node being stopped) nothing is judged, and sim time runs at 1x (the simulator's
+``unjudged_rtf``). ``--rtf N`` (N > 0) keeps a fixed factor, as before.
 
 Each run's row carries what it achieved (:func:`with_speed`): ``rtf``, the simulator's sim seconds per wall second
 over the run, and ``speed``: those seconds, and the sim and wall seconds while the node's ``cmd_vel`` was followed

@@ -76,6 +76,7 @@ class HostedJudge:
         judge.start_gate = self._robot_followed
         judge.clock_matched = self._clock_matched
         sim.observers.append(self._on_outputs)
+        sim.set_judging(False)  # until its t0
 
     def _clock_matched(self) -> bool:
         """Whether the simulator's ``/clock`` publisher has matched every ``/clock`` subscription on the graph: the
@@ -104,6 +105,7 @@ class HostedJudge:
     def poll(self) -> bool:
         """The judge's duties between spins; True once the simulator's loop has ended (never at the verdict)."""
         self.judge.poll()
+        self.sim.set_judging(self.judge.started and not self.judge.finished)
         return self.sim.poll()
 
     def close(self) -> None:

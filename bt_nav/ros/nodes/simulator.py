@@ -44,7 +44,9 @@ Pacing (``real_time_factor``): r > 0 advances sim time r times faster than wall 
 needed; after a hiccup of more than 0.25 s it re-anchors instead of bursting to catch up). r = 0 runs
 as fast as the *followers* keep up, at ``idle_rtf`` while there are none, and never faster than
 ``afap_max_rtf`` (0 = no cap); ``solo_rtf`` caps the speed while only ``cmd_vel`` is followed (the
-``eval`` bringup sets it, so the minutes before the referee joins cost little CPU). With ``afap_adapt`` (a graded
+``eval`` bringup sets it, so the minutes before the referee joins cost little CPU); while a judge hosted here is not
+judging, before its t0 and after its verdict, sim time runs at ``unjudged_rtf`` (1x; :meth:`set_judging`). With
+``afap_adapt`` (a graded
 node: ``bt-nav grade --exe``) the speed while a robot's node is followed is also kept just below the pace that node
 keeps (:class:`bt_nav_sim.pacing.StayBehind`: it grows while the node answers before its limit and backs off when it
 answers while sim time waited for it), so the followers' bound is a safety net rather than the pace.
@@ -212,6 +214,8 @@ class SimulatorNode(QuietQosEvents, Node):
                               "afap_max_rtf"),
         "solo_rtf": (0.0, "real_time_factor 0: upper bound while only cmd_vel is followed, no sim_sync "
                           "follower such as the referee (0: none)"),
+        "unjudged_rtf": (1.0, "real_time_factor 0: the speed while a judge hosted here is not judging, before its t0 "
+                              "and after its verdict (0: no such speed)"),
         "duration": (0.0, "stop after this much sim time, s (0: run until shut down)"),
         "robots": (1, "robots in the world; > 1: their topics under robot1/, robot2/, ... (one /clock)"),
         "robot_names": ("", "comma-separated robot namespaces (their count wins over robots); empty: robot1, ..."),
@@ -253,6 +257,8 @@ class SimulatorNode(QuietQosEvents, Node):
         self.idle_rtf = max(0.0, float(p["idle_rtf"]))
         self.afap_max_rtf = max(0.0, float(p["afap_max_rtf"]))
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
+        self.unjudged_rtf = max(0.0, float(p["unjudged_rtf"]))
+        self.judging = True  # a hosted judge says otherwise (set_judging): no judge here, nothing to wait for
         # it keeps behind a followed node: without following (follow off) there is none, and no member to ask
         adapt = bool(p["afap_adapt"]) and self.rtf == 0.0 and self.follow
         self.stay_behind = StayBehind(self.afap_max_rtf) if adapt else None
@@ -424,6 +430,14 @@ class SimulatorNode(QuietQosEvents, Node):
                 self.get_logger().info(f"following {who} (t={self.core.t:.2f} s)")
             self._cond.notify_all()
 
+    def set_judging(self, judging: bool) -> None:
+        """Whether the judge hosted here is judging (any thread). While it is not, before its t0 and after its verdict,
+        sim time runs at ``unjudged_rtf`` (``real_time_factor`` 0): measured at the default 10x, the seconds before a
+        graded node was up and after its verdict, while it was being stopped, cost a run's simulator and node 0.3-0.6
+        CPU s for nothing judged, on a grade that is CPU-bound. 1x is a robot's own pace: a node starting up, or
+        shutting down on ROS-time timers, sees its clock run as on a robot."""
+        self.judging = bool(judging)
+
     def robot_armed(self, armed: bool) -> None:
         """The robot's judge armed (True) or disarmed (False) its node: the answer to its arm service said success
         (a hosted judge, any thread; :meth:`bt_nav_sim.pacing.Followers.disarmed` says what changes)."""
@@ -477,6 +491,11 @@ class SimulatorNode(QuietQosEvents, Node):
         ``following``: some follower is active; ``synced``: one besides ``cmd_vel`` (the referee).
         """
         rate = self.rtf
+        if rate == 0.0 and not self.judging and self.unjudged_rtf > 0.0:
+            if self.stay_behind is not None:
+                with self._cond:
+                    self.stay_behind.idle()  # this pace says nothing of the node's
+            return self.unjudged_rtf
         if rate == 0.0:
             rate = self.idle_rtf if not following else self.afap_max_rtf
             if following and not synced and self.solo_rtf > 0.0:
