@@ -2,8 +2,9 @@
 grid, the same node file and each commit's own defaults, and whether every run's verdict stayed the same.
 
 Why side by side: on a shared 2-core machine a wall time alone says little (the load moves it by tens of per cent);
-the two commits measured in one sitting, each scenario's two grades back to back (before, after, before, after,
-...), share the machine's drift, so their ratio is the measurement. The load average before and after each grade is
+the two commits measured in one sitting, each scenario's grades back to back (before, after, before, after, ...:
+:data:`PAIRS` pairs), share the machine's drift, so their ratio is the measurement (of the medians, over several
+pairs: :func:`paired`). The load average before and after each grade is
 recorded next to it.
 
 The "before" side is :data:`BEFORE` (the head when issue 43 was filed), checked out in a ``git worktree`` of its own
@@ -83,6 +84,10 @@ LIMITS = {"correct": 1200.0, "wallclock": 3600.0, "class": 7200.0}
 #: Wall seconds of one lab run at 1x when the after side ran none at 1x (about 75 sim s, start-up and shutdown).
 ONE_RUN_1X_FALLBACK = 80.0
 CORRECT_RATIO = 0.55
+#: Alternating pairs (before, after, before, after, ...) per scenario: the right node's grade is short and its wall
+#: time on a shared machine moved by 56-70 s between two sittings of the same commit, so its ratio is that of the
+#: medians of three pairs; the others take minutes each and are graded once per side.
+PAIRS = {"correct": 3, "wallclock": 1, "class": 1}
 WALLCLOCK_MARGIN = 30.0
 #: Seconds a stopped grade gets to stop its runs before SIGTERM, then SIGKILL.
 STOP_GRACE = 60.0
@@ -386,20 +391,42 @@ def run(quick: bool = False, only: Sequence[str] = SCENARIOS, out: Path | None =
         with sigterm_as_interrupt(), sides(work) as (before, after):
             result["sides"] = {side.name: side.describe() for side in (before, after)}
             for scenario in [s for s in SCENARIOS if s in only]:
-                pair = {}
-                for side in (before, after):
-                    print(f"  {scenario}: {side.name} ({side.commit}) ...", flush=True)
-                    pair[side.name] = run_grade(side, scenario, grades / f"{scenario}-{side.name}",
-                                                manifest if scenario == "class" else None, quick)
-                    print(f"    {_line(pair[side.name])}", flush=True)
-                pair["comparison"] = compare(pair["before"], pair["after"])
-                if pair["before"].get("wall_s") and pair["after"].get("wall_s"):
-                    pair["after_over_before"] = round(pair["after"]["wall_s"] / pair["before"]["wall_s"], 3)
-                result["scenarios"][scenario] = pair
+                repeats = []
+                for index in range(1 if quick else PAIRS[scenario]):
+                    one = {}
+                    for side in (before, after):
+                        print(f"  {scenario}: {side.name} ({side.commit}) ...", flush=True)
+                        one[side.name] = run_grade(side, scenario, grades / f"{scenario}-{side.name}-{index + 1}",
+                                                   manifest if scenario == "class" else None, quick)
+                        print(f"    {_line(one[side.name])}", flush=True)
+                    repeats.append(one)
+                result["scenarios"][scenario] = paired(repeats)
     finally:
         shutil.rmtree(work, ignore_errors=True)  # the manifest, and the grades unless --out keeps them
     result["one_run_1x_s"], result["one_run_1x_from"] = one_run_1x(result)
     return result
+
+
+def paired(repeats: list[dict[str, dict[str, Any]]]) -> dict[str, Any]:
+    """A scenario's result from its alternating pairs: ``before`` and ``after``, each side's grade of median wall
+    time (the table's rows); ``after_over_before``, the ratio of the sides' median wall times; ``comparison``, every
+    pair's verdicts compared (one differing run in any pair is a difference); ``pairs``, each pair's walls and
+    ratio; ``repeats``, every grade."""
+    def middle(name: str) -> dict[str, Any]:
+        timed = sorted((g for g in (r[name] for r in repeats) if g.get("wall_s")), key=lambda g: g["wall_s"])
+        return timed[(len(timed) - 1) // 2] if timed else repeats[0][name]
+
+    compared = [compare(r["before"], r["after"]) for r in repeats]
+    comparison = {"identical": all(c["identical"] for c in compared), "measured": all(c["measured"] for c in compared),
+                  "differences": [d for c in compared for d in c["differences"]],
+                  "decisions_differ": [d for c in compared for d in c["decisions_differ"]]}
+    out: dict[str, Any] = {"before": middle("before"), "after": middle("after"), "comparison": comparison,
+                           "pairs": [{"before_s": r["before"].get("wall_s"), "after_s": r["after"].get("wall_s")}
+                                     for r in repeats], "repeats": repeats}
+    walls = {name: [g["wall_s"] for g in (r[name] for r in repeats) if g.get("wall_s")] for name in ("before", "after")}
+    if walls["before"] and walls["after"] and all(len(w) == len(repeats) for w in walls.values()):
+        out["after_over_before"] = round(median(walls["after"]) / median(walls["before"]), 3)
+    return out
 
 
 def _line(grade: dict[str, Any]) -> str:
@@ -467,7 +494,10 @@ def markdown(result: dict[str, Any]) -> list[str]:
         same = "identical" if c["identical"] else "not compared (a side has no grade)" if not c["measured"] else \
             "DIFFER: " + "; ".join(f"{d['run']} {d['before']} -> {d['after']}" for d in c["differences"][:10])
         ratio = pair.get("after_over_before")
-        notes.append(f"- {scenario}: after / before {ratio if ratio is not None else '-'}; verdicts {same}"
+        walls = "; ".join(f"{p['before_s']} -> {p['after_s']} s" for p in pair.get("pairs") or [])
+        notes.append(f"- {scenario}: after / before {ratio if ratio is not None else '-'}"
+                     + (f" (medians of {len(pair['pairs'])} alternating pairs: {walls})"
+                        if len(pair.get("pairs") or []) > 1 else "") + f"; verdicts {same}"
                      + (f"; re-run decisions differ in {len(c['decisions_differ'])} runs" if c["decisions_differ"]
                         else ""))
     grid = " ".join(result.get("grid") or [])
