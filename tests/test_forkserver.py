@@ -108,19 +108,53 @@ def test_children_end_with_the_server(server: ForkServer) -> None:
         server.spawn(["say", "0"], {}, str(REPO), target=TARGET)
 
 
+def test_a_server_is_usable_at_once_and_forks_once_it_is_ready(monkeypatch: pytest.MonkeyPatch,
+                                                                tmp_path: Path) -> None:
+    """The server imports while its owner goes on (a grade starts its first nodes meanwhile); a spawn waits for it."""
+    monkeypatch.chdir(REPO)
+    gate = tmp_path / "open"
+    monkeypatch.setenv("BT_NAV_TEST_GATE", str(gate))
+    started = ForkServer(preload=("tests.forkserver_gate",))
+    try:
+        assert started.usable and not started.settled and not started.ready(0.2)  # still importing, behind the gate
+        gate.touch()
+        child = started.spawn(["say", "0"], {"PATH": os.environ["PATH"]}, str(tmp_path), target=TARGET)
+        assert child.wait(10) == 0 and started.settled and started.alive
+    finally:
+        started.close()
+
+
+def test_a_server_that_never_becomes_ready_is_passed_over(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Its preload fails: spawns raise, the launcher starts the command the usual way, current() offers it no more."""
+    monkeypatch.chdir(REPO)
+    broken = ForkServer(preload=("bt_nav_no_such_module",))
+    try:
+        assert not broken.ready(30) and not broken.usable
+        with pytest.raises(ForkServerError, match="not ready"):
+            broken.spawn(["say", "0"], {}, str(REPO), target=TARGET)
+        launcher = Launcher({"PATH": os.environ["PATH"]}, sink=lambda n, line: None, forker=broken)
+        child = launcher.start(_Spec("bt-nav", [sys.executable, "-m", "bt_nav.cli", "help"]))
+        assert isinstance(child.popen, subprocess.Popen) and child.popen.wait(30) == 0
+    finally:
+        broken.close()
+
+
+class _Spec:
+    """What a launcher starts (:class:`bt_nav.ros.supervise.Startable`)."""
+
+    def __init__(self, executable: str, command: list[str]) -> None:
+        self.executable, self._command = executable, command
+
+    def command(self) -> list[str]:
+        return self._command
+
+
 def test_a_launcher_forks_bt_nav_commands_and_starts_the_rest(server: ForkServer) -> None:
-    class Spec:
-        def __init__(self, executable: str, command: list[str]) -> None:
-            self.executable, self._command = executable, command
-
-        def command(self) -> list[str]:
-            return self._command
-
     lines: list[tuple[str, str]] = []
     launcher = Launcher({"PATH": os.environ["PATH"], "SOME_VAR": "x"}, sink=lambda n, line: lines.append((n, line)),
                         forker=server)
-    ours = launcher.start(Spec("bt-nav", [sys.executable, "-m", "bt_nav.cli", "help"]))
-    theirs = launcher.start(Spec("echo", ["/bin/echo", "not ours"]))
+    ours = launcher.start(_Spec("bt-nav", [sys.executable, "-m", "bt_nav.cli", "help"]))
+    theirs = launcher.start(_Spec("echo", ["/bin/echo", "not ours"]))
     assert isinstance(ours.popen, ForkedProcess) and isinstance(theirs.popen, subprocess.Popen)
     assert ours.popen.wait(10) == 0 and theirs.popen.wait(10) == 0
     launcher.shutdown(grace=1.0)

@@ -105,8 +105,9 @@ class ForkedProcess:
 
 
 class ForkServer:
-    """``python -m bt_nav.ros.forkserver``, started now and ready (it has imported ``preload``) or
-    :class:`ForkServerError`. :meth:`spawn` forks a child of it; :meth:`close` ends it (its children get SIGTERM)."""
+    """``python -m bt_nav.ros.forkserver``, started now; :meth:`spawn` forks a child of it once it is ready (it has
+    imported ``preload``: about a second, which a grade spends starting its first nodes meanwhile, not waiting), or
+    raises :class:`ForkServerError` when it never became ready; :meth:`close` ends it (its children get SIGTERM)."""
 
     def __init__(self, preload: Sequence[str] = PRELOAD, timeout: float = READY_TIMEOUT) -> None:
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
@@ -126,25 +127,46 @@ class ForkServer:
         self._children: dict[int, ForkedProcess] = {}
         self._early: dict[int, int] = {}  # pid -> code of a child reaped before spawn() registered it
         self._next_id = 0
-        self.alive = False
-        mine.settimeout(timeout)
-        try:
-            hello = json.loads(mine.recv(_PACKET) or b"{}")
-        except (OSError, ValueError) as exc:
-            self.close()
-            raise ForkServerError(f"the fork server did not start: {exc}") from None
-        if not hello.get("ready"):
-            self.close()
-            raise ForkServerError(f"the fork server refused to fork: {hello}")
-        mine.settimeout(None)
-        self.alive = True
+        self.alive = False  # ready and not ended
+        self.settled = False  # its hello came (ready or refusing), or never will
+        self.refusal = ""  # why it is not ready, once settled so
+        self._timeout = timeout
         threading.Thread(target=self._read, name="bt_nav-forkserver", daemon=True).start()
+
+    @property
+    def usable(self) -> bool:
+        """Whether :meth:`spawn` may fork: ready, or not yet known (it waits for the hello)."""
+        return self.alive or not self.settled
+
+    def ready(self, timeout: float | None = None) -> bool:
+        """Wait for the server's hello (at most ``timeout`` s; None: as long as it takes); whether it is ready."""
+        with self._lock:
+            self._replied.wait_for(lambda: self.settled, timeout)
+            return self.alive
+
+    def _hello(self) -> bool:
+        """Read the server's first message (``timeout`` s at most); whether it said it is ready."""
+        self.sock.settimeout(self._timeout)
+        try:
+            hello = json.loads(self.sock.recv(_PACKET) or b"{}")
+        except (OSError, ValueError) as exc:
+            hello = {"ready": False, "error": f"it did not start: {exc}"}
+        ready = bool(hello.get("ready"))
+        if ready:
+            self.sock.settimeout(None)
+        with self._lock:
+            self.alive, self.settled = ready, True
+            self.refusal = "" if ready else f"the fork server is not ready: {hello}"
+            self._replied.notify_all()
+        return ready
 
     def spawn(self, argv: Sequence[str], env: Mapping[str, str], cwd: str,
               fd_env: Mapping[str, int] | None = None, target: str = TARGET) -> ForkedProcess:
         """Fork a child that runs ``target(argv)`` with ``env`` in ``cwd``; ``fd_env``: descriptors it keeps, each
         named in its environment by its number there. Raises :class:`ForkServerError` (nothing was started)."""
         names = list(fd_env or {})
+        if not self.ready():
+            raise ForkServerError(self.refusal or "the fork server has ended")
         read, write = os.pipe()
         with self._lock:
             if not self.alive:
@@ -175,8 +197,11 @@ class ForkServer:
         return child
 
     def _read(self) -> None:
-        """The server's answers and its children's ends (a thread of its own); at its end every child still listed
-        is taken as ended (the server's death sent it SIGTERM)."""
+        """The server's hello, then its answers and its children's ends (a thread of its own); at its end every child
+        still listed is taken as ended (the server's death sent it SIGTERM). A server that is not ready is ended."""
+        if not self._hello():
+            self.close()
+            return
         try:
             while True:
                 packet = self.sock.recv(_PACKET)
@@ -229,13 +254,14 @@ _current_lock = threading.Lock()
 
 def current() -> ForkServer | None:
     """The fork server of the :func:`serving` block this process is in (None: start processes the usual way)."""
-    return _current if _current is not None and _current.alive else None
+    return _current if _current is not None and _current.usable else None
 
 
 @contextmanager
 def serving(enabled: bool = True) -> Iterator[ForkServer | None]:
-    """A fork server for the block (nested blocks share the outer one); None when it cannot start, which only costs
-    the imports it would have saved. ``enabled`` False: none."""
+    """A fork server for the block (nested blocks share the outer one), starting while the block goes on; None when
+    it cannot be started (and one that never becomes ready refuses its spawns): either only costs the imports it
+    would have saved. ``enabled`` False: none."""
     global _current
     with _current_lock:
         outer = _current is not None
