@@ -12,6 +12,7 @@ from bt_nav_sim.pacing import (
     STAY_BACKOFF,
     STAY_FLOOR,
     STAY_GROWTH,
+    STAY_GROWTH_STRAIGHT,
     STAY_REFRACTORY,
     Followers,
     StayBehind,
@@ -227,9 +228,11 @@ def test_a_message_that_came_while_sim_time_waited_for_its_sender_is_at_the_limi
 
 def test_stay_behind_grows_while_the_node_keeps_up_and_backs_off_when_it_answers_at_its_limit() -> None:
     pace = StayBehind(cap=0.0, start=4.0)
-    assert pace.rate(10.0) == 4.0
-    assert pace.rate(10.5) == 4.0 + 0.5 * STAY_GROWTH and pace.rate(11.0) == 4.0 + STAY_GROWTH, "keeping up"
-    assert pace.rate(14.5) == 4.0 + 2 * STAY_GROWTH, "a wall second at most between two steps (a stall says nothing)"
+    assert pace.rate(10.0, turning=True) == 4.0
+    assert pace.rate(10.5, turning=True) == 4.0 + 0.5 * STAY_GROWTH and pace.rate(11.0, turning=True) == \
+        4.0 + STAY_GROWTH, "keeping up"
+    assert pace.rate(14.5, turning=True) == 4.0 + 2 * STAY_GROWTH, \
+        "a wall second at most between two steps (a stall says nothing)"
     before = pace.value
     pace.at_limit(14.6)
     assert pace.value == pytest.approx(before * STAY_BACKOFF) and pace.backoffs == 1
@@ -238,6 +241,23 @@ def test_stay_behind_grows_while_the_node_keeps_up_and_backs_off_when_it_answers
     for k in range(1, 40):
         pace.at_limit(14.6 + k * STAY_REFRACTORY)
     assert pace.value == STAY_FLOOR and pace.rate(14.6 + 39 * STAY_REFRACTORY) == STAY_FLOOR, "no growth meanwhile"
+
+
+def test_stay_behind_grows_faster_while_the_robot_does_not_turn_and_starts_a_turn_at_the_last_turns_speed() -> None:
+    pace = StayBehind(cap=0.0, start=4.0)
+    pace.rate(0.0, turning=True)
+    pace.at_limit(0.5)  # the first turn ends at 3.0x
+    assert pace.rate(0.5, turning=True) == 3.0 and pace.turn_value == 3.0
+    assert pace.rate(1.0) == 3.0 + 0.5 * STAY_GROWTH_STRAIGHT, "creeping: the straight growth"
+    assert pace.rate(1.5) == 3.0 + STAY_GROWTH_STRAIGHT > STAY_GROWTH + 3.0
+    assert pace.rate(1.6, turning=True) == 3.0 and pace.value == pytest.approx(3.0 + 0.1 * STAY_GROWTH), \
+        "a new turn starts at the last turn's speed"
+    slow = StayBehind(cap=0.0, start=4.0)
+    slow.rate(0.0)
+    for k in range(1, 6):
+        slow.at_limit(k * STAY_REFRACTORY)
+    assert slow.value < 2.0 and slow.rate(1.0, turning=True) == round(slow.value / 0.5) * 0.5, \
+        "never faster than the straight speed when that is lower"
 
 
 def test_stay_behind_keeps_under_its_cap_and_does_not_grow_while_the_node_is_not_followed() -> None:

@@ -94,7 +94,7 @@ import rclpy
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.multi import MultiSimCore, parse_starts
-from bt_nav_sim.pacing import CMD_VEL, Followers, PaceStops, StayBehind
+from bt_nav_sim.pacing import CMD_VEL, STAY_TURNING, Followers, PaceStops, StayBehind
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
@@ -474,7 +474,8 @@ class SimulatorNode(QuietQosEvents, Node):
                 commands = [(r.cmd, r.arrival_ns) for r in self.robots]
                 following = self.followers.any_active()
                 synced = self.followers.any_active(exclude=tuple(r.follower for r in self.robots))
-            if not self._keep_pace(self._rate(following, synced), following):
+            turning = any(abs(cmd[1]) >= STAY_TURNING for cmd, _ in commands)
+            if not self._keep_pace(self._rate(following, synced, turning), following):
                 break
             self._publish_all(self.sim.advance([self._live(cmd, arrival) for cmd, arrival in commands]))
 
@@ -485,10 +486,11 @@ class SimulatorNode(QuietQosEvents, Node):
             return 0.0, 0.0
         return cmd
 
-    def _rate(self, following: bool, synced: bool) -> float:
+    def _rate(self, following: bool, synced: bool, turning: bool = False) -> float:
         """Sim seconds per wall second for the next step (0: no pacing, only the followers bound it).
 
-        ``following``: some follower is active; ``synced``: one besides ``cmd_vel`` (the referee).
+        ``following``: some follower is active; ``synced``: one besides ``cmd_vel`` (the referee); ``turning``: a
+        robot's command turns it (:class:`StayBehind` keeps a turn's speed apart).
         """
         rate = self.rtf
         if rate == 0.0 and not self.judging and self.unjudged_rtf > 0.0:
@@ -505,7 +507,7 @@ class SimulatorNode(QuietQosEvents, Node):
                     if not following:
                         self.stay_behind.idle()
                     else:
-                        adapted = self.stay_behind.rate(time.monotonic())
+                        adapted = self.stay_behind.rate(time.monotonic(), turning)
                         rate = min(rate, adapted) if rate > 0.0 else adapted
         return rate
 
