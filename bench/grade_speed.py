@@ -285,6 +285,8 @@ def run_grade(side: Side, scenario: str, out: Path, manifest: Path | None, quick
         "load_before": load_before, "load_after": load_average(), "processes": sampler.summary(side)}
     if not ended:
         result["error"] = f"stopped after {LIMITS[scenario]:g} s (the limit of a {scenario} grade)"
+    elif proc.returncode not in (0, 1):  # 1: some run failed; anything else: no grade of this command
+        result["error"] = f"the grade exited with code {proc.returncode}"
     try:
         result.update(read_verdicts(out, scenario, manifest))
     except (OSError, ValueError, KeyError) as exc:
@@ -381,6 +383,9 @@ def compare(before: dict[str, Any], after: dict[str, Any]) -> dict[str, Any]:
 def run(quick: bool = False, only: Sequence[str] = SCENARIOS, out: Path | None = None) -> dict[str, Any]:
     """Every chosen scenario, before then after, back to back (see the module docstring); the result for
     ``bench.run`` (``latest.json``)."""
+    if out is not None and (out / "grades").is_dir() and any((out / "grades").iterdir()):
+        # a grade refuses an --out that holds one (exit 2), and its old grade.json would be read as this one's
+        raise ValueError(f"{out / 'grades'} holds grades already: keep them elsewhere (a benchmark never mixes runs)")
     work = Path(tempfile.mkdtemp(prefix="bench-gradespeed-"))
     grades = (out or work) / "grades"
     grades.mkdir(parents=True, exist_ok=True)
