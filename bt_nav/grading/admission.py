@@ -7,9 +7,9 @@ number: a run whose processes lack CPU answers late in sim time, so its verdict 
 
 So :class:`Admission` keeps a number of *places* and lets a run start whenever one is free:
 
-- at the grid's start it looks at the cores for :data:`OPENING` wall seconds: nearly idle (``burst_idle``) they
-  get every place up to ``limit`` at once (twelve runs in two waves of six, not a ramp whose last wave starts
-  late), otherwise ``base`` places (one per core);
+- at the grid's start it looks at the cores for :data:`OPENING` wall seconds: nearly free of other programs
+  (``burst_idle``: idle, or used by the grade itself) they get every place up to ``limit`` at once (twelve runs
+  in two waves of six, not a ramp whose last wave starts late), otherwise ``base`` places (one per core);
 - a place is added, up to ``limit``, when the cores this process may use were at least ``idle_needed`` idle
   since the last look and the last start was ``gap`` wall seconds ago (a run's start-up is its busiest part, and
   the next look should see it running);
@@ -165,14 +165,16 @@ class IdleMeter:
         """Whether the window of the last :meth:`idle_share` began at or after ``when`` (it says nothing of before)."""
         return self._share_from >= when
 
-    def share_over(self, seconds: float) -> float | None:
-        """The idle share over the next ``seconds`` (blocks that long; None: unknown)."""
-        first = self._read()
+    def free_over(self, seconds: float) -> float | None:
+        """The share of the cores other programs left over the next ``seconds`` (blocks that long; None: unknown): the
+        idle share plus what this process tree used meanwhile (a grade's start-up, its fork server's imports, is its
+        own and leaves the cores free for its runs)."""
+        first, first_own = self._read(), self._own()
         time.sleep(seconds)
-        last = self._read()
-        if first is None or last is None or last[1] <= first[1]:
+        last, last_own = self._read(), self._own()
+        if first is None or last is None or first_own is None or last_own is None or last[1] <= first[1]:
             return None
-        return (last[0] - first[0]) / (last[1] - first[1])
+        return min(1.0, (last[0] - first[0] + last_own - first_own) / (last[1] - first[1]))
 
 
 def auto_bounds(jobs: int) -> tuple[int, int] | None:
@@ -215,11 +217,15 @@ class Admission:
         return None if bounds is None else cls(*bounds)
 
     def _open(self) -> int:
-        """The places at the start: all of them when the cores are nearly idle, else ``base``."""
+        """The places at the start: all of them when other programs leave the cores nearly free, else ``base``.
+
+        Free, not idle: the grade's own start-up (its fork server imports for about a CPU second) is no other
+        program's load; read as busy, it opened two places instead of six and the right C node's grade took 42-50 s
+        instead of about 35."""
         if self.limit == self.base:
             return self.base
-        idle = self.meter.share_over(self.opening)
-        return self.limit if idle is not None and idle >= self.burst_idle else self.base
+        free = self.meter.free_over(self.opening)
+        return self.limit if free is not None and free >= self.burst_idle else self.base
 
     def _quiet_from(self) -> float:
         """When the runs in flight were last settled: ``gap`` s after the last start or change of places."""

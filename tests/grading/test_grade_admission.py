@@ -16,7 +16,7 @@ from bt_nav.grading.admission import Admission, AutoJobs, IdleMeter, cpu_times, 
 
 
 class Meter:
-    """An idle share the test sets (the opening look sees ``opening``, by default a busy machine)."""
+    """An idle share the test sets (the opening look sees ``opening`` free, by default a busy machine)."""
 
     def __init__(self, share: float | None, opening: float | None = 0.5) -> None:
         self.share = share
@@ -30,7 +30,7 @@ class Meter:
     def foreign_share(self) -> float | None:
         return self.foreign
 
-    def share_over(self, seconds: float) -> float | None:
+    def free_over(self, seconds: float) -> float | None:
         return self.opening
 
     def fresh_since(self, when: float) -> bool:
@@ -160,10 +160,14 @@ def test_the_idle_share_is_read_from_proc_stat(tmp_path: Path) -> None:
     assert meter.fresh_since(0.0) and not meter.fresh_since(0.5), "the share's window began at 0"
     assert cpu_times() is not None, "this machine's /proc/stat reads"
     looks = iter([(0.0, 100.0), (50.0, 100.0), (50.0, 100.0)])
-    assert IdleMeter(read=lambda: next(looks), clock=clock).share_over(0.0) is None, "no time between the two looks"
+    assert IdleMeter(read=lambda: next(looks), clock=clock, own=lambda: 0.0).free_over(0.0) is None, \
+        "no time between the two looks"
     looks = iter([(10.0, 100.0), (10.0, 100.0), (90.0, 200.0)])
-    meter = IdleMeter(read=lambda: next(looks), clock=clock)
-    assert meter.share_over(0.0) == pytest.approx(0.8)
+    owns = iter([0.0, 0.0, 15.0])
+    meter = IdleMeter(read=lambda: next(looks), clock=clock, own=lambda: next(owns))
+    assert meter.free_over(0.0) == pytest.approx(0.95), "80 of 100 jiffies idle, 15 the grade's own start-up"
+    assert IdleMeter(read=lambda: (0.0, 1.0), clock=clock, own=lambda: None).free_over(0.0) is None, \
+        "the grade's own time unknown: so is what is free"
 
 
 def test_other_programs_share_is_the_busy_share_less_the_grade_s_own() -> None:
