@@ -214,9 +214,10 @@ class Followers:
 
 class StayBehind:
     """The simulator's speed at ``real_time_factor`` 0 kept just below the pace the robot's node keeps (``afap_adapt``):
-    it grows by :data:`STAY_GROWTH` x per wall second while the node answers before its limit and drops to
-    :data:`STAY_BACKOFF` of itself when it answers at its limit (sim time had to wait for it), at most once per
-    :data:`STAY_REFRACTORY` wall seconds.
+    it grows by :data:`STAY_GROWTH` x per wall second while the node answers before its limit and the robot turns
+    (:data:`STAY_GROWTH_STRAIGHT` while it does not, and a turn starts at no more than the speed the last one ended
+    at: :meth:`rate`), and drops to :data:`STAY_BACKOFF` of itself when it answers at its limit (sim time had to
+    wait for it), at most once per :data:`STAY_REFRACTORY` wall seconds.
 
     Why: the followers' bound alone lets the simulator run ahead of a node that cannot keep up, and the node then
     lags by its whole lead at every message; worse, the bound grants one message per lead (70 ms for a 50 Hz node),
