@@ -32,8 +32,11 @@ Maneuver episodes come from the commands: a maximal run of commands with |w| >= 
 their forward speed (one that drives forward while turning is judged for that; a run that drives and turns the
 robot less than ``steer_max_deg`` is steering, not a turn). Trigger readings (front, left and right sector
 minima and the distance to the first obstacle in the robot's swept path) are cast noise-free from the true
-pose at every ground-truth sample while armed, so they reflect the world as it was at that moment (objects
-that appear later do not count). See :meth:`CheckoffJudge._judge_episode` for the rules.
+pose of a ground-truth sample while armed, as the world was at that moment (objects that appear later do not
+count). In a world that never changes they are cast when an episode first asks for a sample's reading, not at
+every sample: an episode looks at a few seconds of samples, and casting all of them was the hosted check-off's
+largest cost (measured: ~1700 casts a lab run, a fifth of its simulator's CPU). A world with appearing objects
+is cast at every sample while armed, as it was then. See :meth:`CheckoffJudge._judge_episode` for the rules.
 
 People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
 from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
@@ -65,6 +68,20 @@ from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
 from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
 from bt_nav_sim.world import World
+
+
+class _Deferred:
+    """A sample's trigger reading not cast yet (:meth:`CheckoffJudge._reading` casts it when asked), with the people
+    walking as they were at the sample (the samples that come later must not move them)."""
+
+    __slots__ = ("walkers",)
+
+    def __init__(self, walkers: np.ndarray | None) -> None:
+        self.walkers = walkers
+
+
+#: The deferred reading of a world without people walking (one object for every such sample).
+_NO_WALKERS = _Deferred(None)
 
 
 @dataclass(frozen=True)
@@ -206,7 +223,7 @@ class CheckoffJudge(Verdict):
         self._y: list[float] = []
         self._yaw: list[float] = []
         self._uyaw: list[float] = []  # unwrapped yaw
-        self._readings: list[Reading | None] = []
+        self._readings: list[Reading | _Deferred | None] = []
         self._walkers: list[tuple[float, np.ndarray]] = []  # (t, circles (K, 3)) as the simulator reported them
         self.commands: list[tuple[float, float, float]] = []
         self.collisions: list[tuple[float, float, float]] = []
@@ -334,7 +351,22 @@ class CheckoffJudge(Verdict):
         self._y.append(float(y))
         self._yaw.append(float(yaw))
         self._uyaw.append(uyaw)
-        self._readings.append(self._read(x, y, yaw, self._walkers_at(t), t) if self._armed_at(t) else None)
+        self._readings.append(self._reading_now(x, y, yaw, t) if self._armed_at(t) else None)
+
+    def _reading_now(self, x: float, y: float, yaw: float, t: float) -> Reading | _Deferred | None:
+        """An armed sample's reading, or what casts it later when the world cannot change meanwhile (no appearing
+        objects; a reading source is read now, as it was then)."""
+        walkers = self._walkers_at(t)
+        if self.readings is None and not self.world.appearing:
+            return _NO_WALKERS if walkers is None else _Deferred(walkers)
+        return self._read(x, y, yaw, walkers, t)
+
+    def _reading(self, k: int) -> Reading | None:
+        """Sample ``k``'s trigger reading (None: not armed then, or no reading), cast now if it was deferred."""
+        r = self._readings[k]
+        if isinstance(r, _Deferred):
+            r = self._readings[k] = self._read(self._x[k], self._y[k], self._yaw[k], r.walkers, self._t[k])
+        return r
 
     def on_walkers(self, t: float, circles: Any) -> None:
         """Where the people walking were at ``t`` (circles (K, 3): x, y, r); out-of-order samples are dropped."""
@@ -552,7 +584,7 @@ class CheckoffJudge(Verdict):
         i = self._index_at(start)
         k = i
         while k > 0 and self._t[k - 1] > since:
-            if not self._trigger_all(self._readings[k - 1]):
+            if not self._trigger_all(self._reading(k - 1)):
                 break
             k -= 1
         if k == 0 or self._t[k - 1] <= since:
@@ -562,7 +594,7 @@ class CheckoffJudge(Verdict):
         held = start - self._t[k]
         episode["trigger_held_for"] = round(held, 2)
         if crept >= cfg.late_distance and held >= cfg.late_time:
-            episode.update(late=True, passed=False, late_at=self._fired_at(self._readings[i]))
+            episode.update(late=True, passed=False, late_at=self._fired_at(self._reading(i)))
 
     def _fired_at(self, r: Reading | None) -> str:
         """Where a late trigger fired, in the figures a student compares with their parameter."""
@@ -649,9 +681,9 @@ class CheckoffJudge(Verdict):
             return [None]
         i = self._index_at(start)
         first = self._index_at(start - self.config.scan_age - stood)
-        window = [self._readings[k] or self._cast_at(k) for k in range(i, first - 1, -1)]
+        window = [self._reading(k) or self._cast_at(k) for k in range(i, first - 1, -1)]
         held = [r for r in window if self._trigger(r)[0]]
-        return held or [self._readings[i]]
+        return held or [self._reading(i)]
 
     def _cast_at(self, k: int) -> Reading | None:
         """The reading of sample ``k`` though it was taken before the arming (an episode that starts at the arming

@@ -473,3 +473,34 @@ def test_the_forward_rule_speaks_in_figures_that_agree() -> None:
                              "forward speed") and "commanded up to" not in rolled
     assert _forward_text({"forward_command": 0.004, "forward_motion": 0.0})[:52] == \
         "drove forward during the turn (commanded up to 0.004"
+
+
+LATE_SCRIPT = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (math.pi / 2, 0.0, 1.0), (8.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+
+
+@pytest.mark.parametrize(("maneuver", "segments", "script", "kw"), [
+    ("A", [WALL_AHEAD], A_SCRIPT, {}),
+    ("A", [WALL_AHEAD], LATE_SCRIPT, {"safety_distance": 0.6}),
+    ("C", [BOX_AHEAD, [0.0, -0.3, 1.0, -0.3]], _c_script(math.pi / 2 / 1.6), {}),
+], ids=["randomizer", "late", "smart_pivot"])
+def test_readings_cast_when_an_episode_asks_judge_as_those_cast_at_every_sample(maneuver, segments, script, kw) -> None:
+    """In a world that cannot change, a sample's trigger reading is cast when an episode first asks for it: far
+    fewer casts than armed samples, and the same verdict, figure for figure, as the same run in the same world with
+    one more object that could appear (never near enough to), where every armed sample is cast as it comes."""
+    def judged(extra_circles: list[dict]) -> tuple[CheckoffJudge, list[int]]:
+        world = world_from_dict({"name": "test", "segments": ROOM + segments, "circles": extra_circles})
+        judge = CheckoffJudge(_cfg(maneuver, **kw), world)
+        casts, cast = [0], judge.caster.true_ranges
+
+        def counted(*args, **kwargs):
+            casts[0] += 1
+            return cast(*args, **kwargs)
+        judge.caster.true_ranges = counted
+        return _run(judge, script), casts
+
+    lazy, lazy_casts = judged([])
+    eager, eager_casts = judged([{"x": -1.8, "y": 1.8, "r": 0.05, "appear_within": 0.3}])
+    armed = sum(r is not None for r in eager._readings)
+    assert eager_casts[0] >= armed > 300
+    assert 0 < lazy_casts[0] < armed / 5, (lazy_casts, armed)
+    assert lazy.results() == eager.results() and lazy.report_lines() == eager.report_lines()

@@ -110,6 +110,7 @@ from std_msgs.msg import String
 from bt_nav.mission.resources import written_whole
 from bt_nav.ros.rosutil import ConfigError, QuietQosEvents, declare_node_parameters
 from bt_nav.ros.runner import param_args, run_node
+from bt_nav.ros.stencil import Stencil
 
 NODE_NAME = "bt_nav_sim"
 
@@ -139,9 +140,14 @@ def cmd_vel_qos(reliability: str, follow: bool) -> QoSProfile:
                       reliability=ReliabilityPolicy.BEST_EFFORT if best_effort else ReliabilityPolicy.RELIABLE)
 
 
-def _quaternion(yaw: float) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of a rotation by ``yaw`` about +z."""
-    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+#: What changes in an odometry message from one sample to the next (:meth:`_RobotIO.publish`: stamp, pose, speeds).
+ODOM_FIELDS = ("header.stamp.sec", "header.stamp.nanosec", "pose.pose.position.x", "pose.pose.position.y",
+               "pose.pose.orientation.z", "pose.pose.orientation.w", "twist.twist.linear.x", "twist.twist.angular.z")
+
+
+def _pose(x: float, y: float, yaw: float) -> tuple[float, float, float, float]:
+    """An odometry pose's changing numbers: x, y and the quaternion's z and w of a rotation by ``yaw`` about +z."""
+    return float(x), float(y), math.sin(0.5 * yaw), math.cos(0.5 * yaw)
 
 
 def _sim_config(p: dict[str, Any]) -> SimConfig:
@@ -232,7 +238,8 @@ class SimulatorNode(QuietQosEvents, Node):
         # One robot without names: today's topic names (no prefix); else each robot under its name.
         prefixes = [""] if count == 1 and not names else [f"{n}/" for n in self.sim.names]
         self._read_pacing(p)
-        self._clock_msg = Clock()
+        self._clock = Stencil(Clock(), ("clock.sec", "clock.nanosec"))  # 100 samples a sim second, as bytes
+        self._clock_bytes = self._clock.fill(0, 0)
         self._create_publishers()
         cmd_qos = cmd_vel_qos(str(p["cmd_vel_reliability"]), self.follow)
         self.cmd_reliability = cmd_qos.reliability.name.lower()  # best_effort or reliable, for the start-up line
@@ -556,7 +563,7 @@ class SimulatorNode(QuietQosEvents, Node):
                     self._publish_clock(core.t_ns)
                 waited = True
                 if now - last_clock >= _CLOCK_REPEAT_S:
-                    self.clock_pub.publish(self._clock_msg)  # in case the last sample was lost
+                    self.clock_pub.publish(self._clock_bytes)  # in case the last sample was lost
                     last_clock = now
                 self._cond.wait(_CLOCK_REPEAT_S)
         return waited
@@ -583,17 +590,22 @@ class SimulatorNode(QuietQosEvents, Node):
         return any(out.odom or out.collision or out.scan is not None for out in outs)
 
     def _publish_clock(self, t_ns: int) -> None:
-        """One /clock sample (the message is reused; the repeat while waiting sends it again)."""
-        clock = self._clock_msg
-        clock.clock.sec, clock.clock.nanosec = divmod(t_ns, 1_000_000_000)
-        self.clock_pub.publish(clock)
+        """One /clock sample (its bytes are kept: the repeat while waiting sends them again)."""
+        self._clock_bytes = data = self._clock.fill(*divmod(t_ns, 1_000_000_000))
+        self.clock_pub.publish(data)
         self._clock_sent_ns = t_ns
-        self.tap("/clock", clock, t_ns)
+        self.tap("/clock", self._clock.example, t_ns, data)
 
     def tap(self, topic: str, msg: Any, t_ns: int, data: bytes | None = None) -> None:
         """Hand one message to the :attr:`taps` (nothing to do without one); ``data``: its bytes, when serialized."""
         for tap in self.taps:
             tap(topic, msg, t_ns, data)
+
+    def send_bytes(self, publisher: Any, topic: str, stencil: Stencil, t_ns: int, data: bytes) -> None:
+        """Publish a serialized message of ``stencil`` (rclpy's raw publish) and tap it."""
+        publisher.publish(data)
+        if self.taps:
+            self.tap(topic, stencil.example, t_ns, data)
 
     def send(self, publisher: Any, topic: str, msg: Any, t_ns: int) -> None:
         """Publish ``msg`` and tap it. With a tap it is serialized once, for both (measured: a recorded message cost
@@ -644,10 +656,11 @@ class _RobotIO:
                                      event_callbacks=warn)
         if prefix:  # this robot's referee speaks on its own namespace's sim_sync
             node.create_subscription(String, f"{prefix}sim_sync", node._on_sync, QoSProfile(depth=50))
-        # Messages are reused: publish() serialises synchronously, so only the fields change.
+        # Messages are reused: publish() serialises synchronously, so only the fields change; odometry, 60 messages a
+        # sim second, is written as bytes (bt_nav.ros.stencil)
         self._scan_msg = self._scan_template()
-        self._odom_msg = self._odom_template("odom")
-        self._truth_msg = self._odom_template("world")
+        self._odom = Stencil(self._odom_template("odom"), ODOM_FIELDS)
+        self._truth = Stencil(self._odom_template("world"), ODOM_FIELDS)
 
     def _on_cmd(self, msg: Any, v: float, w: float) -> None:
         """A command from the robot's node (executor thread): taken, then tapped at the sim time it arrived."""
@@ -697,10 +710,11 @@ class _RobotIO:
             if self.walkers_pub is not None:  # before the pose it goes with: a judge reads it first
                 people = String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles()))
                 self.node.send(self.walkers_pub, self.topic["walkers"], people, out.t_ns)
-            self._fill_odom(self._odom_msg, sec, nanosec, core.odom_x, core.odom_y, core.odom_yaw, state)
-            self.node.send(self.odom_pub, self.topic["odom"], self._odom_msg, out.t_ns)
-            self._fill_odom(self._truth_msg, sec, nanosec, state.x, state.y, state.yaw, state)
-            self.node.send(self.truth_pub, self.topic["ground_truth_odom"], self._truth_msg, out.t_ns)
+            v, w = float(state.v), float(state.w)
+            self.node.send_bytes(self.odom_pub, self.topic["odom"], self._odom, out.t_ns,
+                                 self._odom.fill(sec, nanosec, *_pose(core.odom_x, core.odom_y, core.odom_yaw), v, w))
+            self.node.send_bytes(self.truth_pub, self.topic["ground_truth_odom"], self._truth, out.t_ns,
+                                 self._truth.fill(sec, nanosec, *_pose(state.x, state.y, state.yaw), v, w))
         if out.scan is not None:
             msg = self._scan_msg
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
@@ -720,16 +734,6 @@ class _RobotIO:
         self.node.get_logger().warning(f"{self.prefix}collision at t={event['t']:.2f} s, "
                                        f"({state.x:.2f}, {state.y:.2f})")
 
-    @staticmethod
-    def _fill_odom(msg: Odometry, sec: int, nanosec: int, x: float, y: float, yaw: float,
-                   state: RobotState) -> None:
-        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
-        msg.pose.pose.position.x = float(x)
-        msg.pose.pose.position.y = float(y)
-        q = msg.pose.pose.orientation
-        q.x, q.y, q.z, q.w = _quaternion(yaw)
-        msg.twist.twist.linear.x = float(state.v)
-        msg.twist.twist.angular.z = float(state.w)
 
 
 def make_node(parameter_overrides: list | None = None) -> SimulatorNode:
