@@ -193,3 +193,40 @@ def test_the_parameters_are_listed_and_read_back(graph: tuple[Any, GraphAudit]) 
     assert "safety_distance" not in by_node["/other_node"]["names"]
     assert by_node["/other_node"]["values"]["use_sim_time"] is False
     assert audit.parameter_findings() == []  # one judged node declares it
+
+
+def test_endpoints_are_read_again_when_the_outline_changes(graph: tuple[Any, GraphAudit], monkeypatch) -> None:
+    """Between looks whose outline (topics, counts, nodes) is the same, no endpoint is read; an endpoint that comes
+    later on a topic already there (a transient-local scan reader beside the node's volatile one) changes the counts,
+    and the next look names its mismatch (the periodic full read is pushed out of the test's reach)."""
+    from bt_nav.ros.nodes import audit as audit_module
+
+    monkeypatch.setattr(audit_module, "SAMPLE_PERIOD", 0.0)
+    monkeypatch.setattr(audit_module, "FULL_PERIOD", 1e9)
+    student, audit = graph
+    node = student()
+    node.create_subscription(LaserScan, "scan", lambda msg: None, 10)
+    reads = [0]
+    endpoints = audit.node.get_publishers_info_by_topic
+
+    def counted(topic: str) -> Any:
+        reads[0] += 1
+        return endpoints(topic)
+    monkeypatch.setattr(audit.node, "get_publishers_info_by_topic", counted)
+    outlines: list[Any] = []
+
+    def settled() -> bool:
+        audit.sample()
+        outlines.append(audit._outline)
+        return "/scan" in audit.subscribed and len(outlines) > 3 and outlines[-1] == outlines[-4] \
+            and not audit._unnamed  # an endpoint without its node's name yet is read at every look
+
+    wait_until(settled, 20.0, "the node's scan reader seen and the graph settled (every endpoint named)")
+    before = reads[0]
+    audit.sample()
+    assert reads[0] == before, "an unchanged outline read the endpoints again"
+    node.create_subscription(LaserScan, "scan", lambda msg: None,
+                             QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    wait_until(lambda: audit.sample() or any("incompatible QoS on /scan" in f for f in audit.findings()), 20.0,
+               "the new reader's mismatch found by an unforced look", lambda: str(audit.findings()))
+    assert reads[0] > before
