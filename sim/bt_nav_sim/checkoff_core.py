@@ -33,10 +33,8 @@ their forward speed (one that drives forward while turning is judged for that; a
 robot less than ``steer_max_deg`` is steering, not a turn). Trigger readings (front, left and right sector
 minima and the distance to the first obstacle in the robot's swept path) are cast noise-free from the true
 pose of a ground-truth sample while armed, as the world was at that moment (objects that appear later do not
-count). In a world that never changes they are cast when an episode first asks for a sample's reading, not at
-every sample: an episode looks at a few seconds of samples, and casting all of them was the hosted check-off's
-largest cost (measured: ~1700 casts a lab run, a fifth of its simulator's CPU). A world with appearing objects
-is cast at every sample while armed, as it was then. See :meth:`CheckoffJudge._judge_episode` for the rules.
+count; when they are cast: :mod:`bt_nav_sim.trigger_readings`). See :meth:`CheckoffJudge._judge_episode` for the
+rules.
 
 People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
 from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
@@ -56,32 +54,16 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
 from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
-from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
-from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
+from bt_nav_sim.readings import Reading, SectorFamily
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
+from bt_nav_sim.trigger_readings import TriggerReadings
 from bt_nav_sim.world import World
-
-
-class _Deferred:
-    """A sample's trigger reading not cast yet (:meth:`CheckoffJudge._reading` casts it when asked), with the people
-    walking as they were at the sample (the samples that come later must not move them)."""
-
-    __slots__ = ("walkers",)
-
-    def __init__(self, walkers: np.ndarray | None) -> None:
-        self.walkers = walkers
-
-
-#: The deferred reading of a world without people walking (one object for every such sample).
-_NO_WALKERS = _Deferred(None)
 
 
 @dataclass(frozen=True)
@@ -204,27 +186,16 @@ class CheckoffJudge(Verdict):
                  readings: ReadingSource | None = None) -> None:
         """``readings``: where the trigger readings come from instead of casts in ``world`` (a real robot's recorded
         scans, :class:`bt_nav_sim.feeds.ScanReadings`: the reading at a pose is the latest scan at or before it)."""
-        if world is None and readings is None:
-            raise ValueError("the check-off judge needs a world to cast its readings in, or a reading source")
         self.config = config
         self.world = world
         self.update_world = update_world and world is not None
-        self.readings = readings
-        if world is not None:
-            name = config.lidar or world.lidar
-            self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
-            angles = self.caster.layout.angles()
-            self._mount = (self.caster.model.mount_x, self.caster.model.mount_y)
-            self._sectors = SectorReader(angles, config.family())
-            self._cos, self._sin = np.cos(angles), np.sin(angles)
+        self.readings = TriggerReadings(world, config.lidar, config.family(), config.half_width, readings)
         self.t0: float | None = None
         self._t: list[float] = []
         self._x: list[float] = []
         self._y: list[float] = []
         self._yaw: list[float] = []
         self._uyaw: list[float] = []  # unwrapped yaw
-        self._readings: list[Reading | _Deferred | None] = []
-        self._walkers: list[tuple[float, np.ndarray]] = []  # (t, circles (K, 3)) as the simulator reported them
         self.commands: list[tuple[float, float, float]] = []
         self.collisions: list[tuple[float, float, float]] = []
         self.travelled = 0.0
@@ -351,35 +322,11 @@ class CheckoffJudge(Verdict):
         self._y.append(float(y))
         self._yaw.append(float(yaw))
         self._uyaw.append(uyaw)
-        self._readings.append(self._reading_now(x, y, yaw, t) if self._armed_at(t) else None)
-
-    def _reading_now(self, x: float, y: float, yaw: float, t: float) -> Reading | _Deferred | None:
-        """An armed sample's reading, or what casts it later when the world cannot change meanwhile (no appearing
-        objects; a reading source is read now, as it was then)."""
-        walkers = self._walkers_at(t)
-        if self.readings is None and not self.world.appearing:
-            return _NO_WALKERS if walkers is None else _Deferred(walkers)
-        return self._read(x, y, yaw, walkers, t)
-
-    def _reading(self, k: int) -> Reading | None:
-        """Sample ``k``'s trigger reading (None: not armed then, or no reading), cast now if it was deferred."""
-        r = self._readings[k]
-        if isinstance(r, _Deferred):
-            r = self._readings[k] = self._read(self._x[k], self._y[k], self._yaw[k], r.walkers, self._t[k])
-        return r
+        self.readings.add(float(x), float(y), float(yaw), float(t), self._armed_at(t))
 
     def on_walkers(self, t: float, circles: Any) -> None:
         """Where the people walking were at ``t`` (circles (K, 3): x, y, r); out-of-order samples are dropped."""
-        if self._walkers and t <= self._walkers[-1][0]:
-            return
-        self._walkers.append((float(t), np.asarray(circles, dtype=np.float64).reshape(-1, 3)))
-
-    def _walkers_at(self, t: float) -> np.ndarray | None:
-        """The walkers of the last sample at or before ``t`` (else the first one; None without walkers)."""
-        if not self._walkers:
-            return None
-        i = bisect.bisect_right(self._walkers, t + 1e-9, key=lambda s: s[0]) - 1
-        return self._walkers[max(0, i)][1]
+        self.readings.on_walkers(t, circles)
 
     def on_collision(self, t: float, x: float, y: float) -> None:
         """A collision event (the start of one contact)."""
@@ -417,18 +364,6 @@ class CheckoffJudge(Verdict):
         if self.cycle_on_requested is not None and t > self.cycle_on_requested:
             return self.cycle_on_requested
         return self.activation_requested if self.activation_requested is not None else -math.inf
-
-    def _read(self, x: float, y: float, yaw: float, walkers: np.ndarray | None = None,
-              t: float = math.nan) -> Reading | None:
-        """Sector minima and the swept-path distance from the true pose (noise-free, unlimited range), the
-        people walking included; with a reading source, its reading at ``t`` instead (None: none then)."""
-        if self.readings is not None:
-            return self.readings.reading_at(t)
-        sx, sy = self.caster.sensor_pose(float(x), float(y), float(yaw))
-        r = self.caster.true_ranges(sx, sy, float(yaw), walkers)
-        along, across = r * self._cos + self._mount[0], np.abs(r * self._sin + self._mount[1])  # from the centre
-        in_path = (along > 0.0) & (across <= self.config.half_width)
-        return self._sectors.read(r, float(along[in_path].min()) if in_path.any() else math.inf)
 
     def _index_at(self, t: float) -> int:
         """The last sample at or before ``t`` (the first one if none is)."""
@@ -584,7 +519,7 @@ class CheckoffJudge(Verdict):
         i = self._index_at(start)
         k = i
         while k > 0 and self._t[k - 1] > since:
-            if not self._trigger_all(self._reading(k - 1)):
+            if not self._trigger_all(self.readings.at(k - 1)):
                 break
             k -= 1
         if k == 0 or self._t[k - 1] <= since:
@@ -594,7 +529,7 @@ class CheckoffJudge(Verdict):
         held = start - self._t[k]
         episode["trigger_held_for"] = round(held, 2)
         if crept >= cfg.late_distance and held >= cfg.late_time:
-            episode.update(late=True, passed=False, late_at=self._fired_at(self._reading(i)))
+            episode.update(late=True, passed=False, late_at=self._fired_at(self.readings.at(i)))
 
     def _fired_at(self, r: Reading | None) -> str:
         """Where a late trigger fired, in the figures a student compares with their parameter."""
@@ -681,15 +616,9 @@ class CheckoffJudge(Verdict):
             return [None]
         i = self._index_at(start)
         first = self._index_at(start - self.config.scan_age - stood)
-        window = [self._reading(k) or self._cast_at(k) for k in range(i, first - 1, -1)]
+        window = [self.readings.cast(k) for k in range(i, first - 1, -1)]
         held = [r for r in window if self._trigger(r)[0]]
-        return held or [self._reading(i)]
-
-    def _cast_at(self, k: int) -> Reading | None:
-        """The reading of sample ``k`` though it was taken before the arming (an episode that starts at the arming
-        may have been decided on a scan from just before it)."""
-        t = self._t[k]
-        return self._read(self._x[k], self._y[k], self._yaw[k], self._walkers_at(t), t)
+        return held or [self.readings.at(i)]
 
     def _stood_before(self, a: int) -> float:
         """Seconds of zero commands just before command ``a`` (since the last moving command or the first)."""

@@ -419,7 +419,7 @@ def test_c_compares_the_sides_beside_the_robot_not_a_sector_that_sees_the_obstac
     from bt_nav_sim.world import load_world
 
     judge = CheckoffJudge(CheckoffConfig(maneuver="C"), load_world("lab_side"), update_world=False)
-    r = judge._read(-0.31, 0.0, math.radians(yaw_deg))
+    r = judge.readings.read(-0.31, 0.0, math.radians(yaw_deg))
     assert judge._clearer_side(r) == "right", r.sides
     assert r.left_abeam == pytest.approx(0.5, abs=0.01) and r.right_abeam > 1.9
 
@@ -490,17 +490,17 @@ def test_readings_cast_when_an_episode_asks_judge_as_those_cast_at_every_sample(
     def judged(extra_circles: list[dict]) -> tuple[CheckoffJudge, list[int]]:
         world = world_from_dict({"name": "test", "segments": ROOM + segments, "circles": extra_circles})
         judge = CheckoffJudge(_cfg(maneuver, **kw), world)
-        casts, cast = [0], judge.caster.true_ranges
+        casts, cast = [0], judge.readings.caster.true_ranges
 
         def counted(*args, **kwargs):
             casts[0] += 1
             return cast(*args, **kwargs)
-        judge.caster.true_ranges = counted
+        judge.readings.caster.true_ranges = counted
         return _run(judge, script), casts
 
     lazy, lazy_casts = judged([])
     eager, eager_casts = judged([{"x": -1.8, "y": 1.8, "r": 0.05, "appear_within": 0.3}])
-    armed = sum(r is not None for r in eager._readings)
+    armed = sum(eager._armed_at(t) for t in eager._t)
     assert eager_casts[0] >= armed > 300
     assert 0 < lazy_casts[0] < armed / 5, (lazy_casts, armed)
     assert lazy.results() == eager.results() and lazy.report_lines() == eager.report_lines()

@@ -92,9 +92,11 @@ def test_appearance_is_reproduced_by_a_judge_with_a_world_of_its_own() -> None:
         reveal_sim = reveal_sim or (core.world.shown[0] and core.t)
         reveal_own = reveal_own or (own.shown[0] and core.t)
     assert reveal_sim and reveal_own and reveal_own - reveal_sim <= 0.03 + 1e-9
-    assert judge._readings[-1].front == pytest.approx(shared._readings[-1].front)
-    first_seen = next(i for i, r in enumerate(judge._readings) if r is not None and r.front < 1.0)
-    assert judge._readings[first_seen].front == pytest.approx(0.40, abs=0.002)
+    last = len(judge._t) - 1
+    assert judge.readings.at(last).front == pytest.approx(shared.readings.at(last).front)
+    readings = [judge.readings.at(k) for k in range(len(judge._t))]
+    first_seen = next(i for i, r in enumerate(readings) if r is not None and r.front < 1.0)
+    assert readings[first_seen].front == pytest.approx(0.40, abs=0.002)
 
 
 def test_several_robots_reveal_it_in_a_shared_world() -> None:

@@ -96,12 +96,12 @@ def test_the_lidar_sees_a_person_and_driving_into_one_is_a_collision() -> None:
 
 def test_the_checkoff_judge_sees_people_where_the_simulator_said() -> None:
     judge = CheckoffJudge(CheckoffConfig(), world_from_dict({"name": "w", "boxes": ROOM}))
-    far = judge._read(-2.0, 0.0, 0.0, None).front
-    near = judge._read(-2.0, 0.0, 0.0, np.array([[-1.5, 0.0, 0.2]])).front
+    far = judge.readings.read(-2.0, 0.0, 0.0, None).front
+    near = judge.readings.read(-2.0, 0.0, 0.0, np.array([[-1.5, 0.0, 0.2]])).front
     assert far > 3.0 and near == pytest.approx(0.3)
     judge.on_walkers(1.0, [[-1.5, 0.0, 0.2]])
     judge.on_walkers(0.5, [[9.0, 9.0, 0.2]])  # out of order: dropped
-    assert judge._walkers_at(1.2)[0, 0] == -1.5 and judge._walkers_at(0.2)[0, 0] == -1.5
+    assert judge.readings.walkers_at(1.2)[0, 0] == -1.5 and judge.readings.walkers_at(0.2)[0, 0] == -1.5
 
 
 def test_the_bundled_worlds_with_people() -> None:

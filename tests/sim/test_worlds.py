@@ -365,7 +365,7 @@ def _creep(name: str) -> dict[str, float]:
     while core.collisions == 0 and core.t < 40.0:
         core.advance(0.05, 0.0, 10)
         s = core.state
-        r = judge._read(s.x, s.y, s.yaw)
+        r = judge.readings.read(s.x, s.y, s.yaw)
         crept = math.hypot(s.x - x0, s.y - y0)
         for key, held in (("A", r.front < 0.5), ("B", r.left < 0.5 and r.right < 0.5), ("C", r.front < 0.3)):
             first.setdefault(key, crept) if held else None
@@ -389,7 +389,8 @@ def _reading_at_spawn(name: str, dx: float, dy: float, dyaw: float) -> Any:
 
     w = load_world(name)
     x, y, yaw = w.spawn
-    return CheckoffJudge(CheckoffConfig(), w, update_world=False)._read(x + dx, y + dy, yaw + math.radians(dyaw))
+    judge = CheckoffJudge(CheckoffConfig(), w, update_world=False)
+    return judge.readings.read(x + dx, y + dy, yaw + math.radians(dyaw))
 
 
 @pytest.mark.parametrize(("name", "side", "b_graded"), [("lab_beside", 0.3, False), ("lab_hallway", 0.5, True)])
