@@ -53,8 +53,8 @@ class Stencil:
         self._bytes = bytearray(data)
         #: A message of the stencil's type with the values it was made from (what names the type, e.g. to a bag).
         self.example = deserialize_message(data, self.msg_type)
-        for kind_of_marker in range(2):  # a second set of markers if padding bytes happened to repeat one
-            offsets = self._place(data, fields, kind_of_marker)
+        for family in range(2):  # a second family of markers if padding bytes happened to repeat one
+            offsets = self._place(data, fields, family)
             if offsets is not None:
                 break
         else:

@@ -1,6 +1,6 @@
 """The check-off's trigger readings at its ground-truth samples: what the robot could have read when it decided.
 
-A reading (:class:`bt_nav_sim.sectors.Reading`: front, left and right sector minima and the distance to the first
+A reading (:class:`bt_nav_sim.readings.Reading`: front, left and right sector minima and the distance to the first
 obstacle in the robot's swept path) comes from one of two places. In a world, it is cast noise-free from the true pose
 with unlimited range, the people walking where they were at the pose's time (the latest ``walkers`` sample at or before
 it). From a real robot, a reading source gives the reading of the latest scan at or before the pose
@@ -27,8 +27,8 @@ from bt_nav_sim.world import World
 
 
 class _Pose:
-    """A sample whose reading is not cast yet: its pose, time and the people walking as they were then (the samples
-    that come later must not move them); ``armed``: whether the robot was armed then."""
+    """A sample whose reading is not cast yet: its pose, time, whether the robot was armed then and, if it was, the
+    people walking as they were then (the samples that come later must not move them)."""
 
     __slots__ = ("armed", "t", "walkers", "x", "y", "yaw")
 
@@ -50,7 +50,7 @@ class TriggerReadings:
                  source: Any = None) -> None:
         if world is None and source is None:
             raise ValueError("the check-off judge needs a world to cast its readings in, or a reading source")
-        self.world, self.source, self.half_width = world, source, half_width
+        self.source, self.half_width = source, half_width
         if world is not None:
             name = lidar or world.lidar
             self.caster = RayCaster(world, lidar_model(name) if name else LDS01)
@@ -77,11 +77,12 @@ class TriggerReadings:
 
     def add(self, x: float, y: float, yaw: float, t: float, armed: bool) -> None:
         """The next ground-truth sample; its reading is read now or deferred (see the module's docstring)."""
-        walkers = self.walkers_at(t)
-        if self._deferred or not armed:
-            self._samples.append(_Pose(x, y, yaw, t, walkers, armed))
+        if not armed:  # cast only if an episode asks (:meth:`cast`), with the people walking known by then
+            self._samples.append(_Pose(x, y, yaw, t, None, False))
+        elif self._deferred:
+            self._samples.append(_Pose(x, y, yaw, t, self.walkers_at(t), True))
         else:
-            self._samples.append(self.read(x, y, yaw, walkers, t))
+            self._samples.append(self.read(x, y, yaw, self.walkers_at(t), t))
 
     def at(self, k: int) -> Reading | None:
         """Sample ``k``'s reading while armed (None: not armed then, or no reading), cast now if it was deferred."""

@@ -591,21 +591,20 @@ class SimulatorNode(QuietQosEvents, Node):
 
     def _publish_clock(self, t_ns: int) -> None:
         """One /clock sample (its bytes are kept: the repeat while waiting sends them again)."""
-        self._clock_bytes = data = self._clock.fill(*divmod(t_ns, 1_000_000_000))
-        self.clock_pub.publish(data)
+        self._clock_bytes = self._clock.fill(*divmod(t_ns, 1_000_000_000))
+        self.send_bytes(self.clock_pub, "/clock", self._clock.example, t_ns, self._clock_bytes)
         self._clock_sent_ns = t_ns
-        self.tap("/clock", self._clock.example, t_ns, data)
 
     def tap(self, topic: str, msg: Any, t_ns: int, data: bytes | None = None) -> None:
         """Hand one message to the :attr:`taps` (nothing to do without one); ``data``: its bytes, when serialized."""
         for tap in self.taps:
             tap(topic, msg, t_ns, data)
 
-    def send_bytes(self, publisher: Any, topic: str, stencil: Stencil, t_ns: int, data: bytes) -> None:
-        """Publish a serialized message of ``stencil`` (rclpy's raw publish) and tap it."""
+    def send_bytes(self, publisher: Any, topic: str, msg: Any, t_ns: int, data: bytes) -> None:
+        """Publish ``data``, the serialized ``msg`` (rclpy's raw publish), and tap it; ``msg`` names the type (a
+        :class:`Stencil`'s example: its fields need not be the bytes')."""
         publisher.publish(data)
-        if self.taps:
-            self.tap(topic, stencil.example, t_ns, data)
+        self.tap(topic, msg, t_ns, data)
 
     def send(self, publisher: Any, topic: str, msg: Any, t_ns: int) -> None:
         """Publish ``msg`` and tap it. With a tap it is serialized once, for both (measured: a recorded message cost
@@ -613,9 +612,7 @@ class SimulatorNode(QuietQosEvents, Node):
         if not self.taps:
             publisher.publish(msg)
             return
-        data = serialize_message(msg)
-        publisher.publish(data)
-        self.tap(topic, msg, t_ns, data)
+        self.send_bytes(publisher, topic, msg, t_ns, serialize_message(msg))
 
 
 class _RobotIO:
@@ -711,9 +708,9 @@ class _RobotIO:
                 people = String(data=walkers_message(out.t_ns * 1e-9, self.walkers.circles()))
                 self.node.send(self.walkers_pub, self.topic["walkers"], people, out.t_ns)
             v, w = float(state.v), float(state.w)
-            self.node.send_bytes(self.odom_pub, self.topic["odom"], self._odom, out.t_ns,
+            self.node.send_bytes(self.odom_pub, self.topic["odom"], self._odom.example, out.t_ns,
                                  self._odom.fill(sec, nanosec, *_pose(core.odom_x, core.odom_y, core.odom_yaw), v, w))
-            self.node.send_bytes(self.truth_pub, self.topic["ground_truth_odom"], self._truth, out.t_ns,
+            self.node.send_bytes(self.truth_pub, self.topic["ground_truth_odom"], self._truth.example, out.t_ns,
                                  self._truth.fill(sec, nanosec, *_pose(state.x, state.y, state.yaw), v, w))
         if out.scan is not None:
             msg = self._scan_msg
