@@ -20,9 +20,11 @@ Schedule (seconds from ``t0``): static until ``activate_at``; ``toggle_navigatio
 until an answer says success; the toggle cycle: ``toggle_navigation(false)`` ``toggle_off_after`` s after the first
 maneuver ends (the robot creeping on: no turning command for that long), ``grace`` to brake, static for
 ``static_after``, and ``toggle_navigation(true)`` again ``toggle_off_for`` s after the false (a cycle that would not
-end ``toggle_off_for`` s before the final disarm is left out; ``toggle_off_for`` 0: no cycle); at
-``activate_at + armed_for`` ``toggle_navigation(false)`` until success; ``grace`` to brake; static for
-``static_after``; then the report. Each call is asked on every step until an answer says success.
+end ``toggle_off_for`` s before the final disarm is left out; ``toggle_off_for`` 0: no cycle); ``drive_on_for`` s
+after the cycle's true was answered (a turn under way ended first: :mod:`bt_nav_sim.checkoff_schedule`), or at
+``activate_at + armed_for`` at the latest, ``toggle_navigation(false)`` until success; ``grace`` to brake; static for
+``static_after``; then the report. Each call is asked on every step until an answer says success. While armed the
+node must keep moving whenever nothing triggers (:mod:`bt_nav_sim.checkoff_creep`).
 
 Announcements (:meth:`CheckoffJudge.on_announcement`): the lines the judged node logs (``/rosout`` over DDS; any
 words, only their times count) mark where it began a new maneuver within one continuous rotation, so maneuvers
@@ -58,6 +60,8 @@ from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
 from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
+from bt_nav_sim.checkoff_creep import CREEP_CHECK, creep_check
+from bt_nav_sim.checkoff_schedule import drove_on
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.readings import Reading, SectorFamily
@@ -71,8 +75,8 @@ class CheckoffConfig:
     """Schedule and rules of the lab's check-off (seconds are relative to t0, distances in metres)."""
 
     maneuver: str = MANEUVERS[0]  # the first lab maneuver (the spec's order)
-    activate_at: float = 5.0  # static before; then toggle_navigation(true) until success
-    armed_for: float = 60.0  # toggle_navigation(false) at activate_at + armed_for
+    activate_at: float = 2.0  # static before (t0 waited for the node's /clock and arm service); then true until success
+    armed_for: float = 60.0  # toggle_navigation(false) at activate_at + armed_for at the latest (no maneuver, ...)
     grace: float = 1.0  # braking time after the disarm request
     static_after: float = 3.0  # must be static this long after the grace; then the report
     rate_hz: float = 2.0  # how often the driver calls step()
@@ -117,7 +121,13 @@ class CheckoffConfig:
     half_width: float = 0.18  # half the swept path's width (robot half width plus a margin)
     min_maneuvers: int = 1
     toggle_off_after: float = 1.0  # s: the toggle cycle's false this long after the first maneuver ends ...
-    toggle_off_for: float = 5.0  # s: ... and its true again this long after it (0: no toggle cycle)
+    toggle_off_for: float = 3.0  # s: ... and its true again this long after it (0: no toggle cycle)
+    # s after the cycle's true was answered: the node has been shown driving on (a turn under way ends first), so the
+    # final false comes then (bt_nav_sim.checkoff_schedule; 0: only at activate_at + armed_for)
+    drive_on_for: float = 4.5
+    creep_start: float = 1.0  # s after an arming answered before a standstill counts (bt_nav_sim.checkoff_creep) ...
+    creep_settle: float = 1.0  # ... and after a turning command
+    creep_still: float = 3.0  # s: standing this long while armed with nothing triggering fails "creep while armed"
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
     # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
     lidar: str = ""
@@ -174,7 +184,7 @@ class CheckoffConfig:
 
 #: Check names, in report order (one "maneuver N" line per maneuver sits where "maneuver" is).
 CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers performed", "maneuver",
-          "back-to-back maneuvers", "recovery turns", "no collision", "static after deactivation")
+          "back-to-back maneuvers", "recovery turns", CREEP_CHECK, "no collision", "static after deactivation")
 
 
 
@@ -222,7 +232,7 @@ class CheckoffJudge(Verdict):
             return []
         cfg = self.config
         rel = since_t0(t, self.t0)
-        if rel >= cfg.activate_at + cfg.armed_for:
+        if rel >= cfg.activate_at + cfg.armed_for or self.deactivation_requested is not None or drove_on(self, t):
             if self.deactivation_requested is None:
                 self.deactivation_requested = float(t)
             if t >= self.deactivation_requested + cfg.grace + cfg.static_after:
@@ -736,6 +746,7 @@ class CheckoffJudge(Verdict):
                 "collision_events": [{"t": c[0] - t0, "x": c[1], "y": c[2]} for c in self.collisions],
                 "times": {k: None if v is None else v - t0 for k, v in (
                     ("t0", self.t0), ("activation_requested", self.activation_requested),
+        checks.append(creep_check(self, now))
                     ("activated", self.activated), ("cycle_off_requested", self.cycle_off_requested),
                     ("cycle_off", self.cycle_off), ("cycle_on_requested", self.cycle_on_requested),
                     ("cycle_on", self.cycle_on), ("deactivation_requested", self.deactivation_requested),

@@ -60,9 +60,10 @@ def _run(judge: CheckoffJudge, script: list[tuple[float, float, float]], *, star
 
 
 def _cfg(maneuver: str, **kw) -> CheckoffConfig:
-    """Disarm at 25 s, report at 29 s; no toggle cycle unless asked (the scripts play on whatever the judge calls:
-    the cycle's own tests, in test_checkoff_chains.py, play a node that obeys it)."""
-    return CheckoffConfig(**{"maneuver": maneuver, "armed_for": 20.0, "toggle_off_for": 0.0, **kw})
+    """Armed at 5 s (the scripts are timed to it), disarm at 25 s, report at 29 s; no toggle cycle unless asked (the
+    scripts play on whatever the judge calls: the cycle's own tests, in test_checkoff_chains.py, play a node that obeys
+    it; the run as long as its checks need, in test_checkoff_schedule.py)."""
+    return CheckoffConfig(**{"maneuver": maneuver, "activate_at": 5.0, "armed_for": 20.0, "toggle_off_for": 0.0, **kw})
 
 
 def _line(judge: CheckoffJudge, prefix: str) -> str:
@@ -85,7 +86,7 @@ def test_a_correct_randomizer_passes() -> None:
     assert res["collisions"] == 0 and res["done"]
     names = [c["name"] for c in res["checks"]]
     assert names == ["static before activation", "toggle_navigation answered", "maneuvers performed",
-                     "maneuver 1", "no collision", "static after deactivation"]
+                     "maneuver 1", "creep while armed", "no collision", "static after deactivation"]
     assert judge.report_lines()[-1] == "overall: PASSED"
     line = _line(judge, "maneuver 1")
     assert line.endswith(": PASSED") and "front 0.49 m < 0.5 m (+0.05 m sensor-noise tolerance)" in line
@@ -284,7 +285,8 @@ def test_a_trigger_acted_on_late_fails() -> None:
 def test_a_fast_creep_reacting_within_a_scan_is_not_late() -> None:
     """Creeping at 0.2 m/s (four times the template's), a node that turns 0.25 s after its trigger holds (its next
     5 Hz scan) has crept 5 cm: more than ``late_distance`` but in a reaction time no node can beat, so on time."""
-    script = [(5.0, 0.0, 0.0), (2.8, 0.2, 0.0), (math.pi / 2, 0.0, 1.0), (8.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+    # creeping on until 24.4 s (the disarm at 25 s: no standstill while armed, the creep check)
+    script = [(5.0, 0.0, 0.0), (2.8, 0.2, 0.0), (math.pi / 2, 0.0, 1.0), (15.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), script)
     (m,) = [e for e in judge.results()["maneuvers"] if e["kind"] == "maneuver"]
     assert m["crept_with_trigger"] >= 0.04 and m["trigger_held_for"] < 0.6, m
@@ -312,7 +314,7 @@ def test_a_smart_pivot_where_the_aeb_braked_at_safety_distance_passes_and_says_w
     there is a reasonable reading and passes; the line says it was judged at either distance. A pivot 0.7 m
     from the box (neither reading) still did not hold."""
     brake_and_pivot = [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0), (0.5, 0.0, 0.0), (1.6, 0.0, math.pi / 2 / 1.6),
-                       (4.0, 0.05, 0.0), (10.0, 0.0, 0.0)]
+                       (7.0, 0.05, 0.0), (10.0, 0.0, 0.0)]  # creeps on until 24.3 s (the creep check)
     judge = _run(CheckoffJudge(_cfg("C"), C_WORLD), brake_and_pivot)
     assert judge.passed, judge.report_lines()
     assert "front 0.49 m < 0.5 m (+0.05 m sensor-noise tolerance)" in _line(judge, "maneuver 1")
@@ -372,7 +374,8 @@ def test_did_not_hold_only_when_no_side_reading_held() -> None:
     0.5 m, 90 +- 30 deg nothing near): a node reading its sides centred at 60 deg is squeezed, so its Retreat's
     trigger held."""
     funnel = _world([0.6, 0.4, 1.6, 0.4], [0.6, -0.4, 1.6, -0.4])  # the passage begins 0.3 m ahead of the turn
-    script = [(5.0, 0.0, 0.0), (6.0, 0.05, 0.0), (math.pi, 0.0, 1.0), (3.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
+    # creeps on until 24.1 s (the creep check)
+    script = [(5.0, 0.0, 0.0), (6.0, 0.05, 0.0), (math.pi, 0.0, 1.0), (10.0, 0.05, 0.0), (20.0, 0.0, 0.0)]
     judge = _run(CheckoffJudge(_cfg("B"), funnel), script)
     (m,) = judge.results()["maneuvers"]
     assert m["trigger"] and m["readings"]["left"] < 0.55 < m["readings"]["left_all"], m

@@ -1,0 +1,45 @@
+"""The lab check-off's run as long as its checks need: when the final ``toggle_navigation(false)`` may come before
+``activate_at + armed_for`` (pure, no rclpy; the judge is :class:`bt_nav_sim.checkoff_core.CheckoffJudge`).
+
+Why: grading runs at real time (1x), so every sim second is a wall second, and a lab grade of 12 runs must fit in a
+minute. The fixed schedule kept a right node armed for 60 s although every check was decided long before: the
+activation (static before it), the first maneuver, the toggle cycle (the stop, standing still, the true again) and the
+re-armed node going on. Worse, a right node then crept on for half a minute more into corners none of the sheet's
+triggers watches (lab_dead_end's side wall grazed at t=47-51 s), failing for what the sheet never asked.
+
+So once the toggle cycle's true was answered, the judge watches the node drive on for ``drive_on_for`` s (its
+``creep_start`` to start, then long enough for the creep check, :mod:`bt_nav_sim.checkoff_creep`, to see a standstill
+of ``creep_still``), lets a turn under way end (no turning command for ``toggle_off_after`` s: the maneuver it began
+is judged whole), and then disarms for good: the grace, the static window and the verdict follow as before. A node
+that never triggers gets no toggle cycle and keeps the upper bound, ``activate_at + armed_for``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def drove_on(judge: Any, t: float) -> bool:
+    """Whether the re-armed node of ``judge`` (a check-off judge) has been shown driving on by ``t``: its toggle
+    cycle's true was answered ``drive_on_for`` s ago or more, and no turn it began since is still under way (its
+    last turning command ``toggle_off_after`` s ago or more). False when the config turns the early end off
+    (``drive_on_for`` 0) or there was no toggle cycle."""
+    cfg = judge.config
+    since = judge.cycle_on
+    if cfg.drive_on_for <= 0 or since is None or t < since + cfg.drive_on_for:
+        return False
+    for stamp, _, w in reversed(judge.commands):  # newest first: only those since the true matter
+        if stamp < since:
+            break
+        if abs(w) >= cfg.rotation_min_rate:
+            return t >= stamp + cfg.toggle_off_after
+    return True
+
+
+def schedule_words(cfg: Any) -> str:
+    """When the final false comes, in words (the judge node's schedule line and the rules page say it)."""
+    bound = cfg.activate_at + cfg.armed_for
+    if cfg.drive_on_for <= 0 or cfg.toggle_off_for <= 0:
+        return f"false at {bound:g} s"
+    return (f"false {cfg.drive_on_for:g} s after the toggle cycle's true is answered (once a turn under way has "
+            f"ended: no turning command for {cfg.toggle_off_after:g} s), at {bound:g} s at the latest")

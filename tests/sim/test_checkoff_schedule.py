@@ -1,0 +1,176 @@
+"""The lab check-off's run as long as its checks need (bt_nav_sim.checkoff_schedule) and its creep check
+(bt_nav_sim.checkoff_creep), on the default schedule: bt_nav's own executive in lock-step, and a small reactive node
+played by a kinematic driver (commands 20 Hz, ground truth ~33 Hz, the schedule's calls at 2 Hz, obeyed)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.world import world_from_dict
+
+from bt_nav.run.lockstep import Lockstep
+
+DT = 0.01
+ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
+WALL_AHEAD = [[1.0, -2.0, 1.0, 2.0]]  # a wall across the room 1 m ahead of the spawn
+
+
+class _Node:
+    """A Randomizer as the sheet's flow has it: armed, creep at 0.05 m/s; when the front (the wall 1 m ahead) reads
+    below 0.5 m, turn 90 deg left at 1 rad/s, then creep on; a false stops it. Its faults, by option: ``pause`` s
+    standing after each arming, ``brake`` s standing at the trigger before the turn (an AEB stop), ``stand_after_rearm``
+    (never creeps again after the toggle cycle's true), ``turn_after_rearm`` s after it a 90 deg turn on its own."""
+
+    def __init__(self, *, pause: float = 0.0, brake: float = 0.0, stand_after_rearm: bool = False,
+                 turn_after_rearm: float | None = None) -> None:
+        self.pause, self.brake, self.stand, self.turn_after = pause, brake, stand_after_rearm, turn_after_rearm
+        self.armed, self.armed_at, self.arms = False, 0.0, 0
+        self.turn_to: float | None = None
+        self.braked_at: float | None = None
+
+    def toggle(self, t: float, data: bool) -> None:
+        if data and not self.armed:
+            self.armed_at, self.arms = t, self.arms + 1
+        self.armed = data
+        if not data:
+            self.turn_to = self.braked_at = None
+
+    def command(self, t: float, x: float, yaw: float) -> tuple[float, float]:
+        if not self.armed or t < self.armed_at + self.pause:
+            return 0.0, 0.0
+        if self.turn_to is not None:
+            if math.remainder(self.turn_to - yaw, 2 * math.pi) > 0.0:  # until it passed the target (left turns)
+                return 0.0, 1.0
+            self.turn_to = None
+        rearmed = self.arms >= 2
+        if rearmed and self.turn_after is not None and t >= self.armed_at + self.turn_after:
+            self.turn_after, self.turn_to = None, yaw + math.pi / 2
+            return 0.0, 1.0
+        if rearmed and self.stand:
+            return 0.0, 0.0
+        front = (1.0 - x) / math.cos(yaw) if math.cos(yaw) > 0.87 else math.inf
+        if front < 0.5:
+            self.braked_at = t if self.braked_at is None else self.braked_at
+            if t < self.braked_at + self.brake:
+                return 0.0, 0.0
+            self.turn_to, self.braked_at = yaw + math.pi / 2, None
+            return 0.0, 1.0
+        return 0.05, 0.0
+
+
+def _play(node: _Node, config: CheckoffConfig | None = None, end: float = 90.0) -> CheckoffJudge:
+    """Play ``node`` in the room with the wall ahead until the judge reports (the default schedule unless given)."""
+    world = world_from_dict({"name": "test", "segments": ROOM + WALL_AHEAD})
+    judge = CheckoffJudge(config or CheckoffConfig(maneuver="A"), world)
+    judge.start(0.0)
+    x = y = yaw = 0.0
+    cmd = (0.0, 0.0)
+    for k in range(round(end / DT) + 1):
+        t = k * DT
+        if k % 50 == 0:
+            for action in judge.step(t):
+                judge.on_activate_result(t, action.data, True)
+                node.toggle(t, action.data)
+        if judge.done:
+            break
+        if k % 5 == 0:
+            cmd = node.command(t, x, yaw)
+            judge.on_command(t, *cmd)
+        if k % 3 == 0:
+            judge.observe(t, x, y, yaw)
+        x += cmd[0] * DT * math.cos(yaw)
+        y += cmd[0] * DT * math.sin(yaw)
+        yaw = math.remainder(yaw + cmd[1] * DT, 2 * math.pi)
+    assert judge.done
+    return judge
+
+
+def _check(judge: CheckoffJudge, name: str) -> dict:
+    return next(c for c in judge.results()["checks"] if c["name"] == name)
+
+
+# ------------------------------------------------------------------------------------------- the early end
+@pytest.mark.parametrize(("world", "maneuver"), [("lab_object", "A"), ("lab_dead_end", "C"), ("lab_dead_end", "B")])
+def test_bt_navs_executive_is_disarmed_once_it_drove_on_after_the_toggle_cycle(world: str, maneuver: str) -> None:
+    """Lock-step, bt_nav's own executive: armed at 2 s, the toggle cycle after its first maneuver, the final false
+    once it drove on for drive_on_for s (a turn it began then judged whole first), the verdict 4 s later: a run of
+    20-40 s instead of the fixed 69 s."""
+    run = Lockstep(world, maneuver, 0, None, "lab")
+    run.run()
+    judge = run.robots[0].referee
+    res = judge.results()
+    times, cfg = res["times"], judge.config
+    assert res["passed"], judge.report_lines()
+    assert times["activation_requested"] == pytest.approx(2.0)
+    assert times["cycle_on"] is not None and times["cycle_on"] - times["cycle_off_requested"] == pytest.approx(3.0)
+    assert cfg.drive_on_for <= times["deactivation_requested"] - times["cycle_on"] <= cfg.drive_on_for + 6.0
+    assert times["report"] == pytest.approx(times["deactivation_requested"] + cfg.grace + cfg.static_after)
+    assert times["report"] < 40.0 < cfg.activate_at + cfg.armed_for
+    assert not any(m["interrupted"] for m in res["maneuvers"]), res["maneuvers"]  # none cut short by the early end
+    assert _check(judge, "creep while armed")["passed"]
+
+
+def test_a_turn_under_way_at_the_drive_on_end_is_waited_for() -> None:
+    """The re-armed node turns 4.3 s after its true (in the open: its trigger did not hold): the final false waits
+    until its last turning command is toggle_off_after s old, so the turn is judged whole, not interrupted."""
+    judge = _play(_Node(turn_after_rearm=4.3))
+    res = judge.results()
+    times = res["times"]
+    last = res["maneuvers"][-1]
+    assert len(res["maneuvers"]) == 2 and not last["interrupted"] and abs(last["angle_deg"]) == pytest.approx(90, abs=3)
+    assert times["deactivation_requested"] >= last["settled"] + judge.config.toggle_off_after - 0.2
+    assert times["deactivation_requested"] > times["cycle_on"] + judge.config.drive_on_for
+    assert [c["name"] for c in res["checks"] if not c["passed"]] == ["maneuver 2"]  # judged: nothing triggered it
+
+
+def test_a_node_that_never_triggers_keeps_the_upper_bound() -> None:
+    """No maneuver, no toggle cycle: the final false at activate_at + armed_for (2 + 60 s), the report 4 s later; its
+    creep on passes the creep check (and it fails for performing no maneuver)."""
+    never = _Node()
+    never.command = lambda t, x, yaw: (0.02, 0.0) if never.armed else (0.0, 0.0)  # creeps, never turns
+    judge = _play(never)
+    times = judge.results()["times"]
+    assert times["cycle_off_requested"] is None
+    assert times["deactivation_requested"] == pytest.approx(62.0) and times["report"] == pytest.approx(66.0)
+    assert _check(judge, "creep while armed")["passed"] and not _check(judge, "maneuvers performed")["passed"]
+
+
+def test_a_right_node_is_disarmed_soon_after_it_drove_on() -> None:
+    judge = _play(_Node())
+    times = judge.results()["times"]
+    assert judge.passed, judge.report_lines()
+    assert times["cycle_on"] == pytest.approx(times["cycle_off_requested"] + 3.0)
+    assert times["deactivation_requested"] == pytest.approx(times["cycle_on"] + 4.5, abs=0.5)
+    assert times["report"] < 30.0
+
+
+# ------------------------------------------------------------------------------------------- the creep check
+def test_a_node_that_stops_creeping_after_the_rearm_fails_the_creep_check() -> None:
+    judge = _play(_Node(stand_after_rearm=True))
+    check = _check(judge, "creep while armed")
+    assert not check["passed"] and not judge.passed
+    assert check["reason"].startswith("stood still for 3.")
+    assert ("while armed with nothing triggering (front 1.0" in check["reason"]  # the wall 30 deg off its right
+            and "clear beyond safety_distance 0.50 m): the sheet says to maintain a slow forward velocity"
+            in check["reason"]), check["reason"]
+    assert [c["name"] for c in judge.results()["checks"] if not c["passed"]] == ["creep while armed"]
+
+
+@pytest.mark.parametrize(("pause", "passes"), [(0.9, True), (4.5, False)])
+def test_a_standstill_right_after_arming_counts_only_after_a_second(pause: float, passes: bool) -> None:
+    """Standing 0.9 s after the true (its next scan, a slow start) is no fault; 4.5 s is 3.5 s past the second it
+    has to start."""
+    judge = _play(_Node(pause=pause))
+    check = _check(judge, "creep while armed")
+    assert check["passed"] is passes, check
+    assert judge.passed is passes, judge.report_lines()
+
+
+def test_a_node_braked_at_its_trigger_is_not_failed_for_standing() -> None:
+    """An AEB stop at the wall (front below safety_distance, the trigger holding) for 4 s before the turn: standing
+    there is no missing creep."""
+    judge = _play(_Node(brake=4.0))
+    assert _check(judge, "creep while armed")["passed"]
+    assert judge.passed, judge.report_lines()
