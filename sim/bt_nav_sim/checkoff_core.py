@@ -735,6 +735,7 @@ class CheckoffJudge(Verdict):
             checks.append({"name": "recovery turns", "passed": not bad, "value": len(recoveries), "required":
                            "no forward command or motion", "detail": f"{len(recoveries)} emergency-stop recovery "
                            f"turn{'s' if len(recoveries) != 1 else ''}, {len(bad)} with forward motion"})
+        checks.append(creep_check(self, now))
         n = len(self.collisions)
         checks.append({"name": "no collision", "passed": n == 0, "value": n, "required": 0,
                        "detail": f"{n} collision{'s' if n != 1 else ''}"
@@ -746,7 +747,6 @@ class CheckoffJudge(Verdict):
                 "collision_events": [{"t": c[0] - t0, "x": c[1], "y": c[2]} for c in self.collisions],
                 "times": {k: None if v is None else v - t0 for k, v in (
                     ("t0", self.t0), ("activation_requested", self.activation_requested),
-        checks.append(creep_check(self, now))
                     ("activated", self.activated), ("cycle_off_requested", self.cycle_off_requested),
                     ("cycle_off", self.cycle_off), ("cycle_on_requested", self.cycle_on_requested),
                     ("cycle_on", self.cycle_on), ("deactivation_requested", self.deactivation_requested),
