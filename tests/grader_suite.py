@@ -11,6 +11,11 @@ class is graded on must catch the mistakes), and prints one table::
     python tests/grader_suite.py --hogs 2             # the same with two CPU hogs running
     python tests/grader_suite.py --compare runs/grader-suite/confusion.json --out runs/grader-suite-loaded
     python tests/grader_suite.py --only mistakes --mistakes left_or_right,ignores_safety_distance --lidars lds01
+    python tests/grader_suite.py --only generated --generated 100   # right nodes nobody wrote by hand (issue 52)
+
+``--generated N`` also grades N generated right nodes (``tests/nodegen``: seeds 0..N-1, each on a sample of its
+choice's default-grid cells, every cell getting >= 20 nodes when N >= 100) and each one's mutants (the sheet's
+mistakes, on the choice's default grid, each to fail for its reason: ``tests.nodegen.EXPECT``).
 
 ``--compare`` names every run whose verdict differs from an earlier suite's (the verdicts must not depend on the
 machine's load). ``make grader-suite`` runs the first line. Written: ``<out>/confusion.json`` (every run's verdict)
@@ -178,10 +183,33 @@ def cpu_hogs(count: int) -> Iterator[None]:
             hog.wait()
 
 
+def generated_classes(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The classes of ``--generated N``: the generated right nodes per cell and their mutants per choice (the node
+    files written under ``<out>/generated``)."""
+    if args.generated <= 0:
+        return {}
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run as a file: tests.nodegen from the repository
+    from tests.nodegen import suite
+
+    return suite.classes(args.generated, (args.out / "generated").resolve(), sys.executable,
+                         with_mutants=not args.no_generated_mutants)
+
+
+def judged_generated(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """A generated mutant's line of the matrix (:func:`tests.nodegen.suite.judged_mutant`)."""
+    from tests.nodegen import suite
+
+    return suite.judged_mutant(student, rows)
+
+
 def parse(argv: Sequence[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("runs/grader-suite"))
-    parser.add_argument("--only", choices=("all", "right", "mistakes"), default="all")
+    parser.add_argument("--only", choices=("all", "right", "mistakes", "generated"), default="all",
+                        help="generated: only the --generated nodes and their mutants")
+    parser.add_argument("--generated", type=int, default=0, metavar="N",
+                        help="also grade N generated right nodes (tests/nodegen) and their mutants")
+    parser.add_argument("--no-generated-mutants", action="store_true", help="grade the generated right nodes only")
     parser.add_argument("--variants", default="", help="comma-separated variant names (default: every one)")
     parser.add_argument("--mistakes", default="", help="comma-separated mistakes (default: every one the mutation "
                                                        "suite expects of a choice, each graded as that choice)")
@@ -202,8 +230,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     node = fixture()
     variants = [v for v in args.variants.split(",") if v] or list(node.VARIANTS)
     mistakes = [m for m in args.mistakes.split(",") if m] or sorted({m for t in expectations()[0].values() for m in t})
-    todo = classes(node, variants if args.only != "mistakes" else [], mistakes if args.only != "right" else [],
-                   args.choices)
+    todo = classes(node, variants if args.only in ("all", "right") else [],
+                   mistakes if args.only in ("all", "mistakes") else [], args.choices)
+    todo.update(generated_classes(args))
     # at the default speed only (--rtf 0, as fast as the node keeps up): a right node must pass there on its own (the
     # 1x re-run would hide a grader that fails it)
     options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
@@ -214,7 +243,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name, spec in todo.items():
             kind = "mistake" if name.startswith("mistakes") else "right"
             for student, rows in grade_class(name, spec, options, args.out).items():
-                lines.append(judged(kind, student, rows))
+                lines.append(judged_generated(student, rows) if name.startswith("gen_mutants")
+                             else judged(kind, student, rows))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "confusion.json").write_text(json.dumps(lines, indent=1))
     text = matrix(lines)

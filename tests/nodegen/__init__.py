@@ -43,7 +43,8 @@ def fill(knobs: Knobs, seed: int, mistake: str | None) -> str:
     k = knobs
     said = "A right node: no mistake." if mistake is None else f"A mutant: {MUTATIONS[mistake][3]} ({mistake})."
     return Template(TEMPLATE).substitute(
-        SEED=seed, DESCRIPTION=textwrap.fill(describe(k), 110), MISTAKE=said, CHOICE=k.choice, EXECUTOR=k.executor, LOOP=k.loop,
+        SEED=seed, DESCRIPTION=textwrap.fill(describe(k), 110), MISTAKE=said, CHOICE=k.choice,
+        EXECUTOR=k.executor, LOOP=k.loop,
         TIMER_HZ=k.timer_hz, TIMING=k.timing, TURN_RATE=repr(k.turn_rate), ANNOUNCE=k.announce,
         FRONT_HALF=k.front_half, SIDE_CENTRE=k.side_centre, SIDE_HALF=k.side_half, SIDE_STAT=k.side_stat,
         REARM_MARGIN=repr(k.rearm_margin), PAUSE=repr(k.pause), C_TRIGGER=k.c_trigger, SPIN=k.spin)

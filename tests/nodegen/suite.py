@@ -1,0 +1,106 @@
+"""Generated right nodes and their mutants as the grader suite's classes (``tests/grader_suite.py --generated N``).
+
+Every default-grid cell of each choice must see many right nodes nobody wrote by hand: each generated node is
+graded on a sample of its choice's cells, dealt round-robin so that every cell gets at least :data:`PER_CELL` nodes
+when there are enough (N >= 100: each choice's ~33 nodes take both of its two cells). A cell is graded as its own
+class (``--maneuvers X --worlds W`` and the cell's parameters as ``--node-param``, which the judge triggers at
+too); each node's mutants are graded on their choice's default grid (``--maneuvers X``), where the mistakes must
+fail for the reasons of :data:`tests.nodegen.EXPECT`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+from bt_nav_sim.world import load_world
+
+from bt_nav.grading.grid import cell_label
+from bt_nav.mission.assignments import LAB, Cell
+from tests.nodegen import BY_LIDAR, EXPECT, NodeSpec, generate, mutants
+
+#: The fewest right nodes each default-grid cell of a choice gets when the choice has that many nodes.
+PER_CELL = 20
+#: Class names: ``gen_right_<choice>_<cell>`` and ``gen_mutants_<choice>``.
+RIGHT, MUTANTS = "gen_right", "gen_mutants"
+
+
+def choice_cells(choice: str) -> list[Cell]:
+    """The choice's cells of the lab's default grid (those whose world checks the choice off)."""
+    return [c for c in LAB.exe_grid.cells_of(choice) if choice in load_world(c.world).checkoff_maneuvers]
+
+
+def deal(specs: list[NodeSpec], per_cell: int = PER_CELL) -> dict[tuple[str, int], list[NodeSpec]]:
+    """(choice, cell index) -> the nodes graded there: each node on k of its choice's cells, round-robin, k the
+    fewest that give every cell ``per_cell`` nodes (all the cells when the choice has too few nodes)."""
+    out: dict[tuple[str, int], list[NodeSpec]] = {}
+    for choice in "ABC":
+        nodes = [s for s in specs if s.knobs.choice == choice]
+        cells = choice_cells(choice)
+        if not nodes or not cells:
+            continue
+        k = min(len(cells), math.ceil(per_cell * len(cells) / len(nodes)))
+        for i, spec in enumerate(nodes):
+            for j in range(k):
+                out.setdefault((choice, (i * k + j) % len(cells)), []).append(spec)
+    return out
+
+
+def cell_grid(choice: str, cell: Cell) -> tuple[str, ...]:
+    """The grade options of one cell: its world, the choice, and the cell's parameters given to the node."""
+    params = [word for name, value in cell.params for word in ("--node-param", f"{name}={value:g}")]
+    return ("--maneuvers", choice, "--worlds", cell.world, *params)
+
+
+def cell_name(cell: Cell) -> str:
+    """A cell as a class-name part: ``lab_beside_safety_distance_0.7``."""
+    return "_".join([cell.world, *(f"{k}_{v:g}" for k, v in cell.params)])
+
+
+def classes(count: int, folder: Path, python: str, with_mutants: bool = True) -> dict[str, dict[str, Any]]:
+    """Write nodes 0..count-1 (and their mutants) under ``folder``; the classes that grade them."""
+    folder.mkdir(parents=True, exist_ok=True)
+    specs = [generate(seed) for seed in range(count)]
+    out: dict[str, dict[str, Any]] = {}
+    for spec in specs:
+        (folder / f"{spec.name}.py").write_text(spec.source)
+    for (choice, index), nodes in sorted(deal(specs).items()):
+        cell = choice_cells(choice)[index]
+        out[f"{RIGHT}_{choice}_{cell_name(cell)}"] = {
+            "grid": cell_grid(choice, cell),
+            "students": {s.name: f"{python} {folder / (s.name + '.py')}" for s in nodes}}
+    for spec in specs if with_mutants else []:
+        group = out.setdefault(f"{MUTANTS}_{spec.knobs.choice}", {"grid": ("--maneuvers", spec.knobs.choice),
+                                                                   "students": {}})
+        for mistake, source in mutants(spec).items():
+            path = folder / f"{spec.name}__{mistake}.py"
+            path.write_text(source)
+            group["students"][path.stem] = f"{python} {path}"
+    return out
+
+
+def judged_mutant(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """A generated mutant's line of the matrix (``gen007_C__angle_45``): it must fail every run in the cells where
+    its mistake shows, for its reason (with the LiDAR it reads right, when only some show it: pass there)."""
+    runs = [{"cell": cell_label(r), "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]),
+             "reason": r["reason"]} for r in rows]
+    line = {"student": student, "kind": "mistake", "runs": runs}
+    if not runs:
+        return {**line, "outcome": "not graded", "wrong": ["no runs"]}
+    name, mistake = student.split("__", 1)
+    pattern, cells = EXPECT[mistake][name[-1]]
+    good, bad = BY_LIDAR.get(mistake, (None, None))
+    wrong, counted = [], 0
+    for r in runs:
+        if cells is not None and not re.search(cells, r["cell"]):
+            continue
+        counted += 1
+        if r["lidar"] == good and not r["passed"]:
+            wrong.append(f"{r['cell']}: failed with the LiDAR it reads right ({r['reason']})")
+        elif (good is None or r["lidar"] == bad) and (r["passed"] or not re.search(pattern, r["reason"])):
+            wrong.append(f"{r['cell']}: {'PASSED' if r['passed'] else r['reason']}")
+    if not counted:
+        wrong.append(f"no run in the cells it must fail in ({cells})")
+    return {**line, "outcome": "wrong" if wrong else "failed for its reason", "wrong": wrong}
