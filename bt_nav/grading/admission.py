@@ -177,17 +177,47 @@ class IdleMeter:
         return min(1.0, (last[0] - first[0] + last_own - first_own) / (last[1] - first[1]))
 
 
-def auto_bounds(jobs: int) -> tuple[int, int] | None:
-    """(runs started at once, most runs at once) of ``--jobs auto``; None for a plain number (exactly that many)."""
+#: Runs at most per usable core at 1x (the default grade): a 1x lab run uses about a tenth of a core (six cells took
+#: 43.8 CPU s over 74 s wall, 2026-11-28), so a whole grid of 12 runs at once on 2 cores with room to spare.
+REALTIME_PER_CORE = 8
+#: MiB a run takes (the node, a forked simulator with its judge and bag writer): the memory bound on runs at once.
+RUN_MEMORY_MIB = 400
+
+
+def available_mib(path: str = "/proc/meminfo") -> float | None:
+    """MiB of memory available to new processes (``MemAvailable``), or None when it cannot be read."""
+    try:
+        with open(path, encoding="ascii") as stream:
+            for line in stream:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def auto_bounds(jobs: int, real_time: bool = False) -> tuple[int, int] | None:
+    """(runs started at once, most runs at once) of ``--jobs auto``; None for a plain number (exactly that many). At
+    1x (``real_time``) every place opens at once, up to :data:`REALTIME_PER_CORE` per core and the memory's bound:
+    a 1x run waits for the wall clock most of the time, and one that fell behind says so itself (its place is then
+    taken away, :meth:`Admission.fell_behind`)."""
     if not isinstance(jobs, AutoJobs):
         return None
+    if real_time:
+        memory = available_mib()
+        most = REALTIME_PER_CORE * max(int(jobs), usable_cores())
+        if memory is not None:
+            most = max(1, min(most, int(memory // RUN_MEMORY_MIB)))
+        return most, most
     return int(jobs), PER_CORE * max(int(jobs), usable_cores())
 
 
-def describe(jobs: int) -> str:
-    """What ``--jobs`` means for a grid's first line: ``2 at a time``, or ``2 at a time, up to 6 while the cores stay
-    idle``."""
-    bounds = auto_bounds(jobs)
+def describe(jobs: int, real_time: bool = False) -> str:
+    """What ``--jobs`` means for a grid's first line: ``2 at a time``, ``up to 16 at once`` (1x), or ``2 at a time,
+    up to 6 while the cores stay idle``."""
+    bounds = auto_bounds(jobs, real_time)
+    if bounds is not None and real_time:
+        return f"up to {bounds[1]} at once"
     if bounds is None or bounds[0] == bounds[1]:
         return f"{int(jobs)} at a time"
     return f"{bounds[0]} at a time, up to {bounds[1]} while the cores stay idle"
@@ -211,10 +241,19 @@ class Admission:
         self._cond = threading.Condition()
 
     @classmethod
-    def for_jobs(cls, jobs: int) -> Admission | None:
-        """The admission of ``--jobs`` (None for a plain number: that many run, no more)."""
-        bounds = auto_bounds(jobs)
+    def for_jobs(cls, jobs: int, real_time: bool = False) -> Admission | None:
+        """The admission of ``--jobs`` (None for a plain number: that many run, no more); ``real_time``: of 1x runs
+        (:func:`auto_bounds`)."""
+        bounds = auto_bounds(jobs, real_time)
         return None if bounds is None else cls(*bounds)
+
+    def fell_behind(self) -> None:
+        """A run's simulator fell behind real time: the machine carries fewer runs than are running. One place
+        fewer than are running now (never below one), so its re-run and the next ones start only as others end."""
+        with self._cond:
+            self.base = max(1, min(self.base, self.running - 1))
+            self.places = max(1, min(self.places if self.places is not None else self.running, self.running - 1))
+            self.limit = max(self.base, self.places)
 
     def _open(self) -> int:
         """The places at the start: all of them when other programs leave the cores nearly free, else ``base``.

@@ -296,15 +296,14 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
     """Every student's grid into ``out/<name>``, all their runs in one pool of ``workers`` (a student with fewer
     runs than workers leaves no slot idle), each grid's report written as ``bt-nav grade --exe`` writes it as soon
     as its last run ends. Returns the rows that ended, per student reached. ``workers`` is a count of runs at once
-    here, or a :class:`~bt_nav.grading.exe.grid.Cluster`: then every run and every re-run of the 1x check is a Dask
-    task there (:func:`~bt_nav.grading.exe.grid.run_pool`), the verdicts as here.
+    here, or a :class:`~bt_nav.grading.exe.grid.Cluster`: then every cell is a Dask task there
+    (:func:`~bt_nav.grading.exe.grid.run_pool`), the verdicts as here.
 
     ``plan(student)`` gives the student's :class:`bt_nav.grading.exe.run.ExeSettings` (its command, its
     directory) and jobs (the same worlds, LiDARs and seeds for all; the maneuver each one's own). Resuming keeps
     each student's finished runs (a student whose grid is complete runs nothing). Runs start student by student
     in the manifest's order. A stop request ends the class after the runs under way; the runs not started are
-    left for ``--resume``. ``say`` gets each student's lines about the 1x check (which failed runs go again at 1x,
-    which not and why), as ``--exe`` prints them for one node.
+    left for ``--resume``. ``say``: kept for callers' lines (unused since a cell's re-runs are its own).
     """
     from bt_nav.grading.exe.grid import prepare_out
 
@@ -319,34 +318,12 @@ def run_class(students: Sequence[Student], plan: Callable[[Student], tuple[Any, 
         if not any(task[0] == name for task in todo):
             _write_student_report(settings, jobs, rows)  # nothing to run: its report as it stands
     _run_pooled(todo, grids, workers, stop, on_row)
-    _check_at_real_time(grids, workers, stop, on_row, say)
     out: dict[str, list[dict[str, Any]]] = {}
     for name, (_settings, jobs, rows) in grids.items():
         ended = _ended(jobs, rows)
         if ended or not jobs:
             out[name] = ended
     return out
-
-
-def _check_at_real_time(grids: dict[str, tuple[Any, Sequence[Any], dict[str, dict[str, Any]]]], workers: Workers,
-                        stop: Any, on_row: Callable[[str, dict[str, Any]], None] | None,
-                        say: Callable[[str], None] | None = None) -> None:
-    """Every student's failures checked at 1x as ``--exe`` checks one node's (:mod:`bt_nav.grading.realtime`), in one
-    pool; the report of each student who had a failure to check written again (with its 1x rows or its probe)."""
-    from bt_nav.grading.realtime import check_plan, confirm_grids, failed_jobs
-
-    if stop is not None and stop.requested:
-        return
-    for name, (settings, jobs, rows) in grids.items():
-        for line in check_plan(jobs, settings, rows) if say is not None else ():
-            say(f"{name}: {line.removeprefix('bt-nav grade: ')}")
-    names = [name for name, (settings, jobs, rows) in grids.items() if failed_jobs(jobs, settings, rows)]
-    shown = [None if on_row is None else (lambda row, who=name: on_row(who, row)) for name in names]
-    heard = None if say is None else (lambda index, line: say(f"{names[index]}: {line.removeprefix('bt-nav grade: ')}"))
-    confirm_grids([(grids[n][1], grids[n][0], grids[n][2], show) for n, show in zip(names, shown, strict=True)],
-                  workers, stop, heard)
-    for name in names:
-        _write_student_report(*grids[name])
 
 
 def _ended(jobs: Sequence[Any], rows: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:

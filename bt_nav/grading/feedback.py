@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.grid import failure_groups, run_label, runs_label
+from bt_nav.grading.grid import failure_groups, preview_said, run_label, runs_label
 from bt_nav.grading.handins import FEEDBACK, StudentResult, load_class, load_grid
 from bt_nav.grading.hints import LAUNCH_HINTS
 from bt_nav.grading.rules import RULES_FILE
@@ -42,9 +42,9 @@ def _run_lines(result: StudentResult) -> list[str]:
         checks = (row.get("verdict") or {}).get("report_lines") or []
         lines += [f"  - {line}" for line in checks if not line.startswith("overall:")]
         lines += [f"  - finding: {f}" for f in row.get("findings") or []]
-        said = (row.get("rerun") or {}).get("said")
-        if said and said not in (row.get("findings") or []):  # how its re-runs ended (bt_nav.grading.realtime)
-            lines.append(f"  - run again: {said}")
+        said = preview_said(row)
+        if said:  # a preview's failure, graded again at 1x (bt_nav.grading.exe.realtime)
+            lines.append(f"  - {said}")
     return lines
 
 

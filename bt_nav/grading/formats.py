@@ -34,7 +34,7 @@ from typing import Any
 
 from bt_nav_sim.referee_core import check_reason
 
-from bt_nav.grading.grid import cell_label, failure_groups, run_label, runs_label
+from bt_nav.grading.grid import cell_label, failure_groups, preview_said, run_label, runs_label
 from bt_nav.grading.hints import LAUNCH_HINTS, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
 from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this module's API since it began)
@@ -94,17 +94,9 @@ def _check_line(check: dict[str, Any]) -> str:
 
 
 def _run_again(row: dict[str, Any]) -> str:
-    """How the run went when it was run again before its failure stood (the grade's speed, 1x real time): one line
-    (the failure's words are above)."""
-    rerun, probe = row.get("rerun"), row.get("realtime_probe")
-    if isinstance(rerun, dict) and rerun.get("runs"):
-        said = ", ".join(f"at {float(r.get('rtf', 1)):g}x real time it {'passed' if r.get('passed') else 'failed'}"
-                         for r in rerun["runs"])
-        ending = {"stands": "the failure stands"}.get(str(rerun.get("decision")), str(rerun.get("decision") or ""))
-        return f"Run again before the failure stood: {said}" + (f"; {ending}." if ending else ".")
-    if isinstance(probe, dict):
-        return f"Checked again at 1x real time: it {'passed' if probe.get('passed') else 'failed'}."
-    return ""
+    """How a preview's failed run went at 1x, whose verdict this is (:func:`preview_said`): one line."""
+    said = preview_said(row)
+    return f"{said[0].upper()}{said[1:]}." if said else ""
 
 
 def _run_text(row: dict[str, Any]) -> str:

@@ -337,6 +337,18 @@ def run_label(row: dict[str, Any]) -> str:
     return f"{cell_label(row)} seed {row['seed']}"
 
 
+def preview_said(row: dict[str, Any]) -> str:
+    """How a preview's failed run went when graded again at 1x, whose verdict the row is
+    (:mod:`bt_nav.grading.exe.realtime`), in a clause; "" for any other run."""
+    preview = row.get("preview") or {}
+    if not preview.get("reason"):
+        return ""
+    rtf = float(preview.get("rtf") or 0.0)
+    where = f"at {rtf:.1f}x" if rtf else "as fast as it kept up"
+    now = "passed" if row.get("passed") else "failed"
+    return f"in the preview ({where}) it failed ({preview['reason']}); graded again at 1x real time it {now}"
+
+
 def runs_label(rows: Sequence[dict[str, Any]]) -> str:
     """Runs of one cell named at once: ``lab_object C rplidar seed 0``, ``lab_object C rplidar seeds 0, 3``."""
     if len(rows) == 1:

@@ -368,3 +368,54 @@ def read_pace(path: str | Path) -> dict[str, Any] | None:
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None
+
+
+#: Wall seconds late a step may be and still count as on time: a thread woken a little late by the scheduler.
+ON_TIME_S = 0.02
+
+
+class RealTimeKeeping:
+    """How well a simulator at a fixed factor kept it while its hosted judge was judging: the run's own evidence of
+    whether it was a real-time run (``bt-nav grade``'s verdict is that of a 1x run; one that fell behind is run
+    again, :mod:`bt_nav.grading.exe.realtime`).
+
+    At a fixed factor the loop sleeps until each step is due; when a step comes late (the simulator lacked CPU) the
+    wall clock has run ahead of sim time, and a backlog the loop writes off (it re-anchors instead of bursting to
+    catch up) is time the robot's world stood still while the node's did not. Counted only while judging: a node's
+    start-up and shutdown are not judged. Written into :data:`PACE_FILE` as ``realtime`` (:meth:`record`).
+    """
+
+    def __init__(self) -> None:
+        self.judged_sim_s = 0.0
+        self.judged_wall_s = 0.0
+        self.worst_s = 0.0  # the latest a step came, in wall s past its due time
+        self.lost_s = 0.0  # wall s written off (sim time did not make them up)
+        self.late_steps = 0  # steps later than ON_TIME_S
+        self._since: tuple[float, float] | None = None  # (wall, sim) where the judged span began
+
+    def judging(self, on: bool, wall: float, sim_s: float) -> None:
+        """The hosted judge started (``on``) or stopped judging at ``wall`` s (monotonic), sim ``sim_s`` s."""
+        if on and self._since is None:
+            self._since = (wall, sim_s)
+        elif not on and self._since is not None:
+            self.judged_wall_s += wall - self._since[0]
+            self.judged_sim_s += sim_s - self._since[1]
+            self._since = None
+
+    def step(self, late_s: float, written_off: bool) -> None:
+        """A step came ``late_s`` wall s past its due time (0 or less: on time); ``written_off``: the loop re-anchored
+        rather than catch up. Ignored while not judging."""
+        if self._since is None or late_s <= ON_TIME_S:
+            return
+        self.late_steps += 1
+        self.worst_s = max(self.worst_s, late_s)
+        if written_off:
+            self.lost_s += late_s
+
+    def record(self, wall: float, sim_s: float) -> dict[str, float | int]:
+        """What :data:`PACE_FILE` carries as ``realtime`` (a span still open ends at ``wall``, ``sim_s``)."""
+        open_wall = wall - self._since[0] if self._since is not None else 0.0
+        open_sim = sim_s - self._since[1] if self._since is not None else 0.0
+        return {"judged_wall_s": round(self.judged_wall_s + open_wall, 3),
+                "judged_sim_s": round(self.judged_sim_s + open_sim, 3), "worst_s": round(self.worst_s, 3),
+                "lost_s": round(self.lost_s, 3), "late_steps": self.late_steps}

@@ -65,7 +65,7 @@ def make_class(out: Path) -> Path:
     _grade(out, "ann", "ann")
     _grade(out, "bob", "bob")
     _grade(out, "cy", "ann", {"passed": False, "outcome": "node exited", "reason": CRASH, "verdict": None,
-                              "realtime_probe": None, "media": {"picture": None, "video": None}})
+                              "preview": None, "media": {"picture": None, "video": None}})
     (out / "cy" / "lab_object_C_lds01_seed0" / "node.log").write_text(TRACEBACK)
     _grade(out, "dee", "ann")
     _grade(out, "fay", "ann", {"passed": False, "outcome": "bt_nav error", "not_graded": NOT_GRADED,

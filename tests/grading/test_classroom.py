@@ -25,7 +25,6 @@ class FakeSettings(str):
     """A student's settings, named as the student: their grid runs at 1x, so no failure is checked again."""
 
     rtf = 1.0
-    realtime_check = True
 
 
 class Recorder:
@@ -199,31 +198,3 @@ def test_the_choice_is_read_from_the_file_the_command_runs(tmp_path: Path) -> No
     assert node_file(f"./{node.name}.py --ros-args") == Path(f"./{node.name}.py")
 
 
-def test_a_class_says_for_each_student_which_failures_go_again_and_how_they_ended(tmp_path: Path,
-                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
-    """As ``--exe`` does for one node, a class names, per student, the failed run that goes again at 1x; a student
-    without a failure says nothing."""
-    from bt_nav.grading import realtime
-    from bt_nav.grading.exe.run import ExeSettings
-    from bt_nav.grading.grid import Job
-
-    def row(job: Job, passed: bool) -> dict[str, Any]:
-        return {"job": job.key, "passed": passed, "outcome": "verdict", "reason": "failed: angle", "findings": [],
-                "run_dir": f"/r/{job.seed}", "world": job.world, "maneuver": job.maneuver, "lidar": "lds01",
-                "seed": job.seed, "verdict": {"checks": [{"name": "maneuver 1", "passed": passed}]}}
-
-    def again(tasks: list[tuple[Job, ExeSettings]], workers: int, stop: Any) -> Any:  # every re-run fails too
-        for index, (job, settings) in enumerate(tasks):
-            yield index, {**row(job, False), "run_dir": f"/r{settings.rtf:g}/{job.seed}"}
-
-    monkeypatch.setattr(realtime, "run_pool", again)
-    monkeypatch.setattr(classroom, "_write_student_report", lambda *args: None)
-    job = Job("lab_object", "C", 0, "lab", sim_params=(("lidar", "lds01"),))
-    grids = {"ann": (ExeSettings("python3 a.py", "lab", tmp_path / "ann", rtf=5.0), [job], {job.key: row(job, False)}),
-             "bob": (ExeSettings("python3 b.py", "lab", tmp_path / "bob", rtf=5.0), [job], {job.key: row(job, True)})}
-    said: list[str] = []
-    classroom._check_at_real_time(grids, 2, None, None, said.append)
-    assert len(said) == 2 and said[0].startswith("ann: lab_object C lds01 seed 0 again at 5x and at 1x real time"), said
-    # how the re-runs ended (issue 44: the class terminal used to stop at the plan)
-    assert said[1] == ("ann: lab_object C lds01 seed 0: failed at 5x (failed: angle); run again at 5x: failed (failed: "
-                       "angle); at 1x: failed (failed: angle): it failed again; the failure stands"), said

@@ -1,4 +1,4 @@
-"""A student's ``feedback.md`` says how each re-run of a failed run ended (issue 44: it used to say nothing of them),
+"""A student's ``feedback.md`` says how a preview's failed run went when graded again at 1x (whose verdict it is),
 and a run that was not graded is named as such, not as the node's failure."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading import realtime
+from bt_nav.grading.exe.realtime import not_real_time
 from bt_nav.grading.feedback import feedback_markdown
 from bt_nav.grading.handins import StudentResult
 
@@ -19,18 +19,17 @@ def _row(passed: bool, side: str, angle: float, where: str) -> dict[str, Any]:
                                        "angle_deg": angle if side == "left" else -angle}]}}
 
 
-def test_feedback_says_how_each_rerun_ended(tmp_path: Path) -> None:
-    fast = _row(False, "right", 60.0, "fast")
-    row, said = realtime.decide(fast, _row(True, "left", 135.0, "again"), _row(True, "left", 120.0, "slow"), 5.0, None)
-    text = feedback_markdown(StudentResult("cara", tmp_path, "node.py", "A", None, [row], None, False))
-    assert f"  - run again: {said}" in text.splitlines()
-    assert "run again at 5x: passed; at 1x: passed: the runs differed" in text and "the failure stands" in text
+def test_feedback_says_how_a_preview_failure_went_at_real_time(tmp_path: Path) -> None:
+    row = {**_row(True, "left", 135.0, "realtime"),
+           "preview": {"rtf": 9.3, "reason": "failed: maneuver 1 turned 60 deg right", "run_dir": "/fast/0"}}
+    text = feedback_markdown(StudentResult("cara", tmp_path, "node.py", "A", None, [row], None, True))
+    assert ("  - in the preview (at 9.3x) it failed (failed: maneuver 1 turned 60 deg right); graded again at 1x "
+            "real time it passed") in text.splitlines()
 
 
-def test_feedback_of_a_rerun_that_overturned_a_failure_says_it_as_its_finding(tmp_path: Path) -> None:
-    fast = _row(False, "left", 114.0, "fast")
-    slip = "the simulator stopped waiting for the node's commands at t=11.0 s, inside maneuver 1"
-    row, said = realtime.decide(fast, _row(True, "left", 91.0, "again"), None, 5.0, slip)
-    text = feedback_markdown(StudentResult("dan", tmp_path, "node.py", "A", None, [row], None, True))
-    assert f"  - finding: {said}" in text.splitlines()  # the finding (and the reason, as every finding) says it
-    assert not any(line.startswith("  - run again:") for line in text.splitlines())
+def test_a_run_behind_real_time_twice_is_not_graded_not_failed(tmp_path: Path) -> None:
+    row = not_real_time(_row(False, "right", 60.0, "again"), "its simulator fell behind real time")
+    text = feedback_markdown(StudentResult("dan", tmp_path, "node.py", "A", None, [row], None, False))
+    runs = [line for line in text.splitlines() if line.startswith("- **lab_object")]
+    assert runs == [f"- **lab_object A lds01 seed 0: not graded (not yours)** ({row['reason']})"], text
+    assert row["unkept"]["reason"] == "failed: maneuver 1 turned 60 deg right"

@@ -74,7 +74,10 @@ def test_one_node_s_results_json_validates_and_scores_its_runs() -> None:
     assert "**How to fix:** Turn by the angle and to the side the rule says" in output, output
     assert run["reason"].removeprefix("failed: ") in wrong["output"], wrong["output"]
     assert right["tests"][0]["output"] == "**PASSED**", right
-    assert output.endswith("\n\nChecked again at 1x real time: it failed."), output
+    said = ("In the preview (at 9.3x) it failed (failed: maneuver 1 turned 45 deg right; the Smart Pivot needs 90 +- "
+            "10 deg either side (readings at the start: front 0.32 m, left 1.93 m, right 2.07 m) (and 20 more "
+            "maneuvers failed)); graded again at 1x real time it failed.")
+    assert output.endswith(f"\n\n{said}"), output
     for doc in (right, wrong):  # Gradescope shows Markdown, and nothing the student cannot open there
         assert doc["output_format"] == doc["test_output_format"] == "md", doc
         assert all(t["output_format"] == "md" for t in doc["tests"]), doc

@@ -144,7 +144,7 @@ def test_resume_refuses_another_grade_and_keeps_only_finished_runs(tmp_path: Pat
     out = tmp_path / "g"
     settings = _settings(out)
     exe_grid.prepare_out(settings, JOBS, resume=False)
-    with pytest.raises(ValueError, match="rtf 0.0 there, 8.0 now"):
+    with pytest.raises(ValueError, match="rtf 1.0 there, 8.0 now"):
         exe_grid.prepare_out(_settings(out, rtf=8.0), JOBS, resume=True)
     with pytest.raises(ValueError, match="command"):
         exe_grid.prepare_out(ExeSettings("/bin/true", "homework", out, cwd=str(tmp_path)), JOBS, resume=True)
@@ -241,14 +241,16 @@ def test_the_cli_shows_progress_and_resumes(tmp_path: Path, monkeypatch: pytest.
     assert os.path.exists(out / "grade.json") and len(json.loads((out / "grade.json").read_text())["runs"]) == 6
 
 
-def test_the_simulator_is_paced_to_the_graded_node(tmp_path: Path) -> None:
-    """A graded run's simulator follows the node's cmd_vel (read best effort, so any writer is heard), leading its
-    latest command by at most 0.05 s (or its own command period) beyond the next scan it answers: a node starved of
-    CPU is waited for instead of left behind, and one that times its turns on the ROS clock turns what it meant."""
+def test_the_simulator_keeps_real_time_and_a_preview_is_paced_to_the_graded_node(tmp_path: Path) -> None:
+    """At 1x (the grade) the robot's world does not wait for its node (no follow), as on the robot; a preview follows
+    the node's cmd_vel (read best effort, so any writer is heard), leading its latest command by at most 0.05 s (or
+    its own command period) beyond the next scan it answers."""
     from bt_nav.grading.exe.run import exe_graph
 
     job = Job("lab_object", "C", 0, "lab", sim_params=(("lidar", "rplidar"),))
     spec = exe_graph(job, ExeSettings("python3 node.py", "lab", tmp_path), tmp_path / "verdict.json")
-    assert spec.executable == "sim"
+    assert spec.executable == "sim" and spec.parameters["real_time_factor"] == 1.0
+    assert spec.parameters["follow"] is False
+    spec = exe_graph(job, ExeSettings("python3 node.py", "lab", tmp_path, rtf=0.0), tmp_path / "verdict.json")
     assert {k: spec.parameters[k] for k in ("follow", "cmd_vel_reliability", "max_lag")} == {
         "follow": True, "cmd_vel_reliability": "best_effort", "max_lag": 0.05}

@@ -46,7 +46,6 @@ def test_right_nodes_written_other_ways_pass_every_run(tmp_path: Path) -> None:
         names = [name for k, name in enumerate(SPREAD) if LIDARS[k % len(LIDARS)] == lidar]
         for name, spec in suite.classes(node, names, []).items():
             options = ["--lidars", lidar, "--seeds", "1", "--jobs", "2", "--record", "off", "--progress", "off",
-                       "--realtime-check", "off",
                        "--worlds", "lab_object" if name != "right_B" else "lab_dead_end"]
             for student, rows in suite.grade_class(f"{lidar}_{name}", spec, options, tmp_path).items():
                 lines.append(suite.judged("right", student, rows))

@@ -17,7 +17,7 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
 def _grade(tmp_path: Path, fixture: str, *extra: str) -> tuple[int, dict]:
     code = grade.main(["--exe", f"{sys.executable} {FIXTURES / fixture}", "--worlds", "stage_4", "--seeds", "1",
-                       "--realtime-check", "off",
+                       "--rtf", "0", "--realtime-check", "off",
                        "--lidars", "profile",
                        "--jobs", "1", "--out", str(tmp_path / "grid"), *extra])
     return code, json.loads((tmp_path / "grid" / "grade.json").read_text())

@@ -36,7 +36,7 @@ def _env(mark: str) -> dict[str, str]:
 
 def _grade(command: str, out: Path, *extra: str) -> list[str]:
     return [sys.executable, "-m", "bt_nav.cli", "grade", "--exe", command, "--worlds", "stage_4",
-            "--realtime-check", "off", "--lidars", "profile", "--out", str(out),
+            "--rtf", "0", "--realtime-check", "off", "--lidars", "profile", "--out", str(out),
             "--progress", "off", "--timeout", "120", *extra]
 
 

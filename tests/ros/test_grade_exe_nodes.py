@@ -24,7 +24,7 @@ def _grade(tmp_path: Path, fixture: str, timeout: float, *extra: str) -> dict[st
     out = tmp_path / "grid"
     before = {p.pid for p in psutil.Process().children(recursive=True)}  # the test process's own (a resource tracker)
     code = grade.main(["--exe", f"{sys.executable} {FIXTURES / fixture}", "--worlds", "stage_4", "--seeds", "1",
-                       "--realtime-check", "off",
+                       "--rtf", "0", "--realtime-check", "off",
                        "--lidars", "profile",
                        "--jobs", "1", "--timeout", str(timeout), "--out", str(out), *extra])
     [row] = json.loads((out / "grade.json").read_text())["runs"]
@@ -195,7 +195,7 @@ def test_a_run_whose_domain_another_program_uses_moves_and_says_so(tmp_path: Pat
         subprocess.run([sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--exe",
                         f"{sys.executable} {FIXTURES / 'lab_student_node.py'} --variant c_stands_05",
                         "--worlds", "lab_object", "--maneuvers", "C", "--lidars", "lds01", "--seeds", "1",
-                        "--realtime-check", "off", "--record", "off", "--out", str(out)],
+                        "--rtf", "0", "--realtime-check", "off", "--record", "off", "--out", str(out)],
                        env={**os.environ, "PYTHONHASHSEED": str(seed), "BT_NAV_DOMAIN_RANGE": f"{low}-{low + 2}"},
                        check=False, timeout=240)
     finally:

@@ -29,7 +29,7 @@ _BEFORE: set[int] = set()
 def _grade(out: Path, command: str, *extra: str) -> tuple[int, dict]:
     _BEFORE.clear()
     _BEFORE.update(p.pid for p in psutil.Process().children(recursive=True))
-    code = grade.main(["--exe", command, "--worlds", "stage_4", "--seeds", "1", "--realtime-check", "off",
+    code = grade.main(["--exe", command, "--worlds", "stage_4", "--seeds", "1", "--rtf", "0", "--realtime-check", "off",
                        "--lidars", "profile", "--jobs", "1", "--out", str(out),
                        *extra])
     return code, json.loads((out / "grade.json").read_text())

@@ -96,7 +96,7 @@ def _class(tmp_path: Path, students: dict[str, str], *options: str) -> dict[str,
     manifest.write_text("".join(f"{name}: {command}\n" for name, command in students.items()))
     out = tmp_path / "class"
     code = grade.main(["--class", str(manifest), "--seeds", "1", "--jobs", "2", "--record", "off",
-                       "--realtime-check", "off", "--progress", "off", "--out", str(out), *options])
+                       "--progress", "off", "--out", str(out), *options])
     page = json.loads((out / "class.json").read_text())
     rows = {name: json.loads((out / name / "grade.json").read_text()) for name in students}
     return {"code": code, "page": page, "grades": rows}
@@ -231,7 +231,7 @@ def test_a_class_graded_together_equals_each_student_graded_alone(tmp_path: Path
     for name, command in students.items():
         out = tmp_path / "alone" / name
         grade.main(["--exe", command, "--seeds", "1", "--jobs", "2", "--record", "off",
-                    "--realtime-check", "off", "--progress", "off",
+                    "--progress", "off",
                     "--out", str(out), *grid])
         alone = json.loads((out / "grade.json").read_text())["runs"]
         with_class = together["grades"][name]["runs"]

@@ -106,14 +106,14 @@ def _parser() -> argparse.ArgumentParser:
                         "checks as --class gives each hand-in (see bt-nav check-launch); grade.json and feedback.md "
                         "carry them")
     parser.add_argument("--timeout", type=float, default=150.0, help="--exe: wall seconds per run (default 150)")
-    parser.add_argument("--rtf", type=float, default=0.0, help="--exe: sim seconds per wall second; 0 (default): as "
-                        "fast as the node keeps up, the factor each run achieved in its line")
+    parser.add_argument("--rtf", type=float, default=1.0, help="--exe: sim seconds per wall second; 1 (default): "
+                        "real time, as on the robot: the grade; 0 (as fast as the node keeps up) or above 1: a PREVIEW "
+                        "for iterating (failed cells graded again at 1x; no score written)")
     parser.add_argument("--rtf-max", type=float, default=None, metavar="N", help="--exe, --rtf 0: at most N sim "
-                        "seconds per wall second (default and 0: no cap; the simulator keeps just behind the node)")
+                        "seconds per wall second in the preview (default and 0: no cap)")
     parser.add_argument("--realtime-check", choices=("on", "off"), default="on",
-                        help="--exe: before failures at --rtf 0 or > 1 stand, one failed run is run again at 1x; if it "
-                        "passes there (a node keeping time by the wall clock), every failed run is graded at 1x, "
-                        "with a finding (default on)")
+                        help="--exe, a preview (--rtf other than 1): grade each failed cell again at 1x before it is "
+                        "shown (default on); off: show the preview's failures as they are (still a preview)")
     parser.add_argument("--out", default=None, help="--exe: the grid's directory, new or empty unless --resume "
                         "(default runs/grade-exe-<time>); with --scheduler on a filesystem every worker shares")
     parser.add_argument("--record", choices=("on", "failures", "off"), default="on", help="--exe: each run's bag, "

@@ -17,16 +17,19 @@ from typing import Any
 from tqdm import tqdm
 
 from bt_nav.cli.grade.formats import write_class_formats, write_exe_formats
-from bt_nav.grading.grid import Job, format_lidars, run_label
+from bt_nav.grading.grid import Job, format_lidars, preview_said, run_label
 
 
 def _show(row: dict[str, Any]) -> None:
     """One line per run as it ends (above the progress bar, when there is one)."""
     label = "STOPPED" if row["outcome"] == "stopped" else "PASSED" if row["passed"] else "FAILED"
-    label = "NOT GRADED" if row.get("not_graded") else label  # another program on its domain: not the node's
+    label = "NOT GRADED" if row.get("not_graded") else label  # not the node's doing: its domain, a busy machine
+    label += " (preview)" if str((row.get("preview") or {}).get("said")).endswith("in the preview") else ""
     factor = f", {row['rtf']:.1f}x" if row.get("rtf") else ""  # what the run achieved (bt_nav.grading.exe.pace)
     tqdm.write(f"  {run_label(row)}: {label} ({row['reason']}; "
                f"{row['wall_time']:.1f} s wall{factor}) {row['run_dir']}", file=sys.stdout)
+    if preview_said(row):  # a preview's failure graded at 1x: this is the 1x run's verdict
+        tqdm.write(f"    {preview_said(row)}", file=sys.stdout)
     for note in row.get("notes", []):  # not the node's: a domain it had to leave, a lost SIGINT
         tqdm.write(f"    note: {note}", file=sys.stdout)
     sys.stdout.flush()
@@ -43,12 +46,12 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         describe_workers,
         exe_settings,
         prepare_out,
+        run_exe_grid,
     )
-    from bt_nav.grading.exe.pace import speed_words
+    from bt_nav.grading.exe.pace import preview, speed_words
     from bt_nav.grading.launch_target import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
-    from bt_nav.grading.wallclock import run_grid
     from bt_nav.ros.supervise import StopRequest
 
     try:
@@ -58,7 +61,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         done = prepare_out(settings, jobs, args.resume)
     except ValueError as exc:
         parser.error(str(exc))
-    where = describe_workers(workers)
+    where = describe_workers(workers, real_time=not preview(settings.rtf))
     print(f"bt-nav grade: {len(jobs)} runs of {settings.command!r} ({args.profile} profile, {where}, "
           f"{speed_words(settings.rtf, settings.rtf_max)}, {args.timeout:g} s wall each) in {settings.out}/",
           flush=True)
@@ -76,9 +79,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
 
     rows: list[dict[str, Any]] = []
     try:
-        rows = run_grid(jobs, settings, workers, stop, ended_run, done=done, progress=progress,  # a wall clock: 1x
-                        say=lambda line: tqdm.write(line, file=sys.stdout))
-        rows = _check_at_real_time(jobs, settings, rows, workers, stop)  # re-runs where the runs ran
+        rows = run_exe_grid(jobs, settings, workers, stop, ended_run, done=done, progress=progress)
     finally:
         close_workers(workers)
         stop.closing = True
@@ -98,23 +99,6 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
     for line in format_lidars(ended):
         print(line)
     return _verdict(args, ended, len(jobs), settings, time.perf_counter() - started, stop, (json_path, md_path))
-
-
-def _check_at_real_time(jobs: Sequence[Job], settings: Any, rows: list[dict[str, Any]], workers: Any,
-                        stop: Any) -> list[dict[str, Any]]:
-    """The grid's failures checked at 1x (:mod:`bt_nav.grading.realtime`), saying which runs go again and which
-    not (and why)."""
-    from bt_nav.grading.realtime import check_plan, confirm_at_real_time, failed_jobs
-
-    by_key = {row["job"]: row for row in rows}
-    if stop.requested:
-        return rows
-    for line in check_plan(jobs, settings, by_key):
-        print(line, flush=True)
-    if not failed_jobs(jobs, settings, by_key):
-        return rows
-    confirm_at_real_time(jobs, settings, by_key, workers, stop, _show, lambda line: print(line, flush=True))
-    return [by_key[job.key] for job in jobs if job.key in by_key]
 
 
 def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned: int, settings: Any,

@@ -69,6 +69,10 @@ def check_format_options(args: argparse.Namespace) -> Weights | None:
         raise ValueError("--gradescope and --junit are written for --exe or --class grades")
     if getattr(args, "csv", None) and args.klass is None:
         raise ValueError("--csv is written for --class grades (a row per student)")
+    scores = [name for name in ("gradescope", "junit", "csv") if getattr(args, name, None)]
+    if scores and getattr(args, "rtf", 1.0) != 1.0:  # bt_nav.grading.exe.pace.preview
+        raise ValueError(f"--{scores[0]} writes scores, which come from 1x runs only: --rtf {args.rtf:g} is a preview; "
+                         "leave --rtf out to grade at real time")
     if args.weights and not (args.gradescope or getattr(args, "csv", None) or args.klass):
         raise ValueError("--weights sets the points of --gradescope, --csv or a class page: give one of them")
     return load_weights(Path(args.weights) if args.weights else None) \

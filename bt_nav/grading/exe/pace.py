@@ -1,25 +1,26 @@
-"""The speed of an ``--exe`` run: what ``--rtf`` and ``--rtf-max`` set in its simulator, the factor the run achieved
-(read from the simulator's pace record, ``pace.json``), and the words for both.
+"""The speed of an ``--exe`` run: real time (1x, the default, the verdict) or a preview (``--rtf 0`` or ``--rtf N``
+above 1), what each sets in the simulator, whether a 1x run kept real time, and the words for both.
 
-Why a node sets the speed: the simulator is paced to the graded node (:data:`bt_nav.grading.exe.run.FOLLOW_NODE`):
-sim time never runs ahead of the node's latest command by more than its period and the next scan it answers, so a
-node on ROS time (``use_sim_time``) finds the world where it left it at any speed. At ``--rtf 0`` (the default) the
-simulator therefore runs as fast as the node keeps up (``afap_max_rtf``), capped by ``--rtf-max``
-(:data:`DEFAULT_RTF_MAX` unless given), and under that cap just behind the pace the node keeps (``afap_adapt``:
-:class:`bt_nav_sim.pacing.StayBehind`), so the followers' bound is a safety net, not the pace: a simulator held at the
-bound makes every command of the node come that late; the hosted judge sends no ``sim_sync`` of its own, so
-``solo_rtf``, the cap while only ``cmd_vel`` is followed, is the same cap.
-While the node says nothing (before its arming, after its stop,
-a node that publishes only on change) nobody is followed and sim time runs at ``idle_rtf``: :data:`IDLE_RTF`, or
-``--rtf-max`` when lower, so a silent node does not see sim time race away. Before the judge's t0 (the node starting
-up) and after its verdict (the node being stopped) nothing is judged, and sim time runs at 1x (the simulator's
-``unjudged_rtf``). ``--rtf N`` (N > 0) keeps a fixed factor, as before.
+Why real time: a check-off is a real-time event. The robot, its LiDAR and the student's node all run at 1x, so a
+node is graded as it will run there: its world at 1x, its own clock whatever it is (ROS time, the wall clock, scan
+stamps), its CPU shared with the run's simulator as with the robot's drivers. At 1x the simulator does not wait for
+the node (``follow`` off): a node that answers late answers late, as on the robot. A 1x run costs about a tenth of a
+core (it waits for the wall clock), so a whole grid runs at once (:mod:`bt_nav.grading.admission`) and its wall
+time is the schedule's simulated length.
+
+A 1x run is valid only if its simulator kept real time while it was judged: it measures its own lag
+(:class:`bt_nav_sim.pacing.RealTimeKeeping`, ``pace.json``'s ``realtime``); a run that fell behind
+(:func:`fell_behind`) is run again, and not graded if it falls behind again (:mod:`bt_nav.grading.exe.realtime`).
+
+The preview (:func:`preview`), for a student iterating: ``--rtf 0`` runs as fast as the node keeps up (sim time
+waits for the node's commands: :data:`bt_nav.grading.exe.run.FOLLOW_NODE`, the speed kept just behind the node's
+pace by :class:`bt_nav_sim.pacing.StayBehind`, at most ``--rtf-max``), ``--rtf N`` at a fixed N. Every line and
+report says "preview"; a failed cell is graded again at 1x before it is shown as a failure, and a preview writes no
+score.
 
 Each run's row carries what it achieved (:func:`with_speed`): ``rtf``, the simulator's sim seconds per wall second
-over the run, and ``speed``: those seconds, and the sim and wall seconds while the node's ``cmd_vel`` was followed
-(``node_rtf``: how fast the node kept up). At ``--rtf 0`` a node that kept up with less than 1x real time while
-followed (for at least :data:`MIN_FOLLOWED_SIM` sim seconds) gets a finding: it would be too slow for the robot,
-which moves at 1x whatever the node does. Not a failure by itself: the judge's checks say whether the run passed.
+over the run, and ``speed``: those seconds, the sim and wall seconds while the node's ``cmd_vel`` was followed (a
+preview at 0) and, at 1x, how real time was kept while judging.
 """
 
 from __future__ import annotations
@@ -29,53 +30,54 @@ from typing import Any
 
 from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace
 
-#: Sim seconds per wall second at ``--rtf 0`` while the node is not followed (silent): the simulator's own default.
+#: The speed of a graded run: the robot's.
+REAL_TIME = 1.0
+#: Sim seconds per wall second of a preview at ``--rtf 0`` while the node is not followed (silent).
 IDLE_RTF = 10.0
-#: ``--rtf 0``'s cap unless ``--rtf-max`` is given (``--rtf-max 0``: none): none. Until 2026-11-27 it was 5x: with the
-#: followers' bound alone the simulator ran at that bound whenever it was faster than the node, so every command came
-#: the whole bound late and a node on a fast timer steered on a full odometry queue (uncapped, five right variants of
-#: the grader suite failed; a 50 Hz Retreat on odometry turned 190-258 deg). Kept just behind the node
-#: (:class:`bt_nav_sim.pacing.StayBehind`), the suite's 40 right nodes passed 240 of 240 runs uncapped, two CPU hogs
-#: running.
-DEFAULT_RTF_MAX = 0.0
-#: The factor a real robot runs at: a node that keeps up with less is too slow for it.
-ROBOT_RTF = 1.0
-#: Sim seconds of following below which a run's ``node_rtf`` says nothing of the node (a node that spoke once; a
-#: right node is followed for most of a lab run's 70 s, about 55 s of it).
+#: Sim seconds of following below which a preview's ``node_rtf`` says nothing of the node.
 MIN_FOLLOWED_SIM = 5.0
+#: A 1x run fell behind when a step of its simulator came this many wall seconds late while judged (a scan of the
+#: lab's LDS-01 comes every 0.2 s: a world that stood still longer than most of a scan period is not the robot's) ...
+WORST_LATE_S = 0.15
+#: ... or the wall seconds it wrote off add up to more than this share of the judged time.
+LOST_SHARE = 0.01
+
+
+def preview(rtf: float) -> bool:
+    """Whether a grade at ``rtf`` is a preview (anything but real time): its verdicts are not the grade's."""
+    return rtf != REAL_TIME
 
 
 def check_speed(rtf: float, rtf_max: float | None) -> None:
-    """Refuse a speed no run can keep: a negative ``--rtf`` or ``--rtf-max``, or ``--rtf-max`` beside a fixed
-    ``--rtf N`` (the cap is of mode 0 only). ``rtf_max`` None: not given.
+    """Refuse a speed no grade keeps: ``--rtf`` negative or between 0 and 1 (slower than the robot judges nothing
+    a 1x run does not), ``--rtf-max`` negative or beside a fixed ``--rtf``. ``rtf_max`` None: not given.
 
     Raises:
         ValueError: one line naming the option and what to do instead.
     """
-    if rtf < 0:
-        raise ValueError(f"--rtf {rtf:g}: sim seconds per wall second, >= 0 (0: as fast as the node keeps up)")
+    if rtf < 0 or 0 < rtf < REAL_TIME:
+        raise ValueError(f"--rtf {rtf:g}: 1 (the default) grades at real time; 0 or above 1 is a preview (0: as fast "
+                         "as the node keeps up)")
     if rtf_max is None:
         return
     if rtf_max < 0:
         raise ValueError(f"--rtf-max {rtf_max:g}: the cap of --rtf 0, >= 0 (0: no cap)")
     if rtf > 0:
-        raise ValueError(f"--rtf-max caps --rtf 0 (as fast as the node keeps up); --rtf {rtf:g} is a fixed factor "
-                         "already: leave one of them out")
+        raise ValueError(f"--rtf-max caps the preview --rtf 0 (as fast as the node keeps up); --rtf {rtf:g} is a "
+                         "fixed factor already: leave one of them out")
 
 
 def rtf_cap(rtf: float, rtf_max: float | None) -> float:
-    """The cap a grade runs with: ``--rtf-max`` as given (0: none), else :data:`DEFAULT_RTF_MAX` at ``--rtf 0`` and
-    none beside a fixed factor."""
-    if rtf_max is not None:
-        return float(rtf_max)
-    return DEFAULT_RTF_MAX if rtf == 0.0 else 0.0
+    """The cap a grade runs with: ``--rtf-max`` as given at ``--rtf 0`` (0: none), else none."""
+    return float(rtf_max) if rtf_max is not None and rtf == 0.0 else 0.0
 
 
 def sim_pace(rtf: float, rtf_max: float = 0.0) -> dict[str, float | bool]:
-    """The simulator's pacing parameters for a grade's speed (module docstring): none at a fixed factor (``rtf`` >
-    0, ``real_time_factor`` says it all); at 0 the cap ``rtf_max`` (0: none) while the node is followed, alone or
-    not, the speed kept just behind the node's pace under it (``afap_adapt``:
-    :class:`bt_nav_sim.pacing.StayBehind`), and :data:`IDLE_RTF` (or the cap, when lower) while it is silent."""
+    """The simulator's pacing parameters for a grade's speed (module docstring): at 1x nobody is followed (the
+    robot's world does not wait for its node); a preview at a fixed factor follows the node; at 0 the cap
+    ``rtf_max`` (0: none), the speed kept just behind the node's pace, :data:`IDLE_RTF` (or the cap) while silent."""
+    if rtf == REAL_TIME:
+        return {"follow": False}
     if rtf > 0:
         return {}
     idle = min(IDLE_RTF, rtf_max) if rtf_max > 0 else IDLE_RTF
@@ -83,38 +85,45 @@ def sim_pace(rtf: float, rtf_max: float = 0.0) -> dict[str, float | bool]:
 
 
 def speed_words(rtf: float, rtf_max: float = 0.0) -> str:
-    """A grade's speed in words: ``5x real time``, or ``as fast as the node keeps up`` (and its cap)."""
+    """A grade's speed in words: ``real time (1x)``, or the preview's."""
+    if rtf == REAL_TIME:
+        return "real time (1x, as on the robot)"
     if rtf > 0:
-        return f"{rtf:g}x real time"
-    return "as fast as the node keeps up" + (f" (at most {rtf_max:g}x real time)" if rtf_max > 0 else "")
+        return f"PREVIEW at {rtf:g}x real time (failures graded again at 1x; no score)"
+    cap = f", at most {rtf_max:g}x" if rtf_max > 0 else ""
+    return f"PREVIEW as fast as the node keeps up{cap} (failures graded again at 1x; no score)"
 
 
-def run_speed(run_dir: str | Path) -> dict[str, float] | None:
+def run_speed(run_dir: str | Path) -> dict[str, Any] | None:
     """What a run's simulator wrote of its speed (:data:`bt_nav_sim.pacing.PACE_FILE`): ``sim_s`` and ``wall_s``
-    over the run and ``rtf`` their ratio; ``node_sim_s``, ``node_wall_s`` and ``node_rtf`` while the node's
-    ``cmd_vel`` was followed (``node_rtf`` None when that was under :data:`MIN_FOLLOWED_SIM`). None: no record (a
-    simulator killed before its exit, or one of before the record had its wall time)."""
+    over the run and ``rtf`` their ratio; ``node_sim_s``, ``node_wall_s``, ``node_rtf`` while the node's ``cmd_vel``
+    was followed (a preview at 0; ``node_rtf`` None under :data:`MIN_FOLLOWED_SIM`); ``realtime``: how a fixed
+    factor was kept while judged. None: no record (a simulator killed before its exit)."""
     record = read_pace(Path(run_dir) / PACE_FILE) if run_dir else None
     if record is None or not record.get("wall_s") or record.get("t_end") is None:
         return None
     sim_s, wall_s = float(record["t_end"]), float(record["wall_s"])
     node = (record.get("followed") or {}).get(CMD_VEL) or {}
     node_sim, node_wall = float(node.get("sim_s", 0.0)), float(node.get("wall_s", 0.0))
-    return {"sim_s": round(sim_s, 2), "wall_s": round(wall_s, 2), "rtf": round(sim_s / wall_s, 2),
-            "node_sim_s": round(node_sim, 2), "node_wall_s": round(node_wall, 2),
-            "node_rtf": round(node_sim / node_wall, 2) if node_sim >= MIN_FOLLOWED_SIM and node_wall > 0 else None}
+    speed: dict[str, Any] = {
+        "sim_s": round(sim_s, 2), "wall_s": round(wall_s, 2), "rtf": round(sim_s / wall_s, 2),
+        "node_sim_s": round(node_sim, 2), "node_wall_s": round(node_wall, 2),
+        "node_rtf": round(node_sim / node_wall, 2) if node_sim >= MIN_FOLLOWED_SIM and node_wall > 0 else None}
+    if isinstance(record.get("realtime"), dict):
+        speed["realtime"] = record["realtime"]
+    return speed
 
 
 def too_slow_finding(node_rtf: float) -> str:
-    """The finding of a node that kept up with less than 1x real time (:data:`ROBOT_RTF`)."""
+    """The finding of a node that kept up with less than 1x real time in a preview at 0."""
     return (f"too slow for the robot: the node kept up with {node_rtf:.1f}x real time (a robot moves at 1x whatever "
             "the node does; its commands would come late there)")
 
 
 def with_speed(row: dict[str, Any], rtf: float) -> dict[str, Any]:
     """``row`` of a run at the grade's ``rtf`` with what it achieved (module docstring): ``rtf`` and ``speed``
-    (:func:`run_speed`), and at ``rtf`` 0 the too-slow finding. Once only: a row that has ``speed`` is returned
-    as it is."""
+    (:func:`run_speed`), and in a preview at 0 the too-slow finding. Once only: a row that has ``speed`` is
+    returned as it is."""
     if "speed" in row:
         return row
     speed = run_speed(row.get("run_dir") or "")
@@ -123,28 +132,26 @@ def with_speed(row: dict[str, Any], rtf: float) -> dict[str, Any]:
         return row
     row["rtf"] = speed["rtf"]
     node_rtf = speed.get("node_rtf")
-    if rtf <= 0 and node_rtf is not None and node_rtf < ROBOT_RTF and row.get("outcome") not in ("stopped",):
+    if rtf <= 0 and node_rtf is not None and node_rtf < REAL_TIME and row.get("outcome") not in ("stopped",):
         finding = too_slow_finding(node_rtf)
         row["findings"] = [*row.get("findings", []), finding]
         row["reason"] = f"{row['reason']}; {finding}"
     return row
 
 
-def achieved(row: dict[str, Any] | None, rtf: float) -> float:
-    """The factor a run went at, for words and the re-run rule: the grade's fixed ``rtf``, or at 0 the run's own
-    (``rtf``: its line's figure, the simulator's sim seconds per wall second over the run; else ``node_rtf``; 1 when
-    neither is known: nothing faster is shown)."""
-    if rtf > 0:
-        return rtf
+def fell_behind(row: dict[str, Any] | None) -> str | None:
+    """Why a 1x run is no valid real-time run (a clause), or None when its simulator kept real time while judged
+    (or said nothing of it: a simulator without the record is not doubted). Not of a preview's run."""
     speed = (row or {}).get("speed") or {}
-    return float(speed.get("rtf") or speed.get("node_rtf") or 1.0)
-
-
-def node_factor(row: dict[str, Any] | None, rtf: float) -> float:
-    """How fast the node kept up while it was followed (``node_rtf``), the pace its turns ran at; else
-    :func:`achieved`."""
-    speed = (row or {}).get("speed") or {}
-    return float(speed["node_rtf"]) if rtf <= 0 and speed.get("node_rtf") else achieved(row, rtf)
+    kept = speed.get("realtime")
+    if speed.get("set") != REAL_TIME or not isinstance(kept, dict):
+        return None
+    judged, worst, lost = float(kept.get("judged_wall_s", 0.0)), float(kept.get("worst_s", 0.0)), \
+        float(kept.get("lost_s", 0.0))
+    if worst <= WORST_LATE_S and lost <= LOST_SHARE * max(judged, 1.0):
+        return None
+    return (f"its simulator fell behind real time while judged (a step {worst:.2f} s late; {lost:.2f} s of "
+            f"{judged:.1f} s lost): the machine was too busy for a real-time run")
 
 
 def factor_text(row: dict[str, Any]) -> str:
@@ -163,15 +170,3 @@ def achieved_text(rows: list[dict[str, Any]] | tuple[dict[str, Any], ...] | Any)
     if factors[0] == factors[-1] or len(factors) == 1:
         return f" (the runs went at {median:.1f}x)"
     return f" (the runs went at {factors[0]:.1f}-{factors[-1]:.1f}x, median {median:.1f}x)"
-
-
-def fell_behind(row: dict[str, Any] | None) -> float | None:
-    """The factor a run at 1x kept while it followed the node, when under 1x (None: it kept real time, or no
-    record): its simulation fell behind the wall clock, a machine too busy for it (or a node too slow for the
-    robot). A node timing itself by the wall clock then turns less than it means (measured: 55-76 deg of a 90 deg
-    turn at 0.92-0.99x, with 12 runs at 1x beside a test suite; 90-92 deg at 1.00-1.01x on a quiet machine)."""
-    speed = (row or {}).get("speed") or {}
-    if speed.get("set") != 1.0 or speed.get("node_rtf") is None:
-        return None
-    kept = float(speed["node_rtf"])
-    return kept if kept < ROBOT_RTF else None

@@ -94,7 +94,7 @@ import rclpy
 from bt_nav_sim.core import PROFILES, SimConfig, SimCore, StepOutput
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.multi import MultiSimCore, parse_starts
-from bt_nav_sim.pacing import CMD_VEL, STAY_TURNING, Followers, PaceStops, StayBehind
+from bt_nav_sim.pacing import CMD_VEL, STAY_TURNING, Followers, PaceStops, RealTimeKeeping, StayBehind
 from bt_nav_sim.physics import KINEMATICS, RobotParams, RobotState
 from bt_nav_sim.walkers import walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
@@ -266,6 +266,7 @@ class SimulatorNode(QuietQosEvents, Node):
         self.solo_rtf = max(0.0, float(p["solo_rtf"]))
         self.unjudged_rtf = max(0.0, float(p["unjudged_rtf"]))
         self.judging = True  # a hosted judge says otherwise (set_judging): no judge here, nothing to wait for
+        self.keeping = RealTimeKeeping()  # how well a fixed factor was kept while judging (pace.json's realtime)
         # it keeps behind a followed node: without following (follow off) there is none, and no member to ask
         adapt = bool(p["afap_adapt"]) and self.rtf == 0.0 and self.follow
         self.stay_behind = StayBehind(self.afap_max_rtf) if adapt else None
@@ -359,6 +360,7 @@ class SimulatorNode(QuietQosEvents, Node):
             record = self.pace_stops.record(self.followers, follower_timeout=self.followers.silence_s,
                                             hold_timeout=self.followers.hold_s, t_end=round(self.sim.t, 4),
                                             wall_s=round(time.monotonic() - self._wall_start, 3),
+                                            realtime=self.keeping.record(time.monotonic(), self.sim.t),
                                             **self._stay_record())
         try:
             with written_whole(self.pace_path) as stream:
@@ -444,6 +446,7 @@ class SimulatorNode(QuietQosEvents, Node):
         CPU s for nothing judged, on a grade that is CPU-bound. 1x is a robot's own pace: a node starting up, or
         shutting down on ROS-time timers, sees its clock run as on a robot."""
         self.judging = bool(judging)
+        self.keeping.judging(self.judging, time.monotonic(), self.core.t)
 
     def robot_armed(self, armed: bool) -> None:
         """The robot's judge armed (True) or disarmed (False) its node: the answer to its arm service said success
@@ -469,6 +472,8 @@ class SimulatorNode(QuietQosEvents, Node):
         core = self.core
         self._publish_all(self.sim.outputs())
         self._anchor_wall, self._anchor_ns, self._anchor_rate = time.monotonic(), core.t_ns, -1.0
+        if self.judging:  # no hosted judge: the whole run counts
+            self.keeping.judging(True, self._anchor_wall, core.t)
         while not self._stop.is_set() and rclpy.ok(context=self.context):
             if self.duration_ns and core.t_ns >= self.duration_ns:
                 self.get_logger().info(f"duration reached (t={core.t:.2f} s): stopping")
@@ -537,8 +542,12 @@ class SimulatorNode(QuietQosEvents, Node):
             if delay > 0.0:
                 if self._stop.wait(delay):
                     return False
-            elif delay < -_REANCHOR_S or (not following and delay < -core.step_ns * 1e-9 / rate):
+                return True
+            written_off = delay < -_REANCHOR_S or (not following and delay < -core.step_ns * 1e-9 / rate)
+            if written_off:
                 self._anchor_wall, self._anchor_ns = time.monotonic(), core.t_ns
+            if rate == self.rtf:  # a fixed factor (a grade's 1x): was it kept?
+                self.keeping.step(-delay, written_off)
         return True
 
     def _wait_for_followers(self) -> bool:
