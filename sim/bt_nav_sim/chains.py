@@ -11,7 +11,9 @@ A rotation is split only where all three hold (:func:`split_run`), the earliest 
 (a) the node marks a new maneuver there (:func:`marks`): a line it logged (``/rosout``, any words: the lab
     template logs one as each maneuver starts) within :data:`ANNOUNCE_WINDOW` s, a pause in its commands, or a step
     in its commanded rate (a rise, or a drop to a new steady rate; a closed loop's gradual slow-down is not one);
-(b) the judge's own readings show the trigger held at that moment (the node's words never replace them);
+(b) the judge's own readings show the trigger held at that moment, for a pause or a rate step (an announced start
+    splits whatever the readings say: each maneuver the node announced is judged as it made it, its trigger
+    included; measured: three announced right Randomizers of 96, 142 and 103 deg read as one of 348 deg);
 (c) the part before it is within the maneuver's angle range;
 
 and the rest of the rotation turns at least half the smallest maneuver, unless the disarm cut it short: a line the
@@ -23,7 +25,8 @@ maneuvers visible (:data:`SPLIT_HINT`). Maneuvers the robot made without travell
 (:func:`chains`), judged by its maneuver's purpose (:class:`bt_nav.mission.maneuver_spec.Purpose`,
 :func:`chain_verdict`): a search (the Randomizer, the Smart Pivot) that turns again on a still-blocked front is
 searching on, and passes with a finding that counts the turns; an exit (the Retreat) that never leads out before the
-disarm failed its purpose ("never moved on").
+disarm failed its purpose ("never moved on"): a finding too, as the sheet only implies driving out, unless the
+course makes it strict (:mod:`bt_nav_sim.findings`).
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ import math
 import statistics
 from collections.abc import Sequence
 from typing import Any
+
+from bt_nav_sim.findings import BACK_TO_BACK, SEARCH_CHAIN, finding
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
 #: stopped by the disarm, as it must be: its angle is not judged. A node that publishes from its scan callback
@@ -129,7 +134,7 @@ def split_run(judge: Any, a: int, b: int) -> list[tuple[int, int, float | None, 
             continue
         if abs(end_yaw - at) < half and not cut_short:
             continue
-        if not judge._trigger(judge._readings_at(t)[0])[0]:
+        if why != "announcement" and not judge._trigger(judge._readings_at(t)[0])[0]:
             continue
         pieces.append((first, i - 1, t, why))
         first, since = i, t
@@ -194,25 +199,28 @@ def chain_verdict(judge: Any, chain: Sequence[dict[str, Any]], now: float) -> tu
 
 
 def chain_check(judge: Any, episodes: Sequence[dict[str, Any]], now: float) -> tuple[dict[str, Any] | None,
-                                                                                      list[str]]:
-    """The "back-to-back maneuvers" check (None without a chain to judge) and the findings that count the chains
-    which passed, each of valid maneuvers (a student sees that the judge counted each turn). A chain holding a failed
-    maneuver is judged only when it failed its purpose."""
+                                                                                      list[dict[str, Any]]]:
+    """The "back-to-back maneuvers" check (None without a chain to judge) and its findings (records of
+    :mod:`bt_nav_sim.findings`). A chain is a finding: a search's counts its turns (a student sees that the judge
+    counted each), an exit's that never moved on says so, as the sheet only implies driving out (its Retreat is "a
+    full 180 deg spin to exit"). Only a kind the course makes strict (``strict_findings``) fails the check. A chain
+    holding a failed maneuver is judged only when it failed its purpose (that maneuver's own line says why)."""
     verdicts = []
     for chain in chains(judge, episodes):
         ok, text = chain_verdict(judge, chain, now)
-        if not ok or all(e["passed"] for e in chain):  # a failed maneuver's own line says why it failed
-            verdicts.append((ok, text))
+        if not ok or all(e["passed"] for e in chain):
+            verdicts.append((BACK_TO_BACK if not ok else SEARCH_CHAIN, text))
     if not verdicts:
         return None, []
-    failed = [text for ok, text in verdicts if not ok]
-    findings = [text for ok, text in verdicts if ok]
+    failed = [text for kind, text in verdicts if judge.config.strict(kind)]
+    found = [finding(kind, text) for kind, text in verdicts if not judge.config.strict(kind)]
     check: dict[str, Any] = {"name": "back-to-back maneuvers", "passed": not failed, "value": len(verdicts),
-                             "required": f"each chain {judge.config.spec.purpose.words}",
+                             "required": f"each chain {judge.config.spec.purpose.words}" + (
+                                 " (strict)" if failed else " (else a finding)"),
                              "detail": "; ".join(text for _, text in verdicts)}
     if failed:
         check["reason"] = failed[0]
-    return check, findings
+    return check, found
 
 
 def turning_point(judge: Any, last: float, nxt: float, now: float, w_before: float, w_after: float) -> float:

@@ -64,8 +64,10 @@ from bt_nav_sim.checkoff_creep import CREEP_CHECK, creep_check
 from bt_nav_sim.checkoff_schedule import drove_on
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
+from bt_nav_sim.findings import implied_rules, maneuver_findings, strict_kinds
 from bt_nav_sim.readings import Reading, SectorFamily
 from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
+from bt_nav_sim.segments import announced_between, join_small
 from bt_nav_sim.trigger_readings import TriggerReadings
 from bt_nav_sim.world import World
 
@@ -131,9 +133,13 @@ class CheckoffConfig:
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
     # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
     lidar: str = ""
+    # The finding kinds (bt_nav_sim.findings: comma-separated, or "all") that fail their check instead: what the sheet
+    # only implies is a finding unless the course teaches it (bt-nav grade --strict-findings)
+    strict_findings: str = ""
 
     def __post_init__(self) -> None:
         self.family()  # refuses an empty or inverted sector family
+        strict_kinds(self.strict_findings)  # refuses an unknown kind
         if self.maneuver not in MANEUVERS:  # an unknown maneuver is an error, never judged by another's rules
             raise ValueError(f"maneuver must be one of {', '.join(MANEUVERS)}, got {self.maneuver!r}")
         if not (self.armed_for > 0 and self.rate_hz > 0 and self.grace >= 0 and self.static_after > 0):
@@ -145,6 +151,10 @@ class CheckoffConfig:
         """The sector readings this config accepts as reasonable."""
         return SectorFamily(self.front_min_half_deg, self.front_max_half_deg, self.side_centre_min_deg,
                             self.side_centre_max_deg, self.side_min_half_deg, self.side_max_half_deg)
+
+    def strict(self, kind: str) -> bool:
+        """Whether the course makes finding ``kind`` a failure (``strict_findings``)."""
+        return kind in strict_kinds(self.strict_findings)
 
     @property
     def spec(self) -> ManeuverSpec:
@@ -424,7 +434,8 @@ class CheckoffJudge(Verdict):
         """Rotation episodes as (first, last) command indices: maximal runs of turning commands given while
         armed, whatever their forward speed (a node that drives forward while it turns is judged for it, not
         left unseen), cut where the turn reverses (:meth:`_reversals`) and joined across another publisher's creep
-        commands sent while it went on (:meth:`_interleaved`); a run that drove forward and turned less than
+        commands sent while it went on (:meth:`_interleaved`; never a turn the node announced: the creep before it
+        lies between two maneuvers, :mod:`bt_nav_sim.segments`); a run that drove forward and turned less than
         ``steer_max_deg`` is steering, not a turn."""
         cfg = self.config
         runs: list[tuple[int, int]] = []
@@ -440,7 +451,7 @@ class CheckoffJudge(Verdict):
             runs.append((first, len(self.commands) - 1))
         merged: list[tuple[int, int]] = []
         for a, b in (piece for run in runs for piece in self._reversals(*run)):
-            if merged and self._interleaved(merged[-1][1], a):
+            if merged and self._interleaved(merged[-1][1], a) and not announced_between(self, merged[-1][1], a):
                 merged[-1] = (merged[-1][0], b)
             else:
                 merged.append((a, b))
@@ -485,7 +496,7 @@ class CheckoffJudge(Verdict):
     def _judge_all(self, now: float) -> list[dict[str, Any]]:
         """Every episode judged (see :meth:`_judge_episode`), with its settling time; a rotation that holds
         maneuvers back to back judged one by one (:func:`bt_nav_sim.chains.split_run`)."""
-        runs = [piece for a, b in self.episodes() for piece in split_run(self, a, b)]
+        runs = join_small(self, [piece for a, b in self.episodes() for piece in split_run(self, a, b)])
         starts = [self.commands[a][0] for a, _, _, _ in runs]
         out = []
         since = self.activation_requested if self.activation_requested is not None else -math.inf
@@ -574,8 +585,9 @@ class CheckoffJudge(Verdict):
         end = min(settle, last + cfg.brake_allowance, self._next_forward(b))
         motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
-        angle_ok, rule = self._judged_angle(angle + math.copysign(swung, angle), candidates, interrupted)
-        moved_on, moved_text = self._moved_on(settle, next_start, now, start)
+        moved = self._moved_on(settle, next_start, now, start)  # the implied rules: findings unless strict
+        angle_ok, rule, moved_on, found = implied_rules(cfg, angle, reading, self._judged_angle(
+            angle + math.copysign(swung, angle), candidates, interrupted), moved)
         as_maneuver = trigger and angle_ok and forward_ok and moved_on
         recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
                     and self._stood_before(a) >= cfg.aeb_stop and not self._trigger_all(reading))
@@ -585,7 +597,7 @@ class CheckoffJudge(Verdict):
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
                 "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule, "swung_deg": swung,
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
-                "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved_text,
+                "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved[1], "findings": found,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)
                                                           for k, v in vars(reading).items() if k != "sides"}}
 
@@ -728,6 +740,7 @@ class CheckoffJudge(Verdict):
         checks.append(performed_check(cfg, maneuvers, recoveries))
         checks += [maneuver_check(i + 1, cfg.maneuver, e) for i, e in enumerate(maneuvers)]
         chained, findings = chain_check(self, maneuvers, now)
+        findings = [*maneuver_findings(maneuvers), *findings]  # what the sheet only implies
         if chained is not None:
             checks.append(chained)
         if recoveries:
@@ -751,7 +764,8 @@ class CheckoffJudge(Verdict):
                     ("cycle_off", self.cycle_off), ("cycle_on_requested", self.cycle_on_requested),
                     ("cycle_on", self.cycle_on), ("deactivation_requested", self.deactivation_requested),
                     ("deactivated", self.deactivated), ("report", now))},
-                "findings": findings, "announcements": len(self.announcements),
+                "findings": [f["clause"] for f in findings], "finding_kinds": findings,
+                "announcements": len(self.announcements),
                 "evaluation_calls": self.evaluation_calls, "commands": len(self.commands),
                 "samples": len(self._t), "done": self.done}
 

@@ -12,10 +12,12 @@ against the whole family, and which way a rule leans depends on what it accuses 
 - **"it turned late"** only when *every* reading held: the nearest distance of the narrowest front (+-5 deg)
   and, for each side, the largest over the sector centres of the narrow (+-5 deg) sector's nearest distance,
   against the tightest limit (C: the smaller of the two), with no margin;
-- **C's side**: the sides as each (centre, half-width) pair of the family that keeps clear of the front reads
-  them (from 60 deg outwards: a sector reaching 30 deg off the bow sees the obstacle C pivots from, not where the
-  room is), and their means; a side is required only where every pair agrees (see
-  :class:`bt_nav_sim.checkoff_core.CheckoffJudge`).
+- **C's side**: the sides as each (centre, half-width) pair of the family reads them, and their means; a side is
+  required only where every pair agrees (see :class:`bt_nav_sim.checkoff_core.CheckoffJudge`). The pairs reach
+  as close to the bow as :data:`SIDE_REACH_DEG` and as wide as :data:`WIDE_SIDE` (30-150 deg): right nodes read
+  their sides centred at 70 deg, or spanning 30-150 deg, and such a sector may see the obstacle C pivots from (its
+  corner, where the robot's yaw puts it) and call that side the closer one. Where they disagree with the sectors
+  beside the robot either side passes, with a finding (:mod:`bt_nav_sim.findings`).
 
 Pure (NumPy only): the judge casts noise-free ranges from the true pose and hands them here.
 """
@@ -31,6 +33,13 @@ import numpy as np
 MEAN_CAP = 3.5
 #: Degrees between the side-sector centres the "every reading" rule tries.
 CENTRE_STEP_DEG = 5.0
+#: deg: how close to the bow C's side sectors may reach (a 30-150 deg "left" is a reasonable reading of the sheet).
+SIDE_REACH_DEG = 30.0
+#: (centre, half-width) deg of the widest side sector C's comparison tries: 30-150 deg.
+WIDE_SIDE = (90.0, 60.0)
+#: deg: further side-sector centres C's comparison tries beside the family's ends, 75 and 90 (70: measured, a right
+#: node's "left" centred at 70 deg).
+SIDE_CENTRES = (70.0, 75.0, 90.0)
 
 
 @dataclass(frozen=True)
@@ -80,12 +89,14 @@ class SectorReader:
         self.family = family = family or SectorFamily()
         deg = np.degrees(np.remainder(np.asarray(angles, dtype=np.float64) + math.pi, 2 * math.pi) - math.pi)
         centres = np.arange(family.side_centre_min, family.side_centre_max + 1e-9, CENTRE_STEP_DEG)
-        # C's comparison of the sides: sectors that stay clear of the front (none reaching within side_centre_min of
-        # it). One that reaches 30 deg off the bow sees the very obstacle C pivots away from on whichever side the
-        # robot's yaw puts its corner, and says nothing of where the room is.
-        pairs = [(c, h) for c in sorted({family.side_centre_min, 75.0, 90.0, family.side_centre_max})
+        # C's comparison of the sides: every sector a right node may read, reaching no closer to the bow than
+        # SIDE_REACH_DEG. One that reaches 30 deg off the bow may see the very obstacle C pivots away from on
+        # whichever side the robot's yaw puts its corner: a node reading it so turns the other way, and is right by
+        # its reading; so the side is required only where these agree too.
+        pairs = [(c, h) for c in sorted({family.side_centre_min, *SIDE_CENTRES, family.side_centre_max})
                  for h in sorted({family.side_min_half, 15.0, family.side_max_half})
-                 if family.side_min_half <= h <= family.side_max_half and c - h >= family.side_centre_min - 1e-9]
+                 if family.side_min_half <= h <= family.side_max_half and c - h >= SIDE_REACH_DEG - 1e-9]
+        pairs.append(WIDE_SIDE)
         lo, hi = family.side_centre_min - family.side_max_half, family.side_centre_max + family.side_max_half
         rows = [np.abs(deg) <= family.front_max_half + 1e-9, np.abs(deg) <= family.front_min_half + 1e-9]
         for sign in (1.0, -1.0):  # left, then right

@@ -48,3 +48,19 @@ def test_the_judges_and_the_simulators_own_lines_and_lines_before_t0_do_not() ->
     waiting = _node(started=False)
     CheckoffNode._on_log(waiting, _log("reactive_navigator", 42))
     assert node.judge.heard == [] and waiting.judge.heard == []
+
+
+def test_a_wall_stamped_line_is_placed_at_its_stamp_on_the_sim_clock_not_at_its_arrival() -> None:
+    """Issue 52: a line logged at wall 1000.5 s, when the sim clock read 40.5 s, arrives at sim 42 s (a busy machine
+    delivered it late): it marks its maneuver at 40.5 s. A stamp the clock map does not cover is timed on arrival."""
+    from bt_nav_sim.segments import ClockMap
+
+    node = _node()
+    node.clocks = ClockMap()
+    for k in range(301):
+        node.clocks.add(1000.0 + k * 0.01, 40.0 + k * 0.01)
+    late = _log("reactive_navigator", 1000)
+    late.stamp.nanosec = 500_000_000
+    CheckoffNode._on_log(node, late)
+    CheckoffNode._on_log(node, _log("reactive_navigator", 2000))
+    assert [round(t, 3) for t, _, _ in node.judge.heard] == [40.5, 42.0]

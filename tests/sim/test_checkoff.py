@@ -179,14 +179,24 @@ def test_motion_before_arming_and_after_disarm_fail() -> None:
     assert _line(judge, "static after deactivation").endswith("FAILED")
 
 
-def test_no_maneuver_and_no_move_on_fail() -> None:
+def test_no_maneuver_fails_and_no_move_on_is_a_finding_unless_strict() -> None:
+    """Issue 52: the sheet asks for no moving on after the maneuver (a robot its brake stopped at a wall stands
+    there), so standing after the turn is a finding; ``strict_findings`` moved_on makes it the maneuver's failure."""
     judge = _run(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), [(5.0, 0.0, 0.0), (10.2, 0.05, 0.0)])
     assert _line(judge, "maneuvers performed (0 performed, required >= 1)").endswith("FAILED")
     stuck = A_SCRIPT[:3] + [(30.0, 0.0, 0.0)]  # turns, then stands still though armed for 8 more s
     judge = _run(CheckoffJudge(_cfg("A", armed_for=30.0), _world(WALL_AHEAD)), stuck, end=45.0)
     line = _line(judge, "maneuver 1")
-    assert "moved on: travelled 0.000 m in 10 s" in line
-    assert "did not move on after the turn (travelled 0.000 m in 10 s)" in line
+    assert "moved on: travelled 0.000 m in 10 s" in line and line.endswith("PASSED")
+    res = judge.results()
+    assert res["findings"] == ["maneuver 1 did not move on after the turn (travelled 0.000 m in 10 s): the sheet "
+                               "asks for none, so it passed"]
+    assert [f["kind"] for f in res["finding_kinds"]] == ["moved_on"]
+    judge = _run(CheckoffJudge(_cfg("A", armed_for=30.0, strict_findings="moved_on"), _world(WALL_AHEAD)), stuck,
+                 end=45.0)
+    line = _line(judge, "maneuver 1")
+    assert "did not move on after the turn (travelled 0.000 m in 10 s)" in line and line.endswith("FAILED")
+    assert judge.results()["findings"] == []
 
 
 def test_an_emergency_stop_turn_is_a_recovery_not_a_maneuver() -> None:
@@ -414,16 +424,16 @@ def test_back_to_back_maneuvers_are_two_turns_and_a_closed_loops_correction_is_p
 
 
 @pytest.mark.parametrize("yaw_deg", [-8.0, 0.0, 8.0])
-def test_c_compares_the_sides_beside_the_robot_not_a_sector_that_sees_the_obstacle_ahead(yaw_deg: float) -> None:
-    """lab_side at C's pivot: a wall 0.5 m to the left, the room 2 m to the right. Read 30-90 deg wide, the right side
-    may see the box C pivots from (0.33 m, when the robot's yaw puts its corner there) and call the left clearer;
-    every side reading from 60 deg outwards says right, so right is required (a node turning left fails), and the
-    line shows the sides beside the robot."""
+def test_c_requires_a_side_only_where_every_reading_agrees(yaw_deg: float) -> None:
+    """lab_side at C's pivot: a wall 0.5 m to the left, the room 2 m to the right. Read 30-150 deg wide (a reasonable
+    reading, issue 52), the right side sees the box C pivots from (0.33 m) once the robot's yaw puts its corner
+    there (yawed 8 deg left) and calls the left clearer: then either side passes. Straight or yawed right, every
+    side reading says right, so right is required; the line shows the sides beside the robot."""
     from bt_nav_sim.world import load_world
 
     judge = CheckoffJudge(CheckoffConfig(maneuver="C"), load_world("lab_side"), update_world=False)
     r = judge.readings.read(-0.31, 0.0, math.radians(yaw_deg))
-    assert judge._clearer_side(r) == "right", r.sides
+    assert judge._clearer_side(r) == ("either side" if yaw_deg > 0 else "right"), r.sides
     assert r.left_abeam == pytest.approx(0.5, abs=0.01) and r.right_abeam > 1.9
 
 

@@ -17,10 +17,12 @@ judge's report lines (``name (detail): PASSED|FAILED``, ``overall: ...``), write
 
 What the robot node logs (``/rosout``, rcl_interfaces/Log; any node not bt_nav's own infrastructure, the judge's and
 the simulator's lines excluded) goes to the judge as announcements (``on_announcement``): any words, only their
-times count, as marks where the node began a new maneuver within one continuous rotation. rclpy stamps a
-``/rosout`` line with the wall clock even under ``use_sim_time`` (rcutils' system time; measured), so a line is timed
-by its arrival on the judge's sim clock; a stamp within ``LOG_STAMP_SLACK`` s of that clock (a node that logs on sim
-time) is taken as it is.
+times count, as marks where the node began a new maneuver within one continuous rotation. A line is placed in sim
+time from its own stamp: rclpy stamps a ``/rosout`` line with the wall clock even under ``use_sim_time`` (rcutils'
+system time; measured), so the stamp is mapped onto the sim clock by the wall and sim times the judge saw together
+as ground truth came (:class:`bt_nav_sim.segments.ClockMap`), not timed by its arrival (a busy machine delivers it
+late); a stamp within ``LOG_STAMP_SLACK`` s of the judge's clock (a node that logs on sim time) is taken as it is,
+and one the map cannot place is timed by its arrival.
 
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
 7.30 s)``) is :class:`bt_nav.ros.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
@@ -36,6 +38,8 @@ from dataclasses import fields
 from typing import Any
 
 from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_schedule import schedule_words
+from bt_nav_sim.segments import ClockMap
 from bt_nav_sim.world import load_world
 from rcl_interfaces.msg import Log
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -73,7 +77,14 @@ class CheckoffNode(JudgeNode):
     required_parameters = ("safety_distance",)  # the check-off's `ros2 param list` step
 
     def __init__(self, wall_start: float | None = None, **hosting: Any) -> None:
+        self.clocks = ClockMap()  # the wall and sim times seen together: a log line's wall stamp onto the sim clock
         super().__init__(NODE_NAME, wall_start, **hosting)  # hosting: fed, cli_args (a hosted judge: JudgeNode)
+
+    def _take_truth(self, t: float, x: float, y: float, yaw: float) -> None:
+        """A ground-truth pose, as the judge driver takes it; its stamp and the wall clock now are one pair of the
+        clock map (a hosted judge's pose is its step's: the pair is exact)."""
+        self.clocks.add(time.time(), t)
+        super()._take_truth(t, x, y, yaw)
 
     def _create_interfaces(self, p: dict[str, Any]) -> None:
         """The driver's interfaces, and ``/rosout`` for the robot node's lines (the announcements)."""
@@ -88,7 +99,10 @@ class CheckoffNode(JudgeNode):
             return
         now = self.now()
         stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
-        self.judge.on_announcement(stamp if abs(stamp - now) <= LOG_STAMP_SLACK else now, str(msg.name), str(msg.msg))
+        clocks = getattr(self, "clocks", None)
+        placed = clocks.sim_at(stamp) if clocks is not None else None
+        t = stamp if abs(stamp - now) <= LOG_STAMP_SLACK else placed if placed is not None else now
+        self.judge.on_announcement(t, str(msg.name), str(msg.msg))
 
     def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
         """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""
@@ -106,12 +120,12 @@ class CheckoffNode(JudgeNode):
     def schedule_text(self) -> str:
         """The lab's schedule, sim seconds from t0."""
         c = self.config
-        off = c.activate_at + c.armed_for
         call = self.call_name
         cycle = (f"{call}(false) {c.toggle_off_after:g} s after the first maneuver and (true) {c.toggle_off_for:g} s "
                  "later, " if c.toggle_off_for > 0 else "")
         return (f"check-off of maneuver {c.maneuver} in {self.world_name}: {call}(true) at {c.activate_at:g} s, "
-                f"{cycle}{call}(false) at {off:g} s, report at {off + c.grace + c.static_after:g} s (sim time from t0)")
+                f"{cycle}{call}({schedule_words(c)}), the report {c.grace + c.static_after:g} s after it (sim time "
+                "from t0)")
 
 
 def make_node(wall_start: float | None = None) -> CheckoffNode:

@@ -684,7 +684,10 @@ class JudgeNode(QuietQosEvents, Node):
         # the judge's own first (the check-off's maneuvers back to back), then the audit's
         judged = [str(f) for f in self.judge.results().get("findings") or []] if self.started else []
         self.findings = [*judged, *(found.text for found in records)]
-        self.finding_kinds = [*({"kind": JUDGE_FINDING, "topic": None, "clause": f} for f in judged),
+        # each with its kind where the judge gives one (the check-off's: bt_nav_sim.findings), else the judge's
+        kinds = (self.judge.results().get("finding_kinds") or []) if self.started else []
+        self.finding_kinds = [*(kinds if len(kinds) == len(judged) else
+                                ({"kind": JUDGE_FINDING, "topic": None, "clause": f} for f in judged)),
                               *(found.record() for found in records)]
         for finding in self.findings:
             self.get_logger().warning(f"finding: {finding}")
