@@ -26,6 +26,8 @@ from typing import Any
 from bt_nav_sim.chains import ANNOUNCE_WINDOW
 from bt_nav_sim.checkoff_core import CHECKS as LAB_CHECKS
 from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, MANEUVER_NAMES, CheckoffConfig
+from bt_nav_sim.checkoff_creep import CREEP_CHECK, CREEP_SHEET
+from bt_nav_sim.checkoff_schedule import schedule_words
 from bt_nav_sim.lidar import LIDARS
 from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
 from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
@@ -84,9 +86,13 @@ _LAB_REQUIRED = {
     "back-to-back maneuvers": lambda c: "maneuvers made one after another without moving on serve their purpose: "
                                         "a search (A, C) may go on; a Retreat (B) must end by driving out",
     "recovery turns": lambda c: "no forward command or motion",
+    CREEP_CHECK: lambda c: f"armed, never standing still {c.creep_still:g} s or more while no reading of your trigger "
+                           f"holds and the front is clear beyond `safety_distance` (+{c.trigger_margin:.2f} m): keep "
+                           f"creeping (not counted: the first {c.creep_start:g} s after each `data: true`, a turn and "
+                           f"{c.creep_settle:g} s after it, a stop with the path blocked)",
     "no collision": lambda c: "no contact with anything",
     "static after deactivation": lambda c: f"still from {c.grace:g} s after each disarm call (the toggle cycle's, "
-                                           f"and the final one at {c.activate_at + c.armed_for:g} s) for "
+                                           "and the final one) for "
                                            f"{c.static_after:g} s",
     "parameters declared": lambda c: f"a node of yours declares `{LAB_PARAMETERS[0]}` (`ros2 param list`)",
 }
@@ -94,6 +100,8 @@ _LAB_REQUIRED = {
 _LAB_WORDS = {"maneuver": "one sentence per rule it broke, e.g. its angle and the rule's",
               "back-to-back maneuvers": "never moved on: N Retreats back to back (D deg in place), with the "
                                         "trigger's readings at each start",
+              CREEP_CHECK: f"stood still for S s while armed with nothing triggering (front D m clear beyond "
+                           f"safety_distance X m): {CREEP_SHEET}",
               "parameters declared": f"no node declares the parameter {LAB_PARAMETERS[0]}"}
 
 
@@ -229,8 +237,8 @@ def _lab(level: int, maneuvers: Sequence[str], setup: GradeSetup, base: Checkoff
     out = [_h(level, "The lab: what your node must do"), "", *_lab_short(cfg, configs, node_params), "",
            _h(level + 1, "The lab: interface"), "",
            *_interface_rows(LAB_ARM, f"called with `data: true` at {cfg.activate_at:g} s, `data: false` and "
-                                     f"`data: true` again once (the toggle cycle) and `data: false` at {off:g} s "
-                                     "(schedule below)"), "",
+                                     "`data: true` again once (the toggle cycle) and `data: false` once more, at "
+                                     f"{off:g} s at the latest (schedule below)"), "",
            *_lab_parameters(cfg, node_params), "", _h(level + 1, "The lab: schedule and time limits"), "",
            *_lab_schedule(cfg, setup), "", _h(level + 1, "The lab: each maneuver"), "", *_family(cfg), ""]
     for config in configs:
@@ -245,18 +253,19 @@ def _lab(level: int, maneuvers: Sequence[str], setup: GradeSetup, base: Checkoff
 
 def _lab_short(cfg: CheckoffConfig, configs: Sequence[CheckoffConfig], node_params: Mapping[str, Any]) -> list[str]:
     """The two-minute answer: the numbered list a lab node must satisfy."""
-    off = cfg.activate_at + cfg.armed_for
     lines = [f"1. Serve `{LAB_ARM}` (`{SET_BOOL}`) and answer every call with `success: true`.",
              f"2. Stand still until it is called with `data: true` (at {cfg.activate_at:g} s); after every `data: "
-             f"false` (the toggle cycle's, {cfg.toggle_off_after:g} s after your first maneuver, and the last at "
-             f"{off:g} s) stop within {cfg.grace:g} s and stay still; after `data: true` again go on.",
+             f"false` (the toggle cycle's, {cfg.toggle_off_after:g} s after your first maneuver, and the last: "
+             f"{schedule_words(cfg).removeprefix('false ')}) stop within {cfg.grace:g} s and stay still; after `data: "
+             "true` again go on.",
              f"3. Declare the parameter `{LAB_PARAMETERS[0]}` and use it as your trigger distance"
              + (f" (the grade gives it {float(node_params['safety_distance']):g} m)." if "safety_distance"
                 in node_params else f" (default {cfg.safety_distance:g} m, the judge's)."),
              f"4. Subscribe `{SCAN[0]}` and find your sectors from `angle_min` and `angle_increment`, never by fixed "
              "index (the grader runs LiDARs whose beam layouts differ: see the end of this page).",
-             f"5. Publish `{COMMAND[0]}` (`{COMMAND[1]}`): creep forward while armed; when your maneuver's trigger "
-             "holds, turn in place with `linear.x` 0, then creep on:"]
+             f"5. Publish `{COMMAND[0]}` (`{COMMAND[1]}`): creep forward while armed (standing still "
+             f"{cfg.creep_still:g} s with nothing triggering fails); when your maneuver's trigger holds, turn in "
+             "place with `linear.x` 0, then creep on:"]
     lines += [f"   - **{c.maneuver}**, {MANEUVER_NAMES[c.maneuver]}: when {_sheet_trigger(c)}, turn {_angle(c)}."
               for c in configs]
     lines += ["6. Run on sim time: the grader appends `use_sim_time:=true` to your command's ROS arguments (pass "
@@ -278,18 +287,24 @@ def _lab_parameters(cfg: CheckoffConfig, node_params: Mapping[str, Any]) -> list
 
 
 def _lab_schedule(cfg: CheckoffConfig, setup: GradeSetup) -> list[str]:
-    """The lab's schedule in sim seconds from t0, and the wall-time limits of a grade."""
+    """The lab's schedule in sim seconds from t0, and the wall-time limits of a grade: a run as long as its checks
+    need (the final false once the re-armed node drove on), ``activate_at + armed_for`` at the latest."""
     off = cfg.activate_at + cfg.armed_for
     still = f"stand still (motion: over {cfg.moving_linear:g} m/s or {cfg.moving_angular:g} rad/s on ground truth)"
+    early = cfg.toggle_off_for > 0 and cfg.drive_on_for > 0
+    final = f"F = {off:g}"
+    if early:
+        final = (f"F = R + {cfg.drive_on_for:g} (later while a turn you began goes on: once no turning command came "
+                 f"for {cfg.toggle_off_after:g} s), {off:g} at the latest (no toggle cycle: {off:g})")
     return [_T0, "", "| t (s) | the grader | your node |", "|---|---|---|",
             f"| 0 - {cfg.activate_at:g} | nothing | {still} |",
             f"| {cfg.activate_at:g} | `{LAB_ARM}` `data: true`, again every {1 / cfg.rate_hz:g} s until an answer "
             "says `success: true` | creep; turn when the trigger holds |",
             *_cycle_rows(cfg, still),
-            f"| {off:g} | `data: false`, again every {1 / cfg.rate_hz:g} s until success | stop "
+            f"| {final} | `data: false`, again every {1 / cfg.rate_hz:g} s until success | stop "
             f"({cfg.grace:g} s to brake) |",
-            f"| {off + cfg.grace:g} - {off + cfg.grace + cfg.static_after:g} | watches | {still} |",
-            f"| {off + cfg.grace + cfg.static_after:g} | the report | |", "",
+            f"| F + {cfg.grace:g} - F + {cfg.grace + cfg.static_after:g} | watches | {still} |",
+            f"| F + {cfg.grace + cfg.static_after:g} | the report | |", "",
             "No deadline and no evaluation service in the lab (a call to one is refused). " + _limits(LAB_ARM, setup)]
 
 
@@ -298,10 +313,11 @@ def _cycle_rows(cfg: CheckoffConfig, still: str) -> list[str]:
     if cfg.toggle_off_for <= 0:
         return []
     after = f"{cfg.toggle_off_after:g} s after your first maneuver ends (no turning command since)"
+    watched = min(cfg.grace + cfg.static_after, cfg.toggle_off_for)
     return [f"| T = {after} | the toggle cycle: `data: false`, again until success | stop ({cfg.grace:g} s to "
             "brake) |",
-            f"| T + {cfg.grace:g} - T + {cfg.grace + cfg.static_after:g} | watches | {still} |",
-            f"| T + {cfg.toggle_off_for:g} | `data: true` again, until success (no cycle when T + "
+            f"| T + {cfg.grace:g} - T + {watched:g} | watches | {still} |",
+            f"| T + {cfg.toggle_off_for:g} | `data: true` again, until success (answered at R; no cycle when T + "
             f"{2 * cfg.toggle_off_for:g} s would pass the final `data: false`) | creep on; turn when the trigger "
             "holds |"]
 
@@ -378,9 +394,8 @@ _T0 = ("Sim seconds from t0, which comes once your node offers its service and h
 
 def _limits(service: str, setup: GradeSetup) -> str:
     """A grade's pace and wall-time limits, and what a node that never offers its service gets."""
-    pace = f"at {speed_words(setup.rtf)} (`--rtf`)" if setup.rtf > 0 else \
-        f"{speed_words(0.0, setup.rtf_max)} (`--rtf 0`: sim time waits for your node's commands)"
-    return (f"A grade runs in sim time, {pace}, at most {setup.limit:g} s wall per run "
+    pace = f"at {speed_words(setup.rtf, setup.rtf_max)} (`--rtf`)"
+    return (f"A grade runs your node {pace}, at most {setup.limit:g} s wall per run "
             f"(`--timeout`); a node that offers no `{service}` within {START_WAIT:g} s wall (less with a short "
             "`--timeout`) is not judged: the run fails.")
 
