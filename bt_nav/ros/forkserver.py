@@ -19,7 +19,16 @@ Protocol (one ``SOCK_SEQPACKET`` socket pair, one JSON message per packet): the 
 descriptors (the child's stdout and stderr first, then one per ``fd_env`` name, whose number the child's environment
 gets under that name); the server answers ``{"id", "pid"}`` or ``{"id", "error"}``, and ``{"exited": pid, "code"}``
 when it has reaped a child (``code`` as :attr:`subprocess.Popen.returncode`: negative for a signal). The server
-ends when the socket closes (the grade ended, or died).
+ends when the socket closes (the grade ended, or died), quietly: a client gone is no error. Its own failure is one
+message, ``{"ended": "one line", "traceback": text}`` (before its hello: the hello says ``"error"``), never a traceback
+on the grade's terminal (its stderr is not the terminal's).
+
+Either end may go at any time, and the other end takes it in its stride (issue 52): a client that closes the server
+before its hello kills it (it has forked nothing yet); a spawn waits for the hello :data:`HELLO_WAIT` s at most and
+then gives the server up (its commands start the usual way); the socket is closed once, by :meth:`ForkServer.close`,
+after the reader thread that uses it has ended; and :func:`serving` ends a server when the last block using it ends,
+not the first one (a grade's probe re-runs beside its grid share the grid's server: the grid's end killed their
+simulators with SIGTERM, ``PR_SET_PDEATHSIG``).
 """
 
 from __future__ import annotations
@@ -38,7 +47,7 @@ import sys
 import threading
 import traceback
 from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from typing import IO, Any
 
 from bt_nav.ros.parentdeath import die_with_parent, libc_prctl
@@ -67,6 +76,10 @@ TARGET = "bt_nav.cli:main"
 SWITCH_ENV = "BT_NAV_FORKSERVER"
 #: Wall seconds the server may take to import :data:`PRELOAD` and say it is ready.
 READY_TIMEOUT = 60.0
+#: Wall seconds a spawn waits for the server's hello before the server is given up (killed: it has forked nothing) and
+#: the command started the usual way: a server stuck in its imports must not hold a run's simulator back for
+#: :data:`READY_TIMEOUT` (two CPU hogs on two cores: its imports take ~3 s; a fresh interpreter needs as long).
+HELLO_WAIT = 20.0
 #: The most file descriptors one request passes (stdout, stderr and the ``fd_env`` ones).
 MAX_FDS = 8
 _PACKET = 1 << 20
@@ -85,6 +98,8 @@ class ForkedProcess:
         self.stdout = stdout
         self.args = list(args)
         self.returncode: int | None = None
+        #: Why its end is a guess (the fork server is gone, and with it the child's exit code), else "".
+        self.lost = ""
         self._ended = threading.Event()
 
     def poll(self) -> int | None:
@@ -97,9 +112,11 @@ class ForkedProcess:
             raise subprocess.TimeoutExpired(self.args, timeout or 0.0)
         return int(self.returncode or 0)
 
-    def ended(self, code: int) -> None:
-        """The server reaped it with ``code`` (or is gone: then the code is a guess, SIGTERM's)."""
+    def ended(self, code: int, lost: str = "") -> None:
+        """The server reaped it with ``code``; or is gone (``lost`` says how): then the code is a guess, SIGTERM's,
+        which its death sent the child (``PR_SET_PDEATHSIG``)."""
         if self.returncode is None:
+            self.lost = lost
             self.returncode = int(code)
             self._ended.set()
 
@@ -107,7 +124,10 @@ class ForkedProcess:
 class ForkServer:
     """``python -m bt_nav.ros.forkserver``, started now; :meth:`spawn` forks a child of it once it is ready (it has
     imported ``preload``: about a second, which a grade spends starting its first nodes meanwhile, not waiting), or
-    raises :class:`ForkServerError` when it never became ready; :meth:`close` ends it (its children get SIGTERM)."""
+    raises :class:`ForkServerError` when it never became ready; :meth:`close` ends it (its children get SIGTERM).
+
+    Its stderr is not the grade's: what it has to say comes over the socket (:attr:`refusal`, :attr:`last_words`,
+    :attr:`traceback`), so no traceback of the server's reaches a grade's terminal."""
 
     def __init__(self, preload: Sequence[str] = PRELOAD, timeout: float = READY_TIMEOUT) -> None:
         mine, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
@@ -117,21 +137,29 @@ class ForkServer:
         try:
             self.proc = subprocess.Popen([sys.executable, "-m", __name__, str(theirs.fileno()), *preload],
                                          pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
-                                         stdout=subprocess.DEVNULL, start_new_session=True, env=env)
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                         start_new_session=True, env=env)
+        except BaseException:
+            mine.close()
+            raise
         finally:
             theirs.close()
-        self.sock = mine
+        self.sock = mine  # used by the reader thread and spawn(); shut down and closed by close() alone
         self._lock = threading.Lock()  # one request at a time on the socket, and the tables below
         self._replies: dict[int, dict[str, Any]] = {}
         self._replied = threading.Condition(self._lock)
         self._children: dict[int, ForkedProcess] = {}
         self._early: dict[int, int] = {}  # pid -> code of a child reaped before spawn() registered it
         self._next_id = 0
+        self._closed = False
         self.alive = False  # ready and not ended
         self.settled = False  # its hello came (ready or refusing), or never will
         self.refusal = ""  # why it is not ready, once settled so
+        self.last_words = ""  # why it ended, when it ended by itself (its one line, or its exit code)
+        self.traceback = ""  # its own traceback, when it failed with one
         self._timeout = timeout
-        threading.Thread(target=self._read, name="bt_nav-forkserver", daemon=True).start()
+        self._reader = threading.Thread(target=self._read, name="bt_nav-forkserver", daemon=True)
+        self._reader.start()
 
     @property
     def usable(self) -> bool:
@@ -144,35 +172,60 @@ class ForkServer:
             self._replied.wait_for(lambda: self.settled, timeout)
             return self.alive
 
+    def _settle(self, ready: bool, refusal: str = "") -> bool:
+        """Take the hello's answer (or a refusal in its place) unless one was taken already (a spawn gave the server
+        up, or it was closed, first); whether this one was taken."""
+        with self._lock:
+            if self.settled:
+                return False
+            self.alive, self.settled, self.refusal = ready, True, "" if ready else refusal
+            self._replied.notify_all()
+            return True
+
     def _hello(self) -> bool:
-        """Read the server's first message (``timeout`` s at most); whether it said it is ready."""
-        self.sock.settimeout(self._timeout)
+        """Read the server's first message (``timeout`` s at most); whether it said it is ready (and is still
+        wanted: a server closed or given up meanwhile is not)."""
         try:
-            hello = json.loads(self.sock.recv(_PACKET) or b"{}")
+            self.sock.settimeout(self._timeout)
+            packet = self.sock.recv(_PACKET)
+            hello = json.loads(packet) if packet else {"ready": False, "error": "it ended before its hello"}
+        except TimeoutError:
+            hello = {"ready": False, "error": f"no hello within {self._timeout:g} s"}
         except (OSError, ValueError) as exc:
-            hello = {"ready": False, "error": f"it did not start: {exc}"}
+            hello = {"ready": False, "error": f"its hello could not be read: {exc}"}
         ready = bool(hello.get("ready"))
         if ready:
             self.sock.settimeout(None)
-        with self._lock:
-            self.alive, self.settled = ready, True
-            self.refusal = "" if ready else f"the fork server is not ready: {hello}"
-            self._replied.notify_all()
-        return ready
+        if not ready:
+            self.traceback = str(hello.get("traceback") or "")
+        said = hello.get("error") or f"{hello.get('threads')} threads, LTTng's fork protocol " \
+                                     f"{'loaded' if hello.get('lttng') else 'absent'}"
+        return self._settle(ready, f"the fork server is not ready: {said}") and ready
+
+    def give_up(self, why: str) -> None:
+        """Stop waiting for a server that has not said hello: it is refused from now on, and ended (it has forked
+        nothing: spawns fork only after its hello)."""
+        if self._settle(False, f"the fork server was given up: {why}"):
+            self._end_process()
 
     def spawn(self, argv: Sequence[str], env: Mapping[str, str], cwd: str,
-              fd_env: Mapping[str, int] | None = None, target: str = TARGET) -> ForkedProcess:
+              fd_env: Mapping[str, int] | None = None, target: str = TARGET,
+              hello_wait: float | None = None) -> ForkedProcess:
         """Fork a child that runs ``target(argv)`` with ``env`` in ``cwd``; ``fd_env``: descriptors it keeps, each
-        named in its environment by its number there. Raises :class:`ForkServerError` (nothing was started)."""
+        named in its environment by its number there. Waits for the server's hello ``hello_wait`` s at most (default
+        :data:`HELLO_WAIT`), then gives it up. Raises :class:`ForkServerError` (nothing was started)."""
         names = list(fd_env or {})
-        if not self.ready():
+        wait = HELLO_WAIT if hello_wait is None else hello_wait
+        if not self.settled and not self.ready(wait):
+            self.give_up(f"no hello after {wait:g} s")
+        if not self.ready(0.0):
             raise ForkServerError(self.refusal or "the fork server has ended")
         read, write = os.pipe()
         with self._lock:
             if not self.alive:
                 os.close(read)
                 os.close(write)
-                raise ForkServerError("the fork server has ended")
+                raise ForkServerError(self.last_words or "the fork server has ended")
             self._next_id += 1
             ident = self._next_id
             request = {"id": ident, "argv": list(argv), "env": dict(env), "cwd": cwd, "fd_env": names,
@@ -186,7 +239,7 @@ class ForkServer:
                 os.close(write)
             while ident not in self._replies and self.alive:
                 self._replied.wait(1.0)
-            reply = self._replies.pop(ident, {"error": "the fork server has ended"})
+            reply = self._replies.pop(ident, {"error": self.last_words or "the fork server has ended"})
             if "pid" not in reply:
                 os.close(read)
                 raise ForkServerError(str(reply.get("error")))
@@ -200,46 +253,78 @@ class ForkServer:
         """The server's hello, then its answers and its children's ends (a thread of its own); at its end every child
         still listed is taken as ended (the server's death sent it SIGTERM). A server that is not ready is ended."""
         if not self._hello():
-            self.close()
+            self._end_process()
             return
         try:
             while True:
                 packet = self.sock.recv(_PACKET)
                 if not packet:
                     break
-                message = json.loads(packet)
-                with self._lock:
-                    if "exited" in message:
-                        pid, code = int(message["exited"]), int(message["code"])
-                        child = self._children.pop(pid, None)
-                        if child is None:
-                            self._early[pid] = code
-                        else:
-                            child.ended(code)
-                    else:
-                        self._replies[int(message["id"])] = message
-                        self._replied.notify_all()
-        except (OSError, ValueError):
-            pass
+                self._take(json.loads(packet))
+        except (OSError, ValueError) as exc:  # closed under it, or a message cut short: the server is lost either way
+            self.last_words = self.last_words or f"its socket failed: {exc}"
+        self._lost()
+
+    def _take(self, message: dict[str, Any]) -> None:
+        """One message of the ready server: a child reaped, an answer to a request, or its last words."""
+        with self._lock:
+            if "exited" in message:
+                pid, code = int(message["exited"]), int(message["code"])
+                child = self._children.pop(pid, None)
+                if child is None:
+                    self._early[pid] = code
+                else:
+                    child.ended(code)
+            elif "ended" in message:
+                self.last_words, self.traceback = str(message["ended"]), str(message.get("traceback") or "")
+            else:
+                self._replies[int(message["id"])] = message
+                self._replied.notify_all()
+
+    def _lost(self) -> None:
+        """The connection ended: the server is no more, and every child it had is taken as ended by SIGTERM."""
         with self._lock:
             self.alive = False
+            if not self._closed and not self.last_words:
+                code = self.proc.poll()
+                self.last_words = "the fork server ended" + (f" with code {code}" if code is not None else "")
+            lost = "closed by its grade" if self._closed else self.last_words
             for child in self._children.values():
-                child.ended(-signal.SIGTERM)
+                child.ended(-signal.SIGTERM, f"the fork server it was forked from is gone ({lost})")
             self._children.clear()
             self._replied.notify_all()
 
-    def close(self, timeout: float = 5.0) -> None:
-        """End the server (its socket closes; children still running get SIGTERM from its end)."""
-        try:
-            self.sock.shutdown(socket.SHUT_RDWR)
-        except OSError:
-            pass
-        self.sock.close()
+    def _end_process(self, timeout: float = 5.0, kill: bool = True) -> None:
+        """End the server's process: at once with ``kill`` (one that never said it was ready has forked nothing),
+        else it goes at its socket's end, and is killed after ``timeout`` s."""
+        if kill:
+            with suppress(OSError):
+                self.proc.kill()
         try:
             self.proc.wait(timeout)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
+
+    def close(self, timeout: float = 5.0) -> None:
+        """End the server (its socket closes; children still running get SIGTERM from its end). Once: a second call
+        does nothing. The socket is closed here alone, after its reader thread has let go of it."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            ready, self.alive = self.alive, False
+            if not self.settled:  # importing still: it would only write its hello into a void
+                self.settled, self.refusal = True, "the fork server was closed before its hello"
+            self._replied.notify_all()
+        if not ready:
+            self._end_process(timeout)  # it has forked nothing
+        with suppress(OSError):
+            self.sock.shutdown(socket.SHUT_RDWR)  # wakes the reader thread's recv
+        if self._reader is not threading.current_thread():
+            self._reader.join(timeout)
+        self._end_process(timeout, kill=False)
+        self.sock.close()
 
 
 def wanted(env: Mapping[str, str] | None = None) -> bool:
@@ -249,35 +334,47 @@ def wanted(env: Mapping[str, str] | None = None) -> bool:
 
 
 _current: ForkServer | None = None
+_users = 0  # the serving() blocks open now, in any thread
 _current_lock = threading.Lock()
 
 
 def current() -> ForkServer | None:
     """The fork server of the :func:`serving` block this process is in (None: start processes the usual way)."""
-    return _current if _current is not None and _current.usable else None
+    server = _current
+    return server if server is not None and server.usable else None
 
 
 @contextmanager
 def serving(enabled: bool = True) -> Iterator[ForkServer | None]:
-    """A fork server for the block (nested blocks share the outer one), starting while the block goes on; None when
-    it cannot be started (and one that never becomes ready refuses its spawns): either only costs the imports it
-    would have saved. ``enabled`` False: none."""
-    global _current
+    """A fork server for the block, starting while the block goes on; None when it cannot be started (and one that
+    never becomes ready refuses its spawns): either only costs the imports it would have saved. ``enabled`` False:
+    none.
+
+    Blocks open at once share one server, nested or in other threads (a grid's runs and the probe re-runs of its
+    first failure beside them), and it ends with the last of them, whichever that is: ended with the first, it took
+    the others' simulators with it (``PR_SET_PDEATHSIG``: SIGTERM 0.4 s into their runs)."""
+    global _current, _users
+    if not enabled:
+        yield None
+        return
     with _current_lock:
-        outer = _current is not None
-        if enabled and not outer:
+        if _current is None:
             try:
                 _current = ForkServer()
             except (ForkServerError, OSError):
                 _current = None
+        _users += 1
         server = _current
     try:
-        yield server if enabled else None
+        yield server
     finally:
-        if enabled and not outer and server is not None:
-            with _current_lock:
+        with _current_lock:
+            _users -= 1
+            last = _current if _users == 0 else None
+            if last is not None:
                 _current = None
-            server.close()
+        if last is not None:
+            last.close()
 
 
 # ------------------------------------------------------------------------------------------------ the server side
@@ -335,9 +432,26 @@ def _warm(modules: Sequence[str], types: Sequence[str]) -> None:
 
 
 def serve(fd: int, preload: Sequence[str]) -> int:
-    """The server's life (see the module docstring): import, say ready, fork on request, reap, report."""
+    """The server's life (see the module docstring): import, say ready, fork on request, reap, report. A client gone
+    (the grade ended, died, or closed it before its hello) ends it quietly with 0; its own failure is said to the
+    client in one message (:func:`_last_words`), its exit code 1."""
     sock = socket.socket(fileno=fd)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the grade's to handle; the socket's end is ours
+    said = False  # the hello was sent: a failure after it is the server's "ended", not its hello's "error"
+    try:
+        hooks, ready, hello = _start(preload)
+        sock.send(json.dumps(hello).encode())
+        said = True
+        return _loop(sock, hooks) if ready else 1
+    except (BrokenPipeError, ConnectionResetError):
+        return 0
+    except Exception as exc:  # noqa: BLE001 - the server's own failure, told to its client instead of a terminal
+        _last_words(sock, exc, said)
+        return 1
+
+
+def _start(preload: Sequence[str]) -> tuple[tuple[Any, Any, Any] | None, bool, dict[str, Any]]:
+    """Import what the children share; LTTng's fork hooks, whether the server may fork, and its hello."""
     try:  # before the first fork; with SPT_NOENV (set by ForkServer): the environment block stays as it is
         importlib.import_module("setproctitle").getproctitle()  # its first call finds the command line's room
     except ImportError:
@@ -353,26 +467,35 @@ def serve(fd: int, preload: Sequence[str]) -> int:
     threads = _threads()
     # forkable: one thread of ours, plus LTTng's listeners only when their fork protocol is there to take them along
     ready = threads == loaded and loaded - 1 in ((0, LTTNG_THREADS) if hooks is not None else (0,))
-    sock.send(json.dumps({"ready": ready, "threads": threads, "lttng": hooks is not None}).encode())
-    if not ready:
-        return 1
+    return hooks, ready, {"ready": ready, "threads": threads, "lttng": hooks is not None}
+
+
+def _loop(sock: socket.socket, hooks: tuple[Any, Any, Any] | None) -> int:
+    """Fork on request and report the children's ends until the client's socket closes (0)."""
     wake_read, wake_write = os.pipe()
     os.set_blocking(wake_write, False)
     signal.set_wakeup_fd(wake_write)
     signal.signal(signal.SIGCHLD, lambda *_: None)  # a handler, so SIGCHLD reaches the wake-up pipe
-    try:
-        while True:
-            readable, _, _ = select.select([sock, wake_read], [], [])
-            if wake_read in readable:
-                os.read(wake_read, 512)
-            _reap(sock)
-            if sock in readable:
-                packet, fds, _, _ = socket.recv_fds(sock, _PACKET, MAX_FDS)
-                if not packet:
-                    return 0
-                _fork(sock, json.loads(packet), fds, (wake_read, wake_write), hooks)
-    except (BrokenPipeError, ConnectionResetError):
-        return 0
+    while True:
+        readable, _, _ = select.select([sock, wake_read], [], [])
+        if wake_read in readable:
+            os.read(wake_read, 512)
+        _reap(sock)
+        if sock in readable:
+            packet, fds, _, _ = socket.recv_fds(sock, _PACKET, MAX_FDS)
+            if not packet:
+                return 0
+            _fork(sock, json.loads(packet), fds, (wake_read, wake_write), hooks)
+
+
+def _last_words(sock: socket.socket, exc: BaseException, said: bool) -> None:
+    """Tell the client why the server fails (one line, and the traceback for a log): before its hello as the hello's
+    ``error``, after it as ``ended``. A client gone too hears nothing."""
+    line = f"{type(exc).__name__}: {exc}".splitlines()[0][:300]
+    text = traceback.format_exc()
+    message = {"ended": line, "traceback": text} if said else {"ready": False, "error": line, "traceback": text}
+    with suppress(OSError):
+        sock.send(json.dumps(message).encode())
 
 
 def _reap(sock: socket.socket) -> None:

@@ -314,32 +314,66 @@ def parameters_lines(row: Row) -> list[str]:
 
 
 # ---------------------------------------------------------------------------------------------- running
-def error_row(job: Job, error: str, traceback_file: str = "") -> Row:
-    """The row of a run that raised inside bt_nav (not the node's fault): not passed, not failed either (its
-    outcome is :data:`ERROR`, counted apart), never lost, rerun on resume."""
+def error_row(job: Job, error: str, traceback_file: str = "", attempts: int = 1) -> Row:
+    """The row of a run that raised inside bt_nav (not the node's fault): not graded (``not_graded``, as every run
+    left without a verdict by bt_nav's own fault: an autograder error, never a 0), not failed either (its outcome is
+    :data:`ERROR`, counted apart), never lost, rerun on resume. ``error``: one line; the traceback is in
+    ``traceback_file`` (the grid's ``bt_nav_errors/``), never on the terminal."""
+    tried = f"tried {attempts} times, " if attempts > 1 else ""
+    said = f"not graded: bt_nav error (not the node's): {error} ({tried}traceback in bt_nav_errors/): --resume runs " \
+           "it again"
     return {"passed": False, "outcome": ERROR, "reason": f"bt_nav error (not the node's): {error}", "verdict": None,
-            "job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar, "seed": job.seed,
-            "profile": job.profile, "run_dir": "", "wall_time": 0.0, "traceback": traceback_file}
+            "not_graded": said, "job": job.key, "world": job.world, "maneuver": job.maneuver, "lidar": job.lidar,
+            "seed": job.seed, "profile": job.profile, "run_dir": "", "wall_time": 0.0, "traceback": traceback_file}
 
 
-#: How often a run that raised inside bt_nav is tried in all (a passing fault, e.g. a file raced for, goes away).
+#: How often a run that raised inside bt_nav is tried in all (a passing fault, e.g. a file raced for, goes away; one
+#: that raises twice is a bug, which a third try would only repeat).
 ATTEMPTS = 2
+#: How many times a run is run again after an attempt that ended without a verdict for a cause of bt_nav's own
+#: (:data:`bt_nav.grading.exe.run.OWN_FAULT`: its fork server gone, its simulator killed by a sibling's signal):
+#: those pass, and the cell is graded on the next attempt; after the last, it is not graded.
+RERUNS = 2
 
 
 def run_unless_stopped(job: Job, settings: ExeSettings, stop: StopRequest | None,
                        on_verdict: Callable[[], None] | None = None) -> Row | None:
-    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already. A run that raises
-    inside bt_nav keeps its traceback in the grid's ``bt_nav_errors/`` and is tried once more; raising again it is
-    an :func:`error_row` (here and on a cluster alike). ``on_verdict``: :func:`run_exe_job`'s."""
-    error, where = "", ""
-    for attempt in range(1, ATTEMPTS + 1):
+    """:func:`run_exe_job`, or None without starting anything when the grid is stopping already (here and on a
+    cluster alike; ``on_verdict``: :func:`run_exe_job`'s).
+
+    bt_nav's own failures never decide a grade (issue 52). A run that raises inside bt_nav keeps its traceback in
+    the grid's ``bt_nav_errors/`` (never on the terminal) and is tried again (:data:`ATTEMPTS` in all); an attempt
+    that ends without a verdict for a cause of bt_nav's own (:data:`~bt_nav.grading.exe.run.OWN_FAULT`) is set aside
+    and run again, up to :data:`RERUNS` times. Each such attempt is one note of the row's (one line on the terminal);
+    a run left without a verdict after them is not graded (:func:`error_row`,
+    :func:`~bt_nav.grading.exe.run.own_fault_not_graded`), never failed."""
+    from bt_nav.grading.exe.run import OWN_FAULT, own_fault_not_graded, set_aside_own_fault, with_notes
+
+    notes: list[str] = []
+    error, where, raised = "", "", 0
+    for attempt in range(1, RERUNS + 2):
         if stop is not None and stop.requested:
             return None
         try:
-            return with_parameters(_with_speed(run_exe_job(job, settings, stop, on_verdict=on_verdict), settings))
+            row = with_parameters(_with_speed(run_exe_job(job, settings, stop, on_verdict=on_verdict), settings))
         except Exception as exc:  # one broken run must not sink the grid
-            error, where = repr(exc), str(_keep_traceback(job, settings, attempt))
-    return error_row(job, error, where)
+            error, where, raised = _one_line(exc), str(_keep_traceback(job, settings, attempt)), raised + 1
+            if raised >= ATTEMPTS:
+                return error_row(job, error, where, attempt)
+            notes.append(f"bt_nav error (not the node's): {error} (traceback in {where}): the run started again")
+            continue
+        if not row.get(OWN_FAULT) or row.get("outcome") == STOPPED:
+            return with_notes(row, notes)
+        if attempt > RERUNS:
+            return own_fault_not_graded(with_notes(row, notes), attempt)
+        notes.append(set_aside_own_fault(row))
+    return error_row(job, error, where, RERUNS + 1)  # not reached: the last attempt returns
+
+
+def _one_line(exc: BaseException) -> str:
+    """An exception in one line for a row's reason (its traceback goes to a file)."""
+    text = " ".join(repr(exc).split())
+    return text if len(text) <= 300 else text[:297] + "..."
 
 
 def _with_speed(row: Row, settings: ExeSettings) -> Row:

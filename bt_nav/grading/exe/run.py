@@ -41,6 +41,7 @@ stderr, merged in order) is ``<name>.log`` in the run directory, the row ``resul
 
 from __future__ import annotations
 
+import errno
 import json
 import shlex
 import signal
@@ -55,7 +56,7 @@ from bt_nav_sim.pacing import PACE_FILE
 from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.exe.bag import bag_row, record_args
-from bt_nav.grading.exe.log import Crash, import_findings, node_crash, rclpy_shutdown_race
+from bt_nav.grading.exe.log import Crash, import_findings, last_traceback, node_crash, rclpy_shutdown_race
 from bt_nav.grading.exe.pace import sim_pace
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
@@ -190,8 +191,39 @@ def _wait(session: MissionSession, sim: Child, node: Child, limit: float, starte
         crash = node_crash(log.read_text(errors="replace")) if log.is_file() else None
         return "node exited", _exit_reason(int(code or 0), wall, crash), crash
     if outcome == EXITED:
-        return "sim exited", f"the simulator exited with code {sim.poll()} without a verdict (see sim.log)", None
+        wall = time.monotonic() - started
+        return SIM_LOST, f"no verdict: {_sim_cause(sim, results_json.parent / f'{sim.name}.log', wall)}", None
     return "timeout", f"no verdict within {limit:g} s wall", None
+
+
+#: The outcome of an attempt whose simulator ended before its verdict: bt_nav's own process, so never the node's
+#: failure (:data:`OWN_FAULT`); the run is run again (:func:`bt_nav.grading.exe.grid.run_unless_stopped`).
+SIM_LOST = "sim exited"
+#: A row's key for an attempt that ended without a verdict for a cause of bt_nav's own (its one-line cause): the
+#: fork server gone, the simulator killed by a signal the run did not send (a sibling's stop), or crashed.
+OWN_FAULT = "bt_nav_fault"
+
+
+def _sim_cause(sim: Child, log: Path, wall: float) -> str:
+    """Why the simulator ended before its verdict (``wall`` s into the run), in one line. The run signals its
+    processes only after the wait, so a signal that ended it came from outside the run: never the node's doing (a
+    node cannot reach the simulator's process group), and not the simulator's own result either."""
+    code = sim.poll()
+    lost = getattr(sim.popen, "lost", "")
+    if lost:
+        return f"the simulator was lost: {lost} (see {log.name})"
+    if code is not None and code < 0:
+        try:
+            name = signal.Signals(-code).name
+        except ValueError:
+            name = f"signal {-code}"
+        return f"the simulator was killed by {name} from outside the run after {wall:.1f} s wall " \
+               f"(not the run's stop, not the node's; see {log.name})"
+    sim.thread.join(LOG_DRAIN)  # its traceback's last lines may still be in the pipe
+    text = log.read_text(errors="replace") if log.is_file() else ""
+    found = last_traceback(text)
+    said = f": {found[1][:200]}" if found and found[1] else ""
+    return f"the simulator exited with code {code} without a verdict{said} (see {log.name})"
 
 
 #: Wall seconds a crashed node's output is waited for (its pipe closes at once unless a child of its holds it).
@@ -326,6 +358,12 @@ def run_exe_job(job: Job, settings: ExeSettings, stop: StopRequest | None = None
     return row
 
 
+#: The errors of a command that cannot start (its program not there, not executable, not a program): the node's
+#: verdict. Any other (EAGAIN, ENOMEM: a busy machine) is bt_nav's, and the run is run again.
+COMMAND_ERRORS = (errno.ENOENT, errno.EACCES, errno.ENOEXEC, errno.ENOTDIR, errno.EISDIR, errno.ELOOP,
+                  errno.ENAMETOOLONG, errno.EPERM)
+
+
 #: Wall seconds a run waits for a free domain beyond its own limit: another run's shutdown (its processes get
 #: :data:`STOP_GRACE` and 2 s each, the node first) and its bag's closing.
 DOMAIN_WAIT_MARGIN = 30.0
@@ -371,12 +409,46 @@ def not_graded_row(row: dict[str, Any], tried: list[int], moved_enough: bool) ->
     return graded
 
 
-def _set_aside(run_dir: Path) -> Path:
-    """Move an abandoned attempt's directory out of the run's name (kept: its logs show the other program)."""
-    aside = make_run_dir(run_dir.parent, f"{run_dir.name}.shared-domain")
+def _set_aside(run_dir: Path, kind: str = "shared-domain") -> Path:
+    """Move an abandoned attempt's directory out of the run's name (kept: its logs show the other program, or what
+    ended it)."""
+    aside = make_run_dir(run_dir.parent, f"{run_dir.name}.{kind}")
     aside.rmdir()
     run_dir.rename(aside)
     return aside
+
+
+def set_aside_own_fault(row: dict[str, Any]) -> str:
+    """An attempt without a verdict for a cause of bt_nav's own (:data:`OWN_FAULT`), to be run again: its directory
+    set aside (its ``result.json`` then says :data:`ERROR`, so ``--resume`` never keeps it as the run's result);
+    the one-line note its run's row gets."""
+    said = f"no verdict: {row[OWN_FAULT]}: bt_nav's, not the node's"
+    if not row.get("run_dir"):
+        return f"{said}: the run started again"
+    aside = _set_aside(Path(row["run_dir"]), "bt_nav-fault")
+    (aside / "result.json").write_text(json.dumps({**row, "passed": False, "outcome": ERROR, "run_dir": str(aside)},
+                                                  indent=1) + "\n", encoding="utf-8")
+    return f"{said}: the run started again (that attempt: {aside})"
+
+
+def own_fault_not_graded(row: dict[str, Any], attempts: int) -> dict[str, Any]:
+    """The row of a run whose every attempt (``attempts``) ended without a verdict for a cause of bt_nav's own: not
+    graded (:data:`ERROR`, ``not_graded``: an autograder error, never a 0; ``--resume`` runs it again), its reason
+    one line naming the last cause."""
+    said = f"not graded: no verdict in {attempts} attempts, each ended by bt_nav's own fault (last: " \
+           f"{row[OWN_FAULT]}): not the node's failure, --resume runs it again"
+    return with_notes({**row, "passed": False, "outcome": ERROR, "reason": said, "not_graded": said}, [])
+
+
+def with_notes(row: dict[str, Any], notes: list[str]) -> dict[str, Any]:
+    """``row`` with ``notes`` before its own (what happened to the run that is not the node's), written again to its
+    ``result.json``."""
+    if notes:
+        row["notes"] = [*notes, *row.get("notes", [])]
+    result = Path(row.get("run_dir") or "") / "result.json"
+    if row.get("run_dir") and result.parent.is_dir():
+        result.write_text(json.dumps(row, indent=1) + "\n", encoding="utf-8")
+    return row
 
 
 def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | None,
@@ -401,11 +473,15 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         try:
             node = session.start(ExeSpec(argv), cwd=settings.cwd)
         except OSError as exc:  # not found, not executable: a verdict, not a crash of the grid
+            if exc.errno not in COMMAND_ERRORS:
+                raise  # EAGAIN, ENOMEM: the machine's, not the command's; the run is run again
             row = {"passed": False, "outcome": "node exited", "reason": f"the command did not start: {exc}",
                    "verdict": None}
         else:
             sim = session.start(sim_spec)
-            outcome, reason, crash = _wait(session, sim, node, settings.limit, started, results_json)
+            # the limit counts from the simulator's start (a fork server's hello may have held it back)
+            limit = settings.limit + time.monotonic() - started
+            outcome, reason, crash = _wait(session, sim, node, limit, started, results_json)
             row = _verdict_row(outcome, reason, sim, results_json)
             if crash is not None:  # what the 1x re-run is decided on (bt_nav.grading.realtime)
                 row["crash"] = asdict(crash)
@@ -415,7 +491,9 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
         # the verdict is in (or never will be): the node first, while its world runs on and records (the bag holds
         # what the node sends on its way out); then the rest at once
         session.close(STOP_GRACE, together=True, first=node)
-    if row["outcome"] not in ("stopped", SHARED_DOMAIN):  # how its node ended is not the node's to answer for
+    if row["outcome"] == SIM_LOST:  # bt_nav's, not the node's: run again (grid.run_unless_stopped)
+        row[OWN_FAULT] = row["reason"].removeprefix("no verdict: ")
+    if row["outcome"] not in ("stopped", SHARED_DOMAIN, SIM_LOST):  # how its node ended is not the node's to answer
         findings, notes = _ending_findings(node, run_dir / "node.log")
         _with_findings(row, findings)
         if notes:
