@@ -82,9 +82,11 @@ _LAB_REQUIRED = {
     "toggle_navigation answered": lambda c: "every call (`data: true`; the toggle cycle's `data: false` and "
                                             "`data: true`; the final `data: false`) answered with `success: true`",
     "maneuvers performed": lambda c: f"at least {c.min_maneuvers} turn judged as the maneuver",
-    "maneuver": lambda c: "each turn: its trigger held, not late, its angle and side, no forward motion, moved on",
-    "back-to-back maneuvers": lambda c: "maneuvers made one after another without moving on serve their purpose: "
-                                        "a search (A, C) may go on; a Retreat (B) must end by driving out",
+    "maneuver": lambda c: "each turn: its trigger held, not late, its angle and side, no forward motion (moving on "
+                          "after it: a finding)",
+    "back-to-back maneuvers": lambda c: "none by default: maneuvers made one after another without moving on are a "
+                                        "finding (a Retreat (B) that never drives out too: the sheet only implies "
+                                        "it), a failure only with `--strict-findings back_to_back`",
     "recovery turns": lambda c: "no forward command or motion",
     CREEP_CHECK: lambda c: f"armed, never standing still {c.creep_still:g} s or more while no reading of your trigger "
                            f"holds and the front is clear beyond `safety_distance` (+{c.trigger_margin:.2f} m): keep "
@@ -354,7 +356,7 @@ def _maneuver(cfg: CheckoffConfig) -> list[str]:
             f"most {cfg.brake_allowance:g} s after its last turning command, or until your next forward command) the "
             f"robot moves less than {cfg.forward_motion_max:g} m |",
             f"| then | move on: {cfg.move_on_distance:g} m within {cfg.move_on_within:g} s of settling, or another "
-            "turn |"]
+            "turn (else a finding; `--strict-findings moved_on` fails it) |"]
 
 
 def _turns(cfg: CheckoffConfig) -> list[str]:
@@ -376,7 +378,8 @@ def _turns(cfg: CheckoffConfig) -> list[str]:
             "part before is within the angle rule (the earliest such point each time). Without such a mark it stays "
             "one turn. Maneuvers made without moving on between them are a chain, judged by the maneuver's purpose: "
             "the Randomizer and the Smart Pivot search, and may go on (a finding counts them); the Retreat is to "
-            "exit the narrow space, and a chain of them that never drives out before the disarm fails."]
+            "exit the narrow space, and a chain of them that never drives out before the disarm is a finding (the "
+            "sheet only implies driving out; `--strict-findings back_to_back` fails it)."]
 
 
 def _checks(names: Sequence[str], required: Mapping[str, str]) -> list[str]:

@@ -68,11 +68,13 @@ LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
           "left_or_right": (r"turned although its trigger did not hold \(left", "lab_hallway"),
           "ignores_safety_distance": (r"turned late: triggered at left 0\.\d\d m and right 0\.\d\d m with "
                                       r"safety_distance 0\.70: it crept on", "safety_distance=0.7"),
-          "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
-          "respins_forever": (r"never moved on: \d+ Retreats back to back \(\d+ deg in place\)", "lab_dead_end")},
+          # respins_forever ("never moved on") is a finding since issue 52 (the sheet only implies driving out): it
+          # fails only with --strict-findings back_to_back (tests/sim/test_checkoff_chains.py)
+          "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None)},
     "C": {**_EVERY_CHOICE, **{name: (LAB_C[name], None) for name in (
               "hardcoded_indices", "zero_is_obstacle", "half_angle", "no_trigger")},
-          "wrong_side": (LAB_C["wrong_side"], "lab_beside"),  # lab_dead_end's sides are alike at the pivot
+          # wrong_side is caught where every reasonable reading of the sides agrees (lab_side: LAB_C); in lab_beside
+          # the box's corners fall in a 30-150 deg side sector (issue 52: a right node's), so either side passes there
           "side_as_front": (NOT_HELD, "lab_beside"),
           "spins_360": (r"turned 3[5-7]\d deg \w+; the Smart Pivot needs 90 \+- 10 deg", None)},
 }
@@ -146,7 +148,7 @@ def test_the_lab_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -
 #: The mistakes each choice's default grid is made to catch: a trigger that fires where it must not (a side or the
 #: whole scan for front; left OR right), the side, and safety_distance passed but not read (its cells give 0.7 m).
 DEFAULT_GRID_MISTAKES = {"A": ("front_is_whole_scan", "ignores_safety_distance"),
-                         "B": ("left_or_right", "ignores_safety_distance"), "C": ("side_as_front", "wrong_side")}
+                         "B": ("left_or_right", "ignores_safety_distance"), "C": ("side_as_front",)}
 
 
 @pytest.mark.slow

@@ -101,6 +101,10 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--node-param", action="append", default=[], metavar="NAME=VALUE",
                         help="--exe: a parameter for the node, as a TA's launch file sets it (repeatable), e.g. "
                         "safety_distance=0.6 (the lab's judge then triggers at it too)")
+    parser.add_argument("--strict-findings", default="", metavar="KIND[,KIND]|all",
+                        help="--exe, --class, lab: the check-off's findings (what the sheet only implies) that fail "
+                        "instead, for a course that teaches them: back_to_back, moved_on, side, search_chain, or all "
+                        "(default: none, each is a finding and the run passes)")
     parser.add_argument("--launch", default=None, metavar="FILE",
                         help="--exe: the student's launch file (or hand-in folder), given the lab sheet's launch "
                         "checks as --class gives each hand-in (see bt-nav check-launch); grade.json and feedback.md "

@@ -133,7 +133,17 @@ def exe_settings(args: Any, maneuvers: bool, command: str | None = None) -> ExeS
     return ExeSettings(command or resolve_program(args.exe), args.profile, out.absolute() if args.scheduler else out,
                        args.timeout, args.rtf, maneuvers, None if args.no_jitter else DEFAULT_JITTER, args.record,
                        args.videos, os.getcwd(), node_params, args.realtime_check == "on",
-                       rtf_cap(args.rtf, args.rtf_max))
+                       rtf_cap(args.rtf, args.rtf_max), strict_findings=strict_option(args))
+
+
+def strict_option(args: Any) -> str:
+    """``--strict-findings`` checked before any run (an unknown kind is refused): the check-off's finding kinds that
+    fail instead (:mod:`bt_nav_sim.findings`; the lab's judge parameter ``strict_findings``)."""
+    from bt_nav_sim.findings import strict_kinds
+
+    text = str(getattr(args, "strict_findings", "") or "")
+    strict_kinds(text)
+    return text
 
 
 def check_node_options(args: Any) -> None:

@@ -99,6 +99,7 @@ class ExeSettings:
     # A failure at rtf > 1 or 0 is checked at 1x before it stands (bt_nav.grading.realtime)
     realtime_check: bool = True
     rtf_max: float = 0.0  # at rtf 0, the most sim seconds per wall second (0: no cap)
+    strict_findings: str = ""  # the check-off's finding kinds that fail instead (bt_nav_sim.findings; "": none)
 
 
 @dataclass(frozen=True)
@@ -159,6 +160,8 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
              "robot_clock_wait": ROBOT_CLOCK_WAIT}
     if lab and job.lidar:  # the check-off reads "from the LiDAR": the robot's, from its mount
         judge["lidar"] = job.lidar
+    if lab and settings.strict_findings:  # what the sheet only implies fails where the course teaches it
+        judge["strict_findings"] = settings.strict_findings
     # the trigger the node was given (as a TA's launch file gives it) is the one it is judged by
     judge.update(assignment.judge.given(dict(job.params_over(settings.node_params)), assignment.judge.launch_shared))
     specs = nodes(assignment.graph, world=job.world, maneuver=job.maneuver if lab else None,
