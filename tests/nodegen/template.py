@@ -55,6 +55,7 @@ AEB_CLEAR = 0.45  # m: the brake's turn-away ends once the path is clear this fa
 PATH_HALF_WIDTH = 0.15  # m: the robot's half width and a margin
 SLOW_ZONE = math.radians(20.0)  # odometry: slow down over the last 20 deg
 MIN_RATE = 0.15  # rad/s: the slowest the odometry loop turns
+NOMINAL_STEP = 1.0 / TIMER_HZ if LOOP == "timer" else 0.2  # s between two control steps, as planned
 
 
 def index_for_angle(msg: LaserScan, angle_deg: float) -> int | None:
@@ -246,7 +247,9 @@ class ReactiveNavigator(Node):
                 self.turned += TURN_RATE * self.period
             else:
                 self.turned = TURN_RATE * (now - self.began)
-            done = self.turned + 0.5 * TURN_RATE * self.period >= self.target
+            # end on the step nearest the end: half a step early at most (the nominal step: one late step must not
+            # end the turn early)
+            done = self.turned + 0.5 * TURN_RATE * min(self.period, NOMINAL_STEP) >= self.target
         if done:
             self.end_turn(now)
         else:
