@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import errno
 import json
+import re
 import shlex
 import signal
 import time
@@ -207,6 +208,10 @@ SIM_LOST = "sim exited"
 OWN_FAULT = "bt_nav_fault"
 
 
+#: The simulator's line when a signal stops it (:mod:`bt_nav.ros.runner`).
+_SIGNAL_SAID = re.compile(r"\]: (SIG[A-Z]+) received: stopping")
+
+
 def _sim_cause(sim: Child, log: Path, wall: float) -> str:
     """Why the simulator ended before its verdict (``wall`` s into the run), in one line. The run signals its
     processes only after the wait, so a signal that ended it came from outside the run: never the node's doing (a
@@ -224,6 +229,10 @@ def _sim_cause(sim: Child, log: Path, wall: float) -> str:
                f"(not the run's stop, not the node's; see {log.name})"
     sim.thread.join(LOG_DRAIN)  # its traceback's last lines may still be in the pipe
     text = log.read_text(errors="replace") if log.is_file() else ""
+    caught = _SIGNAL_SAID.search(text)  # the simulator catches SIGINT and SIGTERM, stops and exits with 0
+    if caught:
+        return f"the simulator was stopped by {caught.group(1)} from outside the run after {wall:.1f} s wall " \
+               f"(not the run's stop, not the node's; see {log.name})"
     found = last_traceback(text)
     said = f": {found[1][:200]}" if found and found[1] else ""
     return f"the simulator exited with code {code} without a verdict{said} (see {log.name})"
