@@ -79,3 +79,38 @@ def test_every_mutant_has_an_expected_reason_that_is_a_regex() -> None:
             assert choice in MUTATIONS[name][0]
             re.compile(pattern)
             assert cells is None or re.compile(cells)
+
+
+def test_at_100_nodes_every_default_grid_cell_of_each_choice_gets_20_right_nodes() -> None:
+    from tests.nodegen import suite
+
+    dealt = suite.deal([generate(seed) for seed in range(100)])
+    for choice in "ABC":
+        cells = suite.choice_cells(choice)
+        assert cells, choice
+        for index in range(len(cells)):
+            nodes = dealt[(choice, index)]
+            assert len(nodes) >= suite.PER_CELL and all(n.knobs.choice == choice for n in nodes), (choice, index)
+
+
+def _row(world: str, lidar: str, passed: bool, reason: str, params: dict | None = None) -> dict:
+    return {"world": world, "maneuver": "C", "lidar": lidar, "seed": 0, "passed": passed, "reason": reason,
+            "cell_params": params or {}}
+
+
+def test_a_generated_mutant_is_judged_on_its_reason_its_cells_and_its_lidars() -> None:
+    from tests.nodegen.suite import judged_mutant
+
+    side = "failed: maneuver 1 turned 89 deg left; the Smart Pivot needs 90 +- 10 deg right (readings ...)"
+    ok = judged_mutant("gen002_C__wrong_side", [_row("lab_beside", "lds01", False, side),
+                                                _row("lab_dead_end", "lds01", True, "passed")])
+    assert ok["outcome"] == "failed for its reason", ok
+    missed = judged_mutant("gen002_C__wrong_side", [_row("lab_beside", "lds01", True, "passed")])
+    assert missed["outcome"] == "wrong" and "PASSED" in missed["wrong"][0]
+    other = judged_mutant("gen002_C__angle_45", [_row("lab_beside", "lds01", False, "failed: hit an obstacle")])
+    assert other["outcome"] == "wrong"
+    by_lidar = judged_mutant("gen002_C__hardcoded_indices", [
+        _row("lab_beside", "lds01", True, "passed"),
+        _row("lab_beside", "rplidar", False, "failed: performed no maneuver")])
+    assert by_lidar["outcome"] == "failed for its reason", by_lidar
+    assert judged_mutant("gen002_C__angle_45", [])["outcome"] == "not graded"
