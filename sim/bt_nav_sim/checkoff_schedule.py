@@ -21,9 +21,9 @@ from typing import Any
 
 def drove_on(judge: Any, t: float) -> bool:
     """Whether the re-armed node of ``judge`` (a check-off judge) has been shown driving on by ``t``: its toggle
-    cycle's true was answered ``drive_on_for`` s ago or more, and no turn it began since is still under way (its
-    last turning command ``toggle_off_after`` s ago or more). False when the config turns the early end off
-    (``drive_on_for`` 0) or there was no toggle cycle."""
+    cycle's true was answered ``drive_on_for`` s ago or more, no turn it began since is still under way (its last
+    turning command ``toggle_off_after`` s ago or more), and a maneuver has been performed (:func:`performed`). False
+    when the config turns the early end off (``drive_on_for`` 0) or there was no toggle cycle."""
     cfg = judge.config
     since = judge.cycle_on
     if cfg.drive_on_for <= 0 or since is None or t < since + cfg.drive_on_for:
@@ -31,9 +31,18 @@ def drove_on(judge: Any, t: float) -> bool:
     for stamp, _, w in reversed(judge.commands):  # newest first: only those since the true matter
         if stamp < since:
             break
-        if abs(w) >= cfg.rotation_min_rate:
-            return t >= stamp + cfg.toggle_off_after
-    return True
+        if abs(w) >= cfg.rotation_min_rate and t < stamp + cfg.toggle_off_after:
+            return False
+    return performed(judge, t)
+
+
+def performed(judge: Any, t: float) -> bool:
+    """Whether ``judge`` has judged ``min_maneuvers`` turns as the maneuver by ``t`` (passed or not: decided). The
+    toggle cycle follows the first turn of any kind, and an emergency stop's recovery turn is no maneuver: bt_nav's
+    own Retreat in lab_hallway braked, turned 69 deg away, and made its Retreat only after the cycle (seeds 10-14 of
+    20); ended there, it failed "maneuvers performed"."""
+    episodes = judge._judge_all(t)
+    return sum(e["kind"] == "maneuver" for e in episodes) >= judge.config.min_maneuvers
 
 
 def schedule_words(cfg: Any) -> str:

@@ -174,3 +174,17 @@ def test_a_node_braked_at_its_trigger_is_not_failed_for_standing() -> None:
     judge = _play(_Node(brake=4.0))
     assert _check(judge, "creep while armed")["passed"]
     assert judge.passed, judge.report_lines()
+
+
+def test_a_run_whose_first_turn_was_a_recovery_goes_on_until_a_maneuver() -> None:
+    """Lock-step, bt_nav's Retreat in lab_hallway, seed 10: it braked, turned 69 deg away (an emergency stop's
+    recovery turn, no maneuver), and the toggle cycle followed that turn; its Retreat came only after the true again.
+    Disarmed 4.5 s after the true, it failed "maneuvers performed"; the run goes on until a maneuver was made."""
+    run = Lockstep("lab_hallway", "B", 10, None, "lab")
+    run.run()
+    judge = run.robots[0].referee
+    res = judge.results()
+    assert [e["kind"] for e in res["maneuvers"] + res["recovery_turns"]] == ["maneuver", "recovery"]
+    assert res["maneuvers"][0]["t"] > res["times"]["cycle_on"] and not res["maneuvers"][0]["interrupted"]
+    assert res["times"]["deactivation_requested"] > res["times"]["cycle_on"] + judge.config.drive_on_for
+    assert res["passed"], judge.report_lines()
