@@ -178,8 +178,8 @@ class IdleMeter:
 
 
 #: Runs at most per usable core at 1x (the default grade): a 1x lab run uses about a tenth of a core (six cells took
-#: 43.8 CPU s over 74 s wall, 2026-11-28), so a whole grid of 12 runs at once on 2 cores with room to spare.
-REALTIME_PER_CORE = 8
+#: 43.8 CPU s over 74 s wall, 2026-11-28), so a whole grid (12 runs; C's 18) runs at once on 2 cores.
+REALTIME_PER_CORE = 10
 #: MiB a run takes (the node, a forked simulator with its judge and bag writer): the memory bound on runs at once.
 RUN_MEMORY_MIB = 400
 

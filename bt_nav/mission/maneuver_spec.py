@@ -147,7 +147,7 @@ MANEUVER_SPECS: dict[str, ManeuverSpec] = {spec.letter: spec for spec in (
                  Purpose("exit", "to exit the narrow space")),
     ManeuverSpec("C", "Smart Pivot", ("smart_pivot", "smartpivot", "pivot"), "SmartPivotManeuver", "SmartPivot",
                  "ManeuverC", Trigger("front", "pivot_distance", or_braked_at="safety_distance"),
-                 AngleRule(90.0, 90.0, side="clearer"), _FRONT_ARENAS,
+                 AngleRule(90.0, 90.0, side="clearer"), (*_FRONT_ARENAS, "lab_slant"),
                  Purpose("search", "toward the clearest side")),
 )}
 """Letter -> record, in the order the lab lists them. The one place a maneuver is defined."""

@@ -372,6 +372,9 @@ def read_pace(path: str | Path) -> dict[str, Any] | None:
 
 #: Wall seconds late a step may be and still count as on time: a thread woken a little late by the scheduler.
 ON_TIME_S = 0.02
+#: Wall seconds of the window :class:`RealTimeKeeping` sums the time written off in: about the length of a turn
+#: (90 deg at 0.8 rad/s), within which a stalled world shows in a node's angle.
+KEEPING_WINDOW_S = 2.0
 
 
 class RealTimeKeeping:
@@ -381,8 +384,11 @@ class RealTimeKeeping:
 
     At a fixed factor the loop sleeps until each step is due; when a step comes late (the simulator lacked CPU) the
     wall clock has run ahead of sim time, and a backlog the loop writes off (it re-anchors instead of bursting to
-    catch up) is time the robot's world stood still while the node's did not. Counted only while judging: a node's
-    start-up and shutdown are not judged. Written into :data:`PACE_FILE` as ``realtime`` (:meth:`record`).
+    catch up) is time the robot's world stood still while the wall clock did not. A node on sim time sees its clock
+    stand still with it; a node on the wall clock sees its turn run on in a world that stood still. Counted only
+    while judging: a node's start-up and shutdown are not judged. Written into :data:`PACE_FILE` as ``realtime``
+    (:meth:`record`): the latest step, the time written off in all and the most of it within any
+    :data:`KEEPING_WINDOW_S` wall seconds.
     """
 
     def __init__(self) -> None:
@@ -390,7 +396,9 @@ class RealTimeKeeping:
         self.judged_wall_s = 0.0
         self.worst_s = 0.0  # the latest a step came, in wall s past its due time
         self.lost_s = 0.0  # wall s written off (sim time did not make them up)
+        self.window_lost_s = 0.0  # the most wall s written off within any KEEPING_WINDOW_S
         self.late_steps = 0  # steps later than ON_TIME_S
+        self._recent: deque[tuple[float, float]] = deque()  # (wall, s written off) within the window
         self._since: tuple[float, float] | None = None  # (wall, sim) where the judged span began
 
     def judging(self, on: bool, wall: float, sim_s: float) -> None:
@@ -402,15 +410,20 @@ class RealTimeKeeping:
             self.judged_sim_s += sim_s - self._since[1]
             self._since = None
 
-    def step(self, late_s: float, written_off: bool) -> None:
-        """A step came ``late_s`` wall s past its due time (0 or less: on time); ``written_off``: the loop re-anchored
-        rather than catch up. Ignored while not judging."""
+    def step(self, late_s: float, written_off: bool, wall: float) -> None:
+        """A step came ``late_s`` wall s past its due time (0 or less: on time) at ``wall`` s (monotonic);
+        ``written_off``: the loop re-anchored rather than catch up. Ignored while not judging."""
         if self._since is None or late_s <= ON_TIME_S:
             return
         self.late_steps += 1
         self.worst_s = max(self.worst_s, late_s)
-        if written_off:
-            self.lost_s += late_s
+        if not written_off:
+            return
+        self.lost_s += late_s
+        self._recent.append((wall, late_s))
+        while self._recent and self._recent[0][0] < wall - KEEPING_WINDOW_S:
+            self._recent.popleft()
+        self.window_lost_s = max(self.window_lost_s, sum(lost for _, lost in self._recent))
 
     def record(self, wall: float, sim_s: float) -> dict[str, float | int]:
         """What :data:`PACE_FILE` carries as ``realtime`` (a span still open ends at ``wall``, ``sim_s``)."""
@@ -418,4 +431,5 @@ class RealTimeKeeping:
         open_sim = sim_s - self._since[1] if self._since is not None else 0.0
         return {"judged_wall_s": round(self.judged_wall_s + open_wall, 3),
                 "judged_sim_s": round(self.judged_sim_s + open_sim, 3), "worst_s": round(self.worst_s, 3),
-                "lost_s": round(self.lost_s, 3), "late_steps": self.late_steps}
+                "lost_s": round(self.lost_s, 3), "window_lost_s": round(self.window_lost_s, 3),
+                "late_steps": self.late_steps}

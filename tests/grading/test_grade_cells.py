@@ -31,12 +31,12 @@ def _jobs(*argv: str) -> list[Job]:
 @pytest.mark.parametrize(("choice", "cells"), [
     ("A", {("lab_beside", SD), ("lab_dead_end", ())}),
     ("B", {("lab_dead_end", ()), ("lab_hallway", SD)}),
-    ("C", {("lab_beside", ()), ("lab_dead_end", ())}),
+    ("C", {("lab_beside", ()), ("lab_dead_end", ()), ("lab_slant", ())}),
 ])
 def test_each_choice_is_graded_in_its_own_cells(choice: str, cells: set[tuple[str, Any]]) -> None:
     jobs = _jobs("--maneuvers", choice)
     assert {(j.world, j.node_params) for j in jobs} == cells
-    assert len(jobs) == 2 * 3 * 2  # two cells x the three LiDARs x two seeds
+    assert len(jobs) == len(cells) * 3 * 2  # the cells x the three LiDARs x two seeds
     assert {j.maneuver for j in jobs} == {choice} and {j.seed for j in jobs} == {0, 1}
     assert len({j.key for j in jobs}) == len(jobs)
 
@@ -48,10 +48,11 @@ def test_worlds_given_replace_the_cells_and_a_parameter_given_wins() -> None:
     given = _jobs("--maneuvers", "A", "--node-param", "safety_distance=0.6", "--lidars", "lds01", "--seeds", "1")
     assert {(j.world, j.node_params) for j in given} == {("lab_beside", ()), ("lab_dead_end", ())}
     every = _jobs("--maneuvers", "A,B,C", "--lidars", "lds01", "--seeds", "1")
-    assert len(every) == 6
+    assert len(every) == 7
     # the grid's cells for B: lab_beside's cell of its trigger distance too; the plan keeps what the world checks off
     assert [c.world for c in LAB.exe_grid.cells_of("B")] == ["lab_beside", "lab_dead_end", "lab_hallway"]
-    assert [(c.world, c.params) for c in LAB.exe_grid.cells_of("C")] == [("lab_beside", ()), ("lab_dead_end", ())]
+    assert [(c.world, c.params) for c in LAB.exe_grid.cells_of("C")] == [("lab_beside", ()), ("lab_dead_end", ()),
+                                                                         ("lab_slant", ())]
 
 
 def test_a_cell_s_parameters_reach_the_node_and_its_judge(tmp_path: Path) -> None:

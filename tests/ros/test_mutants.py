@@ -73,8 +73,10 @@ LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
           "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None)},
     "C": {**_EVERY_CHOICE, **{name: (LAB_C[name], None) for name in (
               "hardcoded_indices", "zero_is_obstacle", "half_angle", "no_trigger")},
-          # wrong_side is caught where every reasonable reading of the sides agrees (lab_side: LAB_C); in lab_beside
-          # the box's corners fall in a 30-150 deg side sector (issue 52: a right node's), so either side passes there
+          # wrong_side is caught where every reasonable reading of the sides agrees (lab_slant, made for it); in
+          # lab_beside the box's corners fall in a 30-150 deg side sector (issue 52: a right node's), so either side
+          # passes there, with a finding
+          "wrong_side": (LAB_C["wrong_side"], "lab_slant"),
           "side_as_front": (NOT_HELD, "lab_beside"),
           "spins_360": (r"turned 3[5-7]\d deg \w+; the Smart Pivot needs 90 \+- 10 deg", None)},
 }
@@ -148,7 +150,7 @@ def test_the_lab_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -
 #: The mistakes each choice's default grid is made to catch: a trigger that fires where it must not (a side or the
 #: whole scan for front; left OR right), the side, and safety_distance passed but not read (its cells give 0.7 m).
 DEFAULT_GRID_MISTAKES = {"A": ("front_is_whole_scan", "ignores_safety_distance"),
-                         "B": ("left_or_right", "ignores_safety_distance"), "C": ("side_as_front",)}
+                         "B": ("left_or_right", "ignores_safety_distance"), "C": ("side_as_front", "wrong_side")}
 
 
 @pytest.mark.slow
@@ -165,7 +167,8 @@ def test_each_choice_s_default_grid_fails_its_trigger_mistakes(tmp_path: Path, c
                 **{name: f"{LAB} --choice {choice} --seed 1 --mistake {name}" for name in names}}
     result = _class(tmp_path, students, "--profile", "lab", "--maneuvers", choice, "--lidars", "lds01")
     correct = result["grades"]["correct"]["runs"]
-    assert len(correct) == 2 and all(row["passed"] for row in correct), [row["reason"] for row in correct]
+    assert len(correct) == len({cell_label(row) for row in correct}) >= 2 and all(row["passed"] for row in correct), \
+        [row["reason"] for row in correct]
     for row in correct:
         given = row["parameters"]["given"]
         assert set(given) == set(row["cell_params"]) and all(p["applied"] for p in given.values()), row["parameters"]

@@ -325,7 +325,7 @@ NEAR_START = {"lab_beside": 0.03}
 
 def test_lab_arenas_are_listed_apart() -> None:
     assert set(LAB_WORLDS) == {"lab_object", "lab_dead_end", "lab_narrow_gap", "lab_cluttered", "lab_appearing",
-                               "lab_passerby", "lab_side", "lab_beside", "lab_hallway"}
+                               "lab_passerby", "lab_side", "lab_beside", "lab_hallway", "lab_slant"}
     assert not set(LAB_WORLDS) & set(list_worlds())
     assert sorted(list_worlds() + LAB_WORLDS) == list_worlds("all")
 

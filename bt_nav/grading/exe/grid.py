@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.admission import Admission, describe
-from bt_nav.grading.exe.pace import check_speed, rtf_cap, with_speed
+from bt_nav.grading.exe.pace import REAL_TIME, check_speed, rtf_cap, with_speed
 from bt_nav.grading.exe.run import ERROR, ExeSettings, run_exe_job
 from bt_nav.grading.grid import Job, progress_bar
 from bt_nav.mission.maneuver_spec import choice_pattern
@@ -414,10 +414,12 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: Workers,
     :class:`~bt_nav.grading.admission.Admission` lets start, or ``admission`` when given; one grid's, or a whole
     class's), or each a task on a :class:`Cluster` given as ``workers``; yields (the task's index, its row) as each
     ends, None for a run that never started. A stop cancels the runs not started."""
+    if not tasks:  # nothing to run: no fork server to start
+        return
     if isinstance(workers, Cluster):
         yield from workers.run(tasks, stop)
         return
-    admission = admission or Admission.for_jobs(workers)
+    admission = admission or Admission.for_jobs(workers, real_time=all(s.rtf == REAL_TIME for _, s in tasks))
     # With an admission a run's place is free at its verdict, while its thread still stops its processes.
     threads = 2 * admission.limit if admission is not None else max(1, workers)
     with forkserver.serving(forkserver.wanted()), \
@@ -435,8 +437,17 @@ def run_pool(tasks: Sequence[tuple[Job, ExeSettings]], workers: Workers,
 
 
 def _admitted(admission: Admission | None, job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
-    """:func:`run_unless_stopped` once ``admission`` lets the run start (``--jobs auto``); None if stopped first. Its
-    place is given back at the verdict (a retry after that runs on its old place's account)."""
+    """One cell graded (:func:`bt_nav.grading.exe.realtime.graded_run`: a preview's failure again at 1x, a 1x run
+    that fell behind once more), each attempt once ``admission`` lets it start (``--jobs auto``); None if stopped
+    first. A place is given back at the attempt's verdict (a retry after that runs on its old place's account)."""
+    from bt_nav.grading.exe.realtime import graded_run
+
+    return graded_run(lambda own: _attempt(admission, job, own, stop), settings,
+                      admission.fell_behind if admission is not None else None)
+
+
+def _attempt(admission: Admission | None, job: Job, settings: ExeSettings, stop: StopRequest | None) -> Row | None:
+    """:func:`run_unless_stopped` once ``admission`` lets the run start; None if stopped first."""
     if admission is None:
         return run_unless_stopped(job, settings, stop)
     if not admission.enter(stop):
@@ -483,8 +494,9 @@ class ClusterStop(StopRequest):
 
 
 def run_cluster_task(job: Job, settings: ExeSettings, event: str) -> Row | None:
-    """What a Dask worker runs for one job: :func:`run_unless_stopped` with the grade's :class:`ClusterStop`."""
-    return run_unless_stopped(job, settings, ClusterStop(event))
+    """What a Dask worker runs for one job: the cell graded (:func:`_admitted`) with the grade's
+    :class:`ClusterStop`."""
+    return _admitted(None, job, settings, ClusterStop(event))
 
 
 def grid_token(settings: ExeSettings) -> str:
@@ -600,9 +612,9 @@ def close_workers(workers: Workers) -> None:
         workers.close()
 
 
-def describe_workers(workers: Workers) -> str:
-    """Where a grade's runs go, for its first line: ``on tcp://...`` or ``2 at a time``."""
-    return workers.describe() if isinstance(workers, Cluster) else describe(workers)
+def describe_workers(workers: Workers, real_time: bool = False) -> str:
+    """Where a grade's runs go, for its first line: ``on tcp://...``, ``2 at a time`` or (1x) ``up to 16 at once``."""
+    return workers.describe() if isinstance(workers, Cluster) else describe(workers, real_time)
 
 
 def run_exe_grid(jobs: Sequence[Job], settings: ExeSettings, workers: Workers = 2, stop: StopRequest | None = None,

@@ -6,15 +6,11 @@ handed back at its end), a run directory of its own, and two process groups star
 :class:`bt_nav.run.session.MissionSession` (the one layer ``bt-nav demo``, ``sim-run`` and the bench run theirs on):
 
 - the simulator node, hosting the judge (:mod:`bt_nav.ros.nodes.hosting`: fed by its loop, no ``/clock`` or ground
-  truth to read over DDS, no process of its own), at ``rtf`` sim seconds per wall second, or at ``rtf`` 0 (the
-  default) as fast as the node keeps up (:mod:`bt_nav.grading.exe.pace`; the node's sim-time timers tick that much
-  faster too), and in any case *paced to the node* (``follow``, :data:`FOLLOW_NODE`): the node's
-  ``cmd_vel`` publisher is a follower, so sim time never runs more than 0.05 s (or the node's own command period)
-  ahead of its latest command, except to publish the next scan the node answers (:data:`FOLLOW_NODE`). A node
-  starved of CPU on a busy machine then finds the world where it left it instead of a turn 20 deg further on,
-  and its verdict does not depend on the load. A node silent for
-  ``follower_timeout`` wall seconds (before its arming, after its stop, one that publishes only on change) is not
-  waited for until it publishes again, so the pace costs such a node a second of wall time, never its verdict.
+  truth to read over DDS, no process of its own), at 1x by default (:mod:`bt_nav.grading.exe.pace`): the robot's
+  world does not wait for the node, and the simulator measures whether it kept real time while judged. A preview
+  (``rtf`` 0 or above 1) is *paced to the node* (``follow``, :data:`FOLLOW_NODE`): sim time never runs more than
+  0.05 s (or the node's own command period) ahead of its latest command, except to publish the next scan the node
+  answers, and a node silent for ``follower_timeout`` wall seconds is not waited for until it publishes again.
   ``cmd_vel`` is read best effort, which hears reliable and best-effort writers alike;
 - the user's command, with :func:`exe_ros_args` appended (``--ros-args -p use_sim_time:=true``, the
   profile's remaps of bt_nav's own names ``arm`` and ``evaluate_mission`` onto the assignment's, plus
@@ -89,7 +85,7 @@ class ExeSettings:
     profile: str  # homework (the referee) or lab (the check-off judge)
     out: Path  # the grid's directory; one run directory per run below it
     limit: float = 150.0  # wall seconds per run
-    rtf: float = 0.0  # sim seconds per wall second; 0: as fast as the node keeps up (bt_nav.grading.exe.pace)
+    rtf: float = 1.0  # sim seconds per wall second: 1 the verdict; 0 (as fast as the node keeps up) or > 1 a preview
     maneuvers: bool = False  # append -p maneuver:=X
     jitter: tuple[float, float] | None = DEFAULT_JITTER
     record: str = "on"  # on, failures or off: each run's bag (bt_nav.grading.exe.bag.RECORD_MODES)
@@ -97,9 +93,10 @@ class ExeSettings:
     cwd: str | None = None  # where the command runs (a cluster's worker starts elsewhere); None: this process's
     # Parameters given to the node as a TA's launch file would (-p NAME:=VALUE); safety_distance is the judge's too
     node_params: tuple[tuple[str, Any], ...] = ()
-    # A failure at rtf > 1 or 0 is checked at 1x before it stands (bt_nav.grading.realtime)
+    # A preview's failure is graded again at 1x before it is shown (bt_nav.grading.exe.realtime); off: shown as the
+    # preview's (tests that need no verdict of 1x, a student's quick look)
     realtime_check: bool = True
-    rtf_max: float = 0.0  # at rtf 0, the most sim seconds per wall second (0: no cap)
+    rtf_max: float = 0.0  # in a preview at rtf 0, the most sim seconds per wall second (0: no cap)
     strict_findings: str = ""  # the check-off's finding kinds that fail instead (bt_nav_sim.findings; "": none)
 
 
@@ -149,7 +146,7 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     """The simulator of ``job`` hosting its judge (the profile's graph without bt_nav's executive)."""
     assignment = assignment_of(settings.profile)
     lab = assignment.judge.executable == "checkoff"
-    # its pace stops as data beside the verdict (bt_nav.grading.realtime reads them)
+    # its pace stops and how it kept real time, as data beside the verdict (bt_nav.grading.exe.pace reads them)
     sim: dict[str, Any] = {**FOLLOW_NODE, "cmd_vel_stamped": False, "pace_path": str(results_json.with_name(PACE_FILE)),
                            **sim_pace(settings.rtf, settings.rtf_max)}  # at rtf 0 no cap but --rtf-max
     if settings.jitter:
@@ -495,7 +492,7 @@ def _attempt(job: Job, settings: ExeSettings, domain: int, stop: StopRequest | N
             limit = settings.limit + time.monotonic() - started
             outcome, reason, crash = _wait(session, sim, node, limit, started, results_json)
             row = _verdict_row(outcome, reason, sim, results_json)
-            if crash is not None:  # what the 1x re-run is decided on (bt_nav.grading.realtime)
+            if crash is not None:  # the row's crash, for the reports
                 row["crash"] = asdict(crash)
         if on_verdict is not None:
             on_verdict()

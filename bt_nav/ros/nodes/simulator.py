@@ -547,7 +547,7 @@ class SimulatorNode(QuietQosEvents, Node):
             if written_off:
                 self._anchor_wall, self._anchor_ns = time.monotonic(), core.t_ns
             if rate == self.rtf:  # a fixed factor (a grade's 1x): was it kept?
-                self.keeping.step(-delay, written_off)
+                self.keeping.step(-delay, written_off, time.monotonic())
         return True
 
     def _wait_for_followers(self) -> bool:
