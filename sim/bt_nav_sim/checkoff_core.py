@@ -61,7 +61,7 @@ from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffC
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
 from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
 from bt_nav_sim.checkoff_creep import CREEP_CHECK, creep_check
-from bt_nav_sim.checkoff_schedule import drove_on
+from bt_nav_sim.checkoff_schedule import cycle_due, drove_on
 from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
 from bt_nav_sim.feeds import ReadingSource
 from bt_nav_sim.findings import implied_rules, maneuver_findings, strict_kinds
@@ -130,6 +130,9 @@ class CheckoffConfig:
     creep_start: float = 1.0  # s after an arming answered before a standstill counts (bt_nav_sim.checkoff_creep) ...
     creep_settle: float = 1.0  # ... and after a turning command
     creep_still: float = 3.0  # s: standing this long while armed with nothing triggering fails "creep while armed"
+    # s: a node turning on without a pause (maneuvers back to back) gets the cycle's false this long after its first
+    # turning command, and the final false this long after the true again (bt_nav_sim.checkoff_schedule)
+    chain_for: float = 10.0
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
     # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
     lidar: str = ""
@@ -273,8 +276,7 @@ class CheckoffJudge(Verdict):
             return []
         if self.cycle_off_requested is None:
             final = (self.t0 or 0.0) + cfg.activate_at + cfg.armed_for
-            if self._calm_since is None or t < self._calm_since + cfg.toggle_off_after \
-                    or t + 2 * cfg.toggle_off_for > final:
+            if not cycle_due(self, t) or t + 2 * cfg.toggle_off_for > final:
                 return []
             self.cycle_off_requested = float(t)
         if t < self.cycle_off_requested + cfg.toggle_off_for:

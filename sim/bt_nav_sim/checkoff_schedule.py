@@ -22,18 +22,45 @@ from typing import Any
 def drove_on(judge: Any, t: float) -> bool:
     """Whether the re-armed node of ``judge`` (a check-off judge) has been shown driving on by ``t``: its toggle
     cycle's true was answered ``drive_on_for`` s ago or more, no turn it began since is still under way (its last
-    turning command ``toggle_off_after`` s ago or more), and a maneuver has been performed (:func:`performed`). False
-    when the config turns the early end off (``drive_on_for`` 0) or there was no toggle cycle."""
+    turning command ``toggle_off_after`` s ago or more; a node turning on without a pause is not waited for past
+    ``chain_for`` s after the true), and a maneuver has been performed (:func:`performed`). False when the config
+    turns the early end off (``drive_on_for`` 0) or there was no toggle cycle."""
     cfg = judge.config
     since = judge.cycle_on
     if cfg.drive_on_for <= 0 or since is None or t < since + cfg.drive_on_for:
         return False
-    for stamp, _, w in reversed(judge.commands):  # newest first: only those since the true matter
-        if stamp < since:
-            break
-        if abs(w) >= cfg.rotation_min_rate and t < stamp + cfg.toggle_off_after:
-            return False
+    turn = turning_run(judge, since)
+    if turn is not None and t < turn[1] + cfg.toggle_off_after and t < turn[0] + cfg.chain_for:
+        return False  # a turn under way (one going on chain_for s without a pause is interrupted)
     return performed(judge, t)
+
+
+def cycle_due(judge: Any, t: float) -> bool:
+    """Whether the toggle cycle's false is due at ``t``: the first maneuver ended ``toggle_off_after`` s ago (no
+    turning command since), or the node has turned on without such a pause for ``chain_for`` s (a Randomizer in a
+    dead end turns back to back until it faces out: waiting for a pause held it armed to the upper bound, 66 s of a
+    grade's minute; the false then interrupts a turn, whose angle is not judged)."""
+    cfg = judge.config
+    if judge._calm_since is not None and t >= judge._calm_since + cfg.toggle_off_after:
+        return True
+    turn = turning_run(judge, judge.activation_requested) if judge._turned else None
+    return turn is not None and t >= turn[0] + cfg.chain_for
+
+
+def turning_run(judge: Any, since: float | None) -> tuple[float, float] | None:
+    """The latest run of turning commands after ``since`` whose turning commands came less than ``toggle_off_after``
+    s apart (maneuvers back to back), as (its first, its last command's time); None: none."""
+    cfg = judge.config
+    first = last = None
+    for stamp, _, w in reversed(judge.commands):  # newest first
+        if since is None or stamp < since:
+            break
+        if abs(w) < cfg.rotation_min_rate:
+            continue
+        if first is not None and first - stamp >= cfg.toggle_off_after:
+            break
+        first, last = stamp, stamp if last is None else last
+    return None if first is None else (first, last)
 
 
 def performed(judge: Any, t: float) -> bool:

@@ -21,11 +21,13 @@ class _Node:
     """A Randomizer as the sheet's flow has it: armed, creep at 0.05 m/s; when the front (the wall 1 m ahead) reads
     below 0.5 m, turn 90 deg left at 1 rad/s, then creep on; a false stops it. Its faults, by option: ``pause`` s
     standing after each arming, ``brake`` s standing at the trigger before the turn (an AEB stop), ``stand_after_rearm``
-    (never creeps again after the toggle cycle's true), ``turn_after_rearm`` s after it a 90 deg turn on its own."""
+    (never creeps again after the toggle cycle's true), ``turn_after_rearm`` s after it a 90 deg turn on its own,
+    ``spin`` (once triggered it turns on without a pause whenever armed, as maneuvers back to back)."""
 
     def __init__(self, *, pause: float = 0.0, brake: float = 0.0, stand_after_rearm: bool = False,
-                 turn_after_rearm: float | None = None) -> None:
+                 turn_after_rearm: float | None = None, spin: bool = False) -> None:
         self.pause, self.brake, self.stand, self.turn_after = pause, brake, stand_after_rearm, turn_after_rearm
+        self.spin, self.spinning = spin, False
         self.armed, self.armed_at, self.arms = False, 0.0, 0
         self.turn_to: float | None = None
         self.braked_at: float | None = None
@@ -40,6 +42,8 @@ class _Node:
     def command(self, t: float, x: float, yaw: float) -> tuple[float, float]:
         if not self.armed or t < self.armed_at + self.pause:
             return 0.0, 0.0
+        if self.spinning:
+            return 0.0, 1.0
         if self.turn_to is not None:
             if math.remainder(self.turn_to - yaw, 2 * math.pi) > 0.0:  # until it passed the target (left turns)
                 return 0.0, 1.0
@@ -55,7 +59,7 @@ class _Node:
             self.braked_at = t if self.braked_at is None else self.braked_at
             if t < self.braked_at + self.brake:
                 return 0.0, 0.0
-            self.turn_to, self.braked_at = yaw + math.pi / 2, None
+            self.turn_to, self.braked_at, self.spinning = yaw + math.pi / 2, None, self.spin
             return 0.0, 1.0
         return 0.05, 0.0
 
@@ -188,3 +192,17 @@ def test_a_run_whose_first_turn_was_a_recovery_goes_on_until_a_maneuver() -> Non
     assert res["maneuvers"][0]["t"] > res["times"]["cycle_on"] and not res["maneuvers"][0]["interrupted"]
     assert res["times"]["deactivation_requested"] > res["times"]["cycle_on"] + judge.config.drive_on_for
     assert res["passed"], judge.report_lines()
+
+
+def test_a_node_turning_on_without_a_pause_gets_its_cycle_and_its_end_after_chain_for() -> None:
+    """Turning back to back never leaves the 1 s pause the toggle cycle waits for (a Randomizer in a dead end until it
+    faces out): its false comes chain_for (10) s after its first turning command, and the final false chain_for s
+    after the true again, instead of holding it armed to the upper bound (62 s)."""
+    judge = _play(_Node(spin=True))
+    res = judge.results()
+    times, cfg = res["times"], judge.config
+    first = next(t for t, _, w in judge.commands if abs(w) >= cfg.rotation_min_rate)
+    assert first + cfg.chain_for <= times["cycle_off_requested"] <= first + cfg.chain_for + 0.5
+    rearm = times["cycle_on"]
+    assert rearm + cfg.chain_for <= times["deactivation_requested"] <= rearm + cfg.chain_for + 0.5
+    assert times["report"] < 40.0
