@@ -1,32 +1,39 @@
-"""Benchmark 9 (issue 43): a lab grade's wall time side by side with the commit before the speed work, on the same
-grid, the same node file and each commit's own defaults, and whether every run's verdict stayed the same.
+"""Benchmark 9 (issue 52): a lab grade at today's default (real time, every cell at once) side by side with the
+commit before issue 52 (its default: ``--rtf 0``, as fast as the node keeps up, "paced"), on each commit's own
+default grid for maneuver C, the same node file; and what each side's verdicts were.
 
 Why side by side: on a shared 2-core machine a wall time alone says little (the load moves it by tens of per cent);
 the two commits measured in one sitting, each scenario's grades back to back (before, after, before, after, ...:
-:data:`PAIRS` pairs), share the machine's drift, so their ratio is the measurement (of the medians, over several
-pairs: :func:`paired`). The load average before and after each grade is
-recorded next to it.
+:data:`PAIRS` pairs), share the machine's drift (of the medians, over several pairs: :func:`paired`). The load
+average before and after each grade is recorded next to it. Why the simulated seconds too: at 1x with every cell at
+once a grade cannot end before its longest run's simulated time, so the share of the wall that is simulated time
+says what is left to gain (start-up, shutdown, admission) and what is not (the mission itself).
 
-The "before" side is :data:`BEFORE` (the head when issue 43 was filed), checked out in a ``git worktree`` of its own
-(removed at the end, also on an error or Ctrl-C) and run by this venv's Python with ``PYTHONPATH=<worktree>:
+The "before" side is :data:`BEFORE` (issue 52's session's starting commit), checked out in a ``git worktree`` of its
+own (removed at the end, also on an error or Ctrl-C) and run by this venv's Python with ``PYTHONPATH=<worktree>:
 <worktree>/sim`` in the worktree's directory: ``sys.path`` (``PYTHONPATH``) is searched before the venv's editable
 finder of the checkout (appended to ``sys.meta_path``), so ``python -m bt_nav.cli`` imports the old code. Each side's
 imports are checked before its first grade (:func:`check_imports`), and every Python process a grade starts is
 sampled for its ``PYTHONPATH`` and directory (:class:`Sampler`). The "after" side is this checkout, run the same way.
 
 Each grade is what a user runs, ``<venv python> -m bt_nav.cli grade ...`` in a subprocess, with its own ``--out``
-and ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (no ``ROS_DOMAIN_ID``: bt-nav claims its own), on the default lab
-grid of :data:`BEFORE` for maneuver C (:data:`GRID`: 2 arenas x 3 LiDARs x 2 seeds, 12 runs), no ``--rtf``. The
-node is ``tests/fixtures/lab_student_node.py`` of this checkout for both sides. Scenarios:
+and ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (no ``ROS_DOMAIN_ID``: bt-nav claims its own), with :data:`GRID`
+and no ``--worlds``, ``--lidars``, ``--seeds`` or ``--rtf``: each side's own defaults. :data:`BEFORE` grades C on
+lab_beside and lab_dead_end x 3 LiDARs x 2 seeds, 12 runs (its ``assignments.LAB.exe_grid``); the after side's
+default grid may have gained cells (issue 52's arenas), so each side's runs are counted by its own code
+(:func:`count_runs`), a grade is checked against its side's count, and verdicts are compared over the runs both
+sides graded. The node is ``tests/fixtures/lab_student_node.py`` of this checkout for both sides (alike at both
+commits). Scenarios:
 
 ``correct``    the right node (``--choice C``)
 ``wallclock``  a node timing its turns by the wall clock (``--choice C --timing wall``: open loop on
                ``time.monotonic``, right on a robot at 1x and nowhere faster)
 ``class``      ``--class`` of 10 hand-ins (:data:`CLASS`): 7 right C variants and 3 C mistakes
 
-Targets (issue 43's "Done when"): the right node's grade after <= 0.55 x before; the wall-clock node's grade after
-<= one 1x run (the median wall of the after side's runs at 1x, else :data:`ONE_RUN_1X_FALLBACK`) + 30 s; every
-run's verdict the same on both sides.
+Targets (issue 52's "Done when", :func:`targets`): the right node's grade after <= :data:`CORRECT_WALL_S` wall (the
+median of the pairs; the after / before ratio and the runs' simulated seconds are information); the class after no
+slower than before, the wrong ones' run verdicts the same on both sides, every right one passing after; the
+wall-clock node passing every run after.
 
 Standalone: ``python -m bench.grade_speed [--quick] [--only correct,wallclock,class] [--out DIR]`` prints the
 table (``--out``: also ``grade_speed.json``/``.md`` and every grade's directory there, kept). ``--quick``: 1 seed, 1
@@ -56,16 +63,22 @@ from bt_nav.ros.supervise import child_preexec
 
 from .common import REPO, Target, at_most, load_average, median
 
-#: The head when issue 43 was filed: the grader before the speed work.
-BEFORE = "6a6b504"
+#: Issue 52's session's starting commit: the grader before real time became the default (its default: --rtf 0).
+BEFORE = "b6541ee"
 NODE = REPO / "tests" / "fixtures" / "lab_student_node.py"
-#: The default lab grid of :data:`BEFORE` for maneuver C (its ``assignments.LAB.exe_grid``, ``plan.EXE_LIDARS``).
-GRID = ("--profile", "lab", "--maneuvers", "C", "--worlds", "lab_object,lab_dead_end")
-LIDARS, SEEDS = "lds01,lds02,rplidar", 2
+#: Each side's own default lab grid for maneuver C (no --worlds: the assignment's cells; LiDARs and seeds: defaults).
+GRID = ("--profile", "lab", "--maneuvers", "C")
+#: How many runs a side's default grid for a node has, by its own code (its grade's parser and jobs; stdout: the
+#: count): the lab's default grid may change between commits (issue 52 added arenas), so each side is counted.
+GRID_PROBE = ("import sys; from bt_nav.cli.grade import _parser; "
+              "from bt_nav.grading.plan import build_jobs, grid_axes; "
+              "a = _parser().parse_args(['--exe', 'node', *sys.argv[1:]]); w, s = grid_axes(a); "
+              "print(len(build_jobs(a, w, s)))")
 QUICK_LIDARS, QUICK_SEEDS = "lds01", 1
 SCENARIOS = ("correct", "wallclock", "class")
 NODES = {"correct": ("--choice", "C"), "wallclock": ("--choice", "C", "--timing", "wall")}
-#: The class: name -> the fixture's flags. Every variant and mistake exists, alike, at both commits.
+#: The class: name -> the fixture's flags. Every variant and mistake exists, alike, at both commits. A name's prefix
+#: says which it is (:data:`RIGHT`, :data:`WRONG`): the targets read it.
 CLASS: dict[str, tuple[str, ...]] = {
     "right_plain": ("--choice", "C"),
     "right_clock_timed": ("--variant", "c_clock_timed"),
@@ -78,17 +91,16 @@ CLASS: dict[str, tuple[str, ...]] = {
     "wrong_side": ("--choice", "C", "--mistake", "wrong_side"),
     "wrong_forward_while_turning": ("--choice", "C", "--mistake", "forward_while_turning"),
 }
+RIGHT, WRONG = "right_", "wrong_"
 QUICK_CLASS = ("right_plain", "right_clock_timed", "wrong_half_angle")
 #: Wall seconds a grade may take before it is stopped (SIGINT) and counted as failed to measure.
 LIMITS = {"correct": 1200.0, "wallclock": 3600.0, "class": 7200.0}
-#: Wall seconds of one lab run at 1x when the after side ran none at 1x (about 75 sim s, start-up and shutdown).
-ONE_RUN_1X_FALLBACK = 80.0
-CORRECT_RATIO = 0.55
+#: Issue 52: the right node's default grade (every cell at 1x, all at once) on 2 cores, wall seconds at most.
+CORRECT_WALL_S = 60.0
 #: Alternating pairs (before, after, before, after, ...) per scenario: the right node's grade is short and its wall
-#: time on a shared machine moved by 56-70 s between two sittings of the same commit, so its ratio is that of the
-#: medians of three pairs; the others take minutes each and are graded once per side.
+#: time on a shared machine moved by 56-70 s between two sittings of the same commit, so its figure is the median of
+#: three pairs; the others take minutes each and are graded once per side.
 PAIRS = {"correct": 3, "wallclock": 1, "class": 1}
-WALLCLOCK_MARGIN = 30.0
 #: Seconds a stopped grade gets to stop its runs before SIGTERM, then SIGKILL.
 STOP_GRACE = 60.0
 
@@ -102,11 +114,12 @@ class Side:
     commit: str
     env: dict[str, str] = field(default_factory=dict)
     imports: dict[str, Any] = field(default_factory=dict)
+    runs: int | None = None  # runs of its default grid for one node (:func:`count_runs`)
 
     def describe(self) -> dict[str, Any]:
         """JSON-able form."""
         return {"commit": self.commit, "root": str(self.root), "pythonpath": self.env.get("PYTHONPATH"),
-                "imports": self.imports}
+                "imports": self.imports, "grid_runs": self.runs}
 
 
 def _git(*args: str) -> str:
@@ -141,8 +154,19 @@ def check_imports(side: Side) -> dict[str, Any]:
     return found
 
 
+def count_runs(side: Side, quick: bool) -> int | None:
+    """The runs of ``side``'s default grid for one node (:data:`GRID_PROBE` with :func:`grid`), by its code; None
+    when the probe fails (its grade then checks nothing against it)."""
+    out = subprocess.run([sys.executable, "-c", GRID_PROBE, *grid(quick)], cwd=side.root, env=side.env,
+                         capture_output=True, text=True, timeout=120)
+    try:
+        return int(out.stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):
+        return None
+
+
 @contextmanager
-def sides(work: Path) -> Iterator[tuple[Side, Side]]:
+def sides(work: Path, quick: bool = False) -> Iterator[tuple[Side, Side]]:
     """(before, after): :data:`BEFORE` in a detached worktree under ``work`` (removed on the way out, whatever
     ends the block), and this checkout."""
     tree = work / f"before-{BEFORE}"
@@ -154,6 +178,7 @@ def sides(work: Path) -> Iterator[tuple[Side, Side]]:
                      side_env(REPO))
         for side in (before, after):
             side.imports = check_imports(side)
+            side.runs = count_runs(side, quick)
         yield before, after
     finally:
         try:
@@ -223,8 +248,9 @@ def grade_argv(scenario: str, out: Path, manifest: Path | None, quick: bool) -> 
 
 
 def grid(quick: bool) -> list[str]:
-    """The grid's options (:data:`GRID`, the LiDARs and seeds; ``quick``: one of each)."""
-    return [*GRID, "--lidars", QUICK_LIDARS if quick else LIDARS, "--seeds", str(QUICK_SEEDS if quick else SEEDS)]
+    """The grid's options: :data:`GRID` alone (each side's default LiDARs and seeds are the measurement);
+    ``quick``: one LiDAR and one seed."""
+    return [*GRID, "--lidars", QUICK_LIDARS, "--seeds", str(QUICK_SEEDS)] if quick else list(GRID)
 
 
 def write_manifest(path: Path, quick: bool) -> Path:
@@ -298,24 +324,42 @@ def run_grade(side: Side, scenario: str, out: Path, manifest: Path | None, quick
 
 
 def decision(row: dict[str, Any]) -> str | None:
-    """What the re-runs decided for a run, read alike from both commits' rows: today's ``rerun.decision`` (load,
-    wall clock, stands); :data:`BEFORE`'s ``realtime`` (the 1x run passed and replaced it: wall clock) or
-    ``realtime_probe`` (its 1x probe failed: stands). None: not run again."""
+    """What happened to a run beyond its one attempt, read alike from both commits' rows: today's (issue 52)
+    ``not_graded`` (not graded: bt_nav's fault or a machine too busy for 1x, twice), a note "run again" (a 1x run
+    that fell behind, run once more) or ``preview`` (a preview's failure graded again at 1x); :data:`BEFORE`'s
+    ``rerun.decision`` (load, wall clock, stands). None: one attempt, kept."""
+    if row.get("not_graded"):
+        return "not graded"
+    if any(str(note).startswith("run again") for note in row.get("notes") or ()):
+        return "run again"
+    if isinstance(row.get("preview"), dict) and "reason" in row["preview"]:
+        return "preview failed, 1x"
     if isinstance(row.get("rerun"), dict):
         return row["rerun"].get("decision")
-    if "realtime" in row:
-        return "wall clock"
-    if "realtime_probe" in row:
-        return "stands"
     return None
 
 
 def at_1x(row: dict[str, Any]) -> bool:
-    """Whether a run went at 1x: a re-run in ``<out>/realtime/`` (both commits), or a factor achieved near 1
-    (today's rows carry ``rtf``, what the run achieved)."""
+    """Whether a run went at 1x: set so (today's ``speed.set``), a re-run in ``<out>/realtime/`` (both commits), or
+    a factor achieved near 1 (both commits' rows carry ``rtf``, what the run achieved)."""
     factor = row.get("rtf")
-    return "realtime" in Path(str(row.get("run_dir", ""))).parts or \
+    return (row.get("speed") or {}).get("set") == 1.0 or "realtime" in Path(str(row.get("run_dir", ""))).parts or \
         (isinstance(factor, int | float) and 0 < factor <= 1.2)
+
+
+def sim_seconds(row: dict[str, Any], out: Path) -> float | None:
+    """The run's simulated seconds: its row's ``speed.sim_s`` (both commits), else its simulator's ``pace.json``
+    ``t_end`` (``run_dir``, relative to the grade's ``out``); None when neither is there (a run stopped early)."""
+    sim = (row.get("speed") or {}).get("sim_s")
+    if isinstance(sim, int | float):
+        return float(sim)
+    if not row.get("run_dir"):
+        return None
+    try:
+        pace = json.loads((out / str(row["run_dir"]) / "pace.json").read_text(encoding="utf-8"))
+        return float(pace["t_end"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def _rows_of(grid_dir: Path) -> list[dict[str, Any]]:
@@ -327,31 +371,37 @@ def _rows_of(grid_dir: Path) -> list[dict[str, Any]]:
 
 def read_verdicts(out: Path, scenario: str, manifest: Path | None) -> dict[str, Any]:
     """A grade's runs and verdicts from its ``grade.json`` (a class: each student's, ``<out>/<name>/grade.json``):
-    run key (``job``; a class: ``student/job``) -> passed and the re-runs' decision."""
+    run key (``job``; a class: ``student/job``) -> passed, what happened beyond one attempt, the simulated seconds;
+    and the grade's sums: its runs' simulated seconds (max, the floor of a grade of every cell at once at 1x; median)
+    and, for a class, each student's verdict (every run passed)."""
     if scenario == "class" and manifest is not None:
         names = [line.split(":", 1)[0].strip() for line in manifest.read_text(encoding="utf-8").splitlines()
                  if line.strip()]
-        grids = {name: _rows_of(out / name) for name in names}
+        grids = {name: (out / name, _rows_of(out / name)) for name in names}
     else:
-        grids = {"": _rows_of(out)}
-    verdicts, walls_1x, factors = {}, [], []
-    for name, rows in grids.items():
+        grids = {"": (out, _rows_of(out))}
+    verdicts, factors, sims, at_1x_count = {}, [], [], 0
+    for name, (where, rows) in grids.items():
         for row in rows:
             key = f"{name}/{row['job']}" if name else row["job"]
+            sim = sim_seconds(row, where)
             verdicts[key] = {"passed": bool(row["passed"]), "decision": decision(row), "outcome": row.get("outcome"),
-                             "wall_s": row.get("wall_time"), "rtf": row.get("rtf")}
-            if at_1x(row) and row.get("wall_time"):
-                walls_1x.append(float(row["wall_time"]))
+                             "wall_s": row.get("wall_time"), "rtf": row.get("rtf"), "sim_s": sim}
+            at_1x_count += at_1x(row)
+            sims += [sim] if sim is not None else []
             if isinstance(row.get("rtf"), int | float):
                 factors.append(float(row["rtf"]))
     passed = sum(1 for v in verdicts.values() if v["passed"])
     result = {"runs": len(verdicts), "passed": passed, "failed": len(verdicts) - passed,
+              "not_graded": sum(1 for v in verdicts.values() if v["decision"] == "not graded"),
               "decisions": _count(v["decision"] for v in verdicts.values() if v["decision"]),
-              "runs_at_1x": len(walls_1x), "run_wall_1x_median_s": round(median(walls_1x), 1) if walls_1x else None,
-              "rtf_median": round(median(factors), 2) if factors else None, "verdicts": verdicts}
+              "runs_at_1x": at_1x_count, "rtf_median": round(median(factors), 2) if factors else None,
+              "sim_s_max": round(max(sims), 1) if sims else None,
+              "sim_s_median": round(median(sims), 1) if sims else None, "verdicts": verdicts}
     if scenario == "class":
-        result["students_passed"] = sum(1 for name in grids if all(v["passed"] for k, v in verdicts.items()
-                                                                   if k.startswith(f"{name}/")))
+        result["student_verdicts"] = {name: all(v["passed"] for k, v in verdicts.items() if k.startswith(f"{name}/"))
+                                      for name in grids}
+        result["students_passed"] = sum(result["student_verdicts"].values())
         result["students"] = len(grids)
     return result
 
@@ -363,21 +413,22 @@ def _count(values: Any) -> dict[str, int]:
     return counts
 
 
-def compare(before: dict[str, Any], after: dict[str, Any]) -> dict[str, Any]:
-    """The runs whose verdict (passed) differs between the sides, or that only one side has; the runs whose re-run
-    decision differs apart (informative: a wall-clock node is re-run at one commit and run at 1x at the other)."""
-    one, two = before.get("verdicts") or {}, after.get("verdicts") or {}
-    differ = []
-    for key in sorted(set(one) | set(two)):
-        a, b = one.get(key), two.get(key)
-        if a is None or b is None or a["passed"] != b["passed"]:
-            differ.append({"run": key, "before": None if a is None else a["passed"],
-                           "after": None if b is None else b["passed"]})
+def compare(before: dict[str, Any], after: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Of the runs whose key starts with ``prefix`` (a class's wrong ones): those both sides graded whose verdict
+    (passed) differs; those only one side has, apart (each side grades its own default grid, which may have gained
+    a cell); the runs whose re-run decision differs, apart (informative: a paced grade re-runs a wall-clock node at
+    1x, today's default runs it at 1x from the start)."""
+    one = {k: v for k, v in (before.get("verdicts") or {}).items() if k.startswith(prefix)}
+    two = {k: v for k, v in (after.get("verdicts") or {}).items() if k.startswith(prefix)}
+    both = sorted(set(one) & set(two))
+    differ = [{"run": key, "before": one[key]["passed"], "after": two[key]["passed"]} for key in both
+              if one[key]["passed"] != two[key]["passed"]]
     decided = [{"run": key, "before": one[key]["decision"], "after": two[key]["decision"]}
-               for key in sorted(set(one) & set(two)) if one[key]["decision"] != two[key]["decision"]]
-    measured = bool(one) and bool(two) and "error" not in before and "error" not in after
+               for key in both if one[key]["decision"] != two[key]["decision"]]
+    measured = bool(both) and "error" not in before and "error" not in after
     return {"identical": measured and not differ, "measured": measured, "differences": differ,
-            "decisions_differ": decided}
+            "decisions_differ": decided, "only_before": sorted(set(one) - set(two)),
+            "only_after": sorted(set(two) - set(one))}
 
 
 def run(quick: bool = False, only: Sequence[str] = SCENARIOS, out: Path | None = None) -> dict[str, Any]:
@@ -393,8 +444,9 @@ def run(quick: bool = False, only: Sequence[str] = SCENARIOS, out: Path | None =
     result: dict[str, Any] = {"quick": quick, "grid": grid(quick), "node": str(NODE), "scenarios": {},
                               "class": {n: list(CLASS[n]) for n in (QUICK_CLASS if quick else CLASS)}}
     try:
-        with sigterm_as_interrupt(), sides(work) as (before, after):
+        with sigterm_as_interrupt(), sides(work, quick) as (before, after):
             result["sides"] = {side.name: side.describe() for side in (before, after)}
+            result["grid_runs"] = {side.name: side.runs for side in (before, after)}
             for scenario in [s for s in SCENARIOS if s in only]:
                 repeats = []
                 for index in range(1 if quick else PAIRS[scenario]):
@@ -405,109 +457,187 @@ def run(quick: bool = False, only: Sequence[str] = SCENARIOS, out: Path | None =
                                                    manifest if scenario == "class" else None, quick)
                         print(f"    {_line(one[side.name])}", flush=True)
                     repeats.append(one)
-                result["scenarios"][scenario] = paired(repeats)
+                result["scenarios"][scenario] = paired(repeats, WRONG if scenario == "class" else "")
     finally:
         shutil.rmtree(work, ignore_errors=True)  # the manifest, and the grades unless --out keeps them
-    result["one_run_1x_s"], result["one_run_1x_from"] = one_run_1x(result)
     return result
 
 
-def paired(repeats: list[dict[str, dict[str, Any]]]) -> dict[str, Any]:
+def paired(repeats: list[dict[str, dict[str, Any]]], prefix: str = "") -> dict[str, Any]:
     """A scenario's result from its alternating pairs: ``before`` and ``after``, each side's grade of median wall
-    time (the table's rows); ``after_over_before``, the ratio of the sides' median wall times; ``comparison``, every
-    pair's verdicts compared (one differing run in any pair is a difference); ``pairs``, each pair's walls and
-    ratio; ``repeats``, every grade."""
+    time (the table's rows); ``before_median_s``/``after_median_s``, the median wall over the pairs (only when every
+    grade of the side ended by itself with a grade: one stopped or unread grade leaves it unmeasured);
+    ``after_over_before``, their ratio; ``comparison``, every pair's verdicts compared (one differing run in any pair
+    is a difference), and with ``prefix`` ``focus``, those of the runs whose key starts with it (a class's wrong
+    ones); ``pairs``, each pair's walls; ``repeats``, every grade."""
     def middle(name: str) -> dict[str, Any]:
         timed = sorted((g for g in (r[name] for r in repeats) if g.get("wall_s")), key=lambda g: g["wall_s"])
         return timed[(len(timed) - 1) // 2] if timed else repeats[0][name]
 
-    compared = [compare(r["before"], r["after"]) for r in repeats]
-    comparison = {"identical": all(c["identical"] for c in compared), "measured": all(c["measured"] for c in compared),
-                  "differences": [d for c in compared for d in c["differences"]],
-                  "decisions_differ": [d for c in compared for d in c["decisions_differ"]]}
-    out: dict[str, Any] = {"before": middle("before"), "after": middle("after"), "comparison": comparison,
+    out: dict[str, Any] = {"before": middle("before"), "after": middle("after"),
+                           "comparison": _merged([compare(r["before"], r["after"]) for r in repeats]),
                            "pairs": [{"before_s": r["before"].get("wall_s"), "after_s": r["after"].get("wall_s")}
                                      for r in repeats], "repeats": repeats}
-    walls = {name: [g["wall_s"] for g in (r[name] for r in repeats) if g.get("wall_s")] for name in ("before", "after")}
-    if walls["before"] and walls["after"] and all(len(w) == len(repeats) for w in walls.values()):
-        out["after_over_before"] = round(median(walls["after"]) / median(walls["before"]), 3)
+    if prefix:
+        out["focus"] = {"prefix": prefix, **_merged([compare(r["before"], r["after"], prefix) for r in repeats])}
+    for name in ("before", "after"):
+        walls = [g["wall_s"] for g in (r[name] for r in repeats) if g.get("wall_s") and "error" not in g]
+        if walls and len(walls) == len(repeats):
+            out[f"{name}_median_s"] = round(median(walls), 1)
+    if out.get("before_median_s") and out.get("after_median_s"):
+        out["after_over_before"] = round(out["after_median_s"] / out["before_median_s"], 3)
     return out
+
+
+def _merged(compared: list[dict[str, Any]]) -> dict[str, Any]:
+    """Several pairs' comparisons (:func:`compare`) as one: identical only if every pair's is."""
+    return {"identical": all(c["identical"] for c in compared), "measured": all(c["measured"] for c in compared),
+            "differences": [d for c in compared for d in c["differences"]],
+            "decisions_differ": [d for c in compared for d in c["decisions_differ"]],
+            "only_before": sorted({k for c in compared for k in c.get("only_before", ())}),
+            "only_after": sorted({k for c in compared for k in c.get("only_after", ())})}
 
 
 def _line(grade: dict[str, Any]) -> str:
     if "error" in grade and not grade.get("runs"):
         return f"ERROR: {grade['error'][:300]}"
     return (f"{grade['wall_s']} s wall, {grade.get('passed')}/{grade.get('runs')} passed, "
-            f"{grade.get('wall_s_per_run')} s per run, load {grade['load_before'][:1]} -> {grade['load_after'][:1]}")
+            f"{grade.get('wall_s_per_run')} s per run, sim s max {grade.get('sim_s_max')} median "
+            f"{grade.get('sim_s_median')}, load {grade['load_before'][:1]} -> {grade['load_after'][:1]}")
 
 
-def one_run_1x(result: dict[str, Any]) -> tuple[float, str]:
-    """One 1x run's wall seconds: the median of the after side's runs at 1x (the wall-clock grade's first), else
-    :data:`ONE_RUN_1X_FALLBACK`; and where it comes from."""
-    for scenario in ("wallclock", "class", "correct"):
-        grade = (result["scenarios"].get(scenario) or {}).get("after") or {}
-        if grade.get("run_wall_1x_median_s"):
-            return grade["run_wall_1x_median_s"], f"median of the after side's {grade['runs_at_1x']} runs at 1x " \
-                                                  f"({scenario})"
-    return ONE_RUN_1X_FALLBACK, "none ran at 1x on the after side: the issue's estimate"
+def _graded(pair: dict[str, Any], name: str) -> dict[str, Any] | None:
+    """The side's table grade of a scenario when it ended by itself with a grade (no ``error``), else None."""
+    grade = pair.get(name) or {}
+    return grade if grade.get("verdicts") and "error" not in grade else None
+
+
+def right_passing(grade: dict[str, Any] | None) -> tuple[int, int] | None:
+    """A class grade's right hand-ins (:data:`RIGHT`) that passed every run, and how many there are."""
+    if grade is None:
+        return None
+    right = {k: v for k, v in (grade.get("student_verdicts") or {}).items() if k.startswith(RIGHT)}
+    return sum(right.values()), len(right)
+
+
+def wrong_differences(klass: dict[str, Any]) -> int | None:
+    """How the class's wrong hand-ins' verdicts differ after vs before: their runs both sides graded whose verdict
+    differs, plus the wrong hand-ins whose own verdict (every run passed) differs; None when not measured."""
+    focus = klass.get("focus") or {}
+    before, after = _graded(klass, "before"), _graded(klass, "after")
+    if not focus.get("measured") or before is None or after is None:
+        return None
+    one, two = before.get("student_verdicts") or {}, after.get("student_verdicts") or {}
+    return len(focus["differences"]) + sum(1 for name in one if name.startswith(WRONG) and one[name] != two.get(name))
 
 
 def targets(result: dict[str, Any]) -> list[Target]:
-    """Issue 43's "Done when": the right node's grade <= 0.55 x before; the wall-clock node's <= one 1x run + 30 s;
-    the same verdict for every run."""
+    """Issue 52's "Done when": the right node's default grade (every cell at 1x, at once) <= :data:`CORRECT_WALL_S`
+    wall (the median of the pairs); the class no slower than the paced default before, its wrong ones' verdicts
+    the same, every right one passing; the wall-clock node (right on a robot at 1x) passing every run. Information,
+    not targets (:func:`markdown`): the right node's after / before and its runs' simulated seconds."""
     scenarios = result.get("scenarios") or {}
-    correct, wall = scenarios.get("correct") or {}, scenarios.get("wallclock") or {}
-    ratio = correct.get("after_over_before") if "error" not in correct.get("after", {}) else None
-    runs = (correct.get("after") or {}).get("runs")
-    limit = float(result.get("one_run_1x_s") or ONE_RUN_1X_FALLBACK) + WALLCLOCK_MARGIN
-    wall_after = (wall.get("after") or {}).get("wall_s") if wall and "error" not in wall.get("after", {}) else None
-    compared = [s["comparison"] for s in scenarios.values()]
-    differing = None if not compared or not all(c["measured"] for c in compared) else \
-        sum(len(c["differences"]) for c in compared)
+    correct, klass, wall = (scenarios.get(name) or {} for name in ("correct", "class", "wallclock"))
+    runs = (result.get("grid_runs") or {}).get("after")
+    correct_s = correct.get("after_median_s")
+    if runs is not None and any(r["after"].get("runs") != runs for r in correct.get("repeats") or []):
+        correct_s = None  # a grade of other runs than the side's default grid is no measurement of it
+    wrong_differ = wrong_differences(klass) if klass else None
+    right = right_passing(_graded(klass, "after")) if klass else None
+    graded_wall = _graded(wall, "after") if wall else None
+    wall_failed = None if graded_wall is None else int(runs or graded_wall["runs"]) - int(graded_wall["passed"])
+    pairs = len(correct.get("pairs") or [])
     return [
-        Target("gradespeed_correct_ratio", "gradespeed", f"right C node's lab grade ({runs} runs): wall time after / "
-               f"before ({BEFORE})", f"<= {CORRECT_RATIO:g}x", ratio, "x", at_most(ratio, CORRECT_RATIO)),
-        Target("gradespeed_wallclock_s", "gradespeed", "wall-clock C node's lab grade after: wall s (one 1x run "
-               f"{result.get('one_run_1x_s')} s + {WALLCLOCK_MARGIN:g} s)", f"<= {limit:.0f} s", wall_after, "s",
-               at_most(wall_after, limit)),
-        Target("gradespeed_verdicts", "gradespeed", "runs whose verdict differs after vs before "
-               f"({', '.join(scenarios)})", "0", differing, "runs", at_most(differing, 0)),
+        Target("gradespeed_correct_s", "gradespeed", f"right C node's default grade after ({runs} runs at 1x, all at "
+               f"once): wall s, median of {pairs} pairs", f"<= {CORRECT_WALL_S:g} s", correct_s, "s",
+               at_most(correct_s, CORRECT_WALL_S)),
+        Target("gradespeed_class_ratio", "gradespeed", f"class of {len(result.get('class') or CLASS)}: wall after / "
+               f"before ({BEFORE}, paced default)", "<= 1x", klass.get("after_over_before"), "x",
+               at_most(klass.get("after_over_before"), 1.0)),
+        Target("gradespeed_class_wrong_verdicts", "gradespeed", "class's wrong hand-ins: verdicts differing after vs "
+               "before (runs both graded, hand-ins)", "0", wrong_differ, "verdicts", at_most(wrong_differ, 0)),
+        Target("gradespeed_class_right_passing", "gradespeed", "class's right hand-ins passing every run after",
+               f"all {right[1] if right else '-'}", right[0] if right else None, "hand-ins",
+               None if right is None else right[0] == right[1] > 0),
+        Target("gradespeed_wallclock_failed", "gradespeed", f"wall-clock C node's default grade after: runs not "
+               f"passed (of {runs})", "0", wall_failed, "runs", at_most(wall_failed, 0)),
     ]
 
 
+def _row(scenario: str, name: str, g: dict[str, Any]) -> str:
+    """One table row: a side's grade of a scenario."""
+    decided = ", ".join(f"{k} {v}" for k, v in (g.get("decisions") or {}).items()) or "-"
+    share = round(g["sim_s_max"] / g["wall_s"], 2) if g.get("sim_s_max") and g.get("wall_s") else None
+    cells = [scenario, f"{name} `{g.get('commit', '?')}`", g.get("wall_s"), g.get("runs"), g.get("wall_s_per_run"),
+             g.get("passed"), g.get("failed"), decided, g.get("runs_at_1x"),
+             f"{g.get('sim_s_max', '-')} / {g.get('sim_s_median', '-')}", share, g.get("rtf_median"), g.get("cpu_s"),
+             f"{(g.get('load_before') or ['?'])[0]} -> {(g.get('load_after') or ['?'])[0]}", g.get("returncode")]
+    return "| " + " | ".join("-" if c is None else str(c) for c in cells) + " |"
+
+
+def _verdicts_said(c: dict[str, Any]) -> str:
+    """A comparison (:func:`compare`) in words."""
+    if not c.get("measured"):
+        return "not compared (a side has no grade)"
+    if c["identical"]:
+        return "identical"
+    return "DIFFER: " + "; ".join(f"{d['run']} {d['before']} -> {d['after']}" for d in c["differences"][:10])
+
+
+def _scenario_notes(scenario: str, pair: dict[str, Any]) -> list[str]:
+    """What the table's rows do not say of one scenario: the medians, the simulated time, the verdicts."""
+    walls = "; ".join(f"{p['before_s']} -> {p['after_s']} s" for p in pair.get("pairs") or [])
+    ratio = pair.get("after_over_before")
+    after = pair.get("after") or {}
+    line = (f"- {scenario}: wall before {pair.get('before_median_s', '-')} s, after {pair.get('after_median_s', '-')}"
+            f" s, after / before {ratio if ratio is not None else '-'}"
+            + (f" (medians of {len(pair['pairs'])} alternating pairs: {walls})" if len(pair.get("pairs") or []) > 1
+               else ""))
+    if after.get("sim_s_max") and after.get("wall_s"):
+        line += (f"; simulated: the after grade's longest run {after['sim_s_max']} sim s (median "
+                 f"{after['sim_s_median']}), {100 * after['sim_s_max'] / after['wall_s']:.0f} % of its "
+                 f"{after['wall_s']} s wall")
+    line += f"; every run both graded: verdict {_verdicts_said(pair['comparison'])}"
+    only = {k: len(pair["comparison"].get(f"only_{k}") or ()) for k in ("before", "after")}
+    if any(only.values()):
+        line += f" (runs only before: {only['before']}, only after: {only['after']})"
+    if pair["comparison"]["decisions_differ"]:
+        line += f"; beyond one attempt differs in {len(pair['comparison']['decisions_differ'])} runs"
+    lines = [line]
+    if "focus" in pair:
+        right = right_passing(_graded(pair, "after"))
+        failing = [k for k, v in (after.get("student_verdicts") or {}).items() if k.startswith(RIGHT) and not v]
+        lines.append(f"  - the wrong hand-ins' run verdicts: {_verdicts_said(pair['focus'])}; right hand-ins passing "
+                     f"after: {f'{right[0]}/{right[1]}' if right else '-'}"
+                     + (f" (failing: {', '.join(failing)})" if failing else ""))
+    return lines
+
+
 def markdown(result: dict[str, Any]) -> list[str]:
-    """The section's lines: a row per scenario and side, the ratio, and the verdicts compared."""
-    head = ["scenario", "side", "wall s", "runs", "wall s / run", "passed", "failed", "re-run decisions",
-            "median factor achieved", "CPU s", "load before -> after", "exit"]
+    """The section's lines: a row per scenario and side, then per scenario the medians, the simulated time and the
+    verdicts compared."""
+    head = ["scenario", "side", "wall s", "runs", "wall s / run", "passed", "failed", "beyond one attempt",
+            "runs at 1x", "sim s max / median", "max sim / wall", "median factor achieved", "CPU s",
+            "load before -> after", "exit"]
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
     notes = []
     for scenario, pair in (result.get("scenarios") or {}).items():
         for name in ("before", "after"):
             g = pair.get(name) or {}
-            decided = ", ".join(f"{k} {v}" for k, v in (g.get("decisions") or {}).items()) or "-"
-            cells = [scenario, f"{name} `{g.get('commit', '?')}`", g.get("wall_s"), g.get("runs"),
-                     g.get("wall_s_per_run"), g.get("passed"), g.get("failed"), decided, g.get("rtf_median"),
-                     g.get("cpu_s"), f"{(g.get('load_before') or ['?'])[0]} -> {(g.get('load_after') or ['?'])[0]}",
-                     g.get("returncode")]
-            lines.append("| " + " | ".join("-" if c is None else str(c) for c in cells) + " |")
+            lines.append(_row(scenario, name, g))
             if "error" in g:
                 notes.append(f"- {scenario} {name}: {g['error'][:400]}")
             odd = (g.get("processes") or {}).get("not_the_side")
             if odd:
                 notes.append(f"- {scenario} {name}: Python processes not on the side's code: {'; '.join(odd[:5])}")
-        c = pair["comparison"]
-        same = "identical" if c["identical"] else "not compared (a side has no grade)" if not c["measured"] else \
-            "DIFFER: " + "; ".join(f"{d['run']} {d['before']} -> {d['after']}" for d in c["differences"][:10])
-        ratio = pair.get("after_over_before")
-        walls = "; ".join(f"{p['before_s']} -> {p['after_s']} s" for p in pair.get("pairs") or [])
-        notes.append(f"- {scenario}: after / before {ratio if ratio is not None else '-'}"
-                     + (f" (medians of {len(pair['pairs'])} alternating pairs: {walls})"
-                        if len(pair.get("pairs") or []) > 1 else "") + f"; verdicts {same}"
-                     + (f"; re-run decisions differ in {len(c['decisions_differ'])} runs" if c["decisions_differ"]
-                        else ""))
+            per_node = (result.get("grid_runs") or {}).get(name)
+            if g.get("runs") is not None and per_node and g["runs"] != per_node * int(g.get("students") or 1):
+                notes.append(f"- {scenario} {name}: {g['runs']} runs, not its default grid's {per_node} a node")
+        notes += _scenario_notes(scenario, pair)
     grid = " ".join(result.get("grid") or [])
-    notes.append(f"- grid: `{grid}`; node `{result.get('node')}`; one 1x run: {result.get('one_run_1x_s')} s "
-                 f"({result.get('one_run_1x_from')})")
+    counted = ", ".join(f"{k} {v}" for k, v in (result.get("grid_runs") or {}).items())
+    notes.append(f"- grid: `{grid}`, each side's defaults otherwise (runs a node: {counted or '-'}); node "
+                 f"`{result.get('node')}`")
     return [*lines, "", *notes]
 
 

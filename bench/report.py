@@ -262,7 +262,7 @@ def exe_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> li
 
 
 def gradespeed_section(result: dict[str, Any], doc: dict[str, Any] | None = None) -> list[str]:
-    """Benchmark 9 (issue 43), rendered by its module (:func:`bench.grade_speed.markdown`)."""
+    """Benchmark 9 (issue 52), rendered by its module (:func:`bench.grade_speed.markdown`)."""
     if "skipped" in result:
         return [f"skipped: {result['skipped']}"]
     from .grade_speed import markdown
@@ -277,7 +277,8 @@ SECTIONS = (
     ("quality", "4. Mission quality (referee, lock-step)", quality_section),
     ("memory", "5. Memory of the executive during a mission", memory_section),
     ("exe", "7. Grading throughput over DDS (`bt-nav grade --exe`)", exe_section),
-    ("gradespeed", "9. Grading speed before and after issue 43 (`bt-nav grade`, lab grid)", gradespeed_section),
+    ("gradespeed", "9. Grading at real time, before and after issue 52 (`bt-nav grade`, lab grid)",
+     gradespeed_section),
 )
 
 

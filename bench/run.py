@@ -11,7 +11,7 @@ Benchmarks (``--only`` picks some, comma-separated):
 ``exe``      DDS grading throughput: missions/min of ``bt-nav grade --exe "bt-nav executive" --jobs 2``
              (:mod:`bench.exe_throughput`)
 ``testquick`` wall time of ``make test-quick``, the contributor's loop of tests without DDS (:mod:`bench.quick_tests`)
-``gradespeed`` a lab grade's wall time and verdicts side by side with the commit before issue 43's work: a right
+``gradespeed`` a lab grade at real time (issue 52's default) side by side with the paced default before it: a right
              node, a wall-clock node, a class of 10 (:mod:`bench.grade_speed`; 30+ min)
 
 Writes ``<out>/latest.json`` (every result, every target and whether it is met, the machine) and
@@ -168,7 +168,7 @@ class Session:
         return quick_tests.run(quick=self.quick)
 
     def gradespeed(self) -> dict[str, Any]:
-        """Benchmark 9: issue 43's grades, before and after, side by side."""
+        """Benchmark 9: issue 52's grades (real time by default), before and after, side by side."""
         if self.args.no_dds:
             return {"skipped": "no DDS in this run (--no-dds)"}
         from . import grade_speed
