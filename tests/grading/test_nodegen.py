@@ -102,10 +102,10 @@ def test_a_generated_mutant_is_judged_on_its_reason_its_cells_and_its_lidars() -
     from tests.nodegen.suite import judged_mutant
 
     side = "failed: maneuver 1 turned 89 deg left; the Smart Pivot needs 90 +- 10 deg right (readings ...)"
-    ok = judged_mutant("gen002_C__wrong_side", [_row("lab_beside", "lds01", False, side),
+    ok = judged_mutant("gen002_C__wrong_side", [_row("lab_slant", "lds01", False, side),
                                                 _row("lab_dead_end", "lds01", True, "passed")])
     assert ok["outcome"] == "failed for its reason", ok
-    missed = judged_mutant("gen002_C__wrong_side", [_row("lab_beside", "lds01", True, "passed")])
+    missed = judged_mutant("gen002_C__wrong_side", [_row("lab_slant", "lds01", True, "passed")])
     assert missed["outcome"] == "wrong" and "PASSED" in missed["wrong"][0]
     other = judged_mutant("gen002_C__angle_45", [_row("lab_beside", "lds01", False, "failed: hit an obstacle")])
     assert other["outcome"] == "wrong"
