@@ -297,7 +297,8 @@ def _lab_schedule(cfg: CheckoffConfig, setup: GradeSetup) -> list[str]:
     final = f"F = {off:g}"
     if early:
         final = (f"F = R + {cfg.drive_on_for:g} (later while a turn you began goes on: once no turning command came "
-                 f"for {cfg.toggle_off_after:g} s), {off:g} at the latest (no toggle cycle: {off:g})")
+                 f"for {cfg.toggle_off_after:g} s, and turns back to back at most until R + {cfg.chain_for:g}; not "
+                 f"before a turn was judged your maneuver), {off:g} at the latest (no toggle cycle: {off:g})")
     return [_T0, "", "| t (s) | the grader | your node |", "|---|---|---|",
             f"| 0 - {cfg.activate_at:g} | nothing | {still} |",
             f"| {cfg.activate_at:g} | `{LAB_ARM}` `data: true`, again every {1 / cfg.rate_hz:g} s until an answer "
@@ -314,7 +315,8 @@ def _cycle_rows(cfg: CheckoffConfig, still: str) -> list[str]:
     """The toggle cycle's rows of the lab's schedule (none when the config has no cycle)."""
     if cfg.toggle_off_for <= 0:
         return []
-    after = f"{cfg.toggle_off_after:g} s after your first maneuver ends (no turning command since)"
+    after = (f"{cfg.toggle_off_after:g} s after your first maneuver ends (no turning command since), or "
+             f"{cfg.chain_for:g} s after your first turn while you turn on without such a pause")
     watched = min(cfg.grace + cfg.static_after, cfg.toggle_off_for)
     return [f"| T = {after} | the toggle cycle: `data: false`, again until success | stop ({cfg.grace:g} s to "
             "brake) |",

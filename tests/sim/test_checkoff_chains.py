@@ -24,8 +24,8 @@ DEG = math.radians(1.0)
 
 
 def _judge(maneuver: str, segments: list[list[float]], **kw) -> CheckoffJudge:
-    # the schedule these scripts are timed to: armed at 5 s, a 5 s toggle cycle, no early end (test_checkoff_schedule.py
-    # plays the default one); disarm at 25 s, report at 29 s
+    # the schedule these scripts are timed to: armed at 5 s, a 5 s toggle cycle only after a pause, no early end
+    # (test_checkoff_schedule.py plays the default one); disarm at 25 s, report at 29 s
     cfg = CheckoffConfig(**{"maneuver": maneuver, "activate_at": 5.0, "toggle_off_for": 5.0, "drive_on_for": 0.0,
                             "chain_for": math.inf, "armed_for": 20.0, **kw})
     return CheckoffJudge(cfg, world_from_dict({"name": "test", "segments": ROOM + segments}))
