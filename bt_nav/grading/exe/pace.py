@@ -32,6 +32,11 @@ from bt_nav_sim.pacing import CMD_VEL, PACE_FILE, read_pace
 
 #: The speed of a graded run: the robot's.
 REAL_TIME = 1.0
+#: The scheduling priority change of a 1x run's simulator (``bt-nav sim --nice``; root only, else it runs at the usual
+#: one): the robot's world, its LiDAR and its base, keep real time on a robot whatever the student's node and other
+#: programs do, so on a shared machine the simulator goes ahead of them. The node keeps the usual priority, as on the
+#: robot's computer. Its CPU is small (a 1x lab run's simulator uses a few per cent of a core).
+SIM_NICE = -10
 #: Sim seconds per wall second of a preview at ``--rtf 0`` while the node is not followed (silent).
 IDLE_RTF = 10.0
 #: Sim seconds of following below which a preview's ``node_rtf`` says nothing of the node.

@@ -45,7 +45,7 @@ import signal
 import time
 from collections.abc import Callable
 from contextlib import suppress
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +54,7 @@ from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.exe.bag import bag_row, record_args
 from bt_nav.grading.exe.log import Crash, import_findings, last_traceback, node_crash, rclpy_shutdown_race
-from bt_nav.grading.exe.pace import sim_pace
+from bt_nav.grading.exe.pace import REAL_TIME, SIM_NICE, sim_pace
 from bt_nav.grading.grid import Job
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros import forkserver
@@ -164,7 +164,10 @@ def exe_graph(job: Job, settings: ExeSettings, results_json: Path) -> NodeSpec:
     judge.update(assignment.judge.given(dict(job.params_over(settings.node_params)), assignment.judge.launch_shared))
     specs = nodes(assignment.graph, world=job.world, maneuver=job.maneuver if lab else None,
                   seed=job.seed, rtf=settings.rtf, results_json=str(results_json), sim=sim, referee=judge)
-    return host_judge([spec for spec in specs if spec.executable != "executive"])[0]
+    sim_spec = host_judge([spec for spec in specs if spec.executable != "executive"])[0]
+    if settings.rtf == REAL_TIME:  # the robot's world keeps real time beside a busy machine (pace.py)
+        sim_spec = replace(sim_spec, arguments=[*sim_spec.arguments, "--nice", str(SIM_NICE)])
+    return sim_spec
 
 
 def _wait(session: MissionSession, sim: Child, node: Child, limit: float, started: float,

@@ -83,6 +83,7 @@ import argparse
 import array
 import json
 import math
+import os
 import sys
 import threading
 import time
@@ -761,6 +762,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--judge-args", default="[]", metavar="JSON",
                         help="the hosted judge's own ROS arguments, a JSON list (e.g. [\"--ros-args\", \"-p\", "
                              "\"json:=v.json\"])")
+    parser.add_argument("--nice", type=int, default=0, metavar="N",
+                        help="change this process's scheduling priority by N before any of its threads starts "
+                             "(negative: ahead of other programs, as root; a graded run's world at 1x keeps real time "
+                             "beside a busy machine, as a robot's does beside its node)")
     parser.add_argument("--record", metavar="BAG",
                         help="write the run's bag from this process (bt_nav.ros.nodes.hosted_bag): a new directory")
     parser.add_argument("--record-topics", metavar="T,T,...",
@@ -813,7 +818,27 @@ def main(argv: list[str] | None = None) -> int:
     Returns 0 after a clean shutdown (Ctrl-C or ``duration``), 1 if the loop failed, 2 for a configuration
     it refuses (an unknown world or profile; :func:`bt_nav.ros.runner.run_node`).
     """
+    _renice(sys.argv[1:] if argv is None else argv)
     return run_node(NODE_NAME, argv, parse_args, build=_started, make_node=_make, ros_args_of=_as_parameters)
+
+
+def _renice(argv: list[str]) -> None:
+    """``--nice N``, applied before rclpy starts a thread (Linux keeps a priority per thread; new threads inherit the
+    creating thread's). A priority this process may not take (a raise without root) is said once, not raised: the
+    run's own measure of real time (:class:`bt_nav_sim.pacing.RealTimeKeeping`) says whether it mattered."""
+    words = argv[:argv.index("--ros-args")] if "--ros-args" in argv else argv
+    value = next((words[i + 1] for i, word in enumerate(words[:-1]) if word == "--nice"), None)
+    value = value or next((word.split("=", 1)[1] for word in words if word.startswith("--nice=")), None)
+    try:
+        change = int(value) if value is not None else 0
+    except ValueError:
+        return  # parse_args refuses it with its own message
+    if change:
+        try:
+            os.nice(change)
+        except OSError as exc:
+            print(f"bt-nav sim: --nice {change}: {exc.strerror or exc}: running at the usual priority",
+                  file=sys.stderr, flush=True)
 
 
 if __name__ == "__main__":
