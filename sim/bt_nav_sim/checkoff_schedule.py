@@ -49,15 +49,18 @@ def cycle_due(judge: Any, t: float) -> bool:
 
 def turning_run(judge: Any, since: float | None) -> tuple[float, float] | None:
     """The latest run of turning commands after ``since`` whose turning commands came less than ``toggle_off_after``
-    s apart (maneuvers back to back), as (its first, its last command's time); None: none."""
+    s and a step apart (maneuvers back to back: a pause that short may fall between two steps of the schedule, and
+    the cycle never sees it: a level-triggered Retreat creeping 1-1.4 s between its spins in lab_dead_end was armed
+    for 41 s before its cycle), as (its first, its last command's time); None: none."""
     cfg = judge.config
+    gap = cfg.toggle_off_after + 1.0 / cfg.rate_hz
     first = last = None
     for stamp, _, w in reversed(judge.commands):  # newest first
         if since is None or stamp < since:
             break
         if abs(w) < cfg.rotation_min_rate:
             continue
-        if first is not None and first - stamp >= cfg.toggle_off_after:
+        if first is not None and first - stamp >= gap:
             break
         first, last = stamp, stamp if last is None else last
     return None if first is None else (first, last)
