@@ -267,8 +267,14 @@ class ReactiveNavigator(Node):
             self.get_logger().info("Rotation maneuver done")
 
     def recover(self) -> None:
-        """The AEB's way out after standing 1 s: turn in place towards the clearer side until the path is clear."""
+        """The AEB's way out after standing 1 s: turn in place towards the clearer side until the path is clear.
+
+        C pivots instead: its brake stopped it short of the pivot distance (a wall slanting across the path blocks
+        the robot's flank before a narrow front reads 0.3 m), and an obstacle in front is what C pivots from."""
         r = self.readings
+        if CHOICE == "C":
+            self.execute_rotation_maneuver(self.clock())
+            return
         if r["ahead"] > AEB_CLEAR:
             self.state = "creep"
             self.send(0.0, 0.0)
