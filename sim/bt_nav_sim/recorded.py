@@ -25,6 +25,7 @@ import numpy as np
 
 from bt_nav.mission.scan import Scan
 from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, CheckoffConfig, CheckoffJudge
+from bt_nav_sim.checkoff_creep import CREEP_CHECK
 from bt_nav_sim.feeds import (
     ODOMETRY_FORWARD_MOTION_MAX,
     SCAN_MAX_AGE,
@@ -35,8 +36,10 @@ from bt_nav_sim.feeds import (
     not_followed,
 )
 
-#: The checks that need the toggle_navigation calls to be seen.
-SERVICE_CHECKS = ("static before activation", "toggle_navigation answered", "static after deactivation")
+#: The checks that need the toggle_navigation calls to be seen (the creep check: when the node was armed, and when a
+#: disarm stopped it, which a first non-zero command does not say).
+SERVICE_CHECKS = ("static before activation", "toggle_navigation answered", "static after deactivation",
+                  CREEP_CHECK)
 NO_COLLISION_SENSOR = "a robot's recording has no contact sensor: the TA watches for collisions"
 
 

@@ -64,7 +64,7 @@ def test_frame_text_is_the_bags_at_that_instant(lab: dict) -> None:
     start, end = _maneuver(rec)
     renderer = VideoRenderer(rec, lab["world"])
     seen = set()
-    for clock in (3.0, 10.0, start + 0.05, (start + end) / 2, end - 0.1, end + 0.5, DURATION - 0.5):
+    for clock in (1.0, 10.0, start + 0.05, (start + end) / 2, end - 0.1, end + 0.5, DURATION - 0.5):  # armed at 2 s
         text = renderer.text(rec.origin + clock)
         branch, tip, feedback = _expected(rec, rec.origin + clock)
         assert text.clock == pytest.approx(clock)
