@@ -225,7 +225,9 @@ def chain_check(judge: Any, episodes: Sequence[dict[str, Any]], now: float) -> t
 
 def turning_point(judge: Any, last: float, nxt: float, now: float, w_before: float, w_after: float) -> float:
     """Where one turn ends and the next, begun before the robot settled, starts: the yaw's extremum when the
-    next turns the other way (the robot coasts on for up to a fifth of a second first), else the slowest
+    next turns the other way (the robot coasts on for up to a fifth of a second first); else where the node stopped
+    turning, its first command between them that turns no more (a zero twist it sent and overrode with the next
+    turn in one callback never slowed the robot: the node's own boundary is the only one); else the slowest
     moment of the rotation between them."""
     sign = 1.0 if w_before > 0 else -1.0
     ts, uy = judge._t, judge._uyaw
@@ -235,5 +237,9 @@ def turning_point(judge: Any, last: float, nxt: float, now: float, w_before: flo
     if w_before * w_after < 0:
         k = max(range(i, j), key=lambda n: sign * uy[n])
         return ts[k]
+    stopped = next((t for t, _, w in judge.commands if last < t <= nxt and abs(w) < judge.config.rotation_min_rate),
+                   None)
+    if stopped is not None:
+        return stopped
     k = min(range(i + 1, j), key=lambda n: sign * (uy[n] - uy[n - 1]) / max(ts[n] - ts[n - 1], 1e-9))
     return ts[k - 1]

@@ -32,10 +32,12 @@ def _judge(maneuver: str, segments: list[list[float]], **kw) -> CheckoffJudge:
 
 
 def _play(judge: CheckoffJudge, script: list[tuple[float, float, float, bool]], *, obey: bool = True,
-          end: float = 80.0) -> CheckoffJudge:
+          end: float = 80.0, every: int = 5, stop_first: bool = False) -> CheckoffJudge:
     """Play ``script`` ((seconds, v, w, announce) from t = 0, each started at once; ``announce``: the node logs a
     line as that step begins). The robot follows its command instantly. ``obey``: a successful false makes the
-    node send zero twists until a true (else it ignores the false)."""
+    node send zero twists until a true (else it ignores the false). ``every``: the node's command period in steps
+    of 10 ms (5: 20 Hz; 20: a scan callback at 5 Hz); ``stop_first``: a new step's command comes right after a
+    zero twist at the same instant (a node that stops one turn and starts the next in one callback)."""
     x = y = yaw = 0.0
     judge.start(0.0)
     timeline, t_at = [], 0.0
@@ -55,9 +57,12 @@ def _play(judge: CheckoffJudge, script: list[tuple[float, float, float, bool]], 
             break
         while pending and pending[0] <= t + 1e-9:
             judge.on_announcement(pending.pop(0), "reactive_navigator", "Obstacle Detected! Executing rotation")
-        if k % 5 == 0:
-            cmd = next(((v, w) for t0, v, w, _ in reversed(timeline) if t0 <= t + 1e-9), (0.0, 0.0))
+        if k % every == 0:
+            was, cmd = cmd, next(((v, w) for t0, v, w, _ in reversed(timeline) if t0 <= t + 1e-9), (0.0, 0.0))
             cmd = (0.0, 0.0) if off else cmd
+            if stop_first and was != (0.0, 0.0) and any(abs(t0 - t) < every * DT - 1e-9 and t0 <= t + 1e-9
+                                                        for t0, _, _, _ in timeline):
+                judge.on_command(t, 0.0, 0.0)
             judge.on_command(t, *cmd)
         if k % 3 == 0:
             judge.observe(t, x, y, yaw)
@@ -191,6 +196,19 @@ def test_retreats_back_to_back_that_then_drive_out_pass_with_a_finding() -> None
     judge = _play(_judge("B", DEAD_END), script)
     assert judge.passed, judge.report_lines()
     assert judge.results()["findings"][0].startswith("3 Retreats back to back")
+
+
+def test_timed_retreats_stopped_and_begun_again_in_one_scan_callback_split_where_the_node_stopped() -> None:
+    """The sheet's template for B with a level trigger (issue 52): at 5 Hz, each spin timed on ROS time ends on the
+    scan after its time is up (183 deg at 0.8 rad/s); still squeezed, the same callback sends a zero twist and the
+    next spin, so the robot never slows. The maneuvers end where the node stopped each, not at a moment the rotation
+    happened to read slowest (which had cut them 173 + 193 deg)."""
+    spin = 3.99  # s: pi / 0.8 rad/s, ended on the next 5 Hz scan
+    script = [(6.0, 0.0, 0.0, False), (spin, 0.0, 0.8, True), (spin, 0.0, 0.8, True), (30.0, 0.05, 0.0, False)]
+    judge = _play(_judge("B", DEAD_END), script, every=20, stop_first=True)
+    angles = [m["angle_deg"] for m in judge.results()["maneuvers"]]
+    assert len(angles) == 2 and all(abs(a - math.degrees(spin * 0.8)) < 1.5 for a in angles), angles
+    assert judge.passed, judge.report_lines()
 
 
 def test_smart_pivots_back_to_back_get_the_same_finding() -> None:
