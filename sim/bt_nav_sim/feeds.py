@@ -146,52 +146,107 @@ def gaps(topic: str, times: Sequence[float], floor: float = 1.0, periods: float 
     return [Gap(topic, float(edges[i]), float(d[i])) for i in np.flatnonzero(d > limit)]
 
 
+#: rad/s: the fastest a TurtleBot3 base turns (the Burger's 2.84 rad/s): a yaw faster than it was not the motors'.
+BASE_MAX_YAW_RATE = 2.84
+#: s: the yaw rate is read over this span (the pose's jitter at 20 Hz would break a stall into pieces).
+RATE_SPAN = 0.5
+#: deg: a push turns the robot at least this much (a wobble of the odometry is not a hand).
+PUSH_MIN_DEG = 5.0
+#: m/s and m: a translation without a forward command at least this fast and this long is the robot carried.
+CARRY_SPEED, CARRY_MIN = 0.05, 0.05
+
+STUCK, HAND, CARRIED = "stuck", "moved by hand", "carried"
+
+
 @dataclass(frozen=True)
 class Disobeyed:
-    """An interval over which the yaw did not do what the commands asked (absolute times; rad/s and deg)."""
+    """An interval over which the robot did not do what its commands asked (absolute times): ``kind`` is
+    :data:`STUCK` (turned less than half the commanded rate), :data:`HAND` (turned the other way, faster than twice
+    the command or than the base can, or with no turn commanded) or :data:`CARRIED` (moved with no forward command);
+    ``how`` says which."""
 
     start: float
     end: float
-    commanded: float  # rad/s, the command in force
+    commanded: float  # rad/s (m/s for CARRIED), the command in force
     turned_deg: float  # what the yaw did over the interval
-    kind: str  # "turned the other way", "did not turn", "turned uncommanded"
+    kind: str
+    how: str = ""
+    moved_m: float = 0.0
+
+    def what(self) -> str:
+        """What the robot did instead, without when (``9 deg in 6.5 s while commanded -0.22 rad/s``)."""
+        span = self.end - self.start
+        if self.kind == STUCK:
+            return f"{abs(self.turned_deg):.0f} deg in {span:.1f} s while commanded {self.commanded:+.2f} rad/s"
+        if self.kind == CARRIED:
+            return f"{self.moved_m:.2f} m in {span:.1f} s {self.how}"
+        return f"{self.turned_deg:+.0f} deg in {span:.1f} s {self.how}"
 
     def text(self, t0: float) -> str:
-        return (f"the robot did not follow its commands from t={self.start - t0:.1f} s to t={self.end - t0:.1f} s "
-                f"(commanded {self.commanded:+.2f} rad/s, yaw {self.turned_deg:+.0f} deg: {self.kind}): "
-                "handled or blocked")
+        """The event and when (``stuck from t=20.2 s: 9 deg in 6.5 s while commanded -0.22 rad/s``)."""
+        return f"{self.kind} from t={self.start - t0:.1f} s: {self.what()}"
+
+
+def story(events: Sequence[Disobeyed], t0: float) -> str:
+    """Several events in order, as one sentence: the first with when, each next with ``then`` (the turn the issue
+    names: ``stuck from t=20.2 s: ...; then moved by hand at t=26.9 s: +48 deg in 0.6 s against the command``)."""
+    parts = [events[0].text(t0)] if events else []
+    parts += [f"then {d.kind} at t={d.start - t0:.1f} s: {d.what()}" for d in events[1:]]
+    return "; ".join(parts)
 
 
 def not_followed(pose_t: Sequence[float], uyaw: Sequence[float], commands: Sequence[tuple[float, float, float]],
-                 *, settle: float = 0.5, hold: float = 1.0, min_rate: float = 0.2, stale: float = 1.0
-                 ) -> list[Disobeyed]:
-    """Intervals of at least ``hold`` s, ``settle`` s or more after a command changed, over which the yaw turned the
-    other way than the command in force (|rate| >= ``min_rate``), turned less than a fifth of it while it asked for
-    ``min_rate`` or more (stalled, held), or turned at ``min_rate`` or more with none commanded (a person turned it).
-    ``uyaw`` is the unwrapped odometry yaw (rad) at ``pose_t``; ``commands`` (t, v, w) in time order. A command
-    older than ``stale`` s is not taken as in force (the commands fell silent: a gap says so, not this)."""
+                 *, xy: Sequence[tuple[float, float]] | None = None, settle: float = 0.5, hold: float = 1.0,
+                 min_rate: float = 0.2, stale: float = 1.0) -> list[Disobeyed]:
+    """Where the robot did not do what its commands asked, ``settle`` s or more after a command changed (the base
+    takes that long to follow): stuck (turning less than half the commanded rate, for ``hold`` s or more, while
+    asked for ``min_rate`` or more), moved by hand (turning the other way at ``min_rate`` or more, faster than twice
+    the command or :data:`BASE_MAX_YAW_RATE`, or with no turn commanded; :data:`PUSH_MIN_DEG` or more), carried
+    (``xy`` given: moving :data:`CARRY_SPEED` or faster with no forward command). ``uyaw`` is the unwrapped pose yaw
+    (rad) at ``pose_t``; ``commands`` (t, v, w) in time order. A command older than ``stale`` s is not in force
+    (the commands fell silent: a gap says so, not this). Read it on a whole recording: a window of it then sets the
+    same intervals apart whatever its edges."""
     if len(pose_t) < 3 or not commands:
         return []
     t, yaw = np.asarray(pose_t, dtype=np.float64), np.asarray(uyaw, dtype=np.float64)
+    pos = None if xy is None else np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     times = [c[0] for c in commands]
-    since = []  # when the command in force at each command began (a closed loop's varying rate is one command)
-    for k, (tk, _, w) in enumerate(commands):
-        since.append(since[-1] if k and _alike(w, commands[k - 1][2]) else tk)
-    bad: list[tuple[float, float, float, str]] = []  # (t0, t1, w, kind) of sample pairs
+    blocks = _blocks(commands)
+    bad: list[tuple[float, float, float, str, str]] = []  # (t0, t1, command, kind, how) of sample pairs
     for i in range(1, t.size):
         a, b = t[i - 1], t[i]
         k = bisect.bisect_right(times, a) - 1
-        if k < 0 or a - since[k] < settle or a - times[k] > stale or b - a <= 0 or b - a > 0.5:
+        if k < 0 or a - times[k] > stale or b - a <= 0 or b - a > 0.5:
             continue
-        w = commands[k][2]
-        nxt = times[k + 1] if k + 1 < len(times) else math.inf
-        if nxt <= b and not _alike(commands[k + 1][2], w):  # the command changes within the pair
+        if k + 1 < len(times) and times[k + 1] - a > stale or k + 1 == len(times) and b - times[k] > stale:
+            continue  # the commands fall silent here: what the robot was sent is not known (a gap)
+        since, until = blocks[k]
+        if a - since < settle or until <= b + 0.5 * RATE_SPAN:  # the base still following, or about to change
             continue
-        rate = (yaw[i] - yaw[i - 1]) / (b - a)
-        kind = _disobedience(w, rate, min_rate)
+        mid = 0.5 * (a + b)
+        lo, hi = max(t[0], mid - 0.5 * RATE_SPAN), min(t[-1], mid + 0.5 * RATE_SPAN)
+        rate = (np.interp(hi, t, yaw) - np.interp(lo, t, yaw)) / max(hi - lo, 1e-9)
+        v, w = commands[k][1], commands[k][2]
+        peak = max(abs(c[2]) for c in commands[min(k, bisect.bisect_left(times, a - settle)):k + 1])
+        kind, how = _disobedience(w, peak, float(rate), min_rate)
+        if not kind and pos is not None and abs(v) < 1e-3:
+            speed = float(np.hypot(*(pos[i] - pos[i - 1]))) / (b - a)
+            kind, how, w = (CARRIED, "with no forward command", v) if speed >= CARRY_SPEED else ("", "", w)
         if kind:
-            bad.append((a, b, w, kind))
-    return _runs(bad, t, yaw, hold)
+            bad.append((a, b, w, kind, how))
+    return _runs(bad, t, yaw, pos, hold)
+
+
+def _blocks(commands: Sequence[tuple[float, float, float]]) -> list[tuple[float, float]]:
+    """For each command, when the command in force then began and when the next unlike one came (a closed loop's
+    varying rate is one command: :func:`_alike`)."""
+    since: list[float] = []
+    for k, (tk, _, w) in enumerate(commands):
+        since.append(since[-1] if k and _alike(w, commands[k - 1][2]) else tk)
+    until = [math.inf] * len(commands)
+    for k in range(len(commands) - 2, -1, -1):
+        until[k] = until[k + 1] if since[k + 1] == since[k] else commands[k + 1][0]
+    return list(zip(since, until, strict=True))
 
 
 def _alike(w1: float, w2: float) -> bool:
@@ -202,27 +257,37 @@ def _alike(w1: float, w2: float) -> bool:
     return w1 * w2 > 0 and 0.5 <= w1 / w2 <= 2.0
 
 
-def _disobedience(w: float, rate: float, min_rate: float) -> str:
-    """How a yaw rate disobeys a commanded one (empty: it does not)."""
+def _disobedience(w: float, peak: float, rate: float, min_rate: float) -> tuple[str, str]:
+    """How a yaw rate disobeys the command in force ``w`` (``peak``: the largest commanded in the last ``settle``
+    s, which the base may still be turning at); empty when it does not."""
     if abs(w) >= min_rate and rate * w < 0 and abs(rate) >= min_rate:
-        return "turned the other way"
-    if abs(w) >= min_rate and rate * w >= 0 and abs(rate) < 0.2 * abs(w):
-        return "did not turn"
-    if abs(w) < 1e-3 and abs(rate) >= min_rate:
-        return "turned uncommanded"
-    return ""
+        return HAND, "against the command"
+    if abs(w) >= min_rate and rate * math.copysign(1.0, w) < 0.5 * abs(w):
+        return STUCK, ""  # slower than half the command, or backing off too slowly to be a hand
+    if abs(rate) > BASE_MAX_YAW_RATE:
+        return HAND, f"faster than the base's {BASE_MAX_YAW_RATE:g} rad/s"
+    if peak < 1e-3 and abs(rate) >= min_rate:
+        return HAND, "with no turn commanded"
+    if abs(w) >= 1e-3 and rate * w > 0 and abs(rate) > max(2.0 * peak, peak + min_rate):
+        return HAND, f"faster than twice the command ({w:+.2f} rad/s)"
+    return "", ""
 
 
-def _runs(bad: list[tuple[float, float, float, str]], t: np.ndarray, yaw: np.ndarray, hold: float) -> list[Disobeyed]:
-    """Consecutive disobeying pairs of one kind and command joined into intervals; those of ``hold`` s or more."""
+def _runs(bad: list[tuple[float, float, float, str, str]], t: np.ndarray, yaw: np.ndarray, pos: np.ndarray | None,
+          hold: float) -> list[Disobeyed]:
+    """Consecutive disobeying pairs of one kind joined into intervals (a hiccup of up to a rate span between two of
+    the same kind is one interval); those that last (a stall, ``hold`` s) or count (a push, a carry)."""
     out: list[Disobeyed] = []
-    run: list[tuple[float, float, float, str]] = []
+    run: list[tuple[float, float, float, str, str]] = []
     for item in [*bad, None]:
-        if run and (item is None or item[0] > run[-1][1] + 1e-9 or item[2:] != run[-1][2:]):
-            start, end = run[0][0], run[-1][1]
-            if end - start >= hold:
-                turned = float(np.interp(end, t, yaw) - np.interp(start, t, yaw))
-                out.append(Disobeyed(start, end, run[0][2], math.degrees(turned), run[0][3]))
+        if run and (item is None or item[0] > run[-1][1] + RATE_SPAN or item[3:] != run[-1][3:]):
+            start, end, (w, kind, how) = run[0][0], run[-1][1], run[0][2:]
+            turned = math.degrees(float(np.interp(end, t, yaw) - np.interp(start, t, yaw)))
+            moved = 0.0 if pos is None else float(np.hypot(*(np.interp(end, t, p) - np.interp(start, t, p)
+                                                             for p in pos.T)))
+            keep = {STUCK: end - start >= hold, HAND: abs(turned) >= PUSH_MIN_DEG, CARRIED: moved >= CARRY_MIN}[kind]
+            if keep:
+                out.append(Disobeyed(start, end, w, turned, kind, how, moved))
             run = []
         if item is not None:
             run.append(item)

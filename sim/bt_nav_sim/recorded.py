@@ -17,7 +17,6 @@ PASS needs every judged check to pass and at least one complete, judged maneuver
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -26,6 +25,7 @@ import numpy as np
 from bt_nav.mission.scan import Scan
 from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, CheckoffConfig, CheckoffJudge
 from bt_nav_sim.checkoff_creep import CREEP_CHECK
+from bt_nav_sim.checkoff_words import maneuver_check
 from bt_nav_sim.feeds import (
     ODOMETRY_FORWARD_MOTION_MAX,
     SCAN_MAX_AGE,
@@ -34,7 +34,14 @@ from bt_nav_sim.feeds import (
     ScanReadings,
     gaps,
     not_followed,
+    story,
 )
+
+#: The report's one time zero, in the words the help, the terminal, the JSON and the film use (a window does not move
+#: it: a turn keeps its time in every window that holds it).
+TIME_ZERO = "the first /odom, /scan or /cmd_vel message"
+PASSED, FAILED, INCOMPLETE = "PASSED", "FAILED", "INCOMPLETE"
+
 
 #: The checks that need the toggle_navigation calls to be seen (the creep check: when the node was armed, and when a
 #: disarm stopped it, which a first non-zero command does not say).
@@ -112,7 +119,9 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
         if a - SCAN_MAX_AGE <= t <= b:
             source.add(t, scan)
     judge = CheckoffJudge(cfg, None, readings=source)
-    judge.start(a)
+    judge.start(origin)  # one time zero for every window (TIME_ZERO)
+    disobeyed = _disobeyed(rec, a, b)
+    judge.apart = [(d.start, d.end) for d in disobeyed]  # never joined to a turn beside it (bt_nav_sim.segments)
     arming = _arm(judge, rec, window, a, b)
     for t, x, y, yaw in odom:
         judge.observe(t, x, y, yaw)
@@ -125,13 +134,14 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     judge._finish(b)  # noqa: SLF001 - the recording is the schedule: the report is at its end
     res = judge.results()
     armed = judge.activation_requested if judge.activation_requested is not None else a
-    flags = _flags(rec, odom, a, b, armed)
+    flags = _flags(rec, odom, a, b, armed, disobeyed)
     flags.gaps = [g for g in flags.gaps if g.topic != rec.topics["cmd"] or _armed_over(judge, g)]
-    _restate(res, rec, cfg, flags, a)
+    _restate(res, rec, cfg, flags, origin, (a, b))
     res["feed"] = {"poses": f"{rec.topics['odom']} (pose x, y and yaw; the twist is not read)",
                    "readings": f"{rec.topics['scan']} as recorded ({len(source.t)} scans, {source.skipped} skipped)",
                    "commands": rec.topics["cmd"], "arming": arming, "window": [a - origin, b - origin],
-                   "t0": a,  # the report's time zero on the recording's clock (s; epoch seconds on a robot)
+                   "t0": origin,  # the report's time zero on the recording's clock (s; epoch seconds on a robot)
+                   "time_zero": TIME_ZERO,
                    "forward_motion_max": cfg.forward_motion_max, "lidar_mount": list(rec.mount), "notes": rec.notes}
     return res
 
@@ -187,15 +197,26 @@ class _Flags:
     last_move: float | None = None  # the last non-zero command, when the disarm is not visible (no service events)
 
 
-def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, armed: float) -> _Flags:
-    """Where the recording falls silent or contradicts the commands (from the arming on)."""
+def _disobeyed(rec: Recording, a: float, b: float) -> list[Disobeyed]:
+    """Where the robot did not follow its commands, read over the whole recording (so a window's edges change
+    nothing), those touching the window [a, b]."""
+    if len(rec.odom) < 3:
+        return []
+    pose = np.asarray(rec.odom, dtype=np.float64)
+    found = not_followed(pose[:, 0], np.unwrap(pose[:, 3]), rec.commands, xy=pose[:, 1:3])
+    return [d for d in found if d.end >= a and d.start <= b]
+
+
+def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, armed: float,
+           disobeyed: list[Disobeyed]) -> _Flags:
+    """Where the recording falls silent (from the arming on) or contradicts the commands."""
     found = gaps(rec.topics["odom"], [p[0] for p in odom], within=(max(a, armed), b))
     found += gaps(rec.topics["scan"], [t for t, _ in rec.scans if a <= t <= b], within=(max(a, armed), b))
     found += gaps(rec.topics["cmd"], [t for t, _, _ in rec.commands if max(a, armed) <= t <= b])
     t = np.asarray([p[0] for p in odom])
     uyaw = np.unwrap(np.asarray([p[3] for p in odom]))
     cmds = [c for c in rec.commands if a <= c[0] <= b]
-    flags = _Flags(sorted(found, key=lambda g: g.start), not_followed(t, uyaw, cmds))
+    flags = _Flags(sorted(found, key=lambda g: g.start), disobeyed)
     if rec.calls is None:
         flags.last_move = max((c[0] for c in cmds if c[1] != 0.0 or c[2] != 0.0), default=None)
     for g in flags.gaps:  # a turn nobody saw commanded (or read its scans): not judged, and said
@@ -207,15 +228,25 @@ def _flags(rec: Recording, odom: list[tuple[float, ...]], a: float, b: float, ar
     return flags
 
 
-def _episode_problem(e: dict[str, Any], flags: _Flags, cfg: CheckoffConfig, t0: float) -> str:
-    """Why an episode cannot be judged on this recording (empty: it can)."""
+def _episode_problem(e: dict[str, Any], flags: _Flags, cfg: CheckoffConfig, rec: Recording, t0: float,
+                     window: tuple[float, float]) -> str:
+    """Why an episode cannot be judged on this recording (empty: it can): the window cuts it, a topic fell silent in
+    it, the robot did not follow its commands in it (what it did instead, and when), or its end is the run's."""
     start, end = t0 + e["t"] - cfg.scan_age, t0 + e["settled"]
+    cut = _cut_by_window(e, rec, cfg, t0, window)
+    if cut:
+        return cut
     for g in flags.gaps:
         if g.start < end and g.end > start:
             return g.text(t0)
-    for d in flags.disobeyed:
-        if d.start < end and d.end > start:
-            return d.text(t0)
+    events = _events_of(flags.disobeyed, start, end)
+    if events:
+        said = story(events, t0)
+        last_command = max((c[0] for c in rec.commands if window[0] <= c[0] <= window[1]), default=window[1])
+        if not any(c[0] > events[-1].end and (c[1] or c[2]) for c in rec.commands if c[0] <= window[1]) \
+                and window[1] - max(events[-1].end, last_command) < 3.0:
+            said += f"; then the {'recording' if window[1] >= rec.end else 'window'} ends (t={window[1] - t0:.1f} s)"
+        return said
     if e.get("readings") is None:
         return "no scan at its start"
     last = flags.last_move
@@ -226,23 +257,81 @@ def _episode_problem(e: dict[str, Any], flags: _Flags, cfg: CheckoffConfig, t0: 
     return ""
 
 
-def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _Flags, t0: float) -> None:
+def _events_of(events: list[Disobeyed], start: float, end: float) -> list[Disobeyed]:
+    """The intervals set apart that touch an episode (from its scan's age before its first command to its settling),
+    in time order."""
+    return sorted((d for d in events if d.start < end and d.end > start), key=lambda d: d.start)
+
+
+def _cut_by_window(e: dict[str, Any], rec: Recording, cfg: CheckoffConfig, t0: float,
+                   window: tuple[float, float]) -> str:
+    """Whether the window begins or ends inside the episode's turn (a turning command within a second outside it,
+    next to the turn): then the window holds only a piece of it, which is not the maneuver."""
+    a, b = window
+    turning = [c[0] for c in rec.commands if abs(c[2]) >= cfg.rotation_min_rate]
+    def across(edge: float) -> bool:  # turning commands on both sides of the edge, half a second apart at most
+        return any(edge - 0.5 <= t < edge for t in turning) and any(edge <= t <= edge + 0.5 for t in turning)
+
+    if t0 + e["t"] - a < 1.0 and across(a):
+        return f"its turn began before the window (t={a - t0:.1f} s): only its end is in it"
+    if b - (t0 + e["settled"]) < 1.0 and across(b):
+        return f"the window ends (t={b - t0:.1f} s) during its turn"
+    return ""
+
+
+def sheet_words(e: dict[str, Any], cfg: CheckoffConfig) -> str:
+    """The trigger as the sheet states it and the reading accepted beside it (``front 0.40 m: the sheet's 0.3 m did
+    not hold; accepted at safety_distance 0.5 m``): a maneuver line must not print an accepted reading as the rule."""
+    trigger, margin = cfg.spec.trigger, f" (+{cfg.trigger_margin:.2f} m sensor-noise tolerance)"
+    read = str(e["trigger_detail"]).split(" < ", 1)[0]
+    r = e.get("readings") or {}
+    keys = ("left", "right") if trigger.reads == "sides" else ("front",)
+    values = [r.get(k) for k in keys]
+    nearest = max((v if v is not None else math.inf) for v in values)
+    sheet = cfg.distance(trigger.distance)
+    if nearest < sheet + cfg.trigger_margin:
+        return f"{read} < the sheet's {sheet:g} m{margin}"
+    if not trigger.or_braked_at:
+        return f"{read}: the sheet's {sheet:g} m{margin}"
+    other = cfg.distance(trigger.or_braked_at)
+    if e["trigger"]:
+        return f"{read}: the sheet's {sheet:g} m did not hold; accepted at {trigger.or_braked_at} {other:g} m{margin}"
+    return (f"{read}: neither the sheet's {sheet:g} m nor the accepted {trigger.or_braked_at} {other:g} m held"
+            f"{margin}")
+
+
+def _maneuver_line(number: int, e: dict[str, Any], cfg: CheckoffConfig) -> dict[str, Any]:
+    """A judged maneuver's line in the sheet's words, on the report's clock (no simulator's ``(sim ... s)``)."""
+    words = sheet_words(e, cfg)
+    e2 = {**e, "t0": 0.0, "trigger_detail": words}
+    check = maneuver_check(number, cfg.maneuver, e2)
+    if not e["trigger"]:  # "... did not hold" is already said in the sheet's words
+        for key in ("detail", "reason"):
+            if key in check:
+                check[key] = check[key].replace(f"{words} did not hold", words, 1).replace(
+                    f"({words} is not true)", f"({words})")
+    return check
+
+
+def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _Flags, t0: float,
+             window: tuple[float, float]) -> None:
     """The judge's verdict restated for what the recording supports: checks it cannot judge moved to
-    ``not_judged``, maneuvers in a gap or a contradiction too, the verdict from the judged ones."""
+    ``not_judged``, maneuvers in a gap, a contradiction or cut by the window too, the verdict from the judged ones."""
     not_judged: list[dict[str, str]] = []
     keep: dict[str, dict[str, Any]] = {}
     for kind, key in (("maneuver", "maneuvers"), ("recovery", "recovery_turns")):
         judged = []
         for number, e in enumerate(res[key], 1):
-            why = _episode_problem(e, flags, cfg, t0)
-            if why and kind == "maneuver":
-                not_judged.append({"name": f"maneuver {number}", "why": f"at t={e['t']:.1f} s: {why}"})
-            elif why:
-                not_judged.append({"name": "recovery turn", "why": f"at t={e['t']:.1f} s: {why}"})
+            why = _episode_problem(e, flags, cfg, rec, t0, window)
+            e["not_judged"] = why or None
+            name = f"maneuver {number}" if kind == "maneuver" else "recovery turn"
+            if why:
+                turned = f"turned {e['angle_deg']:+.0f} deg"
+                not_judged.append({"name": name, "why": f"at t={e['t']:.1f} s, {turned}: {why}"})
             else:
                 judged.append(e)
                 if kind == "maneuver":
-                    keep[f"maneuver {number}"] = e
+                    keep[name] = e
         res[f"judged_{key}"] = judged
     checks = []
     for c in res["checks"]:
@@ -254,8 +343,8 @@ def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _F
             not_judged.append({"name": name, "why": NO_COLLISION_SENSOR})
         elif name.startswith("maneuver ") and name not in keep:
             continue
-        elif name.startswith("maneuver "):  # a recording's clock is not a simulator's: no "(sim 1700000000.00 s)"
-            checks.append({**c, "detail": re.sub(r" \(sim [-0-9.]+ s\)", "", c["detail"], count=1)})
+        elif name.startswith("maneuver "):
+            checks.append(_maneuver_line(int(name.split()[1]), keep[name], cfg))
         elif name == "maneuvers performed":
             checks.append(_performed(res, cfg, len(flags.gap_turns)))
         elif name == "recovery turns":
@@ -266,27 +355,51 @@ def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _F
     res["checks"] = checks
     res["not_judged"] = not_judged + [{"name": n["name"], "why": n["why"]} for n in flags.gap_turns]
     res["flags"] = [g.text(t0) for g in flags.gaps] + [d.text(t0) for d in flags.disobeyed]
-    res["passed"] = bool(checks) and all(c["passed"] for c in checks) and len(res["judged_maneuvers"]) >= 1
+    res["verdict"] = _verdict(res)
+    res["passed"] = res["verdict"] == PASSED
+
+
+def _verdict(res: dict[str, Any]) -> str:
+    """PASSED: at least one judged maneuver passed and no judged check failed; FAILED: a judged check failed;
+    INCOMPLETE: nothing failed, but no maneuver could be judged (never PASSED on what could not be seen)."""
+    if not all(c["passed"] for c in res["checks"] if c.get("status") != INCOMPLETE):
+        return FAILED
+    if any(e["passed"] for e in res["judged_maneuvers"]):
+        return PASSED
+    return INCOMPLETE
 
 
 def _performed(res: dict[str, Any], cfg: CheckoffConfig, unseen: int = 0) -> dict[str, Any]:
-    """"maneuvers performed" over the complete, judged maneuvers (``unseen``: turns made while a topic was
-    silent)."""
-    judged, seen = len(res["judged_maneuvers"]), len(res["maneuvers"]) + unseen
+    """The count of maneuvers: seen, judged, passed and failed (``unseen``: turns made while a topic was silent).
+    Its status is the maneuvers' own: FAILED when one judged failed, INCOMPLETE when none could be judged."""
+    judged = res["judged_maneuvers"]
+    passed = sum(1 for e in judged if e["passed"])
+    failed = len(judged) - passed
+    seen = len(res["maneuvers"]) + unseen
     need = max(1, cfg.min_maneuvers)
-    detail = f"{judged} performed and judged, required >= {need}"
-    if seen > judged:
-        detail += f"; {seen - judged} more seen but not judged"
-    return {"name": "maneuvers performed", "passed": judged >= need, "value": judged, "required": need,
+    detail = f"{seen} seen: {len(judged)} judged, {passed} passed, {failed} failed"
+    if seen > len(judged):
+        detail += f"; {seen - len(judged)} not judged"
+    detail += f"; required: >= {need} judged and passed, none failed"
+    ok = passed >= need and failed == 0
+    status = PASSED if ok else FAILED if failed or judged else INCOMPLETE
+    return {"name": "maneuvers", "passed": ok, "status": status, "value": len(judged), "judged": len(judged),
+            "passed_count": passed, "failed": failed, "not_judged": seen - len(judged), "required": need,
             "detail": detail}
 
 
 def report_lines(res: dict[str, Any]) -> list[str]:
     """The verdict as the simulator's judge prints it (``name (detail): PASSED|FAILED``), then what was not judged
     and what the data contradicts, then the overall verdict."""
-    lines = [f"{c['name']} ({c['detail']}): {'PASSED' if c['passed'] else 'FAILED'}" for c in res["checks"]]
+    lines = [f"{c['name']} ({c['detail']}): {c.get('status') or (PASSED if c['passed'] else FAILED)}"
+             for c in res["checks"]]
     lines += [f"{n['name']}: NOT JUDGED ({n['why']})" for n in res.get("not_judged", [])]
     lines += [f"data: {f}" for f in res.get("flags", [])]
-    lines.append(f"overall: {'PASSED' if res['passed'] else 'FAILED'}")
+    verdict = res.get("verdict") or (PASSED if res["passed"] else FAILED)
+    if verdict == INCOMPLETE:
+        why = "; ".join(f"{n['name']}: {n['why']}" for n in res.get("not_judged", []) if n["name"].startswith(
+            ("maneuver", "a turn"))) or "no maneuver was seen"
+        verdict += f" (no maneuver could be judged: {why})"
+    lines.append(f"overall: {verdict}")
     return lines
 

@@ -85,18 +85,19 @@ def test_a_gap_inside_the_maneuver_makes_it_not_judged_never_passed(tmp_path: Pa
     assert not res["judged_maneuvers"]
     why = " ".join(n["why"] for n in res["not_judged"] if n["name"] in ("a turn", "maneuver 1"))
     assert "turned -1" in why and ("no /scan for" in why or "no /cmd_vel for" in why), res["not_judged"]
-    assert not any("did not follow" in f for f in res["flags"]), res["flags"]  # silence is not disobedience
+    assert not any(f.startswith(("stuck", "moved by hand")) for f in res["flags"]), res["flags"]  # silence is not
     assert any(f.startswith("no /scan for 4.") for f in res["flags"]), res["flags"]
-    performed = next(c for c in res["checks"] if c["name"] == "maneuvers performed")
-    assert not performed["passed"] and "not judged" in performed["detail"]
+    performed = next(c for c in res["checks"] if c["name"] == "maneuvers")
+    assert not performed["passed"] and "1 not judged" in performed["detail"] and performed["status"] == "INCOMPLETE"
+    assert res["verdict"] == "INCOMPLETE" and report_lines(res)[-1].startswith("overall: INCOMPLETE (")
 
 
 def test_a_person_turning_the_robot_is_named_and_not_judged(tmp_path: Path) -> None:
     effects = Effects(handled_at=14.0)
     run = simulate(effects=effects)
     res = _judge(write_rosbag2(run, tmp_path / "run", "mcap", effects))
-    flag = next(f for f in res["flags"] if f.startswith("the robot did not follow its commands"))
-    assert "commanded -0.60 rad/s" in flag and "turned the other way" in flag and "handled or blocked" in flag
+    flag = next(f for f in res["flags"] if f.startswith("moved by hand from t="))
+    assert "against the command" in flag
     assert not res["judged_maneuvers"] and not res["passed"]
 
 
@@ -104,7 +105,7 @@ def test_a_stalled_turn_is_named_and_not_judged(tmp_path: Path) -> None:
     effects = Effects(stall_at=14.0)
     run = simulate(effects=effects)
     res = _judge(write_rosbag2(run, tmp_path / "run", "sqlite3", effects))
-    assert any("did not turn" in f for f in res["flags"]), res["flags"]
+    assert any(f.startswith("stuck from t=") and "while commanded -0.60 rad/s" in f for f in res["flags"]), res["flags"]
     assert not res["judged_maneuvers"] and not res["passed"]
 
 
