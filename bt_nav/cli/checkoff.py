@@ -13,7 +13,8 @@
   toggle_navigation itself (true after 3 s of listening, false at the end); ``--ros-args`` after the options are the
   listener node's (``ros2 launch bt_nav checkoff_robot.launch.py``).
 
-Exit 0 when the check-off passed, 1 when it failed, 2 on a refused option or an unreadable bag.
+Exit 0 when the check-off passed, 1 when it failed, 2 on a refused option or an unreadable bag, 3 when it is
+INCOMPLETE (a real robot's data in which no maneuver could be judged: never a pass).
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="bt-nav checkoff", allow_abbrev=False, description=plain(__doc__.split("\n\n")[0]),
         epilog="Over DDS every check-off setting is a ROS parameter too: --ros-args -p armed_for:=30.0 ... From a "
-               "bag: exit 0 passed, 1 failed, 2 refused option or unreadable bag.")
+               "bag: exit 0 passed, 1 failed, 2 refused option or unreadable bag, 3 INCOMPLETE (no maneuver could "
+               "be judged). A robot's times: s since t=0, the first /odom, /scan or /cmd_vel message.")
     p.add_argument("--maneuver", help=f"the maneuver to check off: {letters_text()} (parameter maneuver)")
     p.add_argument("--json", help="write the verdict JSON here (parameter json)")
     dds = p.add_argument_group("over DDS, in the simulator")
@@ -55,7 +57,8 @@ def parser() -> argparse.ArgumentParser:
                      "and false at the end (default: the TA calls it)")
     bag.add_argument("--node", help="the student's node file: its '# CHOICE: X' line names the maneuver")
     bag.add_argument("--from", dest="start", type=float,
-                     help="the check-off starts this many s after t=0 (the first message judged)")
+                     help="the check-off starts this many s after t=0 (the first /odom, /scan or /cmd_vel message; "
+                          "a window does not move it)")
     bag.add_argument("--to", dest="end", type=float, help="... and ends this many s after t=0")
     bag.add_argument("--armed-at", type=float, help="s after t=0 at which toggle_navigation(true) was called "
                      "(default: its service events, else the first non-zero command)")
@@ -187,8 +190,7 @@ def _judge_robot(opts: argparse.Namespace) -> int:
         print(f"bt-nav checkoff: {exc}", file=sys.stderr)
         return 2
     feed = res["feed"]
-    first = f"{rec.topics['odom']}, {rec.topics['scan']} or {rec.topics['cmd']}"
-    print(f"check-off of maneuver {config.maneuver} from {source} (t=0: its first {first} message): window "
+    print(f"check-off of maneuver {config.maneuver} from {source} (t=0: {_time_zero(rec)}): window "
           f"t={feed['window'][0]:.1f}-{feed['window'][1]:.1f} s; armed: {feed['arming']}")
     for note in feed["notes"]:
         print(f"note: {note}")
@@ -198,15 +200,28 @@ def _judge_robot(opts: argparse.Namespace) -> int:
         from dataclasses import asdict
 
         res.update(report_lines=lines, config=asdict(odometry_config(config)), bag=str(source),
-                   exit_code=0 if res["passed"] else 1,
-                   time_base="times and report lines: seconds from the window's start")
+                   exit_code=_exit_code(res), time_base=f"s since t=0: {_time_zero(rec)}")
         try:
             Path(opts.json).parent.mkdir(parents=True, exist_ok=True)
             Path(opts.json).write_text(json.dumps(res, indent=2, default=str) + "\n")
         except OSError as exc:
             print(f"bt-nav checkoff: could not write {opts.json}: {exc.strerror or exc}", file=sys.stderr)
             return 2
-    return 0 if res["passed"] else 1
+    return _exit_code(res)
+
+
+def _time_zero(rec: object) -> str:
+    """The report's time zero in the words of help, terminal, JSON and film (bt_nav_sim.recorded.TIME_ZERO), with
+    the topics this recording's are."""
+    from bt_nav_sim.recorded import TIME_ZERO
+
+    topics = rec.topics  # type: ignore[attr-defined]
+    return TIME_ZERO.replace("/odom, /scan or /cmd_vel", f"{topics['odom']}, {topics['scan']} or {topics['cmd']}")
+
+
+def _exit_code(res: dict) -> int:
+    """0 passed, 1 failed, 3 incomplete (no maneuver could be judged)."""
+    return {"PASSED": 0, "INCOMPLETE": 3}.get(res.get("verdict", "PASSED" if res["passed"] else "FAILED"), 1)
 
 
 if __name__ == "__main__":

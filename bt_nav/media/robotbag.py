@@ -46,6 +46,8 @@ SYNTHETIC = "/synthetic"
 REQUEST_SENT, REQUEST_RECEIVED, RESPONSE_SENT, RESPONSE_RECEIVED = 0, 1, 2, 3
 #: The percentile of (receive - stamp) taken as a stamped topic's clock offset (its fastest arrivals).
 OFFSET_PERCENTILE = 5.0
+#: s: stamps further than this from their receive times are on another clock, not a late or early one.
+OTHER_CLOCK = 60.0
 
 @dataclass(frozen=True)
 class Topics:
@@ -89,13 +91,29 @@ def _aligned(rows: list[tuple[int, int | None, Any]], topic: str, notes: list[st
         lag = np.asarray([r - s for r, s in stamped], dtype=np.float64) * 1e-9
         offset = float(np.percentile(lag, OFFSET_PERCENTILE))
         median = float(np.median(lag))
-        if abs(median) > 0.05:
-            ahead = "behind" if median > 0 else "ahead of"
-            notes.append(f"{topic}: header stamps {abs(median):.2f} s {ahead} their receive times (median); "
-                         f"placed on the recorder's clock by their fastest arrivals ({offset:+.3f} s)")
+        note = clock_note(topic, median, offset)
+        if note:
+            notes.append(note)
         out = [(s * 1e-9 + offset if s is not None else r * 1e-9, m) for r, s, m in rows]
     out.sort(key=lambda item: item[0])
     return out
+
+
+def clock_note(topic: str, median: float, offset: float) -> str:
+    """What a topic's header stamps say against the receive times (s: their median difference, and the offset the
+    stamps are shifted by), or nothing when they agree. Two computers' clocks a fraction of a second apart are named
+    as such; stamps more than :data:`OTHER_CLOCK` s off are on another clock altogether (a simulator's, a robot's
+    unset one): their difference says nothing about the network, so the note gives the arrivals' spread instead,
+    which both sides of the same clock give (once printed as ``1795897414.86 s behind``)."""
+    if abs(median) <= 0.05:
+        return ""
+    placed = f"placed on the recorder's clock by their fastest arrivals ({offset:+.3f} s)"
+    if abs(median) > OTHER_CLOCK:
+        return (f"{topic}: header stamps on a clock of their own, not the receiver's (a simulator's or an unset "
+                f"robot clock); {placed.replace(f'({offset:+.3f} s)', '')}(arrivals {median - offset:.2f} s after "
+                "the fastest, median)")
+    ahead = "behind" if median > 0 else "ahead of"
+    return f"{topic}: header stamps {abs(median):.2f} s {ahead} their receive times (median); {placed}"
 
 
 def _scan(msg: Any) -> Scan:

@@ -146,7 +146,7 @@ def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
     from bt_nav_sim.recorded import report_lines
 
     t0 = float(res["feed"]["t0"])
-    end = t0 + float(res["feed"]["window"][1]) - float(res["feed"]["window"][0])
+    end = t0 + float(res["feed"]["window"][1])  # the window's times are on the report's one time zero
     when: dict[str, float] = {}
     for number, e in enumerate(res["maneuvers"], 1):
         when[f"maneuver {number}"] = t0 + float(e.get("settled", e["t"]))
