@@ -265,12 +265,16 @@ def _events_of(events: list[Disobeyed], start: float, end: float) -> list[Disobe
 
 def _cut_by_window(e: dict[str, Any], rec: Recording, cfg: CheckoffConfig, t0: float,
                    window: tuple[float, float]) -> str:
-    """Whether the window begins or ends inside the episode's turn (a turning command within a second outside it,
-    next to the turn): then the window holds only a piece of it, which is not the maneuver."""
+    """Whether the window begins or ends inside the episode's turn (one turn's commands on both sides of an edge:
+    the last before it and the first after it, within half a second, both turning): then the window holds only a
+    piece of it, which is not the maneuver."""
     a, b = window
-    turning = [c[0] for c in rec.commands if abs(c[2]) >= cfg.rotation_min_rate]
-    def across(edge: float) -> bool:  # turning commands on both sides of the edge, half a second apart at most
-        return any(edge - 0.5 <= t < edge for t in turning) and any(edge <= t <= edge + 0.5 for t in turning)
+
+    def across(edge: float) -> bool:
+        before = [c for c in rec.commands if edge - 0.5 <= c[0] < edge]
+        after = [c for c in rec.commands if edge <= c[0] <= edge + 0.5]
+        turning = cfg.rotation_min_rate
+        return bool(before and after) and abs(before[-1][2]) >= turning and abs(after[0][2]) >= turning
 
     if t0 + e["t"] - a < 1.0 and across(a):
         return f"its turn began before the window (t={a - t0:.1f} s): only its end is in it"
