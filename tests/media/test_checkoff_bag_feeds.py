@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.feeds import ScanReadings, gaps, not_followed, usable_ranges
+from bt_nav_sim.feeds import ScanReadings, gaps, not_followed, story, usable_ranges
 from bt_nav_sim.readings import SectorFamily
 
 from bt_nav.mission.scan import Scan
@@ -90,3 +90,66 @@ def test_handled_stalled_and_uncommanded_turns_are_flagged() -> None:
     t, yaw = _yaw([(4.0, 0.9), (6.0, 0.0)])
     assert [(d.kind, d.how) for d in not_followed(t, yaw, still)] == [("moved by hand", "with no turn commanded")]
     assert not_followed(t, yaw, [(0.0, 0.0, 0.0)]) == []  # a command 4 s old is not in force: a gap says that
+
+
+def test_a_stall_a_push_a_fast_spin_and_a_carry_are_each_set_apart() -> None:
+    """Pure synthetic feeds (no DDS): each way a robot does not follow its command, named and timed."""
+    cmds = [(x, 0.0, -0.22) for x in np.arange(1.0, 9.0, 0.1)]
+    t, yaw = _yaw([(1.1, -0.22), (3.0, -0.02), (6.0, -0.22)])  # stuck 3 s: turning a tenth of the command
+    (stall,) = not_followed(t, yaw, cmds)
+    assert stall.kind == "stuck" and stall.text(0.0).startswith("stuck from t=3.")
+    assert "while commanded -0.22 rad/s" in stall.text(0.0) and stall.end - stall.start >= 2.5
+    t, yaw = _yaw([(1.1, -0.22), (4.0, 1.4), (4.6, -0.22)])  # +48 deg in 0.6 s against the command: a hand
+    (push,) = not_followed(t, yaw, cmds)
+    assert push.kind == "moved by hand" and push.how == "against the command" and push.turned_deg > 30
+    t, yaw = _yaw([(1.1, -0.22), (4.0, -1.3), (5.5, -0.22)])  # six times the command: turned by hand
+    (fast,) = not_followed(t, yaw, cmds)
+    assert fast.kind == "moved by hand" and fast.how.startswith("faster than twice the command")
+    t, yaw = _yaw([(1.1, -0.22), (4.0, -3.5), (4.3, -0.22)])  # faster than the base can turn at all
+    assert any("faster" in d.how for d in not_followed(t, yaw, cmds))
+    still = [(x, 0.0, 0.0) for x in np.arange(0.0, 10.0, 0.1)]
+    t = np.arange(0.0, 10.0, 0.05)
+    x = np.where(t < 4.0, 0.0, np.minimum(t - 4.0, 1.5) * 0.3)  # carried forward 0.45 m, no forward command
+    (carry,) = not_followed(t, np.zeros_like(t), still, xy=np.column_stack([x, np.zeros_like(t)]))
+    assert carry.kind == "carried" and carry.moved_m == pytest.approx(0.45, abs=0.05)
+    assert "with no forward command" in carry.text(0.0)
+
+
+def test_the_story_of_a_turn_says_what_happened_and_when() -> None:
+    cmds = [(x, 0.0, -0.22) for x in np.arange(1.0, 9.0, 0.1)]
+    t, yaw = _yaw([(1.1, -0.22), (2.0, 0.0), (6.0, 1.4), (6.6, -0.22)])
+    said = story(not_followed(t, yaw, cmds), 0.0)
+    assert said.startswith("stuck from t=2.") and "; then moved by hand at t=5.8 s: +4" in said  # span-smoothed
+    assert "against the command" in said
+
+
+@pytest.mark.parametrize("lag", [0.3, -0.3, 1795897414.86])
+def test_header_stamps_ahead_of_behind_and_on_another_clock_are_read_as_stated(lag: float) -> None:
+    from bt_nav.media.robotbag import _aligned
+
+    receive = [int((100.0 + 0.1 * k + 0.02 * (k % 3)) * 1e9) for k in range(50)]
+    rows = [(r, int(r - lag * 1e9), k) for k, r in enumerate(receive)]
+    notes: list[str] = []
+    out = _aligned(rows, "/odom", notes)
+    assert [m for _, m in out] == list(range(50))  # the stamps' order and spacing kept, on the receiver's clock
+    assert abs(out[0][0] - 100.0) < 0.05
+    (note,) = notes
+    if abs(lag) > 60:
+        assert "on a clock of their own" in note and "1795897414" not in note
+    else:
+        assert f"0.30 s {'behind' if lag > 0 else 'ahead of'} their receive times" in note
+
+
+def test_nan_and_inf_runs_and_a_beam_count_changing_every_scan_are_read_as_stated() -> None:
+    source = ScanReadings(SectorFamily(), half_width=0.18)
+    for k, n in enumerate((155, 234, 190, 171)):  # an LDS-02: another beam count every scan
+        ranges = np.full(n, 2.0)
+        ranges[: n // 5] = np.nan  # a run of lost returns
+        ranges[n // 5: n // 3] = np.inf
+        deg = np.degrees(np.remainder(2 * math.pi / n * np.arange(n) + math.pi, 2 * math.pi) - math.pi)
+        ranges[np.abs(deg) <= 5.0] = 0.4 + 0.01 * k
+        source.add(1.0 + 0.1 * k, _scan(n, 0.0, ranges))
+    for k in range(4):
+        r = source.reading_at(1.0 + 0.1 * k + 0.05)
+        assert r is not None and r.front == pytest.approx(0.4 + 0.01 * k, abs=1e-5)
+    assert source.skipped == 0 and source.reading_at(3.0) is None  # a gap: nothing known there
