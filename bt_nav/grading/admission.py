@@ -223,9 +223,52 @@ def describe(jobs: int, real_time: bool = False) -> str:
     return f"{bounds[0]} at a time, up to {bounds[1]} while the cores stay idle"
 
 
+#: Where the machine's real-time places are (a lock file each, in the temporary directory unless set).
+SLOTS_ENV = "BT_NAV_SLOTS_DIR"
+
+
+class MachineSlots:
+    """The 1x runs this machine carries at once, shared by every grade on it: ``count`` places, each an exclusive
+    ``flock`` on ``<dir>/slot-<k>.lock`` held for a run's life (the kernel drops it when the holder dies).
+
+    Why: a 1x run costs about a tenth of a core, and its simulator keeps real time only if the cores carry every
+    run at once; three grades of 18 runs started together (54 runs on 2 cores, two CPU hogs beside them) fell
+    behind in every run, and a third of their cells ended NOT GRADED after the second try. With the places shared,
+    the second and third grade wait for places as the first one's runs end."""
+
+    def __init__(self, count: int, directory: str | None = None) -> None:
+        import tempfile
+
+        self.count = max(1, int(count))
+        root = directory or os.environ.get(SLOTS_ENV) or tempfile.gettempdir()
+        self.directory = os.path.join(root, "bt_nav_realtime_slots")
+        os.makedirs(self.directory, exist_ok=True)
+        self._held: list[object] = []
+
+    def take(self) -> bool:
+        """Take a free place (True), or none is free (False, at once)."""
+        import fcntl
+
+        for k in range(self.count):
+            handle = open(os.path.join(self.directory, f"slot-{k}.lock"), "a+")  # noqa: SIM115 - held: the place
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                handle.close()
+                continue
+            self._held.append(handle)
+            return True
+        return False
+
+    def give_back(self) -> None:
+        """Give back one place this process holds (closing the file drops the lock)."""
+        if self._held:
+            self._held.pop().close()  # type: ignore[attr-defined]
+
+
 class Admission:
     """Lets runs start while a place is free: ``base`` to ``limit`` places, by how idle the cores are (module
-    docstring)."""
+    docstring); at 1x also a place of the machine's (:class:`MachineSlots`), shared with the other grades on it."""
 
     def __init__(self, base: int, limit: int, *, idle_needed: float = IDLE_NEEDED, foreign_max: float = FOREIGN_MAX,
                  burst_idle: float = BURST_IDLE, gap: float = GAP, meter: IdleMeter | None = None,
@@ -237,6 +280,7 @@ class Admission:
         self.clock = clock
         self.running = 0
         self.places: int | None = None  # decided by the opening look, at the first start
+        self.slots: MachineSlots | None = None  # at 1x: the machine's places, shared by its grades
         self._last_start = self._last_change = -float("inf")
         self._cond = threading.Condition()
 
@@ -245,7 +289,12 @@ class Admission:
         """The admission of ``--jobs`` (None for a plain number: that many run, no more); ``real_time``: of 1x runs
         (:func:`auto_bounds`)."""
         bounds = auto_bounds(jobs, real_time)
-        return None if bounds is None else cls(*bounds)
+        if bounds is None:
+            return None
+        admission = cls(*bounds)
+        if real_time:
+            admission.slots = MachineSlots(bounds[1])
+        return admission
 
     def fell_behind(self) -> None:
         """A run's simulator fell behind real time: the machine carries fewer runs than are running. One place
@@ -298,7 +347,7 @@ class Admission:
     def enter(self, stop: StopRequest | None = None) -> bool:
         """Wait until a run may start (True), or until ``stop`` is requested (False: start nothing)."""
         with self._cond:
-            while not self._may_start():
+            while not (self._may_start() and (self.slots is None or self.slots.take())):
                 if stop is not None and stop.requested:
                     return False
                 self._cond.wait(self.poll)
@@ -310,4 +359,6 @@ class Admission:
         """A run ended: its place is free."""
         with self._cond:
             self.running -= 1
+            if self.slots is not None:
+                self.slots.give_back()
             self._cond.notify_all()

@@ -199,3 +199,37 @@ def test_the_grade_s_own_cpu_is_its_process_tree_s(tmp_path: Path) -> None:
     assert tree_cpu(99, proc=str(tmp_path)) is None, "not running"
     assert tree_cpu(proc=str(tmp_path / "missing")) is None
     assert (tree_cpu() or 0.0) >= 0.0 and tree_cpu() is not None, "this machine's /proc reads"
+
+
+def test_1x_places_are_the_machines_shared_by_every_grade_on_it(tmp_path: Path) -> None:
+    """Two grades on one machine (two MachineSlots over one directory) share its places: the second waits for one
+    the first gives back, and a place held by a process that died is free again (the kernel drops its flock)."""
+    import subprocess
+    import sys
+
+    from bt_nav.grading.admission import MachineSlots
+
+    first, second = MachineSlots(2, str(tmp_path)), MachineSlots(2, str(tmp_path))
+    assert first.take() and second.take() and not first.take() and not second.take()
+    first.give_back()
+    assert second.take() and not first.take()
+    second.give_back()
+    second.give_back()
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time; sys.path[:0] = [sys.argv[1]]; "
+                               "from bt_nav.grading.admission import MachineSlots as M; s = M(2, sys.argv[2]); "
+                               "s.take(); s.take(); print('held', flush=True); time.sleep(60)",
+                               str(Path(__file__).resolve().parents[2]), str(tmp_path)],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+        assert not first.take()
+    finally:
+        holder.kill()
+        holder.wait()
+    assert first.take() and first.take()
+
+
+def test_a_1x_admission_takes_a_machine_place_per_run() -> None:
+    admission = Admission.for_jobs(AutoJobs(2), real_time=True)
+    assert admission is not None and admission.slots is not None and admission.base == admission.limit
+    assert Admission.for_jobs(AutoJobs(2)) is not None and Admission.for_jobs(AutoJobs(2)).slots is None
