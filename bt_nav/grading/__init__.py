@@ -12,7 +12,9 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
   :mod:`bt_nav.grading.admission`: how many of them run at once with ``--jobs auto``.
 - :mod:`bt_nav.grading.plan`: a grid's worlds, seeds, maneuvers and LiDARs from the options (defaults per kind).
 - :mod:`bt_nav.grading.classroom`: a class in one command (a manifest, one pool, the class page).
-- :mod:`bt_nav.grading.realtime`: a failure at ``--rtf`` > 1 checked at 1x before it stands.
+- :mod:`bt_nav.grading.exe.pace`: a grade's speed (1x, the verdict; or a preview) and whether a 1x run kept real
+  time; :mod:`bt_nav.grading.exe.realtime`: a cell's verdict from a valid 1x run (a preview's failure graded again
+  at 1x, a run that fell behind run again, then not graded).
 - :mod:`bt_nav.grading.report`, :mod:`bt_nav.grading.media`, :mod:`bt_nav.grading.html`: the grid's report
   (``grade.json``, ``summary.md``, ``report.html``) with its pictures and videos.
 - :mod:`bt_nav.grading.formats`: a finished grade in the formats platforms and CI read (Gradescope's

@@ -23,9 +23,12 @@ as "saturated", that busy share took places away mid-grid, and the second wave s
 node's default grid: 55 s with up to six places, 49.6 s with six throughout). A program beside the grade does not
 slow down for it: that is the load to make room for. The grade's own share is its process tree's CPU time
 (:func:`tree_cpu`); the idle share comes from ``/proc/stat`` (Linux: what ROS 2 Jazzy runs on). Where either
-cannot be read, no place beyond ``base`` is given, and none is taken away. A run that fails at ``--rtf`` above 1
-is run again at 1x before its failure stands (:mod:`bt_nav.grading.realtime`), so a load that slipped through
-costs time, not a verdict.
+cannot be read, no place beyond ``base`` is given, and none is taken away. That is a preview's admission (``--rtf``
+0 or above 1), whose failures are graded again at 1x anyway.
+
+At 1x (the grade) every place opens at once (:func:`auto_bounds`): a 1x run waits for the wall clock most of the
+time, and each run also takes one of the machine's places (:class:`MachineSlots`), which every grade on the machine
+shares; a run whose simulator fell behind real time takes a place away (:meth:`Admission.fell_behind`).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """What the graph audit (:class:`bt_nav.ros.nodes.audit.GraphAudit`) found, as data: each finding's kind, topic and
 first clause beside the sentence a student reads.
 
-Why: the sentence is for people and may be reworded; a program that decides on a finding (the grader's 1x check,
-:mod:`bt_nav.grading.realtime`, skips a node that no message can reach at any speed) reads its ``kind`` instead.
+Why: the sentence is for people and may be reworded; a program that decides on a finding (the check-off's strict
+findings, :mod:`bt_nav_sim.findings`; the judge's own verdict) reads its ``kind`` instead.
 The verdict JSON carries both: ``findings`` (the sentences) and ``finding_kinds`` (:meth:`Finding.record`, in the
 same order). Pure (no rclpy), so the grader reads the kinds without ROS.
 """
