@@ -114,6 +114,7 @@ class ReactiveNavigator(Node):
         self.last_yaw: float | None = None
         self.stamp = 0.0
         self.last_step: float | None = None
+        self.elapsed = 0.0  # s since the previous control step
         self.period = 1.0 / TIMER_HZ if LOOP == "timer" else 0.2
         self.readings: dict[str, float] = {}
         self.rearmed = True
@@ -174,8 +175,9 @@ class ReactiveNavigator(Node):
         if not self.active or not self.readings:
             return
         now = self.clock()
-        if self.last_step is not None and 0.0 < now - self.last_step < 1.0:
-            self.period = now - self.last_step
+        self.elapsed = now - self.last_step if self.last_step is not None else 0.0
+        if 0.0 < self.elapsed < 1.0:
+            self.period = self.elapsed
         self.last_step = now
         if self.state == "turn":
             self.advance_turn(now)
@@ -243,8 +245,8 @@ class ReactiveNavigator(Node):
             done = left <= math.radians(1.0)
             rate = TURN_RATE if left > SLOW_ZONE else max(MIN_RATE, TURN_RATE * left / SLOW_ZONE)
         else:
-            if TIMING == "integrate":
-                self.turned += TURN_RATE * self.period
+            if TIMING == "integrate":  # every second since the last step, however late it came
+                self.turned += TURN_RATE * max(self.elapsed, 0.0)
             else:
                 self.turned = TURN_RATE * (now - self.began)
             # end on the step nearest the end: half a step early at most (the nominal step: one late step must not
