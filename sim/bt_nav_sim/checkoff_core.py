@@ -588,8 +588,9 @@ class CheckoffJudge(Verdict):
         motion = self._max_displacement(start + cfg.brake_allowance, end) if self._t else 0.0
         forward_ok = cmd_forward <= cfg.forward_epsilon and motion < cfg.forward_motion_max
         moved = self._moved_on(settle, next_start, now, start)  # the implied rules: findings unless strict
+        travelled = self._travelled(turn_from, settle) if interrupted else 0.0
         angle_ok, rule, moved_on, found = implied_rules(cfg, angle, reading, self._judged_angle(
-            angle + math.copysign(swung, angle), candidates, interrupted), moved)
+            angle + math.copysign(swung, angle), candidates, interrupted, travelled), moved)
         as_maneuver = trigger and angle_ok and forward_ok and moved_on
         recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
                     and self._stood_before(a) >= cfg.aeb_stop and not self._trigger_all(reading))
@@ -618,13 +619,17 @@ class CheckoffJudge(Verdict):
         eps = self.config.forward_epsilon
         return next((t for t, v, _ in self.commands[b + 1:] if abs(v) > eps), math.inf)
 
-    def _judged_angle(self, angle: float, candidates: list[Reading | None], interrupted: bool) -> tuple[bool, str]:
+    def _judged_angle(self, angle: float, candidates: list[Reading | None], interrupted: bool,
+                      travelled: float = 0.0) -> tuple[bool, str]:
         """The angle rule for a turn that may have been decided on any of ``candidates`` (the side may follow any
-        reading the robot could have had), and what the disarm did to it."""
+        reading the robot could have had), and what the disarm did to it (``travelled``: the deg its yaw went to and
+        fro until then: a node rocking in place for half a minute has a small net angle, yet never ended a turn)."""
         angle_ok, rule = self._angle_rule(angle, candidates[0])
         for other in candidates[1:]:
             if not angle_ok:
                 angle_ok, rule = self._angle_rule(angle, other)
+        if interrupted and not self._within_max(travelled):
+            return False, f"{rule}, and it was still turning at the disarm, {travelled:.0f} deg to and fro in place"
         if interrupted and self._within_max(angle):  # the disarm stopped it: its angle is what it had reached
             return True, "interrupted by the disarm (angle not judged)"
         if interrupted:  # ... but it had turned past its rule's largest angle: it would never have stopped
@@ -696,6 +701,11 @@ class CheckoffJudge(Verdict):
         verdicts = {("left" if left > right else "right") if abs(left - right) >= cfg.side_tie
                     and not (left > cfg.open_space and right > cfg.open_space) else "tie" for left, right in pairs}
         return verdicts.pop() if len(verdicts) == 1 and "tie" not in verdicts else "either side"
+
+    def _travelled(self, start: float, end: float) -> float:
+        """Degrees the true yaw went, either way, from ``start`` to ``end``."""
+        i, j = bisect.bisect_left(self._t, start), bisect.bisect_right(self._t, end)
+        return math.degrees(sum(abs(self._uyaw[k] - self._uyaw[k - 1]) for k in range(i + 1, j)))
 
     def _within_max(self, angle: float) -> bool:
         """Whether ``angle`` (deg) is no larger than the maneuver's largest (its spec's, plus the tolerance)."""

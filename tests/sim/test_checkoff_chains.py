@@ -310,3 +310,14 @@ def test_a_turn_reversed_at_once_is_credited_the_swing_the_base_owed_the_last_on
     right = next(m for m in judge.results()["maneuvers"] if m["angle_deg"] < 0)
     assert 70 < -right["angle_deg"] < 80 and 8 < right["swung_deg"] < 14, right
     assert right["angle_ok"], right
+
+
+def test_a_node_rocking_in_place_until_the_disarm_fails_though_its_net_angle_is_small() -> None:
+    """A front read behind the robot (hard-coded indices on another LiDAR, issue 52): braked at the dead end's
+    wall, it rocks left and right in place until the disarm, its net angle a few degrees. The disarm cut a turn
+    that never ended: it fails, where a turn the disarm stopped half way is not judged."""
+    rocking = [(0.4, 0.0, 0.5 if k % 2 == 0 else -0.5, False) for k in range(60)]
+    judge = _play(_judge("A", DEAD_END), INTO_DEAD_END + rocking)
+    line = _line(judge, "maneuver 1")
+    assert not judge.passed and line.endswith("FAILED"), judge.report_lines()
+    assert re.search(r"still turning at the disarm, \d+ deg to and fro in place", line), line
