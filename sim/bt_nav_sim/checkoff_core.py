@@ -592,7 +592,10 @@ class CheckoffJudge(Verdict):
         angle_ok, rule, moved_on, found = implied_rules(cfg, angle, reading, self._judged_angle(
             angle + math.copysign(swung, angle), candidates, interrupted, travelled), moved)
         as_maneuver = trigger and angle_ok and forward_ok and moved_on
-        recovery = (not as_maneuver and reading is not None and reading.ahead < cfg.aeb_distance
+        # a turn with the maneuver's trigger and angle is the maneuver, whatever its side: never excused as a way out
+        shaped = trigger and cfg.spec.angle.low_deg - cfg.angle_tolerance_deg <= abs(angle) <= \
+            cfg.spec.angle.high_deg + cfg.angle_tolerance_deg
+        recovery = (not as_maneuver and not shaped and reading is not None and reading.ahead < cfg.aeb_distance
                     and self._stood_before(a) >= cfg.aeb_stop and not self._trigger_all(reading))
         return {"t": start - (self.t0 or 0.0), "t0": self.t0 or 0.0, "settled": settle - (self.t0 or 0.0), "kind":
                 "recovery" if recovery else "maneuver", "passed": forward_ok if recovery else as_maneuver,

@@ -321,3 +321,20 @@ def test_a_node_rocking_in_place_until_the_disarm_fails_though_its_net_angle_is_
     line = _line(judge, "maneuver 1")
     assert not judge.passed and line.endswith("FAILED"), judge.report_lines()
     assert re.search(r"still turning at the disarm, \d+ deg to and fro in place", line), line
+
+
+#: A wall slanting across the path, its near end on the left (as lab_slant): the line x + y = 0.6.
+SLANT = [[-0.6, 1.2, 1.2, -0.6]]
+
+
+def test_a_pivot_towards_the_closer_side_after_a_stand_is_the_maneuver_not_a_way_out() -> None:
+    """C brakes where its +-30 deg front reads under 0.3 m (a +-5 deg front does not yet), stands 0.6 s with its
+    path blocked, and pivots 90 deg left, towards the slanting wall: the Smart Pivot's trigger and angle, the wrong
+    side. It is the maneuver, failed for its side, never an emergency-stop way out (a generated C mutant passed
+    every C cell so)."""
+    script = [(5.0, 0.0, 0.0, False), (4.4, 0.05, 0.0, False), (0.6, 0.0, 0.0, False), (math.pi / 2, 0.0, 1.0, True),
+              (30.0, 0.05, 0.0, False)]
+    judge = _play(_judge("C", SLANT), script)
+    res = judge.results()
+    assert not judge.passed and not res["recovery_turns"], judge.report_lines()
+    assert "the Smart Pivot needs 90 +- 10 deg right" in _line(judge, "maneuver 1"), judge.report_lines()
