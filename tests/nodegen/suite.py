@@ -2,10 +2,11 @@
 
 Every default-grid cell of each choice must see many right nodes nobody wrote by hand: each generated node is
 graded on a sample of its choice's cells, dealt round-robin so that every cell gets at least :data:`PER_CELL` nodes
-when there are enough (N >= 100: each choice's ~33 nodes take both of its two cells). A cell is graded as its own
-class (``--maneuvers X --worlds W`` and the cell's parameters as ``--node-param``, which the judge triggers at
-too); each node's mutants are graded on their choice's default grid (``--maneuvers X``), where the mistakes must
-fail for the reasons of :data:`tests.nodegen.EXPECT`.
+when there are enough (N >= 100: each choice's ~33 nodes take two of its cells), each node-cell with one LiDAR,
+dealt round-robin. A cell and LiDAR is graded as its own class (``--maneuvers X --worlds W --lidars L`` and the
+cell's parameters as ``--node-param``, which the judge triggers at too); each node's one mutant
+(:func:`one_mutant`) is graded where its mistake shows and must fail there for the reason of
+:data:`tests.nodegen.EXPECT`.
 """
 
 from __future__ import annotations
@@ -59,8 +60,15 @@ def cell_name(cell: Cell) -> str:
     return "_".join([cell.world, *(f"{k}_{v:g}" for k, v in cell.params)])
 
 
+#: The default grid's LiDARs, dealt one per (node, cell): every cell sees every LiDAR, each run one of them.
+LIDARS = ("lds01", "lds02", "rplidar")
+
+
 def classes(count: int, folder: Path, python: str, with_mutants: bool = True) -> dict[str, dict[str, Any]]:
-    """Write nodes 0..count-1 (and their mutants) under ``folder``; the classes that grade them."""
+    """Write nodes 0..count-1 (and their mutants) under ``folder``; the classes that grade them: each right node on
+    its share of its choice's cells (:func:`deal`) with one LiDAR a cell, dealt round-robin (a class per cell and
+    LiDAR); each node's one mutant (:func:`one_mutant`) on the cell where its mistake shows, with the LiDAR it must
+    fail with."""
     folder.mkdir(parents=True, exist_ok=True)
     specs = [generate(seed) for seed in range(count)]
     out: dict[str, dict[str, Any]] = {}
@@ -68,17 +76,46 @@ def classes(count: int, folder: Path, python: str, with_mutants: bool = True) ->
         (folder / f"{spec.name}.py").write_text(spec.source)
     for (choice, index), nodes in sorted(deal(specs).items()):
         cell = choice_cells(choice)[index]
-        out[f"{RIGHT}_{choice}_{cell_name(cell)}"] = {
-            "grid": cell_grid(choice, cell),
-            "students": {s.name: f"{python} {folder / (s.name + '.py')}" for s in nodes}}
+        for k, spec in enumerate(nodes):
+            lidar = LIDARS[(k + index) % len(LIDARS)]
+            group = out.setdefault(f"{RIGHT}_{choice}_{cell_name(cell)}_{lidar}",
+                                   {"grid": (*cell_grid(choice, cell), "--lidars", lidar), "students": {}})
+            group["students"][spec.name] = f"{python} {folder / (spec.name + '.py')}"
     for spec in specs if with_mutants else []:
-        group = out.setdefault(f"{MUTANTS}_{spec.knobs.choice}", {"grid": ("--maneuvers", spec.knobs.choice),
-                                                                   "students": {}})
-        for mistake, source in mutants(spec).items():
-            path = folder / f"{spec.name}__{mistake}.py"
-            path.write_text(source)
-            group["students"][path.stem] = f"{python} {path}"
+        mistake, source, cell, lidar = one_mutant(spec)
+        path = folder / f"{spec.name}__{mistake}.py"
+        path.write_text(source)
+        group = out.setdefault(f"{MUTANTS}_{spec.knobs.choice}_{cell_name(cell)}_{lidar}",
+                               {"grid": (*cell_grid(spec.knobs.choice, cell), "--lidars", lidar), "students": {}})
+        group["students"][path.stem] = f"{python} {path}"
     return out
+
+
+#: deg: a B node whose side sectors begin nearer the bow than this reads the hallway's narrowing walls ahead of its
+#: flanks: at 0.5 m it fires about where a node reading its flanks fires at 0.7 m, so its ignoring a 0.7 m
+#: safety_distance is one of the sheet's reasonable readings there (the judge's "every reading held" late rule).
+FLANK_FROM_DEG = 60
+
+
+def catchable(mistake: str, spec: NodeSpec) -> bool:
+    """Whether the grader can tell this node's mutant from a right node at all (not: a B reading ahead of its flanks
+    that ignores safety_distance, :data:`FLANK_FROM_DEG`)."""
+    knobs = spec.knobs
+    return not (mistake == "ignores_safety_distance" and knobs.choice == "B"
+                and knobs.side_centre - knobs.side_half < FLANK_FROM_DEG)
+
+
+def one_mutant(spec: NodeSpec) -> tuple[str, str, Cell, str]:
+    """The node's one mutant (its choice's mistakes taken in turn by seed), the cell its mistake shows in (the first
+    of the choice's cells its expectation names) and the LiDAR it must fail with (any, dealt by seed, unless only
+    one shows it)."""
+    made = sorted((name, source) for name, source in mutants(spec).items() if catchable(name, spec))
+    mistake, source = made[spec.seed // 3 % len(made)]
+    cells = EXPECT[mistake][spec.knobs.choice][1]
+    cell = next(c for c in choice_cells(spec.knobs.choice) if cells is None or re.search(cells, cell_label(
+        {"world": c.world, "maneuver": spec.knobs.choice, "lidar": "", "cell_params": dict(c.params)})))
+    lidar = BY_LIDAR[mistake][1] if mistake in BY_LIDAR else LIDARS[spec.seed % len(LIDARS)]
+    return mistake, source, cell, lidar
 
 
 def judged_mutant(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
