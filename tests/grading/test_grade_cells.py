@@ -50,7 +50,7 @@ def test_worlds_given_replace_the_cells_and_a_parameter_given_wins() -> None:
     every = _jobs("--maneuvers", "A,B,C", "--lidars", "lds01", "--seeds", "1")
     assert len(every) == 7
     # the grid's cells for B: lab_beside's cell of its trigger distance too; the plan keeps what the world checks off
-    assert [c.world for c in LAB.exe_grid.cells_of("B")] == ["lab_beside", "lab_dead_end", "lab_hallway"]
+    assert [c.world for c in LAB.exe_grid.cells_of("B")] == ["lab_beside", "lab_dead_end", "lab_hallway", "lab_slant"]
     assert [(c.world, c.params) for c in LAB.exe_grid.cells_of("C")] == [("lab_beside", ()), ("lab_dead_end", ()),
                                                                          ("lab_slant", ())]
 
