@@ -34,7 +34,7 @@ def test_lab_terminal_lines_at_their_sim_time(tmp_path: Path) -> None:
         if tip == "SmartPivot" and previous != "SmartPivot":
             starts.append(snap.t)
         previous = tip
-    assert len(shown) >= 2 and len(shown) == len(starts), (shown, starts, demo.output())
+    assert len(shown) >= 1 and len(shown) == len(starts), (shown, starts, demo.output())  # the run ends once decided
     offsets = [round(a - b, 3) for a, b in zip(shown, starts, strict=True)]
     assert all(abs(d) <= TOLERANCE for d in offsets), f"terminal minus bag, sim s: {offsets}\n{demo.output()}"
     log = (tmp_path / "run" / "executive.log").read_text()
@@ -43,4 +43,4 @@ def test_lab_terminal_lines_at_their_sim_time(tmp_path: Path) -> None:
     # taken from a lagging recorder on arrival: 20.14, 30.14, 40.20, 50.14, 60.34, 70.00 for lines of x.81 s).
     stats = [float(m[1]) for m in re.finditer(r"^sim +([\d.]+) s \[wall.*\]: stats: ", log, re.M)]
     gaps = [round(b - a, 2) for a, b in zip(stats, stats[1:], strict=False)]
-    assert len(gaps) >= 4 and all(abs(g - 10.0) <= 0.2 for g in gaps), gaps
+    assert len(gaps) >= 2 and all(abs(g - 10.0) <= 0.2 for g in gaps), gaps
