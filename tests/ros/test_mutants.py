@@ -230,7 +230,7 @@ def test_a_class_graded_together_equals_each_student_graded_alone(tmp_path: Path
     and the class page counts what each student's own grid says."""
     students = {"correct": f"{LAB} --choice C", "wrong_side": f"{LAB} --choice C --mistake wrong_side",
                 "half_angle": f"{LAB} --choice C --mistake half_angle"}
-    grid = ["--profile", "lab", "--maneuvers", "C", "--worlds", "lab_side", "--lidars", "lds01"]
+    grid = ["--profile", "lab", "--maneuvers", "C", "--worlds", "lab_slant", "--lidars", "lds01"]  # the sides agree
     together = _class(tmp_path / "together", students, *grid)
     page = {s["name"]: s for s in together["page"]["students"]}
     for name, command in students.items():
