@@ -35,7 +35,7 @@ browser:
 # Every test but the end-to-end grids over DDS (marked `suite`: the mutation suite per choice, the right variants, the
 # 1x re-runs, the Dask classes), which `make grader-suite` runs: CI stays near 25 min on 2 cores.
 test: $(STAMP) lint browser
-	$(BIN)/python -m pytest -q -m "not suite"
+	$(BIN)/python -m pytest -q -m "not suite" --durations=25
 
 # The contributor's edit-test loop: the tests that need no DDS (the pure core, the tree's leaves, the simulator and
 # the judges' rules, the grading logic, the media), in minutes; `make test` stays the whole suite. Its wall time is
