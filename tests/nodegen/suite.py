@@ -115,20 +115,28 @@ def one_mutant(spec: NodeSpec) -> tuple[str, str, Cell, str]:
     cell = next(c for c in choice_cells(spec.knobs.choice) if cells is None or re.search(cells, cell_label(
         {"world": c.world, "maneuver": spec.knobs.choice, "lidar": "", "cell_params": dict(c.params)})))
     lidar = BY_LIDAR[mistake][1] if mistake in BY_LIDAR else LIDARS[spec.seed % len(LIDARS)]
+    if mistake == "hardcoded_indices" and spec.knobs.choice == "B":
+        # B reads only its two flanks, mirror images under the RPLIDAR's half-turn offset (ranges[90] is its right
+        # there): the LDS-02's beam count, not 360, is where such a B reads both flanks on one side
+        lidar = "lds02"
     return mistake, source, cell, lidar
 
 
 def judged_mutant(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
     """A generated mutant's line of the matrix (``gen007_C__angle_45``): it must fail every run in the cells where
     its mistake shows, for its reason (with the LiDAR it reads right, when only some show it: pass there)."""
-    runs = [{"cell": cell_label(r), "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]),
-             "reason": r["reason"]} for r in rows]
+    # a cell's parameters came as --node-param (the class grades one world): its label names them as the grid's does
+    runs = [{"cell": cell_label({**r, "cell_params": r.get("cell_params") or r.get("node_params")}),
+             "lidar": r.get("lidar") or "", "seed": r.get("seed"), "passed": bool(r["passed"]), "reason": r["reason"],
+             "not_graded": bool(r.get("not_graded"))} for r in rows]
     line = {"student": student, "kind": "mistake", "runs": runs}
     if not runs:
         return {**line, "outcome": "not graded", "wrong": ["no runs"]}
+    if all(r["not_graded"] for r in runs):  # a machine too busy for a 1x run, twice: no verdict either way
+        return {**line, "outcome": "not graded", "wrong": [f"{r['cell']}: {r['reason']}" for r in runs]}
     name, mistake = student.split("__", 1)
     pattern, cells = EXPECT[mistake][name[-1]]
-    good, bad = BY_LIDAR.get(mistake, (None, None))
+    good = BY_LIDAR.get(mistake, (None, None))[0]
     wrong, counted = [], 0
     for r in runs:
         if cells is not None and not re.search(cells, r["cell"]):
@@ -136,7 +144,7 @@ def judged_mutant(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
         counted += 1
         if r["lidar"] == good and not r["passed"]:
             wrong.append(f"{r['cell']}: failed with the LiDAR it reads right ({r['reason']})")
-        elif (good is None or r["lidar"] == bad) and (r["passed"] or not re.search(pattern, r["reason"])):
+        elif r["lidar"] != good and (r["passed"] or not re.search(pattern, r["reason"])):
             wrong.append(f"{r['cell']}: {'PASSED' if r['passed'] else r['reason']}")
     if not counted:
         wrong.append(f"no run in the cells it must fail in ({cells})")
