@@ -55,11 +55,15 @@ docs: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python -m bench.run
 
-# The grader's confusion matrix: every right lab node (the fixture's variants) passed, every mistake failed for its
-# reason, over DDS on three LiDARs (tests/grader_suite.py; --hogs 2 for a loaded machine). About 15 min on 2 cores.
+# The grader's confusion matrix at the shipped default (1x): every right lab node passed, every mistake failed for its
+# reason, over DDS (tests/grader_suite.py): the fixture's variants and mistakes on three LiDARs, then 100 generated
+# right nodes and their mutants (tests/nodegen), once quiet and once with two CPU hogs. About an hour on 2 cores.
 grader-suite: $(STAMP)
 	$(BIN)/python -m pytest -q -m suite
-	$(BIN)/python tests/grader_suite.py
+	$(BIN)/python tests/grader_suite.py --out runs/grader-suite
+	$(BIN)/python tests/grader_suite.py --only generated --generated 100 --out runs/grader-suite-generated
+	$(BIN)/python tests/grader_suite.py --only generated --generated 100 --hogs 2 --out runs/grader-suite-hogs \
+		--compare runs/grader-suite-generated/confusion.json
 
 # bt_nav as a wheel, dist/bt_nav-<version>-py3-none-any.whl: what the Gradescope autograder's setup.sh installs
 # (docs/autograder.md). setuptools' own build/lib is emptied first, so that no file deleted since lands in it.
