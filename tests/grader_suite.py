@@ -122,10 +122,12 @@ def judged(kind: str, student: str, rows: list[dict[str, Any]]) -> dict[str, Any
              "reason": r["reason"]} for r in rows]
     if not runs:
         return {"student": student, "kind": kind, "outcome": "not graded", "runs": runs, "wrong": ["no runs"]}
-    if kind == "right":
-        wrong = [f"{r['cell']} seed {r['seed']}: {r['reason']}" for r in runs if not r["passed"]]
-        return {"student": student, "kind": kind, "outcome": "failed" if wrong else "passed", "runs": runs,
-                "wrong": wrong}
+    if kind == "right":  # a run not graded (a machine too busy for 1x, twice) is no verdict either way
+        unjudged = [f"{cell_label(r)} seed {r['seed']}: {r['reason']}" for r in rows if r.get("not_graded")]
+        wrong = [f"{cell_label(r)} seed {r['seed']}: {r['reason']}" for r in rows
+                 if not r["passed"] and not r.get("not_graded")]
+        outcome = "failed" if wrong else "not graded" if len(unjudged) == len(rows) else "passed"
+        return {"student": student, "kind": kind, "outcome": outcome, "runs": runs, "wrong": wrong + unjudged}
     table, by_lidar = expectations()
     choice, mistake = student.split("_", 1)
     pattern, cells = table[choice][mistake]

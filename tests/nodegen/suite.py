@@ -101,6 +101,11 @@ def catchable(mistake: str, spec: NodeSpec) -> bool:
     """Whether the grader can tell this node's mutant from a right node at all (not: a B reading ahead of its flanks
     that ignores safety_distance, :data:`FLANK_FROM_DEG`)."""
     knobs = spec.knobs
+    if mistake == "hardcoded_indices" and knobs.choice == "B":
+        # B reads only its two flanks: on the RPLIDAR (-pi..pi) ranges[90] is its right flank and ranges[270] its
+        # left, the same squeeze; on the simulated LDS-02 its beams are near enough 360. Graded at 1x, 13 such
+        # mutants passed every run on both (2026-11-28): the sheet's rule shows in the code, not in these runs
+        return False
     return not (mistake == "ignores_safety_distance" and knobs.choice == "B"
                 and knobs.side_centre - knobs.side_half < FLANK_FROM_DEG)
 
@@ -115,10 +120,6 @@ def one_mutant(spec: NodeSpec) -> tuple[str, str, Cell, str]:
     cell = next(c for c in choice_cells(spec.knobs.choice) if cells is None or re.search(cells, cell_label(
         {"world": c.world, "maneuver": spec.knobs.choice, "lidar": "", "cell_params": dict(c.params)})))
     lidar = BY_LIDAR[mistake][1] if mistake in BY_LIDAR else LIDARS[spec.seed % len(LIDARS)]
-    if mistake == "hardcoded_indices" and spec.knobs.choice == "B":
-        # B reads only its two flanks, mirror images under the RPLIDAR's half-turn offset (ranges[90] is its right
-        # there): the LDS-02's beam count, not 360, is where such a B reads both flanks on one side
-        lidar = "lds02"
     return mistake, source, cell, lidar
 
 
