@@ -93,6 +93,11 @@ HOMEWORK_MISTAKES = {
 }
 
 
+#: The tests of ``make test`` grade in the preview, as fast as the nodes keep up, its failures shown as they are:
+#: their subject is the judge's verdicts, not timing (the ``suite`` ones grade at the shipped default, 1x).
+PREVIEW = ("--rtf", "0", "--realtime-check", "off")
+
+
 def _class(tmp_path: Path, students: dict[str, str], *options: str) -> dict[str, Any]:
     """Grade the students as one class; each student's rows (from their own grade.json) and the class page."""
     tmp_path.mkdir(parents=True, exist_ok=True)
@@ -186,7 +191,7 @@ def test_a_node_ignoring_its_safety_distance_triggers_late(tmp_path: Path) -> No
     triggers at its own 0.5 m turns late, and the line asks whether it reads the parameter."""
     students = {"correct": f"{LAB} --choice A --seed 1",
                 "ignores": f"{LAB} --choice A --seed 1 --mistake ignores_safety_distance"}
-    result = _class(tmp_path, students, "--profile", "lab", "--maneuvers", "A", "--worlds", "lab_object",
+    result = _class(tmp_path, students, *PREVIEW, "--profile", "lab", "--maneuvers", "A", "--worlds", "lab_object",
                     "--lidars", "lds01", "--node-param", "safety_distance=0.6")
     [ok] = result["grades"]["correct"]["runs"]
     [late] = result["grades"]["ignores"]["runs"]
@@ -198,7 +203,7 @@ def test_a_node_ignoring_its_safety_distance_triggers_late(tmp_path: Path) -> No
 @pytest.mark.slow
 def test_the_homework_mutants_are_each_failed_for_their_own_mistake(tmp_path: Path) -> None:
     students = {"correct": HOMEWORK, **{name: f"{HOMEWORK} --mistake {name}" for name in HOMEWORK_MISTAKES}}
-    result = _class(tmp_path, students, "--worlds", "stage_4", "--lidars", "profile")
+    result = _class(tmp_path, students, *PREVIEW, "--worlds", "stage_4", "--lidars", "profile")
     correct = result["grades"]["correct"]
     assert all(row["passed"] for row in correct["runs"]), [row["reason"] for row in correct["runs"]]
     problems = {name: _failed_for(result["grades"][name], pattern) for name, pattern in HOMEWORK_MISTAKES.items()}
@@ -209,7 +214,7 @@ def test_the_homework_mutants_are_each_failed_for_their_own_mistake(tmp_path: Pa
 @pytest.mark.slow
 def test_homework_indices_hard_coded_fail_on_the_rplidar(tmp_path: Path) -> None:
     students = {"correct": HOMEWORK, "hardcoded": f"{HOMEWORK} --mistake hardcoded_indices"}
-    result = _class(tmp_path, students, "--worlds", "stage_4", "--lidars", "profile,rplidar")
+    result = _class(tmp_path, students, *PREVIEW, "--worlds", "stage_4", "--lidars", "profile,rplidar")
     assert all(row["passed"] for row in result["grades"]["correct"]["runs"])
     by_lidar = {row["lidar"]: row for row in result["grades"]["hardcoded"]["runs"]}
     assert by_lidar[""]["passed"] and not by_lidar["rplidar"]["passed"], result["grades"]["hardcoded"]["runs"]
@@ -230,7 +235,7 @@ def test_a_class_graded_together_equals_each_student_graded_alone(tmp_path: Path
     and the class page counts what each student's own grid says."""
     students = {"correct": f"{LAB} --choice C", "wrong_side": f"{LAB} --choice C --mistake wrong_side",
                 "half_angle": f"{LAB} --choice C --mistake half_angle"}
-    grid = ["--profile", "lab", "--maneuvers", "C", "--worlds", "lab_slant", "--lidars", "lds01"]  # the sides agree
+    grid = [*PREVIEW, "--profile", "lab", "--maneuvers", "C", "--worlds", "lab_slant", "--lidars", "lds01"]
     together = _class(tmp_path / "together", students, *grid)
     page = {s["name"]: s for s in together["page"]["students"]}
     for name, command in students.items():
