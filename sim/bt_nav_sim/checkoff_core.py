@@ -18,7 +18,8 @@ answers (False, ...) so a driver that serves one anyway gets a clear refusal.
 
 Schedule (seconds from ``t0``): static until ``activate_at``; ``toggle_navigation(true)`` on every step
 until an answer says success; the toggle cycle: ``toggle_navigation(false)`` ``toggle_off_after`` s after the first
-maneuver ends (the robot creeping on: no turning command for that long), ``grace`` to brake, static for
+maneuver ends (the robot creeping on: no turning command for that long), ``grace`` to brake once the node answered
+it (``answer_allowance`` after the call at the latest: :meth:`CheckoffJudge.disarmed_from`), static for
 ``static_after``, and ``toggle_navigation(true)`` again ``toggle_off_for`` s after the false (a cycle that would not
 end ``toggle_off_for`` s before the final disarm is left out; ``toggle_off_for`` 0: no cycle); ``drive_on_for`` s
 after the cycle's true was answered (a turn under way ended first: :mod:`bt_nav_sim.checkoff_schedule`), or at
@@ -79,7 +80,8 @@ class CheckoffConfig:
     maneuver: str = MANEUVERS[0]  # the first lab maneuver (the spec's order)
     activate_at: float = 2.0  # static before (t0 waited for the node's /clock and arm service); then true until success
     armed_for: float = 60.0  # toggle_navigation(false) at activate_at + armed_for at the latest (no maneuver, ...)
-    grace: float = 1.0  # braking time after the disarm request
+    grace: float = 1.0  # braking time after the disarm takes effect (:meth:`CheckoffJudge.disarmed_from`)
+    answer_allowance: float = 1.5  # a disarm takes effect when the node answers it, this long after it at the latest
     static_after: float = 3.0  # must be static this long after the grace; then the report
     rate_hz: float = 2.0  # how often the driver calls step()
     moving_linear: float = 0.01  # m/s, as the homework referee
@@ -248,7 +250,7 @@ class CheckoffJudge(Verdict):
         if rel >= cfg.activate_at + cfg.armed_for or self.deactivation_requested is not None or drove_on(self, t):
             if self.deactivation_requested is None:
                 self.deactivation_requested = float(t)
-            if t >= self.deactivation_requested + cfg.grace + cfg.static_after:
+            if t >= self.disarmed_from(self.deactivation_requested, self.deactivated) + cfg.grace + cfg.static_after:
                 self._finish(t)
                 return []
             return [] if self.deactivated is not None else [Activate(False)]
@@ -376,6 +378,15 @@ class CheckoffJudge(Verdict):
     def disarms(self) -> list[float]:
         """The disarm requests so far (the toggle cycle's, the final one), in order."""
         return [d for d in (self.cycle_off_requested, self.deactivation_requested) if d is not None]
+
+    def disarmed_from(self, requested: float, answered: float | None) -> float:
+        """When a disarm requested at ``requested`` took effect: when the node answered it (its service said it
+        stopped), but ``answer_allowance`` after the request at the latest. The sheet asks the robot to stop on
+        ``false``, not to answer within a time: a node whose executor was busy, or whose request DDS lost and the
+        judge sent again, stops when it hears it; one that never answers is held to the allowance."""
+        allowance = self.config.answer_allowance
+        late = allowance if answered is None else min(max(answered - requested, 0.0), allowance)
+        return requested + late
 
     def next_disarm(self, t: float) -> float:
         """The disarm in effect at ``t`` or the next one (its request; ``inf``: none yet)."""
@@ -789,13 +800,14 @@ class CheckoffJudge(Verdict):
         """Static for ``static_after`` after each disarm and its grace: the toggle cycle's (until its true) and
         the final one's; one check, both windows in its detail."""
         cfg, t0 = self.config, self.t0 or 0.0
-        after = None if self.deactivation_requested is None else self.deactivation_requested + cfg.grace
+        after = None if self.deactivation_requested is None else \
+            self.disarmed_from(self.deactivation_requested, self.deactivated) + cfg.grace
         final = static_check("static after deactivation", samples, after,
                              None if after is None else min(now, after + cfg.static_after),
                              "the run ended before the deactivation", limits, t0)
         if self.cycle_off_requested is None:
             return final
-        start = self.cycle_off_requested + cfg.grace
+        start = self.disarmed_from(self.cycle_off_requested, self.cycle_off) + cfg.grace
         rearm = self.cycle_on_requested if self.cycle_on_requested is not None else math.inf
         cycle = static_check("static after deactivation", samples, start, min(now, start + cfg.static_after, rearm),
                              "the run ended before the toggle cycle's deactivation", limits, t0)

@@ -231,7 +231,9 @@ def test_no_evaluation_service_and_the_schedule() -> None:
     assert [a.data for a in judge.step(35.5)] == [False]  # until answered
     judge.on_activate_result(35.5, False, True)
     assert judge.step(36.0) == [] and not judge.done
-    judge.step(39.0)
+    judge.step(39.4)  # the disarm took effect when answered (35.5): 1 s to brake, 3 s still from there
+    assert not judge.done
+    judge.step(39.5)
     assert judge.done and judge.results()["evaluation_calls"] == 1
     with pytest.raises(ValueError, match="maneuver"):
         CheckoffConfig(maneuver="D")

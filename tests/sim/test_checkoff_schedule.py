@@ -64,17 +64,27 @@ class _Node:
         return 0.05, 0.0
 
 
-def _play(node: _Node, config: CheckoffConfig | None = None, end: float = 90.0) -> CheckoffJudge:
-    """Play ``node`` in the room with the wall ahead until the judge reports (the default schedule unless given)."""
+def _play(node: _Node, config: CheckoffConfig | None = None, end: float = 90.0, answer_false_after: float = 0.0
+          ) -> CheckoffJudge:
+    """Play ``node`` in the room with the wall ahead until the judge reports (the default schedule unless given);
+    ``answer_false_after``: the node hears (and answers) each false that long after the judge first calls it."""
     world = world_from_dict({"name": "test", "segments": ROOM + WALL_AHEAD})
     judge = CheckoffJudge(config or CheckoffConfig(maneuver="A"), world)
     judge.start(0.0)
     x = y = yaw = 0.0
     cmd = (0.0, 0.0)
+    heard: float | None = None  # when the node hears the false under way
     for k in range(round(end / DT) + 1):
         t = k * DT
+        if heard is not None and t >= heard - 1e-9:
+            judge.on_activate_result(t, False, True)
+            node.toggle(t, False)
+            heard = None
         if k % 50 == 0:
             for action in judge.step(t):
+                if not action.data and answer_false_after > 0:
+                    heard = t + answer_false_after if heard is None else heard
+                    continue
                 judge.on_activate_result(t, action.data, True)
                 node.toggle(t, action.data)
         if judge.done:
@@ -206,3 +216,15 @@ def test_a_node_turning_on_without_a_pause_gets_its_cycle_and_its_end_after_chai
     rearm = times["cycle_on"]
     assert rearm + cfg.chain_for <= times["deactivation_requested"] <= rearm + cfg.chain_for + 0.5
     assert times["report"] < 40.0
+
+
+@pytest.mark.parametrize(("late", "passes"), [(0.0, True), (1.3, True), (1.5, True), (2.8, False)])
+def test_a_disarm_takes_effect_when_the_node_answers_it_within_the_allowance(late: float, passes: bool) -> None:
+    """A node that hears each false ``late`` s after the call (a busy executor, a request sent again) and stops at
+    once is still at rest from its answer plus the 1 s to brake: the sheet asks for a stop, not an answer within a
+    time; past ``answer_allowance`` (1.5 s) the judge no longer waits for it, and the creep until then fails."""
+    judge = _play(_Node(), answer_false_after=late)
+    times = judge.results()["times"]
+    assert times["cycle_off"] == pytest.approx(times["cycle_off_requested"] + late, abs=0.02)
+    check = _check(judge, "static after deactivation")
+    assert check["passed"] is passes, check["detail"]
