@@ -228,6 +228,9 @@ def describe(jobs: int, real_time: bool = False) -> str:
 
 #: Where the machine's real-time places are (a lock file each, in the temporary directory unless set).
 SLOTS_ENV = "BT_NAV_SLOTS_DIR"
+#: Wall seconds after a 1x run fell behind anywhere on the machine during which new runs, of every grade on it, take
+#: only the first half of its places (:meth:`MachineSlots.calm`).
+CALM_S = 60.0
 
 
 class MachineSlots:
@@ -237,7 +240,13 @@ class MachineSlots:
     Why: a 1x run costs about a tenth of a core, and its simulator keeps real time only if the cores carry every
     run at once; three grades of 18 runs started together (54 runs on 2 cores, two CPU hogs beside them) fell
     behind in every run, and a third of their cells ended NOT GRADED after the second try. With the places shared,
-    the second and third grade wait for places as the first one's runs end."""
+    the second and third grade wait for places as the first one's runs end.
+
+    A run that fell behind says the machine carries fewer runs than it was given (:meth:`calm`): for
+    :data:`CALM_S` every grade's new runs, its own re-run among them, take only the first half of the places, so
+    the re-run starts once the machine runs at most half as many. Why machine-wide: four classes graded at once
+    (the grader suite) each took a place away from their own admission only, the others filled it at once, and
+    long runs (a node that never creeps, 66 s) fell behind twice and ended NOT GRADED."""
 
     def __init__(self, count: int, directory: str | None = None) -> None:
         import tempfile
@@ -248,11 +257,29 @@ class MachineSlots:
         os.makedirs(self.directory, exist_ok=True)
         self._held: list[object] = []
 
+    @property
+    def _calm_marker(self) -> str:
+        return os.path.join(self.directory, "fell-behind")
+
+    def calm(self) -> None:
+        """A run fell behind real time: only the first half of the places are taken for :data:`CALM_S` s."""
+        with open(self._calm_marker, "a"):
+            pass
+        os.utime(self._calm_marker)
+
+    def usable(self, now: float | None = None) -> int:
+        """How many of the places a new run may take now: half of them within :data:`CALM_S` of :meth:`calm`."""
+        try:
+            age = (time.time() if now is None else now) - os.stat(self._calm_marker).st_mtime
+        except OSError:
+            return self.count
+        return max(1, self.count // 2) if 0.0 <= age < CALM_S else self.count
+
     def take(self) -> bool:
-        """Take a free place (True), or none is free (False, at once)."""
+        """Take a free place among those :meth:`usable` now (True), or none is free (False, at once)."""
         import fcntl
 
-        for k in range(self.count):
+        for k in range(self.usable()):
             handle = open(os.path.join(self.directory, f"slot-{k}.lock"), "a+")  # noqa: SIM115 - held: the place
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -306,6 +333,8 @@ class Admission:
             self.base = max(1, min(self.base, self.running - 1))
             self.places = max(1, min(self.places if self.places is not None else self.running, self.running - 1))
             self.limit = max(self.base, self.places)
+        if self.slots is not None:
+            self.slots.calm()
 
     def _open(self) -> int:
         """The places at the start: all of them when other programs leave the cores nearly free, else ``base``.

@@ -229,6 +229,38 @@ def test_1x_places_are_the_machines_shared_by_every_grade_on_it(tmp_path: Path) 
     assert first.take() and first.take()
 
 
+def test_a_run_that_fell_behind_calms_every_grade_on_the_machine(tmp_path: Path) -> None:
+    """Once a run of any grade fell behind, new runs of every grade on the machine (another MachineSlots over the
+    same directory) take only half of the places for CALM_S; runs holding the other half go on; then all again."""
+    import time
+
+    from bt_nav.grading.admission import CALM_S, MachineSlots
+
+    mine, other = MachineSlots(4, str(tmp_path)), MachineSlots(4, str(tmp_path))
+    assert mine.take() and other.take() and other.take()  # three of four places held
+    assert other.usable() == 4
+    mine.calm()
+    assert other.usable() == 2 and not other.take(), "the first half is held: the re-run waits"
+    other.give_back()  # its newest place (the third): still none of the first half free
+    assert not mine.take()
+    other.give_back()
+    assert mine.take() and not mine.take(), "one of the first half again, never the third or fourth"
+    assert other.usable(now=time.time() + CALM_S + 1.0) == 4
+
+
+def test_fell_behind_calms_the_machine(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Admission.fell_behind at 1x also calms the machine's places (every grade's), not only its own count."""
+    from bt_nav.grading.admission import SLOTS_ENV
+
+    monkeypatch.setenv(SLOTS_ENV, str(tmp_path))
+    admission = Admission.for_jobs(AutoJobs(2), real_time=True)
+    assert admission is not None and admission.slots is not None
+    count = admission.slots.count
+    assert admission.slots.usable() == count
+    admission.fell_behind()
+    assert admission.slots.usable() == max(1, count // 2)
+
+
 def test_a_1x_admission_takes_a_machine_place_per_run() -> None:
     admission = Admission.for_jobs(AutoJobs(2), real_time=True)
     assert admission is not None and admission.slots is not None and admission.base == admission.limit
