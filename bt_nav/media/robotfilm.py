@@ -103,18 +103,23 @@ def scale_bar(px_per_m: float) -> tuple[float, float]:
 
 
 def fit_panel(head: str, rows: list[str], chars: int = PANEL_CHARS, lines: int = PANEL_LINES) -> list[str]:
-    """The panel's rows as drawn: the heading, then the newest ``rows`` whose wrapped lines fit in ``lines``, after a
-    row saying how many earlier ones scrolled away (the card at the end shows every one)."""
-    budget = lines - 1
-    kept: list[str] = []
-    for row in reversed(rows):
-        need = len(_wrap(row, chars))
-        if need > budget - (1 if len(kept) + 1 < len(rows) else 0):
-            break
-        kept.insert(0, row)
-        budget -= need
+    """The panel's rows as drawn: the heading, then ``rows`` whose wrapped lines fit in ``lines``; when they do not,
+    the oldest data lines give way first, then the other lines but the maneuvers' and the overall verdict (which stay
+    on screen), then the oldest rows, and a row says how many (the card at the end shows every one)."""
+    kept = list(rows)
+
+    def need(keep: list[str]) -> int:
+        return sum(len(_wrap(row, chars)) for row in keep) + (1 if len(keep) < len(rows) else 0)
+
+    def last_to_go(row: str) -> bool:  # the maneuvers' verdicts, their count and the overall verdict
+        return any(f"] {word}" in row or row.startswith(word) for word in ("maneuver", "overall:"))
+
+    while kept and need(kept) > lines - 1:
+        data = next((k for k, row in enumerate(kept) if "] data: " in row or row.startswith("data: ")), None)
+        other = next((k for k, row in enumerate(kept) if not last_to_go(row)), 0)
+        kept.pop(data if data is not None else other)
     dropped = len(rows) - len(kept)
-    return [head, *([f"({dropped} earlier line{'s' if dropped > 1 else ''} above: all in the verdict at the end)"]
+    return [head, *([f"({dropped} line{'s' if dropped > 1 else ''} not shown here: all in the verdict at the end)"]
                     if dropped else []), *kept]
 
 
@@ -278,11 +283,10 @@ class RobotFilmRenderer:
 
     def texts(self, t: float, card: bool = False) -> list[str]:
         """Every text the frame at ``t`` shows: the source label, the caption, banners, map notes, the check-off
-        panel and the console; on the card (``card``), the card's rows instead of the panel and the console."""
+        panel and the console; on the card (``card``), the card's rows (it covers the rest)."""
+        if card:  # it covers the frame: its rows are all the frame shows (the source is in its second line)
+            return [row.text for row in card_layout(self.run, self._char_width)[0]]
         shown = [self.run.source, self.caption(t), *(text for _, text in self.banners(t)), *self.map_notes(t)]
-        if card:
-            rows, _ = card_layout(self.run, self._char_width)
-            return [*shown, *(row.text for row in rows)]
         return [*shown, *self.panel_rows(t), *self.console_rows(t)]
 
     def panel_rows(self, t: float) -> list[str]:
@@ -435,6 +439,13 @@ def card_frames(fps: float) -> int:
     return math.ceil(CARD_HOLD * fps)
 
 
+def film_frames(run: RobotRun, fps: float) -> list[tuple[float, bool]]:
+    """Every frame of the film: (absolute time, whether it is the verdict card), the run's frames then, when the run
+    was judged, the card held at its end."""
+    frames = [(float(t), False) for t in frame_times(run, fps)]
+    return frames + [(run.end, True)] * (card_frames(fps) if run.lines else 0)
+
+
 def write_robot_video(run: RobotRun, out: str | Path, fps: float = 10.0,
                       sidecar: str | Path | None = None) -> RobotVideoStats:
     """Render ``run`` to an H.264 MP4 (yuv420p) at ``out``, the verdict card held at its end when the run was
@@ -444,8 +455,7 @@ def write_robot_video(run: RobotRun, out: str | Path, fps: float = 10.0,
     writer = open_mp4(path, fps)
     renderer = RobotFilmRenderer(run)
     log = ConsoleLog(path, ROBOT_TIME_BASE) if sidecar else None
-    frames = [(float(t), False) for t in frame_times(run, fps)]
-    frames += [(run.end, True)] * (card_frames(fps) if run.lines else 0)
+    frames = film_frames(run, fps)
     try:
         for t, card in frames:
             writer.send(renderer.frame(t, card).tobytes())
