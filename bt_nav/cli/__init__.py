@@ -17,6 +17,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "referee": ("bt_nav.ros.nodes.referee", "run the homework referee node"),
     "checkoff": ("bt_nav.cli.checkoff", "the lab's check-off: the judge node over DDS (calls toggle_navigation), or "
                  "a real robot's bag (--bag)"),
+    "rehearse": ("bt_nav.cli.rehearse", "lab day rehearsed here: a simulated TurtleBot3 on a domain of its own and "
+                 "checkoff --robot beside it"),
     "sim-run": ("bt_nav.cli.sim_run", "simulator + executive (+ referee) in one go, without ros2 launch"),
     "demo": ("bt_nav.cli.demo", "the homework mission (or --profile lab: the lab's check-off) over DDS in sim time"),
     "lockstep": ("bt_nav.cli.lockstep", "run one mission in lock-step (no DDS), deterministic per seed"),

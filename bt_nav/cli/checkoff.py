@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 
 #: Options of a real robot's data (a bag, or live), of a bag only, of live listening only, and of the DDS judge only.
@@ -125,10 +126,12 @@ def _maneuver(opts: argparse.Namespace) -> str:
 
 def _listen_live(opts: argparse.Namespace, topics: object, config: object) -> object:
     """Listen to the robot (module docstring), printing each maneuver's line once decided; the Recording heard."""
+    from bt_nav.media.bag import BagError
     from bt_nav.media.robotbag import recording_from
-    from bt_nav.ros.nodes.robotcheck import LINE_MARGIN, graph_words, listen
+    from bt_nav.ros.nodes.robotcheck import LINE_MARGIN, graph_words, listen, unheard, unheard_words
 
     names = topics.names()  # type: ignore[attr-defined]
+    began = time.monotonic()
     how_long = f"for {opts.duration:g} s" if opts.duration > 0 else "until Ctrl-C"
     print(f"bt-nav checkoff: listening to {', '.join(names.values())} on {graph_words()} ({how_long})", flush=True)
     printed: set[str] = set()
@@ -141,6 +144,9 @@ def _listen_live(opts: argparse.Namespace, topics: object, config: object) -> ob
                 print(f"bt-nav checkoff: {line.text}", flush=True)
 
     raw, notes, calls = listen(names, opts.duration, opts.call_toggle, progress, opts.ros_args)
+    missing = unheard(raw, names)
+    if missing and set(missing) & {names["odom"], names["scan"]}:  # nothing to judge: say why, not only what
+        raise BagError(f"the live robot: {unheard_words(missing, time.monotonic() - began)}")
     rec = recording_from(raw, names, notes, "the live robot")
     if rec.calls is None and calls is not None:
         rec.calls = calls

@@ -30,7 +30,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--fps", type=float, default=10.0, help="frames per second of sim time (default 10)")
     parser.add_argument("--still", metavar="PNG", help="also write one frame as PNG (at --at)")
     parser.add_argument("--at", type=float, default=None, help="time of the still, s since the bag's first /clock "
-                        "(the time every frame shows; default: mid-bag)")
+                        "(the time every frame shows; default: mid-bag); a robot's bag: s since its first /odom, "
+                        "/scan or /cmd_vel message, and past its end the verdict card the film ends on")
     parser.add_argument("--plot", metavar="PNG", help="also write the trajectory picture")
     parser.add_argument("--no-video", action="store_true", help="only --still / --plot")
     robot = parser.add_argument_group("a robot's bag (no ground truth)")
@@ -79,7 +80,7 @@ def _robot(args: argparse.Namespace) -> int:
     from bt_nav.cli.checkoff import _maneuver
     from bt_nav.media.console import console_log_path
     from bt_nav.media.robotfilm import RobotFilmRenderer, write_robot_video
-    from bt_nav.media.robotrun import load_robot_run
+    from bt_nav.media.robotrun import ROBOT_TIME_BASE, load_robot_run
 
     try:
         maneuver = _maneuver(args) if args.maneuver or args.node else None
@@ -95,8 +96,10 @@ def _robot(args: argparse.Namespace) -> int:
         print("bt-nav video: --plot draws a simulator's bag; a robot's film shows its path", file=sys.stderr)
     if args.still:
         at = args.at if args.at is not None else (run.end - run.origin) / 2
-        RobotFilmRenderer(run).frame(run.origin + at).save(args.still)
-        print(f"still: {args.still} (t = {at:.2f} s since the bag's first message)")
+        card = at > run.end - run.origin and bool(run.lines)  # past the end: the film's last frame, its verdict card
+        RobotFilmRenderer(run).frame(min(run.origin + at, run.end), card).save(args.still)
+        print(f"still: {args.still} (t = {min(at, run.end - run.origin):.2f} {ROBOT_TIME_BASE}"
+              + ("; the verdict card held at the film's end" if card else "") + ")")
     if not args.no_video:
         sidecar = console_log_path(args.output) if args.console_log else None
         stats = write_robot_video(run, args.output, args.fps, sidecar)

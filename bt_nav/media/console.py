@@ -54,6 +54,61 @@ def console_lines(events: list[tuple[float, str]], prefix: str = "") -> list[tup
     return [(t, prefix + text) for t, text in events if console_shows(text)]
 
 
+# ---------------------------------------------------------------------- a real robot's node: its lines, folded
+# Why: a lab node often logs at INFO what is debug output (every scan: "Getting front cone ...", "Front cone indices:
+# [...]"), so its console would scroll a screen of chatter a second and hide the lines that matter ("Wall detected",
+# "Turning right"). Lines below INFO are not shown; a line of the same shape as one of the newest few rows (the same
+# words, other numbers) replaces that row, counted: ``... (x12)``, so each row is a line the node really logged, the
+# newest of its kind, and the rows stay in time order.
+
+#: rcl_interfaces/Log's INFO: a robot's film shows its node's lines at this level and above.
+INFO = 20
+#: A line folds into one of this many newest rows of its shape (a node's per-scan chatter repeats in cycles of a few).
+FOLD_REACH = 4
+#: Characters of a console row (the strip's width in the mono font), a fold's count kept at its end.
+ROW_CHARS = 150
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+)|\b(?:nan|inf)\b", re.IGNORECASE)
+
+
+def line_shape(text: str) -> str:
+    """A log line with its numbers (and nan, inf) as ``#``: two lines of one shape say the same with other values."""
+    return _NUMBER.sub("#", text)
+
+
+class FoldedLines:
+    """The console rows of a node's log lines at any time, repeats folded (see the section's comment).
+
+    ``lines``: (t, text) in time order, already filtered; :meth:`rows` gives the newest :data:`CONSOLE_ROWS` rows at
+    ``t`` as ``[  19.68] text (x12)``. Every state is computed once (a film asks at rising times, a still at any).
+    """
+
+    def __init__(self, lines: list[tuple[float, str]], keep: int = CONSOLE_ROWS, reach: int = FOLD_REACH) -> None:
+        self._t = np.asarray([t for t, _ in lines], dtype=np.float64)
+        self._states: list[tuple[tuple[float, str, int], ...]] = []
+        entries: list[tuple[float, str, int, str]] = []  # t of the newest, its text, count, shape
+        for t, text in lines:
+            shape = line_shape(text)
+            hit = next((k for k in range(len(entries) - 1, max(-1, len(entries) - 1 - reach), -1)
+                        if entries[k][3] == shape), None)
+            count = entries.pop(hit)[2] + 1 if hit is not None else 1
+            entries = [*entries, (t, text, count, shape)][-keep:]
+            self._states.append(tuple((e[0], e[1], e[2]) for e in entries))
+
+    def entries(self, t: float) -> tuple[tuple[float, str, int], ...]:
+        """(t of the newest, text, count) of each row at ``t``, oldest first."""
+        k = int(np.searchsorted(self._t, t, side="right")) - 1
+        return self._states[k] if k >= 0 else ()
+
+    def rows(self, t: float, origin: float) -> list[str]:
+        """The rows at ``t``, each stamped with its newest line's time since ``origin``, a fold's count at its end."""
+        out = []
+        for lt, text, count in self.entries(t):
+            suffix = f" (x{count})" if count > 1 else ""
+            row = f"[{lt - origin:7.2f}] {text}"
+            out.append(row[:ROW_CHARS - len(suffix)] + suffix)
+        return out
+
+
 # ---------------------------------------------------------------------- a robot node that is not bt_nav's
 # Why: a student films their own node (``bt-nav demo --exe``, ``grade --exe --videos``); it publishes no tree. The
 # side panel then shows what the node says (its log lines, from /rosout) and does (its command), and the caption

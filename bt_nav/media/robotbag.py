@@ -116,6 +116,16 @@ def clock_note(topic: str, median: float, offset: float) -> str:
     return f"{topic}: header stamps {abs(median):.2f} s {ahead} their receive times (median); {placed}"
 
 
+#: ROS 1's rosgraph_msgs/Log levels (1 DEBUG, 2 INFO, 4 WARN, 8 ERROR, 16 FATAL) as ROS 2's (10 ... 50).
+ROS1_LEVELS = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
+
+
+def log_level(msg: Any) -> int:
+    """A /rosout line's severity on ROS 2's scale (a ROS 1 Log, which lists its ``topics``, has its own numbers)."""
+    level = int(getattr(msg, "level", 20))
+    return ROS1_LEVELS.get(level, level) if hasattr(msg, "topics") else level
+
+
 def _scan(msg: Any) -> Scan:
     return Scan(float(msg.angle_min), float(msg.angle_max), float(msg.angle_increment), float(msg.range_min),
                 float(msg.range_max), np.asarray(msg.ranges, dtype=np.float32))
@@ -224,7 +234,8 @@ def recording_from(raw: dict[str, list[tuple[int, int | None, Any]]], names: dic
     mount = _mount(tf, frame)
     if mount is None:
         notes.append(f"no /tf from base_link to the scan's frame {frame!r}: the LiDAR taken at the robot's centre")
-    lines = [(t, str(m.name), str(m.msg)) for t, m in _aligned(raw.get(ROSOUT, []), ROSOUT, notes)
-             if not str(m.name).lstrip("/").startswith(INFRASTRUCTURE)]
+    log = [(t, log_level(m), str(m.name), str(m.msg))
+           for t, m in _aligned(raw.get(ROSOUT, []), ROSOUT, notes)
+           if not str(m.name).lstrip("/").startswith(INFRASTRUCTURE)]
     return Recording(poses, [(t, _scan(m)) for t, m in scans], commands, calls, mount or (0.0, 0.0),
-                     dict(names), notes, lines)
+                     dict(names), notes, [(t, name, text) for t, _, name, text in log], log)

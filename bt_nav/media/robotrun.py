@@ -33,6 +33,12 @@ GAZEBO_LABEL = "simulated bag (Gazebo: its /gazebo or /gz topics say so): not a 
 CLOCK_LABEL = "bag on simulated time (it has /clock): not known to be a real robot"
 #: The time base of every time a robot's film shows.
 ROBOT_TIME_BASE = "s since the bag's first /odom, /scan or /cmd_vel message"
+#: s: a command older than this is not the node's current one (a lab node sends at 10 Hz or so; a Wi-Fi gap or a
+#: node that stopped sending leaves the last one standing): the caption then says how long none has come.
+COMMAND_STALE = 0.5
+#: The kinds of :class:`Mark` after which the odometry no longer places the scans in the room (the robot was moved
+#: by something its wheels did not feel): the film stops adding them to its picture of the room.
+HANDLED = ("moved by hand", "carried")
 
 
 def source_label(types: dict[str, str], synthetic: str | None) -> str:
@@ -68,6 +74,17 @@ class TimedLine:
     text: str
 
 
+@dataclass(frozen=True)
+class Mark:
+    """An interval the judge set apart (its verdict's ``events``: a silent topic, the robot stuck, moved by hand or
+    carried), absolute times on the recording's clock, and the judge's words for it."""
+
+    kind: str
+    start: float
+    end: float
+    text: str
+
+
 @dataclass
 class RobotRun:
     """A robot's recording, where it came from, and the check-off's lines (none without a maneuver)."""
@@ -79,6 +96,8 @@ class RobotRun:
     verdict: dict[str, Any] | None = None
     lines: list[TimedLine] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    marks: list[Mark] = field(default_factory=list)
+    report: list[str] = field(default_factory=list)  # the verdict's lines in the terminal's order
 
     @property
     def origin(self) -> float:
@@ -130,9 +149,38 @@ class RobotRun:
 
     def command_at(self, t: float) -> tuple[float, float] | None:
         """The latest command (v, w) at or before ``t``; None before the first."""
+        latest = self._latest_command(t)
+        return (latest[1], latest[2]) if latest else None
+
+    def _latest_command(self, t: float) -> tuple[float, float, float] | None:
         cmds = self.rec.commands
         k = int(np.searchsorted([c[0] for c in cmds], t, side="right")) - 1
-        return (cmds[k][1], cmds[k][2]) if k >= 0 else None
+        return cmds[k] if k >= 0 else None
+
+    def current_command(self, t: float) -> tuple[float, float] | None:
+        """The command in force at ``t``: the latest, if not older than :data:`COMMAND_STALE` s; else None."""
+        latest = self._latest_command(t)
+        return (latest[1], latest[2]) if latest and t - latest[0] <= COMMAND_STALE else None
+
+    def command_words(self, t: float) -> str:
+        """The caption's command: the current one, or how long none has come (and the last one, which a base may
+        still be executing)."""
+        latest = self._latest_command(t)
+        if latest is None:
+            return "no command yet"
+        ct, v, w = latest
+        said = f"v {v:+.2f} m/s  w {w:+.2f} rad/s"
+        return f"cmd {said}" if t - ct <= COMMAND_STALE else f"no command for {t - ct:.1f} s (last: {said})"
+
+    def marks_at(self, t: float) -> list[Mark]:
+        """The intervals set apart that are happening at ``t``."""
+        return [m for m in self.marks if m.start <= t <= m.end]
+
+    @property
+    def room_until(self) -> float | None:
+        """Until when the scans are laid out into the room: the start of the first :data:`HANDLED` mark (None:
+        the whole run)."""
+        return min((m.start for m in self.marks if m.kind in HANDLED), default=None)
 
     def lines_at(self, t: float) -> list[str]:
         """The check-off's lines decided by ``t``, each with its time on the film's time base."""
@@ -141,8 +189,9 @@ class RobotRun:
 
 def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
     """The verdict's lines (:func:`bt_nav_sim.recorded.report_lines`) at the times they were decided: each
-    maneuver's line (judged, or why not) when its turn settled, the rest (the static checks, the count, what was not
-    judged, the overall verdict) at the window's end. Absolute times (the verdict's ``feed.t0`` plus its own)."""
+    maneuver's line (judged, or why not) when its turn settled, each data line when its interval ended, the rest (the
+    static checks, the count, what was not judged, the overall verdict) at the window's end. Absolute times (the
+    verdict's ``feed.t0`` plus its own)."""
     from bt_nav_sim.recorded import report_lines
 
     t0 = float(res["feed"]["t0"])
@@ -150,9 +199,11 @@ def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
     when: dict[str, float] = {}
     for number, e in enumerate(res["maneuvers"], 1):
         when[f"maneuver {number}"] = t0 + float(e.get("settled", e["t"]))
+    for event in res.get("events", []):  # a data line when its interval is over (it is known then)
+        when[f"data: {event['text']}"] = min(end, t0 + float(event["end"]))
     out = []
     for line in report_lines(res):
-        name = line.split(" (", 1)[0].split(":", 1)[0]
+        name = line if line.startswith("data: ") else line.split(" (", 1)[0].split(":", 1)[0]
         out.append(TimedLine(when.get(name, end), line))
     out.sort(key=lambda line: line.t)
     return out
@@ -161,7 +212,7 @@ def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
 def load_robot_run(path: str | Path, maneuver: str | None = None) -> RobotRun:
     """Read a robot's bag and, given the maneuver, judge it. BagError: unreadable (one line)."""
     from bt_nav_sim.checkoff_core import CheckoffConfig
-    from bt_nav_sim.recorded import judge_recording
+    from bt_nav_sim.recorded import judge_recording, report_lines
 
     from bt_nav.media.robotbag import read_robot_bag
 
@@ -177,4 +228,8 @@ def load_robot_run(path: str | Path, maneuver: str | None = None) -> RobotRun:
         run.notes.append(f"no check-off lines: {exc}")
         return run
     run.lines = checkoff_timeline(run.verdict)
+    run.report = report_lines(run.verdict)
+    t0 = float(run.verdict["feed"]["t0"])
+    run.marks = [Mark(e["kind"], t0 + float(e["start"]), t0 + float(e["end"]), e["text"])
+                 for e in run.verdict.get("events", [])]
     return run

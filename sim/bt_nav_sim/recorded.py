@@ -73,6 +73,9 @@ class Recording:
     topics: dict[str, str] = field(default_factory=lambda: {"odom": "/odom", "scan": "/scan", "cmd": "/cmd_vel"})
     notes: list[str] = field(default_factory=list)  # what the reader did (clock offsets, skipped messages)
     announcements: list[tuple[float, str, str]] = field(default_factory=list)  # (t, logger, line) of /rosout
+    #: the same lines with their severity (t, level, logger, line; rcl_interfaces/Log's 10 DEBUG ... 50 FATAL), for a
+    #: film's console, which shows INFO and above; the judge reads only :attr:`announcements`' times
+    log: list[tuple[float, int, str, str]] = field(default_factory=list)
 
     @property
     def start(self) -> float:
@@ -101,8 +104,9 @@ def odometry_config(config: CheckoffConfig) -> CheckoffConfig:
 
 
 def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Window()) -> dict[str, Any]:  # noqa: B008
-    """The check-off verdict of a recording (the simulator's verdict JSON, plus ``not_judged``, ``flags`` and
-    ``feed``). ValueError: an empty window, or no /odom or /scan in it."""
+    """The check-off verdict of a recording (the simulator's verdict JSON, plus ``not_judged``, ``flags`` (and the
+    same as ``events``: kind, start, end and text of each) and ``feed``). ValueError: an empty window, or no /odom
+    or /scan in it."""
     origin = rec.start
     a = origin + (window.start or 0.0)
     b = origin + window.end if window.end is not None else rec.end
@@ -359,6 +363,10 @@ def _restate(res: dict[str, Any], rec: Recording, cfg: CheckoffConfig, flags: _F
     res["checks"] = checks
     res["not_judged"] = not_judged + [{"name": n["name"], "why": n["why"]} for n in flags.gap_turns]
     res["flags"] = [g.text(t0) for g in flags.gaps] + [d.text(t0) for d in flags.disobeyed]
+    # the same intervals with their times (s on the report's clock), so a film marks each while it happens
+    res["events"] = [{"kind": "gap", "start": g.start - t0, "end": g.end - t0, "text": g.text(t0)} for g in flags.gaps]
+    res["events"] += [{"kind": d.kind, "start": d.start - t0, "end": d.end - t0, "text": d.text(t0)}
+                      for d in flags.disobeyed]
     res["verdict"] = _verdict(res)
     res["passed"] = res["verdict"] == PASSED
 

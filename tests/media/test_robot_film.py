@@ -13,7 +13,7 @@ import pytest
 from bt_nav.cli.video import main as video_main
 from bt_nav.media.bagread import read_bag
 from bt_nav.media.console import SIM_LABEL, read_console_log
-from bt_nav.media.robotfilm import MAP_H, MAP_W
+from bt_nav.media.robotfilm import MAP_H, MAP_W, card_frames
 from bt_nav.media.robotrun import (
     CLOCK_LABEL,
     GAZEBO_LABEL,
@@ -63,15 +63,18 @@ def test_a_robot_bag_is_filmed_with_the_room_the_path_and_the_checkoff_lines(syn
     assert len(frames) == len(log) > 100
     run = load_robot_run(synth_bags["sqlite3"], "A")
     # every frame says where its data came from
-    assert all(rows[0] == SYNTHETIC_LABEL for _, rows in log)
+    assert all(rows[0] == SYNTHETIC_LABEL or rows[1].startswith(SYNTHETIC_LABEL + "; ")  # the card: its 2nd line
+               for _, rows in log)
     # the maneuver's line appears when its turn settled, never before; the verdict only at the end
     settled = run.verdict["feed"]["t0"] + run.verdict["maneuvers"][0]["settled"] - run.origin
     assert run.verdict["maneuvers"][0]["passed"], run.lines
     first = [t for t, rows in log if any("maneuver 1 (" in r and r.endswith("PASSED") for r in rows)]
     assert first and settled - 1.0 / FPS <= first[0] <= settled + 1.0 / FPS
-    assert not any("overall:" in r for _, rows in log[:-2] for r in rows)
-    assert any(r.endswith("overall: PASSED") for r in log[-1][1])
-    early, late = frames[2], frames[-1]
+    held = card_frames(FPS)  # the verdict card: the film's last CARD_HOLD s, the verdict decided at its first
+    assert held >= 3 * FPS
+    assert not any("overall:" in r for _, rows in log[:-held - 1] for r in rows)
+    assert all(any(r == "overall: PASSED" for r in rows) for _, rows in log[-held:])
+    early, late = frames[2], frames[-held - 1]
     # the room grows from the scans (grey returns), the scan (red) is drawn, the path (blue) appears after moving
     assert _count(late, (150, 150, 150), 25) > 2 * _count(early, (150, 150, 150), 25) > 0
     assert _count(early, (230, 40, 40)) > 100 and _count(late, (230, 40, 40)) > 100
@@ -152,3 +155,29 @@ def test_the_browser_view_plays_a_robot_bag_back(synth_bags: dict[str, Path]) ->
     assert early["pose"] != late["pose"] and len(late["trail"]) > len(early["trail"]) and late["scan"]
     assert not any("check-off:" in e for e in early["events"])
     assert any("check-off: overall: PASSED" in e for e in late["events"])
+
+
+def test_the_nodes_lines_at_info_and_above_repeats_folded_and_the_command_current_or_how_long_none() -> None:
+    from bt_nav_sim.recorded import Recording
+
+    from bt_nav.media.robotfilm import RobotFilmRenderer
+    from bt_nav.media.robotrun import RobotRun
+    from bt_nav.mission.scan import Scan
+
+    scan = Scan(0.0, 6.0, 0.1, 0.0, 10.0, np.full(61, 1.0, dtype=np.float32))
+    cycle = ["Getting front cone. angle=0.13rad", "Front cone indices: [{k}, 0, 1]"]
+    log = [(0.1, 10, "node", "a DEBUG line")]
+    log += [(0.2 + 0.1 * k, 20, "node", line.format(k=k)) for k in range(6) for line in cycle]
+    log += [(1.0, 30, "node", "Wall detected"), (1.1, 20, "node", "Front cone indices: [9, 0, 1]")]
+    rec = Recording([(t, 0.0, 0.0, 0.0) for t in np.arange(0.0, 5.0, 0.05)], [(0.0, scan), (4.9, scan)],
+                    [(0.5, 0.1, 0.0), (1.0, 0.0, -0.3)], log=log)
+    renderer = RobotFilmRenderer(RobotRun(Path("x"), rec, "real robot bag"))
+    assert renderer.console_rows(1.2) == ["[   0.70] [node]: Getting front cone. angle=0.13rad (x6)",
+                                          "[   1.00] [node]: Wall detected",
+                                          "[   1.10] [node]: Front cone indices: [9, 0, 1] (x7)"]
+    assert not any("DEBUG" in r for t in (0.15, 3.0) for r in renderer.console_rows(t))
+    assert renderer.caption(0.2).endswith("no command yet")
+    assert renderer.caption(1.3).endswith("cmd v +0.00 m/s  w -0.30 rad/s")
+    assert renderer.caption(3.1).endswith("no command for 2.1 s (last: v +0.00 m/s  w -0.30 rad/s)")
+    assert renderer.run.current_command(3.1) is None  # the robot is drawn with no command arrow
+    assert "scale: 1 m" in renderer.texts(1.0) or "scale: 0.5 m" in renderer.texts(1.0)

@@ -46,6 +46,10 @@ STATIC_BEFORE, STATIC_AFTER = 3.0, 3.0
 REJUDGE_EVERY, LINE_MARGIN = 1.0, 2.0
 #: s to wait for toggle_navigation to be offered, and for each answer.
 SERVICE_WAIT = 10.0
+#: s after which a topic not heard yet is named, with the likely causes (the listener keeps listening).
+NOTHING_HEARD_AFTER = 5.0
+#: The RMW a TurtleBot3's Jazzy image runs (ROBOTIS' setup guide): the TA's computer must run the same.
+ROBOT_RMW = "rmw_fastrtps_cpp"
 #: The command types a lab node may publish, by their graph names.
 COMMAND_TYPES = {"geometry_msgs/msg/Twist": Twist, "geometry_msgs/msg/TwistStamped": TwistStamped}
 
@@ -96,6 +100,57 @@ class RobotListener(Node):
                                              QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT))
                     self.destroy_timer(self._finder)
                 return
+
+
+def unheard(raw: dict[str, list[Any]], names: dict[str, str]) -> list[str]:
+    """The robot's topics (odometry, scan, commands) not heard yet."""
+    return [names[role] for role in ("odom", "scan", "cmd") if not raw.get(names[role])]
+
+
+def rmw_name() -> str:
+    """The RMW this process runs: ``RMW_IMPLEMENTATION``, else the one rclpy loaded (its default)."""
+    chosen = os.environ.get("RMW_IMPLEMENTATION", "").strip()
+    if chosen:
+        return chosen
+    try:
+        return str(rclpy.get_rmw_implementation_identifier())
+    except Exception:  # noqa: BLE001 - before rclpy.init on some versions: the default is Fast DDS
+        return ROBOT_RMW
+
+
+def unheard_words(missing: list[str], waited: float) -> str:
+    """Which topics were not heard in ``waited`` s, the graph this listener is on, and why a robot may not be heard."""
+    return (f"nothing heard on {', '.join(missing)} in {waited:.0f} s ({graph_words()}, RMW {rmw_name()}). Likely "
+            "causes: the robot is on another ROS_DOMAIN_ID (on the robot: echo $ROS_DOMAIN_ID; export the same "
+            "here); ROS_AUTOMATIC_DISCOVERY_RANGE is LOCALHOST on one side (SUBNET on both to hear another computer); "
+            f"the robot runs another RMW_IMPLEMENTATION (a TurtleBot3's Jazzy image runs {ROBOT_RMW}: the same on "
+            "both); the robot's bringup or the node is not running (ros2 topic list on the robot); a firewall or a "
+            "Wi-Fi that drops multicast")
+
+
+class HearingWatch:
+    """Says once, :data:`NOTHING_HEARD_AFTER` s into listening, which of the robot's topics were not heard and the
+    likely causes, then that they came if they do (the listener keeps listening all along)."""
+
+    def __init__(self, names: dict[str, str], began: float) -> None:
+        self.names, self.began = names, began
+        self.warned: list[str] = []
+        self.done = False
+
+    def check(self, raw: dict[str, list[Any]], now: float) -> str | None:
+        """A line to print now, or None."""
+        if self.done or now < self.began + NOTHING_HEARD_AFTER:
+            return None
+        missing = unheard(raw, self.names)
+        if not self.warned:
+            self.warned = missing or ["-"]
+            self.done = not missing
+            return f"{unheard_words(missing, now - self.began)}; still listening" if missing else None
+        if not missing:
+            self.done = True
+            return f"now hearing {', '.join(self.names[r] for r in ('odom', 'scan', 'cmd'))} " \
+                   f"({now - self.began:.0f} s into listening)"
+        return None
 
 
 def graph_words() -> str:
@@ -160,9 +215,13 @@ def listen(names: dict[str, str], duration: float, call_toggle: bool = False,
         return [ServiceCall(t * 1e-9, data, None if a is None else a * 1e-9, ok, msg)
                 for t, data, a, ok, msg in toggler.calls]
 
+    watch = HearingWatch(names, began)
     try:
         while time.monotonic() < end and rclpy.ok():
             rclpy.spin_once(node, timeout_sec=0.1)
+            said = watch.check(node.raw, time.monotonic())
+            if said:
+                print(f"bt-nav checkoff: {said}", flush=True)
             if toggler is not None and not armed and time.monotonic() >= began + STATIC_BEFORE:
                 armed = True
                 print(f"bt-nav checkoff: {toggler.call(True)}", flush=True)
