@@ -71,7 +71,8 @@ def test_one_node_s_results_json_validates_and_scores_its_runs() -> None:
     output = wrong["tests"][0]["output"]
     assert wrong["tests"][0]["name"] == "run lab_object C lds01 seed 0", wrong
     assert output.startswith("**FAILED**: 21 of 27 checks failed\n") and f"\n- {first['reason']}\n" in output, output
-    assert "**How to fix:** Turn by the angle and to the side the rule says" in output, output
+    assert "**How to fix:** Turn by 90 +- 10 deg. Any way of measuring the turn passes" in output, output
+    assert "a turn timed at the rate you command" in output and "rather than timed" not in output, output
     assert run["reason"].removeprefix("failed: ") in wrong["output"], wrong["output"]
     assert right["tests"][0]["output"] == "**PASSED**", right
     said = ("In the preview (at 9.3x) it failed (failed: maneuver 1 turned 45 deg right; the Smart Pivot needs 90 +- "
@@ -95,8 +96,8 @@ def test_the_launch_file_checks_take_their_share() -> None:
     assert sum(t["max_score"] for t in checks) == pytest.approx(20) and doc["score"] == pytest.approx(80 + 20 / 3)
     assert "Launch file: 1/3 checks passed." in doc["output"], doc["output"]
     assert all(t["output"].startswith("**FAILED**: ") for t in checks[1:]), checks
-    assert "**How to fix:** Add `DeclareLaunchArgument('safety_distance', default_value='0.5')`" in \
-        checks[1]["output"], checks[1]
+    assert "**How to fix:** The file declares no launch argument `safety_distance`: add " \
+        "`DeclareLaunchArgument('safety_distance', default_value='0.5')`" in checks[1]["output"], checks[1]
     assert "How to fix" not in checks[0]["output"], checks[0]
 
 
