@@ -28,10 +28,12 @@ WINDOW = {"width": 1280, "height": 800}
 #: folded <details> (not rendered) and the folded matrix itself.
 WIDE_JS = """() => Array.from(document.querySelectorAll('body *')).filter(e => {
   const r = e.getBoundingClientRect();
-  return r.width > 0 && (r.right > window.innerWidth + 0.5 || r.width > window.innerWidth) && !e.closest('details:not([open])');
+  return r.width > 0 && (r.right > window.innerWidth + 0.5 || r.width > window.innerWidth)
+    && !e.closest('details:not([open])');
 }).map(e => e.tagName + '.' + e.className + ': ' + Math.round(e.getBoundingClientRect().right))"""
 #: Each failed row's first reason: its box, and whether it is rendered (not inside a folded <details>).
-REASONS_JS = """() => Array.from(document.querySelectorAll('#students > tbody > tr')).filter(r => r.dataset.verdict !== 'PASSED')
+REASONS_JS = """() => Array.from(document.querySelectorAll('#students > tbody > tr'))
+  .filter(r => r.dataset.verdict !== 'PASSED')
   .map(r => { const f = r.querySelector('td.reason .first'); const b = f ? f.getBoundingClientRect() : null;
     return {name: r.dataset.name, text: f ? f.innerText : '', left: b ? b.left : -1, right: b ? b.right : -1,
             width: b ? b.width : 0, folded: f ? !!f.closest('details:not([open])') : true}; })"""
