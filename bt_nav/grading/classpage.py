@@ -57,8 +57,8 @@ PAGE_STYLE = STYLE + """
  .controls { margin: 0.6em 0; display: flex; gap: 1.2em; flex-wrap: wrap; align-items: center; }
  .counts span { margin-right: 1em; }
  #students { width: 100%; table-layout: fixed; }
- #students col.c-name { width: 9em; } #students col.c-verdict { width: 7em; } #students col.c-score { width: 6em; }
- #students col.c-runs { width: 7.5em; } #students col.c-launch { width: 6.5em; } #students col.c-man { width: 6em; }
+ #students col.c-name { width: 9em; } #students col.c-verdict { width: 8.5em; } #students col.c-score { width: 6em; }
+ #students col.c-runs { width: 7.5em; } #students col.c-launch { width: 6.5em; } #students col.c-man { width: 5.5em; }
  #students td { overflow-wrap: anywhere; }
  th.sort { cursor: pointer; user-select: none; white-space: nowrap; }
  th.sort::after { content: " \\2195"; color: #999; }
@@ -274,7 +274,7 @@ def _folded(row: dict[str, Any], record: dict[str, Any], failures: Sequence[str]
     def count(n: int, what: str) -> str:
         return f"{n} {what}{'s' if n != 1 else ''}" if n else ""
 
-    said = [count(len(failures) - 1, "more failure"), "runs per arena and LiDAR" if matrix else "",
+    said = [count(max(0, len(failures) - 1), "more failure"), "runs per arena and LiDAR" if matrix else "",
             f"passed: {', '.join(w for w in (count(runs, 'run'), count(checks, 'launch check')) if w)}"
             if runs or checks else "", count(found, "finding")]
     summary = ", ".join(w for w in said if w)
