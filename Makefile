@@ -11,7 +11,7 @@ STAMP := $(VENV)/.bt_nav-installed
 # (bt-nav demo/sim-run print it; tests claim theirs per process), unless you set ROS_DOMAIN_ID yourself.
 export ROS_AUTOMATIC_DISCOVERY_RANGE := LOCALHOST
 
-.PHONY: all venv test test-quick lint demo bench faults judge-agreement tree-svg colcon-check clean browser docs grader-suite wheel autograder-zip
+.PHONY: all venv test test-quick lint demo bench faults judge-agreement tree-svg colcon-check clean browser docs grader-suite wheel autograder-zip class-page-shots
 
 all: test
 
@@ -64,6 +64,11 @@ grader-suite: $(STAMP)
 	$(BIN)/python tests/grader_suite.py --only generated --generated 100 --out runs/grader-suite-generated
 	$(BIN)/python tests/grader_suite.py --only generated --generated 100 --hogs 2 --out runs/grader-suite-hogs \
 		--compare runs/grader-suite-generated/confusion.json
+
+# The class page's screenshots in docs/grading.md: issue 54's mixed class of four hand-ins graded at 1x (10 runs,
+# about a minute) and shot in Debian's chromium at 1280 x 800 (tests/class_page_shots.py).
+class-page-shots: $(STAMP) browser
+	$(BIN)/python tests/class_page_shots.py --out runs/class-page-shots --docs docs
 
 # bt_nav as a wheel, dist/bt_nav-<version>-py3-none-any.whl: what the Gradescope autograder's setup.sh installs
 # (docs/autograder.md). setuptools' own build/lib is emptied first, so that no file deleted since lands in it.

@@ -12,6 +12,7 @@ class is graded on must catch the mistakes), and prints one table::
     python tests/grader_suite.py --compare runs/grader-suite/confusion.json --out runs/grader-suite-loaded
     python tests/grader_suite.py --only mistakes --mistakes left_or_right,ignores_safety_distance --lidars lds01
     python tests/grader_suite.py --only generated --generated 100   # right nodes nobody wrote by hand (issue 52)
+    python tests/grader_suite.py --only mixed         # issue 54's folder of four hand-ins, A, B and C mixed
 
 ``--generated N`` also grades N generated right nodes (``tests/nodegen``: seeds 0..N-1, each on a sample of its
 choice's default-grid cells, every cell getting >= 20 nodes when N >= 100) and each one's mutants (the sheet's
@@ -46,6 +47,12 @@ FIXTURE = Path(__file__).resolve().parent / "fixtures" / "lab_student_node.py"
 #: LiDAR only. Each choice's mistakes are graded in the choice's default grid (``--maneuvers X``, no ``--worlds``):
 #: the grid a class is graded on must catch them.
 MUTANTS = Path(__file__).resolve().parent / "ros" / "test_mutants.py"
+#: Issue 54's class: a folder of four hand-ins, each on its own choice (its ``# CHOICE:`` line) and default grid;
+#: how each must come out by its runs (the launch typo of ``c_safety_dist`` fails its hand-in, not its runs:
+#: ``tests/ros/test_mixed_class.py`` reads that) and, for a mistake, the mutation suite's expectation it answers to.
+MIXED = Path(__file__).resolve().parent / "fixtures" / "handins_mixed"
+MIXED_JUDGED = {"right_c": ("right", "right_c"), "right_a": ("right", "right_a"),
+                "c_safety_dist": ("right", "c_safety_dist"), "b_left_or_right": ("mistake", "B_left_or_right")}
 
 
 def _load(path: Path) -> ModuleType:
@@ -97,12 +104,19 @@ def classes(node: ModuleType, variants: Sequence[str], mistakes: Sequence[str],
     return out
 
 
+def mixed_class() -> dict[str, Any]:
+    """Issue 54's folder of hand-ins as a class of the suite: graded as a folder is, each on its own default grid."""
+    return {"folder": MIXED, "grid": (), "students": dict.fromkeys(MIXED_JUDGED), "judged": MIXED_JUDGED}
+
+
 def grade_class(name: str, spec: dict[str, Any], options: Sequence[str], out: Path) -> dict[str, list[dict]]:
     """Grade one class with ``bt-nav grade --class`` in a process of its own; each student's rows."""
     folder = out / name
     folder.mkdir(parents=True, exist_ok=True)
     manifest = folder / "class.yaml"
     manifest.write_text("".join(f"{student}: {command}\n" for student, command in spec["students"].items()))
+    if spec.get("folder"):
+        manifest = spec["folder"]
     argv = [sys.executable, "-m", "bt_nav.cli", "grade", "--profile", "lab", "--class", str(manifest),
             "--out", str(folder / "class"), *options, *spec["grid"]]
     with open(folder / "grade.log", "w", encoding="utf-8") as log:
@@ -209,8 +223,9 @@ def judged_generated(student: str, rows: list[dict[str, Any]]) -> dict[str, Any]
 def parse(argv: Sequence[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("runs/grader-suite"))
-    parser.add_argument("--only", choices=("all", "right", "mistakes", "generated"), default="all",
-                        help="generated: only the --generated nodes and their mutants")
+    parser.add_argument("--only", choices=("all", "right", "mistakes", "generated", "mixed"), default="all",
+                        help="generated: only the --generated nodes and their mutants; mixed: only issue 54's "
+                        "folder of four hand-ins")
     parser.add_argument("--generated", type=int, default=0, metavar="N",
                         help="also grade N generated right nodes (tests/nodegen) and their mutants")
     parser.add_argument("--no-generated-mutants", action="store_true", help="grade the generated right nodes only")
@@ -238,6 +253,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     todo = classes(node, variants if args.only in ("all", "right") else [],
                    mistakes if args.only in ("all", "mistakes") else [], args.choices)
     todo.update(generated_classes(args))
+    if args.only in ("all", "mixed"):
+        todo["mixed"] = mixed_class()
     # at the shipped default (1x, real time): a class's grid options last, so a class's own --lidars wins
     options = ["--lidars", args.lidars, "--seeds", args.seeds, "--jobs", args.jobs, "--record", "off",
                "--progress", "off", *(["--rtf-max", args.rtf_max] if args.rtf_max is not None else [])]
@@ -249,6 +266,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name, future in graded.items():
             kind = "mistake" if name.startswith("mistakes") else "right"
             for student, rows in future.result().items():
+                if "judged" in todo[name]:  # a folder of hand-ins: each student's own expectation
+                    lines.append(judged(*todo[name]["judged"][student], rows))
+                    continue
                 lines.append(judged_generated(student, rows) if name.startswith("gen_mutants")
                              else judged(kind, student, rows))
     args.out.mkdir(parents=True, exist_ok=True)

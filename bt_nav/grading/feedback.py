@@ -9,12 +9,13 @@ report pages stay for the instructor (``report.html``, ``class.html``).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.grid import failure_groups, preview_said, run_label, runs_label
 from bt_nav.grading.handins import FEEDBACK, StudentResult, load_class, load_grid
-from bt_nav.grading.hints import LAUNCH_HINTS
+from bt_nav.grading.hints import launch_hint, run_hints
 from bt_nav.grading.rules import RULES_FILE
 
 
@@ -53,11 +54,14 @@ def _look_at(result: StudentResult) -> list[str]:
     the node's log of a failed run, the rules."""
     out = []
     if result.launch is not None:
-        out += [f"- {LAUNCH_HINTS.get(c.name, c.name)} (now: {c.reason})" for c in result.launch.checks
-                if not c.passed and c.name in LAUNCH_HINTS]
+        for check in (c for c in result.launch.checks if not c.passed):
+            hint = launch_hint(asdict(check))
+            out.append(f"- launch file: {check.name}: {hint or check.reason}" + ("" if check.fix else
+                                                                                 f" (now: {check.reason})"))
     judged = [r for r in result.runs if r.get("outcome") != "bt_nav error"]
     for reason, runs in failure_groups(judged):
-        out.append(f"- {runs_label(runs)}: {reason}")
+        hints = run_hints(runs[0])
+        out.append(f"- {runs_label(runs)}: {reason}" + (f"; what to change: {'; '.join(hints)}" if hints else ""))
     failed = [r for r in judged if not r.get("passed")]
     if failed:
         log = Path(failed[0].get("run_dir", "")) / "node.log"

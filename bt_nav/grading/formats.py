@@ -35,7 +35,7 @@ from typing import Any
 from bt_nav_sim.referee_core import check_reason
 
 from bt_nav.grading.grid import cell_label, failure_groups, preview_said, run_label, runs_label
-from bt_nav.grading.hints import LAUNCH_HINTS, run_hints, student_words
+from bt_nav.grading.hints import check_rule, finding_hints, launch_hint, not_graded_hint, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
 from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this module's API since it began)
     CHECKED,
@@ -44,6 +44,7 @@ from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this 
     WEIGHTS_FILE,
     Weights,
     check_counts,
+    check_depends,
     check_line,
     check_not_checked,
     graded_runs,
@@ -87,8 +88,8 @@ def _check_line(check: dict[str, Any]) -> str:
     """A failed check for a student: what happened, and the rule it broke (the check's ``required``)."""
     name = str(check.get("name"))
     why = student_words(check_reason(check))
-    rule = check.get("required")
-    rule_text = f" (the rule: {_md(str(rule))})" if rule not in (None, "") and str(rule) not in why else ""
+    rule = check_rule(check)  # the rule of the check's own fault: the trigger's for a trigger that did not hold
+    rule_text = f" (the rule: {_md(rule)})" if rule and rule not in why else ""
     what = why if why.startswith(name) else f"{name}: {why}"
     return f"- {_md(what)}{rule_text}"
 
@@ -106,8 +107,9 @@ def _run_text(row: dict[str, Any]) -> str:
     if unscored(row):
         what = "Not graded" if run_not_graded(row) else "bt_nav error"
         why = str(row.get(NOT_GRADED) or row.get("reason", "?"))
-        return (f"**{what}** (not your node's failure; not scored): {_md(student_words(why))}. "
-                "Ask for a regrade: the run is run again.")
+        hint = not_graded_hint(why)
+        return (f"**{what}** (not your node's failure; not scored): {_md(student_words(why))}.\n\n"
+                f"**What happened:** {hint[0].upper()}{hint[1:]}.")
     reason = student_words(str(row.get("reason", "?")))
     rest = reason.removeprefix("passed").removeprefix("failed: ").lstrip(": ")  # the verdict said once
     checks = (row.get("verdict") or {}).get("checks") or []
@@ -127,6 +129,10 @@ def _run_text(row: dict[str, Any]) -> str:
     said = [f"Finding: {_md(student_words(str(f)))}" for f in row.get("findings") or []]
     if said:
         lines += ["", *said]
+    found = finding_hints(row)
+    if found:
+        lines += ["", "**About the findings** (they did not fail the run): "
+                  + " Also: ".join(h[0].upper() + h[1:] + "." for h in found)]
     output = node_output(row) if not row.get("passed") and not failed else ""
     if output:
         lines += ["", "What your node printed last:", "", "~~~", output.replace("~~~", "~ ~ ~"), "~~~"]
@@ -143,9 +149,10 @@ def _launch_text(check: dict[str, Any]) -> str:
     check that ended "not checked" says a TA looks at it (it scores as passed)."""
     line = f" ({check_line(check)})" if check.get("line") else ""
     verdict = "NOT CHECKED: a TA will look" if check_not_checked(check) else \
+        f"NOT CHECKED: depends on {_md(check_depends(check) or '')}" if check_depends(check) else \
         "PASSED" if check.get("passed") else "FAILED"
     text = f"**{verdict}**: {_md(student_words(str(check.get('reason', ''))))}{line}"
-    hint = None if check_counts(check) else LAUNCH_HINTS.get(str(check.get("name")))
+    hint = None if check_counts(check) else launch_hint(check)
     return text + (f"\n\n**How to fix:** {hint[0].upper()}{hint[1:]}." if hint else "")
 
 

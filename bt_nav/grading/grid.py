@@ -331,6 +331,13 @@ def cell_label(row: dict[str, Any]) -> str:
     return " ".join(part for part in parts if part)
 
 
+def maneuvers_text(rows: Sequence[dict[str, Any]]) -> str:
+    """The maneuvers a grid graded, as a report's header says them (``maneuver C``, ``maneuvers A, C``; '' for a
+    grid without one): the student's choice, not the ``-p maneuver:=X`` the grader appends to their command."""
+    letters = sorted({str(r.get("maneuver")) for r in rows if r.get("maneuver") and r.get("maneuver") != "none"})
+    return f"maneuver{'s' if len(letters) > 1 else ''} {', '.join(letters)}" if letters else ""
+
+
 def run_label(row: dict[str, Any]) -> str:
     """A run's name, ``lab_object C rplidar seed 0``: how the CLI's lines, ``summary.md``, ``report.html`` and
     ``class.md`` name a run."""

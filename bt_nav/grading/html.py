@@ -33,6 +33,7 @@ from bt_nav.grading.grid import (
     failure_groups,
     lidar_findings,
     lidar_label,
+    maneuvers_text,
     per_lidar,
     rate_table,
     run_label,
@@ -87,15 +88,21 @@ def _link(out: Path, path: Path, text: str) -> str:
 
 def _header(rows: Sequence[dict[str, Any]], settings: ExeSettings) -> list[str]:
     passed = sum(1 for r in rows if r.get("passed"))
-    # as one would type it (-p maneuver:=X, not the argv's maneuver:="X"), shell-quoted only where needed
-    appended = shell_text(exe_ros_args("X" if settings.maneuvers else None, settings.profile, settings.node_params))
-    return [f"<h1>Grade of <code>{html.escape(settings.command)}</code></h1>",
+    # the student's choice by its letter (maneuver C); the arguments as one would type them (-p maneuver:=C, not the
+    # argv's maneuver:="C"), shell-quoted only where needed
+    chosen = maneuvers_text(rows)
+    letters = chosen.split(" ", 1)[1] if chosen and "," not in chosen else "X"
+    appended = shell_text(exe_ros_args(letters if settings.maneuvers else None, settings.profile,
+                                       settings.node_params))
+    return [f"<h1>Grade of <code>{html.escape(settings.command)}</code>"
+            + (f", {html.escape(chosen)}" if chosen else "") + "</h1>",
             f'<p class="overall">overall: <b>{passed}/{len(rows)} passed '
             f"({100 * passed / max(1, len(rows)):.1f} %)</b></p>",
             "<table>",
             f"<tr><th>command</th><td><code>{html.escape(settings.command)}</code> + "
             f"<code>{html.escape(appended)}</code></td></tr>",
             f"<tr><th>profile</th><td>{html.escape(settings.profile)}</td></tr>",
+            *([f"<tr><th>maneuver</th><td>{html.escape(chosen.split(' ', 1)[1])}</td></tr>"] if chosen else []),
             f"<tr><th>real-time factor</th><td>{html.escape(speed_words(settings.rtf, settings.rtf_max))}"
             f"{html.escape(achieved_text(rows))}</td></tr>",
             f"<tr><th>limit per run</th><td>{settings.limit:g} s wall</td></tr>",

@@ -5,6 +5,10 @@ passed, failed, or not checked.
 Why "not checked" is a status of its own: the grader evaluates a launch file against stand-ins of the launch API
 (:mod:`bt_nav.grading.launch_eval`), and a file may do what they cannot follow (a shell ``Command``, a package of
 its own). Such a check is never failed for the grader's limits: it counts as passed, and says a TA should look.
+A check may also be "not checked" because it depends on another that failed (``depends``: nothing to pass to a
+Node that is not started; a launch argument declared right that reaches no parameter of the sheet's name): one root
+cause fails one check, so a typo costs one check, and a TA need not look. A failed check carries its ``fix``: what
+the file holds and what it misses, said from the file (never "add" what is there).
 Pure: no rclpy, no launch.
 """
 
@@ -25,6 +29,11 @@ STARTS, DECLARES, PASSES = ("starts the node", f"declares {ARGUMENT} (default {D
 NOT_CHECKED = "not checked: a TA should look"
 
 
+def depends_words(name: str | None) -> str:
+    """What a check not checked because check ``name`` failed says: ``not checked: depends on starts the node``."""
+    return f"not checked: depends on {name}"
+
+
 @dataclass(frozen=True)
 class LaunchCheck:
     """One check of the launch file: its name, whether it passed, why, the line it is about (None: none), and
@@ -37,6 +46,8 @@ class LaunchCheck:
     line: int | None = None
     checked: bool = True
     file: str | None = None  # the file the line is in (an included launch file, a params YAML); None: not said
+    depends: str | None = None  # not checked because this check (its name) failed: the root cause, charged once
+    fix: str | None = None  # a failed check's advice from the file: what is there and what is missing
 
     @property
     def at(self) -> str:
@@ -52,7 +63,8 @@ class LaunchCheck:
 
     def text(self) -> str:
         """``starts the node: PASSED (line 12: Node(package='my_package', executable='reactive_navigator'))``."""
-        reason = f"{NOT_CHECKED}; {self.reason}" if not self.checked else self.reason
+        reason = f"{depends_words(self.depends)}; {self.reason}" if self.depends else \
+            f"{NOT_CHECKED}; {self.reason}" if not self.checked else self.reason
         return f"{self.name}: {self.status} ({self.at}{reason})"
 
 
@@ -70,8 +82,9 @@ class LaunchReport:
 
     @property
     def checked(self) -> bool:
-        """Whether every check was checked (False: a TA should look at the file)."""
-        return all(c.checked for c in self.checks)
+        """Whether every check was checked (False: a TA should look at the file; a check not checked because
+        another failed needs no TA)."""
+        return all(c.checked or c.depends for c in self.checks)
 
     def lines(self) -> list[str]:
         """A line per check; one line when every check failed for the same reason (no file, a syntax error)."""

@@ -17,6 +17,7 @@ from bt_nav.grading.grid import (
     failure_groups,
     lidar_findings,
     lidar_label,
+    maneuvers_text,
     params_text,
     per_lidar,
     rate_table,
@@ -72,7 +73,8 @@ def summary_markdown(summary: Sequence[dict[str, Any]], settings: ExeSettings,
     lidars = any(lidar for _, lidar, _ in table)
     runs = sum(s["runs"] for s in summary)
     passed = sum(s["passed"] for s in summary)
-    lines = [f"# Grade of `{settings.command}` ({settings.profile} profile)", "",
+    chosen = maneuvers_text(rows)
+    lines = [f"# Grade of `{settings.command}` ({settings.profile} profile{', ' + chosen if chosen else ''})", "",
              f"**{passed}/{runs} passed ({100 * passed / max(1, runs):.1f} %)**; "
              f"{speed_words(settings.rtf, settings.rtf_max)}{achieved_text(rows)}, {settings.limit:g} s wall per run.",
              "",

@@ -108,8 +108,16 @@ def run_not_graded(row: dict[str, Any]) -> bool:
 
 
 def check_not_checked(check: dict[str, Any]) -> bool:
-    """Whether a launch-file check ended "not checked" (:data:`CHECKED` false): it scores as passed, a TA looks."""
-    return check.get(CHECKED, True) is False
+    """Whether a launch-file check ended "not checked" (:data:`CHECKED` false): it scores as passed, a TA looks
+    (not one that depends on another check that failed: :func:`check_depends`)."""
+    return check.get(CHECKED, True) is False and not check_depends(check)
+
+
+def check_depends(check: dict[str, Any]) -> str | None:
+    """The check a launch-file check was not checked for, because it failed (None: none): it scores as passed,
+    the failed one is charged once; no TA need look."""
+    depends = check.get("depends")
+    return str(depends) if depends else None
 
 
 def check_line(check: dict[str, Any]) -> str:
@@ -153,8 +161,9 @@ PASSED, FAILED, NOT_GRADED_VERDICT = "PASSED", "FAILED", "NOT GRADED"
 
 
 def check_counts(check: dict[str, Any]) -> bool:
-    """Whether a launch-file check scores: passed, or not checked (a TA looks)."""
-    return bool(check.get("passed")) or check_not_checked(check)
+    """Whether a launch-file check scores: passed, not checked (a TA looks), or not checked for another check's
+    failure (:func:`check_depends`)."""
+    return bool(check.get("passed")) or check_not_checked(check) or bool(check_depends(check))
 
 
 def handin_verdict(record: dict[str, Any]) -> str:
@@ -195,7 +204,8 @@ def tests(record: dict[str, Any], weights: Weights) -> list[Test]:
         out.append(Test("the node's runs", 0.0, run_share, "not scored" if runs else "failed"))
     checks = launch_checks(record)
     for check in checks:
-        state = "not checked" if check_not_checked(check) else "passed" if check.get("passed") else "failed"
+        state = "not checked" if check_not_checked(check) or check_depends(check) else \
+            "passed" if check.get("passed") else "failed"
         share = launch_share / len(checks)
         out.append(Test(f"launch file: {check.get('name')}", share if check_counts(check) else 0.0, share, state,
                         check))

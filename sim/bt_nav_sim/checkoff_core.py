@@ -613,6 +613,8 @@ class CheckoffJudge(Verdict):
                 "trigger": trigger, "interrupted": interrupted,
                 "trigger_detail": trigger_text, "angle_deg": round(angle, 2),
                 "side": "left" if angle > 0 else "right", "angle_ok": angle_ok, "rule": rule, "swung_deg": swung,
+                "size_ok": cfg.spec.angle.holds(abs(angle) + swung, cfg.angle_tolerance_deg),
+                "trigger_rule": cfg.trigger_rule(),
                 "forward_command": round(cmd_forward, 4), "forward_motion": round(motion, 4),
                 "forward_ok": forward_ok, "moved_on": moved_on, "moved_on_detail": moved[1], "findings": found,
                 "readings": None if reading is None else {k: (round(v, 3) if math.isfinite(v) else None)

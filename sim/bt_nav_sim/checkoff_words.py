@@ -40,25 +40,51 @@ def _readings_text(e: dict[str, Any], maneuver: str = "") -> str:
     return "readings at the start: " + ", ".join(parts) if parts else "no readings at the start"
 
 
-def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
-    """What is wrong with one judged maneuver, one sentence each, in the check-off's words (empty: nothing)."""
+#: The kinds of fault a judged maneuver may have, as its check's ``kinds`` names them (the grader keys its advice to
+#: a student on them: a trigger that did not hold needs other words than a turn of the wrong angle).
+TRIGGER, LATE, ANGLE, SIDE, STILL_TURNING, FORWARD, MOVED_ON = (
+    "trigger", "late", "angle", "side", "still turning", "forward", "moved on")
+#: The rule a fault of each kind broke, when it is not the episode's angle rule.
+FORWARD_RULE = "no forward command or motion from the turn's start to its end"
+MOVED_ON_RULE = "move on after the turn (strict_findings moved_on)"
+
+
+def maneuver_faults(maneuver: str, e: dict[str, Any]) -> list[tuple[str, str]]:
+    """What is wrong with one judged maneuver: ``(kind, sentence)`` each, in the check-off's words (empty:
+    nothing). The kind says which rule broke (the angle's size, the side, a turn never ended are apart: each
+    needs its own advice)."""
     name = MANEUVER_NAMES.get(maneuver, maneuver)
     out = []
     if not e["trigger"]:
-        out.append(f"turned although its trigger did not hold ({e['trigger_detail']} is not true)")
+        out.append((TRIGGER, f"turned although its trigger did not hold ({e['trigger_detail']} is not true)"))
     if e.get("late"):
         at = f"{e['late_at']}: " if e.get("late_at") else ""
-        out.append(f"turned late: {at}it crept on {e['crept_with_trigger']:.2f} m over {e['trigger_held_for']:.1f} s "
-                   "after its trigger held (does it read its distance parameter, and its sectors at their angles "
-                   "from angle_min and angle_increment?)")
+        out.append((LATE, f"turned late: {at}it crept on {e['crept_with_trigger']:.2f} m over "
+                          f"{e['trigger_held_for']:.1f} s after its trigger held (does it read its distance parameter, "
+                          "and its sectors at their angles from angle_min and angle_increment?)"))
     if not e["angle_ok"]:
-        out.append(f"turned {abs(e['angle_deg']):.0f} deg {e['side']}{_swung_text(e)}; {name} needs {e['rule']}"
-                   + (f" ({SPLIT_HINT})" if e.get("unsplit") else ""))
+        kind = STILL_TURNING if "still turning at the disarm" in str(e["rule"]) else \
+            SIDE if e.get("size_ok") else ANGLE
+        out.append((kind, f"turned {abs(e['angle_deg']):.0f} deg {e['side']}{_swung_text(e)}; {name} needs {e['rule']}"
+                          + (f" ({SPLIT_HINT})" if e.get("unsplit") else "")))
     if not e["forward_ok"]:
-        out.append(_forward_text(e))
+        out.append((FORWARD, _forward_text(e)))
     if not e["moved_on"]:
-        out.append(f"did not move on after the turn ({e['moved_on_detail']})")
+        out.append((MOVED_ON, f"did not move on after the turn ({e['moved_on_detail']})"))
     return out
+
+
+def maneuver_problems(maneuver: str, e: dict[str, Any]) -> list[str]:
+    """What is wrong with one judged maneuver, one sentence each, in the check-off's words (empty: nothing)."""
+    return [text for _, text in maneuver_faults(maneuver, e)]
+
+
+def fault_rule(kind: str, e: dict[str, Any]) -> str:
+    """The rule a fault of ``kind`` broke, in the judge's words: the trigger's for a trigger that did not hold or
+    fired late, the angle's for an angle or a side, the forward rule for forward motion."""
+    if kind in (TRIGGER, LATE):
+        return str(e.get("trigger_rule") or e["rule"])
+    return FORWARD_RULE if kind == FORWARD else MOVED_ON_RULE if kind == MOVED_ON else str(e["rule"])
 
 
 def performed_check(cfg: Any, maneuvers: list[dict[str, Any]],
@@ -88,15 +114,20 @@ def _swung_text(e: dict[str, Any]) -> str:
 def maneuver_check(number: int, maneuver: str, e: dict[str, Any]) -> dict[str, Any]:
     """The report line of one maneuver episode: every rule it was held to, what is wrong with it in words."""
     sim = f" (sim {e['t'] + e['t0']:.2f} s)" if e.get("t0") else ""  # the terminal's and the video's clock
-    problems = maneuver_problems(maneuver, e)
+    faults = maneuver_faults(maneuver, e)
+    problems = [text for _, text in faults]
     detail = (f"{maneuver} at t={e['t']:.2f} s{sim}: {e['trigger_detail']}"
               f"{'' if e['trigger'] else ' did not hold'}; turned {abs(e['angle_deg']):.0f} deg {e['side']}"
               f"{_swung_text(e)}, "
               f"rule {e['rule']}; forward command {e['forward_command']:.3f} m/s, motion {e['forward_motion']:.3f} m; "
               f"moved on: {e['moved_on_detail']}" + (f"; {_readings_text(e, maneuver)}; " + "; ".join(problems)
                                                      if problems else ""))
-    check = {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": e["rule"],
+    # the rule said beside a failure is the rule of the fault (the trigger's for a trigger that did not hold)
+    required = fault_rule(faults[0][0], e) if faults else e["rule"]
+    check = {"name": f"maneuver {number}", "passed": e["passed"], "value": e["angle_deg"], "required": required,
              "detail": detail}
     if problems:
         check["reason"] = f"maneuver {number} " + "; ".join(problems) + f" ({_readings_text(e, maneuver)})"
+        check["kinds"] = list(dict.fromkeys(kind for kind, _ in faults))
+        check["rules"] = {kind: fault_rule(kind, e) for kind, _ in faults}
     return check

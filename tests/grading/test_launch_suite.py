@@ -18,7 +18,7 @@ from bt_nav.grading.launchfile import DECLARES, PASSES, STARTS, check_launch
 
 LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
 NODE = Path("reactive_navigator.py")
-P, F, N = "PASSED", "FAILED", "NOT CHECKED"
+P, F, N, D = "PASSED", "FAILED", "NOT CHECKED", "DEPENDS"  # D: not checked, another failed
 
 #: fixture -> (right or wrong, (starts, declares, passes), words the reason of the first check not passed says)
 SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
@@ -46,16 +46,16 @@ SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
     "forgets_safety": ("wrong", (P, F, F), "no DeclareLaunchArgument('safety_distance'"),
     "hardcoded_value": ("wrong", (P, F, P), "`safety_distance:=0.7` would not reach the node"),
     "yaml_only": ("wrong", (P, F, P), "`safety_distance:=0.7` would not reach the node; declare a launch argument"),
-    "wrong_default": ("wrong", (P, F, F), "default_value is '0.3', the sheet asks 0.5"),
-    "declared_not_passed": ("wrong", (P, F, F), "is declared but never reaches the node"),
-    "typo_name": ("wrong", (P, F, F), "is declared but never reaches the node"),
-    "remapping_string": ("wrong", (P, F, F), "is declared but never reaches the node"),
+    "wrong_default": ("wrong", (P, F, D), "default_value is '0.3', the sheet asks 0.5"),
+    "declared_not_passed": ("wrong", (P, D, F), "is declared but never reaches the node"),
+    "typo_name": ("wrong", (P, P, F), "the Node is given 'saftey_distance', not 'safety_distance' (a typo?)"),
+    "remapping_string": ("wrong", (P, D, F), "is declared but never reaches the node"),
     "string_type": ("wrong", (P, P, F), "as the string '0.5'"),
-    "wrong_executable": ("wrong", (F, P, F), "its Node runs executable 'turtlesim_node'"),
+    "wrong_executable": ("wrong", (F, P, D), "its Node runs executable 'turtlesim_node'"),
     "wrong_package": ("wrong", (F, P, P), "the hand-in's package is 'my_package'"),
-    "other_console_script": ("wrong", (F, P, F), "its Node runs executable 'teleop', not navigator or"),
-    "not_returned": ("wrong", (F, P, F), "does not return it in the launch description"),
-    "condition_off": ("wrong", (F, P, F), "its Node's IfCondition is false with the default launch arguments"),
+    "other_console_script": ("wrong", (F, P, D), "its Node runs executable 'teleop', not navigator or"),
+    "not_returned": ("wrong", (F, P, D), "does not return it in the launch description"),
+    "condition_off": ("wrong", (F, P, D), "its Node's IfCondition is false with the default launch arguments"),
     "other_config": ("wrong", (F, F, F), "'safety_distance' has no default_value and was not given"),
     "undeclared_no_default": ("wrong", (F, F, F), "launch configuration 'safety_distance' does not exist"),
     "float_default": ("wrong", (F, F, F), "a float is not a string or substitution (TypeError)"),
@@ -68,7 +68,8 @@ SUITE: dict[str, tuple[str, tuple[str, str, str], str]] = {
 
 #: The reason of a wrong file's check that is not its first failure, where it names its own mistake.
 SECOND_REASONS = {
-    "typo_name": (PASSES, "the Node is given 'saftey_distance', not 'safety_distance' (a typo?)"),
+    "typo_name": (DECLARES, "DeclareLaunchArgument('safety_distance', default_value='0.5'); safety_distance:=0.7 "
+                            "reaches the node as 'saftey_distance'"),
     "remapping_string": (PASSES, "safety_distance is given as a remapping, not in parameters=[...]"),
     "wrong_default": (PASSES, "the node gets safety_distance=0.3, the sheet asks 0.5"),
     "declared_not_passed": (PASSES, "safety_distance is not among the Node's parameters"),
@@ -80,7 +81,7 @@ def test_each_launch_file_gets_its_verdict_for_its_reason(name: str) -> None:
     kind, statuses, said = SUITE[name]
     report = check_launch(LAUNCH / f"{name}.launch.py", NODE)
     assert [c.name for c in report.checks] == [STARTS, DECLARES, PASSES]
-    assert tuple(c.status for c in report.checks) == statuses, report.lines()
+    assert tuple(D if c.depends else c.status for c in report.checks) == statuses, report.lines()
     assert report.passed == (kind != "wrong"), "a right file passes, a wrong one fails, one a TA looks at passes"
     assert report.checked == (kind != "TA")
     first = next((c for c in report.checks if c.status != P), None)
@@ -134,3 +135,31 @@ def test_a_check_not_checked_scores_as_passed_with_a_note_for_the_ta() -> None:
         assert [t["score"] == t["max_score"] for t in tests] == [s == "passed" for s in statuses]
         if name == "command_default":
             assert [t["output"].startswith("**NOT CHECKED: a TA will look**") for t in tests] == [False, True, True]
+
+
+@pytest.mark.parametrize("name", sorted(n for n, (kind, _, _) in SUITE.items() if kind == "wrong"))
+def test_a_fix_says_what_the_file_holds_and_never_asks_to_add_what_is_there(name: str) -> None:
+    """Each failed check carries its fix from the file; a check failed for another's root cause is not failed
+    (it depends on it), and no fix asks to add a declaration, a parameter or a Node the file already holds."""
+    report = check_launch(LAUNCH / f"{name}.launch.py", NODE)
+    source = (LAUNCH / f"{name}.launch.py").read_text()
+    failed = [c for c in report.checks if not c.passed]
+    assert failed and all(c.fix for c in failed if c.reason != failed[0].reason or len(failed) < 3), report
+    for check in failed:
+        fix = check.fix or ""
+        if "DeclareLaunchArgument('safety_distance'" in source:
+            assert "add `DeclareLaunchArgument" not in fix and "declare `DeclareLaunchArgument" not in fix, fix
+        if "parameters=" in source:
+            assert "has no `parameters=" not in fix, fix
+    for check in report.checks:
+        if check.depends:
+            assert next(c for c in report.checks if c.name == check.depends).status == F, report
+
+
+def test_a_parameter_typo_costs_one_check_and_its_fix_names_the_typo() -> None:
+    """The issue's hand-in: ``{'safety_dist': LaunchConfiguration('safety_distance')}`` fails "passes" alone, and
+    its fix says what the Node gets and what the parameter is called."""
+    report = check_launch(LAUNCH / "typo_name.launch.py", NODE)
+    assert [c.status for c in report.checks] == [P, P, F], report.lines()
+    assert report.checks[2].fix == ("the Node gets `{'saftey_distance': LaunchConfiguration('safety_distance')}` "
+                                    "(typo_name.launch.py:11): the parameter is `safety_distance`")

@@ -51,7 +51,8 @@ def add_format_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--gradescope", default=None, metavar="results.json",
                         help="--exe/--class: also write Gradescope's autograder results.json here (a test per run and "
                         "per launch-file check); a class: each student's in --out/_gradescope/<name>/results.json, "
-                        "and here the only student's results.json (several students: a JSON object name: results)")
+                        "and here the only student's results.json (several students: nothing here; Gradescope "
+                        "grades each submission with run_autograder)")
     parser.add_argument("--junit", default=None, metavar="report.xml",
                         help="--exe/--class: also write JUnit XML here (a testsuite per node or student, a testcase "
                         "per run, the failure's message its reason)")
@@ -124,8 +125,9 @@ def write_exe_formats(args: argparse.Namespace, grade_dir: Path) -> list[Path]:
 def write_class_formats(args: argparse.Namespace, class_dir: Path) -> list[Path]:
     """A class (``class_dir/class.json`` and the students' grades): each student's results.json in
     ``class_dir/_gradescope/<name>/`` (no student's name begins with _, so no student's grid is there),
-    ``--gradescope``'s path (a class of one: that student's results.json, its ``execution_time`` the command's wall
-    time; more: a JSON object name: results), ``--junit``'s (a testsuite per student), ``--csv``'s (a row per
+    ``--gradescope``'s path for a class of one (that student's results.json, its ``execution_time`` the command's
+    wall time; a class of several writes none there: Gradescope takes one submission's results.json, and a dict of
+    students is no format any platform reads), ``--junit``'s (a testsuite per student), ``--csv``'s (a row per
     student), and ``class.html`` again with ``--weights``' points; the paths written."""
     csv_path = getattr(args, "csv", None)
     if not (args.gradescope or args.junit or csv_path or args.weights):
@@ -146,11 +148,14 @@ def write_class_formats(args: argparse.Namespace, class_dir: Path) -> list[Path]
             written += paths
             if doc is not None:
                 results[name] = doc
-        only = len(records) == 1
-        if not only or results:
-            written.append(_write(Path(args.gradescope), _json(next(iter(results.values())) if only else results)))
-        else:
+        if len(records) == 1 and results:
+            written.append(_write(Path(args.gradescope), _json(next(iter(results.values())))))
+        elif len(records) == 1:
             Path(args.gradescope).unlink(missing_ok=True)
+        else:
+            print(f"bt-nav grade: --gradescope: a class of {len(records)}: each student's results.json is in "
+                  f"{class_dir / '_gradescope'}/<student>/ (for the instructor's records; Gradescope grades each "
+                  f"submission with run_autograder); nothing written at {args.gradescope}", file=sys.stderr)
     if args.junit:
         written.append(_write(Path(args.junit), junit_xml(records)))
     if csv_path:
