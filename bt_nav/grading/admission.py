@@ -327,14 +327,20 @@ class Admission:
         return admission
 
     def fell_behind(self) -> None:
-        """A run's simulator fell behind real time: the machine carries fewer runs than are running. One place
-        fewer than are running now (never below one), so its re-run and the next ones start only as others end."""
+        """A run's simulator fell behind real time: the machine carries fewer runs than are running.
+
+        At 1x the machine's places calm down (:meth:`MachineSlots.calm`: every grade's new runs, this one's re-run
+        among them, take half of them for :data:`CALM_S` s), and this grade's own places stay: cutting them to one
+        fewer than were running at each such run, as before, never gave them back, and a class of 180 runs ended
+        graded one run at a time (three times the wall of the same class's first ten minutes). A preview's places
+        (no machine places): one fewer than are running now (never below one), grown again while the cores idle."""
+        if self.slots is not None:
+            self.slots.calm()
+            return
         with self._cond:
             self.base = max(1, min(self.base, self.running - 1))
             self.places = max(1, min(self.places if self.places is not None else self.running, self.running - 1))
             self.limit = max(self.base, self.places)
-        if self.slots is not None:
-            self.slots.calm()
 
     def _open(self) -> int:
         """The places at the start: all of them when other programs leave the cores nearly free, else ``base``.

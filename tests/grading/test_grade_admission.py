@@ -249,7 +249,8 @@ def test_a_run_that_fell_behind_calms_every_grade_on_the_machine(tmp_path: Path)
 
 
 def test_fell_behind_calms_the_machine(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Admission.fell_behind at 1x also calms the machine's places (every grade's), not only its own count."""
+    """Admission.fell_behind at 1x calms the machine's places (every grade's) for a while and keeps its own: cut
+    for good, they once left a class graded one run at a time."""
     from bt_nav.grading.admission import SLOTS_ENV
 
     monkeypatch.setenv(SLOTS_ENV, str(tmp_path))
@@ -257,8 +258,14 @@ def test_fell_behind_calms_the_machine(tmp_path: Path, monkeypatch: pytest.Monke
     assert admission is not None and admission.slots is not None
     count = admission.slots.count
     assert admission.slots.usable() == count
+    for _ in range(3):
+        assert admission.enter()
     admission.fell_behind()
     assert admission.slots.usable() == max(1, count // 2)
+    assert admission.places == admission.limit == count, "its own places stay"
+    assert admission.enter(), "a place of the first half is free: the re-run starts"
+    for _ in range(4):
+        admission.leave()
 
 
 def test_a_1x_admission_takes_a_machine_place_per_run() -> None:

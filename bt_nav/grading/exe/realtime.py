@@ -10,7 +10,7 @@ its passes are shown as preview passes, and each failure is run at 1x (into ``<o
 the one shown, with the preview's reason kept beside it (``preview``).
 
 Each attempt is one :func:`bt_nav.grading.exe.grid.run_unless_stopped` through the grid's admission (a run that
-fell behind gives back its place first, so that the machine carries one run fewer).
+fell behind calms the machine first: :meth:`bt_nav.grading.admission.Admission.fell_behind`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def graded_run(attempt: Callable[[ExeSettings], Row | None], settings: ExeSettin
                on_behind: Callable[[], None] | None = None) -> Row | None:
     """The row of one cell (module docstring): ``attempt(settings)`` runs the cell once with those settings (None:
     stopped before it started). A preview's failure becomes its 1x run's row; a 1x run that fell behind is run
-    again (``on_behind`` called first: the admission takes a place away), then NOT GRADED."""
+    again (``on_behind`` called first: the admission calms the machine), then NOT GRADED."""
     row = attempt(settings)
     if row is None or row.get("outcome") not in JUDGED:
         return row
