@@ -231,11 +231,13 @@ class StudentResult:
 
     @property
     def verdict(self) -> str:
-        """PASSED, FAILED, or NOT GRADED: runs left without a verdict that are none of the node's doing (the class
+        """PASSED, FAILED (a run the node failed, whatever the others), or NOT GRADED: runs left without a verdict
+        that are none of the node's doing and no failure (the class
         page, the CSV and Gradescope say the same: :func:`bt_nav.grading.scores.handin_verdict`)."""
         if self.passed:
             return "PASSED"
-        return NOT_GRADED_VERDICT if any(unscored(r) for r in self.runs) else "FAILED"
+        failed = self.refused or any(not r.get("passed") and not unscored(r) for r in self.runs)
+        return NOT_GRADED_VERDICT if not failed and any(unscored(r) for r in self.runs) else "FAILED"
 
 
 def _runs(grid: Path) -> list[dict[str, Any]]:

@@ -167,13 +167,15 @@ def check_counts(check: dict[str, Any]) -> bool:
 
 
 def handin_verdict(record: dict[str, Any]) -> str:
-    """:data:`PASSED` (every run passed, none without a verdict, every launch-file check counts),
-    :data:`NOT_GRADED_VERDICT` (a run not graded), else :data:`FAILED`; as
+    """:data:`FAILED` (refused, or a run the node failed), else :data:`NOT_GRADED_VERDICT` (a run not graded),
+    :data:`PASSED` (every run passed, every launch-file check counts), else :data:`FAILED`; as
     :func:`bt_nav.grading.handins.verdict` says it, with the two states the runs and checks may now end in."""
+    runs = graded_runs(record)
+    if record.get("refused") or any(not r.get("passed") and not unscored(r) for r in runs):
+        return FAILED  # a verdict of the node's own at 1x: no run left without one can turn it into a pass
     if not_graded_reason(record):
         return NOT_GRADED_VERDICT
-    runs = graded_runs(record)
-    if record.get("refused") or not runs or not all(r.get("passed") for r in runs):
+    if not runs or not all(r.get("passed") for r in runs):
         return FAILED
     return PASSED if all(check_counts(c) for c in launch_checks(record)) else FAILED
 

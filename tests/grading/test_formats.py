@@ -267,6 +267,21 @@ def test_a_hand_in_with_a_run_not_graded_is_an_autograder_error_never_a_score(tm
     assert not_graded_reason(dict(class_records(out))["fay"]) is not None
 
 
+def test_a_failed_run_beside_one_not_graded_is_a_failure() -> None:
+    """A run the node failed at 1x is its verdict: another run left without one (not its doing) cannot make the
+    hand-in pass, so it is FAILED, not NOT GRADED (its score still waits: not_graded_reason); with no failure, NOT
+    GRADED."""
+    from bt_nav.grading.scores import handin_verdict
+
+    failed = {"passed": False, "outcome": "verdict", "reason": "failed: maneuver 1 turned 44 deg"}
+    behind = {"passed": False, "outcome": "error", "not_graded": "not graded: its simulator fell behind"}
+    passed = {"passed": True, "outcome": "verdict", "reason": "passed"}
+    assert handin_verdict({"runs": [failed, behind]}) == "FAILED"
+    assert not_graded_reason({"runs": [failed, behind]}) is not None
+    assert handin_verdict({"runs": [passed, behind]}) == "NOT GRADED"
+    assert handin_verdict({"runs": [passed, passed]}) == "PASSED"
+
+
 def test_the_gradebook_csv_has_a_row_per_student(tmp_path: Path) -> None:
     out = make_class(tmp_path / "class")
     weights = tmp_path / "w.yaml"
