@@ -103,9 +103,10 @@ def test_a_run_never_started_reports_the_robots_own_motion_and_no_check_passes(t
     import json
     from dataclasses import dataclass
 
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-    from bt_nav_sim.unjudged import FreeMotion
     from bt_nav_sim.world import world_from_dict
+
+    from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav.judge.unjudged import FreeMotion
 
     @dataclass
     class Config:

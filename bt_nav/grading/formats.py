@@ -32,8 +32,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.referee_core import check_reason
-
 from bt_nav.grading.grid import cell_label, failure_groups, preview_said, run_label, runs_label
 from bt_nav.grading.hints import LAUNCH_HINTS, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
@@ -57,6 +55,7 @@ from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this 
     unscored,
 )
 from bt_nav.grading.scores import tests as scored_tests
+from bt_nav.judge.referee_core import check_reason
 
 #: How many failed checks of a run its test's output lists before "and N more" (and failures, the summary).
 CHECKS_SHOWN = 5

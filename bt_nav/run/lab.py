@@ -1,7 +1,7 @@
 """The lab's check-off in a run: which judge a lab run gets, and how far each maneuver landed from its angle.
 
 Why here: a lock-step run of the ``lab`` profile is judged by the lab's check-off judge
-(:class:`bt_nav_sim.checkoff_core.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
+(:class:`bt_nav.judge.checkoff_core.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
 maneuver, the angle the executive chose (its maneuver event: :mod:`bt_nav.mission.snapshot`, ``side`` and
 ``angle_deg``, the whole degrees its log line ``Randomizer: front 0.49 m: turning right 143 deg`` says)
 against the angle the robot really turned (the judge measures it on ground truth, at rest). Both lock-step
@@ -13,8 +13,9 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from bt_nav_sim.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import World
+
+from bt_nav.judge.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
 
 #: s: an announcement this long before a judged turn's first turning command is that turn's (the still
 #: before a lagging turn is latency + 0.1 s; a repeated maneuver follows its predecessor at once).

@@ -15,6 +15,7 @@ ROOT = Path(__file__).resolve().parents[2]
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("mission", ("bt_nav.mission",)),
     ("simulator", ("bt_nav_sim",)),
+    ("judges", ("bt_nav.judge",)),
     ("media", ("bt_nav.media",)),
     ("ros", ("bt_nav.ros",)),
     ("simulator nodes", ("bt_nav.ros.nodes",)),
@@ -146,6 +147,7 @@ def test_the_checker_sees_a_cycle_and_an_upward_import() -> None:
 FOLDERS: list[tuple[str, str]] = [
     ("bt_nav/mission", "bt_nav.mission"),
     ("sim/bt_nav_sim", "bt_nav_sim"),
+    ("bt_nav/judge", "bt_nav.judge"),
     ("bt_nav/media", "bt_nav.media"),
     ("bt_nav/ros", "bt_nav.ros"),
     ("bt_nav (testing)", "bt_nav.testing"),

@@ -11,10 +11,10 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from bt_nav_sim.checkoff_core import MANEUVER_NAMES, CheckoffConfig, CheckoffJudge, maneuver_problems
 from bt_nav_sim.world import list_worlds, load_world, world_file
 
 from bt_nav.grading.exe.grid import choice_line
+from bt_nav.judge.checkoff_core import MANEUVER_NAMES, CheckoffConfig, CheckoffJudge, maneuver_problems
 from bt_nav.media.plot import branch_of_tip
 from bt_nav.mission import maneuver_spec as S
 from bt_nav.mission import params as P

@@ -7,11 +7,12 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig, SimCore
 from bt_nav_sim.lidar import LDS01, RayCaster
 from bt_nav_sim.multi import MultiSimCore
 from bt_nav_sim.world import load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
 

@@ -7,11 +7,12 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig
 from bt_nav_sim.multi import MultiSimCore
 from bt_nav_sim.walkers import GIVE_WAY, Walkers, WalkerSpec
 from bt_nav_sim.world import load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
 NO_ROBOTS = np.zeros((0, 3))
 ROOM = [{"x": 0, "y": -2.0, "length": 8, "thickness": 0.1}, {"x": 0, "y": 2.0, "length": 8, "thickness": 0.1},

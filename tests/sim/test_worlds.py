@@ -353,8 +353,9 @@ def _creep(name: str) -> dict[str, float]:
     """Creep straight ahead from the spawn at 0.05 m/s (noise-free) and note, per maneuver, the distance
     crept when its trigger first holds on noise-free ground truth, read over the sectors the arenas' headers
     describe (front +-30 deg, sides 90 +-30 deg: one member of the judge's family of readings)."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
     from bt_nav_sim.core import SimConfig, SimCore
+
+    from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
     core = SimCore(SimConfig(world=name, noise=False, profile="lab"))
     classic = CheckoffConfig(front_min_half_deg=30.0, side_centre_min_deg=90.0, side_centre_max_deg=90.0,
@@ -385,7 +386,7 @@ def test_lab_arena_triggers_what_it_checks_off_within_reach(name: str) -> None:
 
 def _reading_at_spawn(name: str, dx: float, dy: float, dyaw: float) -> Any:
     """The check-off judge's readings at the spawn moved by (dx, dy, dyaw deg)."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
     w = load_world(name)
     x, y, yaw = w.spawn

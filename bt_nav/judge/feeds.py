@@ -2,9 +2,9 @@
 recording says about itself (gaps, commands the robot did not follow). Pure: NumPy and the mission's scan module.
 
 Why a second feed: in the simulator the judge casts its readings noise-free from ground truth
-(:meth:`bt_nav_sim.checkoff_core.CheckoffJudge._read`). On a real TurtleBot3 there is no ground truth and no world
+(:meth:`bt_nav.judge.checkoff_core.CheckoffJudge._read`). On a real TurtleBot3 there is no ground truth and no world
 map; what there is, is the scans the robot recorded and its odometry. :class:`ScanReadings` turns each recorded
-scan into the same :class:`bt_nav_sim.readings.Reading` (the whole reasonable-sector family, over *that scan's*
+scan into the same :class:`bt_nav.judge.readings.Reading` (the whole reasonable-sector family, over *that scan's*
 angles, so an LDS-02 with a different beam count every scan reads right), and the judge takes "the reading at a
 pose's time" as the latest scan at or before it. The rules do not change; only where the readings come from.
 
@@ -27,8 +27,8 @@ from typing import Protocol
 
 import numpy as np
 
+from bt_nav.judge.readings import Reading, SectorFamily, SectorReader
 from bt_nav.mission.scan import Scan, ScanError, beam_angles, clean_validated, validate_scan
-from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 
 #: m: displacement allowed during a turn when the poses are odometry (a pivot's wheel slip drifts it by a few cm
 #: on a real TurtleBot3); the ground-truth judge keeps its own ``forward_motion_max``.

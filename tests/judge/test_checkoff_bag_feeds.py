@@ -1,4 +1,4 @@
-"""The bag check-off's pure feeds (sim/bt_nav_sim/feeds.py): readings from recorded scans at their own angles, the
+"""The bag check-off's pure feeds (bt_nav/judge/feeds.py): readings from recorded scans at their own angles, the
 silences of a topic, the commands a robot did not follow."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.feeds import ScanReadings, gaps, not_followed, story, usable_ranges
-from bt_nav_sim.readings import SectorFamily
 
+from bt_nav.judge.feeds import ScanReadings, gaps, not_followed, story, usable_ranges
+from bt_nav.judge.readings import SectorFamily
 from bt_nav.mission.scan import Scan
 
 

@@ -1,10 +1,10 @@
 """The check-off's trigger readings at its ground-truth samples: what the robot could have read when it decided.
 
-A reading (:class:`bt_nav_sim.readings.Reading`: front, left and right sector minima and the distance to the first
+A reading (:class:`bt_nav.judge.readings.Reading`: front, left and right sector minima and the distance to the first
 obstacle in the robot's swept path) comes from one of two places. In a world, it is cast noise-free from the true pose
 with unlimited range, the people walking where they were at the pose's time (the latest ``walkers`` sample at or before
 it). From a real robot, a reading source gives the reading of the latest scan at or before the pose
-(:class:`bt_nav_sim.feeds.ScanReadings`).
+(:class:`bt_nav.judge.feeds.ScanReadings`).
 
 When: the check-off keeps one entry per ground-truth sample, a reading while the robot is armed. In a world that cannot
 change (no appearing objects) it is cast when first asked for, not as the sample comes: an episode reads a few
@@ -20,10 +20,10 @@ import math
 from typing import Any
 
 import numpy as np
-
 from bt_nav_sim.lidar import LDS01, RayCaster, lidar_model
-from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 from bt_nav_sim.world import World
+
+from bt_nav.judge.readings import Reading, SectorFamily, SectorReader
 
 
 class _Pose:

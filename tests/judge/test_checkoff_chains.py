@@ -1,4 +1,4 @@
-"""The check-off judge on maneuvers back to back (bt_nav_sim.chains) and on its toggle cycle: a tiny kinematic
+"""The check-off judge on maneuvers back to back (bt_nav.judge.chains) and on its toggle cycle: a tiny kinematic
 driver plays a node's script in a small world, feeding the judge commands (20 Hz), ground truth (~33 Hz), the
 node's announcements (its log lines) and the schedule's service calls, which the scripted node obeys unless told
 otherwise (a false stops it, a true lets it go on)."""
@@ -9,9 +9,10 @@ import math
 import re
 
 import pytest
-from bt_nav_sim.chains import SPLIT_HINT, marks
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
+
+from bt_nav.judge.chains import SPLIT_HINT, marks
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
 DT = 0.01
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]

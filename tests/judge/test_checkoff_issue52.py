@@ -10,10 +10,11 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-from bt_nav_sim.findings import strict_kinds
-from bt_nav_sim.segments import ClockMap
 from bt_nav_sim.world import World, load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav.judge.findings import strict_kinds
+from bt_nav.judge.segments import ClockMap
 
 DT = 0.01
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]

@@ -7,8 +7,9 @@ import math
 import re
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 
 DT = 0.01  # physics step of the synthetic driver
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
@@ -481,7 +482,7 @@ def test_a_refused_disarm_is_named_a_refusal() -> None:
 
 def test_the_forward_rule_speaks_in_figures_that_agree() -> None:
     """No forward command but motion is said as such, never "commanded up to 0.00 m/s, moved 0.02 m"."""
-    from bt_nav_sim.checkoff_core import _forward_text
+    from bt_nav.judge.checkoff_core import _forward_text
 
     rolled = _forward_text({"forward_command": 0.0, "forward_motion": 0.0213})
     assert rolled.startswith("moved 0.021 m during the turn (ground truth) though none of its commands asked for "

@@ -1,5 +1,5 @@
-"""The lab check-off's run as long as its checks need (bt_nav_sim.checkoff_schedule) and its creep check
-(bt_nav_sim.checkoff_creep), on the default schedule: bt_nav's own executive in lock-step, and a small reactive node
+"""The lab check-off's run as long as its checks need (bt_nav.judge.checkoff_schedule) and its creep check
+(bt_nav.judge.checkoff_creep), on the default schedule: bt_nav's own executive in lock-step, and a small reactive node
 played by a kinematic driver (commands 20 Hz, ground truth ~33 Hz, the schedule's calls at 2 Hz, obeyed)."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
 
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav.run.lockstep import Lockstep
 
 DT = 0.01
