@@ -5,7 +5,7 @@ Why from the result files and not from the grader's internals: ``grade.json`` (o
 exactly what the report says, can be written again later from a finished grade, and does not change when the
 grader's insides do. A *record* here is one node's ``grade.json`` document, optionally with:
 
-- ``"launch"``: the hand-in's launch-file checks (:meth:`bt_nav.grading.launchfile.LaunchReport.to_dict`:
+- ``"launch"``: the hand-in's launch-file checks (:meth:`bt_nav.grading.launch.check.LaunchReport.to_dict`:
   ``{"file", "passed", "checks": [{"name", "passed", "reason", "line"}], "notes"}``), a test / testcase each;
 - ``"refused"``: why the hand-in was not run at all (a class's refused student: no node file, no maneuver).
 

@@ -32,7 +32,7 @@ from typing import Any
 
 from bt_nav.grading.classroom import NAME, Student, read_class_page
 from bt_nav.grading.exe.grid import declared_choice
-from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
+from bt_nav.grading.launch.check import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
 from bt_nav.grading.report import read_grade
 from bt_nav.grading.scores import NOT_GRADED_VERDICT, unscored
 

@@ -1,5 +1,5 @@
 """A launch file evaluated as ``ros2 launch`` would run it, against the stand-ins of
-:mod:`bt_nav.grading.launch_standins`: which nodes and processes it starts, with which parameters, and which launch
+:mod:`bt_nav.grading.launch.standins`: which nodes and processes it starts, with which parameters, and which launch
 arguments it declares -- once with the defaults, once with ``safety_distance:=0.7`` given on the command line.
 
 Why in a child process (:func:`evaluate`): evaluating runs the student's Python. The child has a time limit (a file
@@ -28,7 +28,7 @@ from typing import Any
 
 import yaml
 
-from bt_nav.grading import launch_standins as s
+from bt_nav.grading.launch import standins as s
 
 #: Seconds a launch file may take to describe itself.
 TIME_LIMIT = 10.0
@@ -429,7 +429,7 @@ def evaluate(path: Path, share: Path, overrides: dict[str, str], limit: float = 
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONDONTWRITEBYTECODE": "1"}
     with tempfile.TemporaryDirectory(prefix="bt_nav_launch_") as tmp:
         out = Path(tmp) / "evaluation.json"
-        command = [sys.executable, "-P", "-m", "bt_nav.grading.launch_eval", str(Path(path).resolve()),
+        command = [sys.executable, "-P", "-m", "bt_nav.grading.launch.evaluate", str(Path(path).resolve()),
                    str(Path(share).resolve()), str(out), *(f"{k}:={v}" for k, v in overrides.items())]
         try:
             done = subprocess.run(command, cwd=share, env=env, capture_output=True, timeout=limit, check=False,

@@ -5,7 +5,7 @@ files hold the launch checks too.
 
 Why here and not in the commands: one code path -- a folder is searched as a class's hand-in is
 (:func:`bt_nav.grading.handins.find_launch`, :func:`~bt_nav.grading.handins.find_node`), and the checks are
-:func:`bt_nav.grading.launchfile.check_launch`, as ``bt-nav grade --class`` runs them.
+:func:`bt_nav.grading.launch.check.check_launch`, as ``bt-nav grade --class`` runs them.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav.grading.handins import find_launch, find_node
-from bt_nav.grading.launchfile import LaunchReport, check_launch
+from bt_nav.grading.launch.check import LaunchReport, check_launch
 from bt_nav.grading.report import GRADE_FILE
 
 
