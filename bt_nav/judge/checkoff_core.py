@@ -34,20 +34,16 @@ made back to back are judged one by one (:mod:`bt_nav.judge.chains`).
 Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate``, whatever
 their forward speed (one that drives forward while turning is judged for that; a run that drives and turns the
 robot less than ``steer_max_deg`` is steering, not a turn). Trigger readings (front, left and right sector
-minima and the distance to the first obstacle in the robot's swept path) are cast noise-free from the true
-pose of a ground-truth sample while armed, as the world was at that moment (objects that appear later do not
-count; when they are cast: :mod:`bt_nav.judge.trigger_readings`). See :meth:`CheckoffJudge._judge_episode` for the
-rules.
+minima and the distance to the first obstacle in the robot's swept path) come from the judge's feed
+(:class:`bt_nav.judge.feeds.TriggerFeed`), one per pose sample while armed: in the simulator cast noise-free from
+the true pose in its world, as the world was at that moment (the simulator's truth feed, ``bt_nav_sim.truth``); from
+a real robot, its recorded scans (:class:`bt_nav.judge.feeds.SourceReadings`). The judge owns no world: whoever
+drives it (the ROS node, the lock-step runner, the recorded feed) hands it its feed. See
+:meth:`CheckoffJudge._judge_episode` for the rules.
 
-People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
+People walking (a world's ``walkers``): the truth feed's readings see them where they were at the pose's time,
 from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
 pose), so a maneuver that a person passing in front of the robot triggered is judged like any other.
-
-Appearing objects (``appear_within`` in a world file): the judge's ray caster sees an object once it has
-appeared. ``update_world=True`` (default) reveals them from the poses the judge observes; that is what a
-judge with a world of its own needs (over DDS), and it is harmless on a world the simulator shares
-(appearance is a monotone function of the robot's positions, and every observed pose is one the simulator
-has already checked). ``update_world=False`` leaves the world to the simulator that shares it.
 """
 
 from __future__ import annotations
@@ -56,8 +52,6 @@ import bisect
 import math
 from dataclasses import dataclass
 from typing import Any
-
-from bt_nav_sim.world import World
 
 from bt_nav.judge.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
 from bt_nav.judge.checkoff_creep import CREEP_CHECK, creep_check
@@ -69,12 +63,11 @@ from bt_nav.judge.checkoff_words import (
     maneuver_problems,
     performed_check,
 )
-from bt_nav.judge.feeds import ReadingSource
+from bt_nav.judge.feeds import TriggerFeed
 from bt_nav.judge.findings import implied_rules, maneuver_findings, strict_kinds
 from bt_nav.judge.readings import Reading, SectorFamily
 from bt_nav.judge.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
 from bt_nav.judge.segments import announced_between, join_small
-from bt_nav.judge.trigger_readings import TriggerReadings
 from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
@@ -212,14 +205,11 @@ CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers p
 class CheckoffJudge(Verdict):
     """The lab's check-off: schedule, ground truth and commands, the maneuver episodes, the verdict."""
 
-    def __init__(self, config: CheckoffConfig, world: World | None, *, update_world: bool = True,
-                 readings: ReadingSource | None = None) -> None:
-        """``readings``: where the trigger readings come from instead of casts in ``world`` (a real robot's recorded
-        scans, :class:`bt_nav.judge.feeds.ScanReadings`: the reading at a pose is the latest scan at or before it)."""
+    def __init__(self, config: CheckoffConfig, readings: TriggerFeed) -> None:
+        """``readings``: where the trigger reading at each pose sample comes from (the simulator's truth feed, cast
+        in its world; a real robot's scans, :class:`bt_nav.judge.feeds.SourceReadings`)."""
         self.config = config
-        self.world = world
-        self.update_world = update_world and world is not None
-        self.readings = TriggerReadings(world, config.lidar, config.family(), config.half_width, readings)
+        self.readings = readings
         self.t0: float | None = None
         self._t: list[float] = []
         self._x: list[float] = []
@@ -334,11 +324,9 @@ class CheckoffJudge(Verdict):
 
     def observe(self, t: float, x: float, y: float, yaw: float) -> None:
         """One ground-truth pose; out-of-order samples and those stamped after the report are ignored. While
-        armed the trigger readings are cast here, against the world as it is now."""
+        armed the feed takes its trigger reading here (the truth feed casts it against the world as it is now)."""
         if self._late(t) or (self._t and t <= self._t[-1]):
             return
-        if self.update_world and self.world.appearing:
-            self.world.update([(x, y)])
         if self._t:
             if self._armed_at(t):
                 self.travelled += math.hypot(x - self._x[-1], y - self._y[-1])

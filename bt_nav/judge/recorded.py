@@ -31,6 +31,7 @@ from bt_nav.judge.feeds import (
     Disobeyed,
     Gap,
     ScanReadings,
+    SourceReadings,
     gaps,
     not_followed,
     story,
@@ -118,7 +119,7 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     for t, scan in rec.scans:
         if a - SCAN_MAX_AGE <= t <= b:
             source.add(t, scan)
-    judge = CheckoffJudge(cfg, None, readings=source)
+    judge = CheckoffJudge(cfg, SourceReadings(source))
     judge.start(origin)  # one time zero for every window (TIME_ZERO)
     disobeyed = _disobeyed(rec, a, b)
     judge.apart = [(d.start, d.end) for d in disobeyed]  # never joined to a turn beside it (bt_nav.judge.segments)

@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from bt_nav_sim.truth import truth_feed
 from bt_nav_sim.world import World
 
 from bt_nav.judge.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
@@ -24,14 +25,15 @@ MATCH_WINDOW = 1.0
 
 def lab_judge(maneuver: str, world: World, config: CheckoffConfig | None = None, lidar: str = ""
               ) -> Callable[[int, str], CheckoffJudge]:
-    """A referee factory (index, name) -> the check-off judge of ``maneuver`` on the simulated ``world``
-    (the simulator's own object, which reveals appearing objects itself), reading along the robot's ``lidar``."""
+    """A referee factory (index, name) -> the check-off judge of ``maneuver`` fed the simulator's truth in
+    ``world`` (the simulator's own object, which reveals appearing objects itself), reading along the robot's
+    ``lidar``."""
     if maneuver not in MANEUVERS:
         raise ValueError(f"the lab's check-off judges maneuver A, B or C, not {maneuver!r}")
     cfg = config or CheckoffConfig(maneuver=maneuver, lidar=lidar)
 
     def make(_index: int, _name: str) -> CheckoffJudge:
-        return CheckoffJudge(cfg, world, update_world=False)
+        return CheckoffJudge(cfg, truth_feed(cfg, world, update_world=False))
 
     return make
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import pytest
 
 from bt_nav.judge.referee_core import CHECKS, Activate, Referee, RefereeConfig
+from tests.judge.truthkit import truth_judge
 
 RATE = 30.0  # ground-truth samples per second
 
@@ -250,9 +251,9 @@ def test_a_step_on_a_schedule_time_acts_whatever_the_float_error_of_t0() -> None
     assert ref.step(t) == [Activate(True)]  # static_before 5 s
     from bt_nav_sim.world import world_from_dict
 
-    from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav.judge.checkoff_core import CheckoffConfig
 
-    judge = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
+    judge = truth_judge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
     judge.start(t0)
     assert judge.step(t) == [Activate(True)]  # activate_at 5 s
 

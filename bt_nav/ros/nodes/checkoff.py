@@ -37,6 +37,7 @@ import time
 from dataclasses import fields
 from typing import Any
 
+from bt_nav_sim.truth import truth_feed
 from bt_nav_sim.world import load_world
 from rcl_interfaces.msg import Log
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -105,7 +106,8 @@ class CheckoffNode(JudgeNode):
         self.judge.on_announcement(t, str(msg.name), str(msg.msg))
 
     def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
-        """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""
+        """The judge for the parameters' config, fed the simulator's truth in its own copy of the world (which it
+        reveals appearing objects in from the poses it observes; ValueError/FileNotFoundError: refused)."""
         values = {f.name: type(getattr(_DEFAULTS, f.name))(p[f.name]) for f in fields(_DEFAULTS)}
         values["maneuver"] = normalise_maneuver(str(values["maneuver"]))  # randomizer, a, ... are A
         config = CheckoffConfig(**values)
@@ -115,7 +117,7 @@ class CheckoffNode(JudgeNode):
             self.get_logger().warning(f"world {world.name} lists check-offs of {', '.join(world.checkoff_maneuvers)}, "
                                       f"not {config.maneuver}: its trigger may never hold here")
         self.world_name = world.name
-        return CheckoffJudge(config, world, update_world=True), config
+        return CheckoffJudge(config, truth_feed(config, world, update_world=True)), config
 
     def schedule_text(self) -> str:
         """The lab's schedule, sim seconds from t0."""
