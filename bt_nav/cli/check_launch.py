@@ -26,8 +26,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Print the checks; the exit code says the verdict (module docstring)."""
-    from bt_nav.grading.launch.check import check_launch
-    from bt_nav.grading.launch.target import exit_code, launch_target
+    from bt_nav.grading.launch import check_launch, exit_code, launch_target
 
     parser = _parser()
     args = parser.parse_args(argv)

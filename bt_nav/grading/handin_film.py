@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.launch.check import LAUNCH_NAME
+from bt_nav.grading.launch import LAUNCH_NAME
 from bt_nav.media.console import ConsoleScript, node_lines, ros_log_line
 
 #: The terminal's transcript in the run directory (:meth:`bt_nav.run.terminal.NodeTerminal.transcript`).
@@ -58,7 +58,7 @@ def launch_stand_in(launch: Path | None, node: Path | None) -> StandIn:
     directly): the package is the one its passed "starts the node" check names, and ``safety_distance`` is given the
     sheet's default when its "passes" check passed (the check passes when the node would get that value).
     """
-    from bt_nav.grading.launch.check import ARGUMENT, DEFAULT, PASSES, STARTS, check_launch
+    from bt_nav.grading.launch import ARGUMENT, DEFAULT, PASSES, STARTS, check_launch
 
     if launch is None:
         where = f"beside {node.name}" if node is not None else "for this command"

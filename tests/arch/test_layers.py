@@ -246,3 +246,21 @@ def test_no_module_under_sim_defines_a_judge_or_a_check() -> None:
              for dep in sorted(imports_of(name, modules[name], modules))
              if _within(dep, ("bt_nav.judge",)) and not _within(dep, SIM_MAY_IMPORT_FROM_JUDGE)]
     assert not taken, "\n".join(taken)
+
+
+#: The launch-file checking room and the entry points it offers (its ``__init__``).
+LAUNCH_ROOM = "bt_nav.grading.launch"
+
+
+def test_launch_file_checking_is_one_room_used_through_its_entry_points() -> None:
+    """Reading, evaluating (with its stand-ins), reports and targets of launch files live in one package, and
+    everything outside it imports that package's entry points, never a module inside it."""
+    modules = project_modules()
+    room = {name for name in modules if name.startswith(LAUNCH_ROOM + ".")}
+    assert {f"{LAUNCH_ROOM}.{m}" for m in ("check", "evaluate", "standins", "static", "report", "target")} <= room
+    flat = [name for name in modules if name.startswith("bt_nav.grading.launch") and not _within(name, (LAUNCH_ROOM,))]
+    assert not flat, f"launch-file modules outside {LAUNCH_ROOM}: {flat}"
+    inside = [f"{name} imports {dep}" for name in sorted(modules) if not _within(name, (LAUNCH_ROOM,))
+              for dep in sorted(imports_of(name, modules[name], modules)) if dep in room]
+    assert not inside, "import the launch room's entry points (bt_nav.grading.launch), not its modules:\n" + \
+        "\n".join(inside)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.launch.check import DECLARES, PASSES, STARTS, check_launch
+from bt_nav.grading.launch import DECLARES, PASSES, STARTS, check_launch
 
 LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
 NODE = Path("reactive_navigator.py")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.launch.check import DECLARES, PASSES, STARTS, LaunchReport, check_launch
+from bt_nav.grading.launch import DECLARES, PASSES, STARTS, LaunchReport, check_launch
 from bt_nav.grading.launch.static import read_statically
 
 LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
