@@ -40,7 +40,7 @@ test: $(STAMP) lint browser
 # The contributor's edit-test loop: the tests that need no DDS (the pure core, the tree's leaves, the simulator and
 # the judges' rules, the grading logic, the media), in minutes; `make test` stays the whole suite. Its wall time is
 # measured by `make bench` (bench/quick_tests.py) and stated in docs/developing.md.
-QUICK_TESTS := tests/arch tests/behaviours tests/mission tests/sim tests/grading tests/media tests/run
+QUICK_TESTS := tests/arch tests/behaviours tests/mission tests/sim tests/judge tests/grading tests/media tests/run
 test-quick: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not ros and not slow" $(QUICK_TESTS)
 

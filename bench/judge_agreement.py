@@ -1,7 +1,7 @@
 """``make judge-agreement``: do the check-off's two judges agree? Simulator runs with a real robot's effects on, each
 judged twice: by the simulator's judge from ground truth and ray casts (what ``bt-nav checkoff`` does in the
 simulator), and by the robot judge from the run's odometry, recorded scans and commands alone (what
-``bt-nav checkoff --bag`` / ``--robot`` does on a TurtleBot: :func:`bt_nav_sim.recorded.judge_recording`).
+``bt-nav checkoff --bag`` / ``--robot`` does on a TurtleBot: :func:`bt_nav.judge.recorded.judge_recording`).
 
 The runs: bt_nav's own executive in lock-step (:class:`bt_nav.run.lockstep.Lockstep`, the lab profile), over the
 lab's arenas x maneuvers A, B, C x seeds, with the effects real TurtleBot3 bags show: an LDS-02 (its beam count
@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-from bt_nav_sim.recorded import Recording, ServiceCall, judge_recording
 from bt_nav_sim.world import list_worlds
 
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav.judge.recorded import Recording, ServiceCall, judge_recording
 from bt_nav.mission.scan import Scan
 from bt_nav.run.lockstep import Lockstep
 

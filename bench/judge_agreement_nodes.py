@@ -22,10 +22,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.checkoff_core import CheckoffConfig
-from bt_nav_sim.recorded import ServiceCall, judge_recording
-
 from bench.judge_agreement import EFFECTS, Row, compare
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from bt_nav.judge.recorded import ServiceCall, judge_recording
 from bt_nav.media.robotbag import read_robot_bag
 
 #: ``python -c`` code: ``bt-nav grade`` with /odom in its runs' bags (the module docstring), argv after it.

@@ -56,7 +56,7 @@ LOCKSTEP_AREAS = (
     ("bt_nav_sim/lidar.py", "LiDAR ray casting (Python side)"),
     ("bt_nav_sim/physics.py", "physics"),
     ("bt_nav_sim/world.py", "world geometry (collision clearance)"),
-    ("bt_nav_sim/referee_core.py", "referee"),
+    ("bt_nav/judge/referee_core.py", "referee"),
     ("numpy", "numpy kernels"),
     ("enum.py", "enum formatting (py_trees debug strings)"),
     ("bt_nav/", "bt_nav core, lock-step loop"),

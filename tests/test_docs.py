@@ -68,8 +68,9 @@ def test_every_command_and_option_has_its_entry(reference: dict[str, str]) -> No
 
 
 def test_every_world_and_check_has_its_entry(reference: dict[str, str]) -> None:
-    from bt_nav_sim.referee_core import CHECK_WORDS
     from bt_nav_sim.world import list_worlds
+
+    from bt_nav.judge.referee_core import CHECK_WORDS
 
     for name in list_worlds("all"):
         assert f"### {name}\n" in reference["worlds.md"], name

@@ -10,6 +10,7 @@ import pytest
 
 from bt_nav.ros.nodes import judging
 from bt_nav.ros.nodes.judging import JudgeNode
+from tests.judge.truthkit import truth_judge
 
 
 class Wall:
@@ -103,9 +104,10 @@ def test_a_run_never_started_reports_the_robots_own_motion_and_no_check_passes(t
     import json
     from dataclasses import dataclass
 
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-    from bt_nav_sim.unjudged import FreeMotion
     from bt_nav_sim.world import world_from_dict
+
+    from bt_nav.judge.checkoff_core import CheckoffConfig
+    from bt_nav.judge.unjudged import FreeMotion
 
     @dataclass
     class Config:
@@ -115,7 +117,7 @@ def test_a_run_never_started_reports_the_robots_own_motion_and_no_check_passes(t
     for k in range(101):  # 10 s at 0.3 m/s, a wall hit at 6 s
         free.observe(2.0 + k * 0.1, 0.03 * k, 0.0, 0.0)
     free.on_collision(6.0, 1.2, 0.0)
-    checkoff = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "t", "segments": []}))
+    checkoff = truth_judge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "t", "segments": []}))
     judge = SimpleNamespace(
         json_path=str(tmp_path / "v.json"), exit_code=judging.EXIT_FAILED, started=False, free=free,
         audit=None, judge=checkoff, required_parameters=(), findings=[], finding_kinds=[], t0_wall=None,

@@ -8,10 +8,10 @@ odometry at the robot's 20 Hz. Every maneuver must still land within 10 deg of t
 from __future__ import annotations
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig
 from bt_nav_sim.world import list_worlds, load_world
 
 from bt_nav.grading.grid import Job, run_job
+from bt_nav.judge.checkoff_core import CheckoffConfig
 from bt_nav.mission.snapshot import event
 from bt_nav.run.lab import angle_errors, announced_turns
 from bt_nav.run.lockstep import run_mission

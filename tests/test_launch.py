@@ -1,7 +1,7 @@
 """The launch files, checked without ``ros2 launch`` (launch/launch_ros are not on PyPI).
 
 Static checks read each file's source; then each ``generate_launch_description()`` runs against
-the recording stand-ins of the launch API (bt_nav.grading.launch_standins, the grader's own), so
+the recording stand-ins of the launch API (bt_nav.grading.launch.standins, the grader's own), so
 the real code path executes and what it would hand to ``launch_ros`` is inspected.
 Where the real ``launch_ros`` is importable, it runs with that too.
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.launch_standins import standin_modules
+from bt_nav.grading.launch.standins import standin_modules
 from bt_nav.mission.params import SPECS
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -218,7 +218,7 @@ def test_checkoff_robot_launch_starts_the_live_listener_as_asked(monkeypatch: py
     from types import SimpleNamespace
 
     from bt_nav.cli.checkoff import parser
-    from bt_nav.grading.launch_standins import perform
+    from bt_nav.grading.launch.standins import perform
 
     module, description = run_launch_file(LAUNCH / "checkoff_robot.launch.py", monkeypatch)
     nodes = [e for e in description.args[0] if type(e).__name__ == "Node"]

@@ -1,6 +1,6 @@
 """``bt-nav check-launch FILE|DIR [--node NODE_FILE]``: the lab sheet's launch-file checks (Task 3: it starts the
 node, declares ``safety_distance`` with the default 0.5, passes it to the node) of one launch file or hand-in folder,
-printed alone. The file is evaluated as ``ros2 launch`` would run it (:mod:`bt_nav.grading.launchfile`: stand-ins of
+printed alone. The file is evaluated as ``ros2 launch`` would run it (:mod:`bt_nav.grading.launch.check`: stand-ins of
 launch and launch_ros in a time-limited child, with the defaults and with ``safety_distance:=0.7``), the same checks
 ``bt-nav grade --class`` gives each hand-in. Exit 0 every check passed, 1 one failed, 2 one could not be checked
 (a TA should look)."""
@@ -26,8 +26,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Print the checks; the exit code says the verdict (module docstring)."""
-    from bt_nav.grading.launch_target import exit_code, launch_target
-    from bt_nav.grading.launchfile import check_launch
+    from bt_nav.grading.launch import check_launch, exit_code, launch_target
 
     parser = _parser()
     args = parser.parse_args(argv)

@@ -4,7 +4,7 @@
   robot node in the simulator and judges it from ground truth and its own ray casts;
 - from a bag (``--bag BAG``): a real TurtleBot's recording (rosbag2 sqlite3 or MCAP, or a ROS 1 .bag), judged
   offline without DDS from /odom (the pose's yaw, never the twist), /scan as recorded and /cmd_vel
-  (:mod:`bt_nav.media.robotbag`, :mod:`bt_nav_sim.recorded`). Same rules, same words; what the bag cannot show
+  (:mod:`bt_nav.media.robotbag`, :mod:`bt_nav.judge.recorded`). Same rules, same words; what the bag cannot show
   (the service calls, unless it holds their events; contact) is listed as not judged;
 - live beside a real robot (``--robot``): it listens to the same topics for ``--duration`` s or until Ctrl-C
   (:mod:`bt_nav.ros.nodes.robotcheck`, never publishing, never calling the service), then judges what it heard as
@@ -160,8 +160,7 @@ def _latest(raw: dict) -> float:
 
 def _decided_lines(raw: dict, calls: list, names: dict, config: object) -> list:
     """The check-off's lines of what was heard so far, at their times (none while there is too little to judge)."""
-    from bt_nav_sim.recorded import judge_recording
-
+    from bt_nav.judge.recorded import judge_recording
     from bt_nav.media.bag import BagError
     from bt_nav.media.robotbag import recording_from
     from bt_nav.media.robotrun import checkoff_timeline
@@ -177,9 +176,8 @@ def _decided_lines(raw: dict, calls: list, names: dict, config: object) -> list:
 
 def _judge_robot(opts: argparse.Namespace) -> int:
     """Read the bag (or listen live), judge, print; the verdict JSON if asked."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig
-    from bt_nav_sim.recorded import Window, judge_recording, odometry_config, report_lines
-
+    from bt_nav.judge.checkoff_core import CheckoffConfig
+    from bt_nav.judge.recorded import Window, judge_recording, odometry_config, report_lines
     from bt_nav.media.bag import BagError
     from bt_nav.media.robotbag import Topics, read_robot_bag
 
@@ -217,9 +215,9 @@ def _judge_robot(opts: argparse.Namespace) -> int:
 
 
 def _time_zero(rec: object) -> str:
-    """The report's time zero in the words of help, terminal, JSON and film (bt_nav_sim.recorded.TIME_ZERO), with
+    """The report's time zero in the words of help, terminal, JSON and film (bt_nav.judge.recorded.TIME_ZERO), with
     the topics this recording's are."""
-    from bt_nav_sim.recorded import TIME_ZERO
+    from bt_nav.judge.recorded import TIME_ZERO
 
     topics = rec.topics  # type: ignore[attr-defined]
     return TIME_ZERO.replace("/odom, /scan or /cmd_vel", f"{topics['odom']}, {topics['scan']} or {topics['cmd']}")

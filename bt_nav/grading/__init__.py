@@ -21,10 +21,10 @@ It sits above the run layer (:mod:`bt_nav.run`, how *one* mission runs) and belo
   ``results.json``, JUnit XML, a gradebook's CSV), from its ``grade.json`` / ``class.json``; its points and verdicts
   from :mod:`bt_nav.grading.scores`, its fix hints from :mod:`bt_nav.grading.hints`; :mod:`bt_nav.grading.classpage`
   the class page (``class.html``).
-- :mod:`bt_nav.grading.handins`: a folder of hand-ins; their launch files checked by
-  :mod:`bt_nav.grading.launchfile` (``bt-nav check-launch``): the file evaluated as ``ros2 launch`` would run it
-  (:mod:`bt_nav.grading.launch_eval`, in a child process, against :mod:`bt_nav.grading.launch_standins`), the static
-  reader :mod:`bt_nav.grading.launch_static` its fallback; the hand-in video's stand-in line
-  (:mod:`bt_nav.grading.handin_film`).
+- :mod:`bt_nav.grading.handins`: a folder of hand-ins (each one's files found by
+  :mod:`bt_nav.grading.handin_files`); their launch files checked by :mod:`bt_nav.grading.launch`, launch-file
+  checking in a room of its own used through its entry points (``bt-nav check-launch``): the file evaluated as
+  ``ros2 launch`` would run it (in a child process, against recording stand-ins), read statically as the fallback;
+  the hand-in video's stand-in line (:mod:`bt_nav.grading.handin_film`).
 - :mod:`bt_nav.grading.rules`: what a node must do, from the judges' own rules (``bt-nav rules``, ``rules.md``).
 """

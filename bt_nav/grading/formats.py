@@ -5,7 +5,7 @@ Why from the result files and not from the grader's internals: ``grade.json`` (o
 exactly what the report says, can be written again later from a finished grade, and does not change when the
 grader's insides do. A *record* here is one node's ``grade.json`` document, optionally with:
 
-- ``"launch"``: the hand-in's launch-file checks (:meth:`bt_nav.grading.launchfile.LaunchReport.to_dict`:
+- ``"launch"``: the hand-in's launch-file checks (:meth:`bt_nav.grading.launch.check.LaunchReport.to_dict`:
   ``{"file", "passed", "checks": [{"name", "passed", "reason", "line"}], "notes"}``), a test / testcase each;
 - ``"refused"``: why the hand-in was not run at all (a class's refused student: no node file, no maneuver).
 
@@ -32,8 +32,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.referee_core import check_reason
-
 from bt_nav.grading.grid import cell_label, failure_groups, preview_said, run_label, runs_label
 from bt_nav.grading.hints import check_rule, finding_hints, launch_hint, not_graded_hint, run_hints, student_words
 from bt_nav.grading.report import GRADE_FILE, read_grade
@@ -58,6 +56,7 @@ from bt_nav.grading.scores import (  # noqa: F401  (WEIGHTS_FILE, Weights: this 
     unscored,
 )
 from bt_nav.grading.scores import tests as scored_tests
+from bt_nav.judge.referee_core import check_reason
 
 #: How many failed checks of a run its test's output lists before "and N more" (and failures, the summary).
 CHECKS_SHOWN = 5

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.launchfile import LAUNCH_NAME
+from bt_nav.grading.launch import LAUNCH_NAME
 from bt_nav.media.console import ConsoleScript, node_lines, ros_log_line
 
 #: The terminal's transcript in the run directory (:meth:`bt_nav.run.terminal.NodeTerminal.transcript`).
@@ -52,13 +52,13 @@ class StandIn:
 
 def launch_stand_in(launch: Path | None, node: Path | None) -> StandIn:
     """What the launch file ``launch`` (None: none found) says of the node file ``node``: its package and the
-    parameters the node gets, through :func:`bt_nav.grading.launchfile.check_launch`.
+    parameters the node gets, through :func:`bt_nav.grading.launch.check.check_launch`.
 
     The one use of the launch-file reader here (adapt it when that module offers the package and parameters
     directly): the package is the one its passed "starts the node" check names, and ``safety_distance`` is given the
     sheet's default when its "passes" check passed (the check passes when the node would get that value).
     """
-    from bt_nav.grading.launchfile import ARGUMENT, DEFAULT, PASSES, STARTS, check_launch
+    from bt_nav.grading.launch import ARGUMENT, DEFAULT, PASSES, STARTS, check_launch
 
     if launch is None:
         where = f"beside {node.name}" if node is not None else "for this command"

@@ -21,7 +21,6 @@ The API other formats build on (Gradescope, JUnit): :class:`StudentResult` and :
 
 from __future__ import annotations
 
-import ast
 import re
 import shlex
 import sys
@@ -32,14 +31,11 @@ from typing import Any
 
 from bt_nav.grading.classroom import NAME, Student, read_class_page
 from bt_nav.grading.exe.grid import declared_choice
-from bt_nav.grading.launchfile import LAUNCH_NAME, LaunchReport, check_launch, launch_ros_installed
+from bt_nav.grading.handin_files import SKIPPED, find_node
+from bt_nav.grading.launch import LAUNCH_NAME, LaunchReport, check_launch, find_launch, launch_ros_installed
 from bt_nav.grading.report import read_grade
 from bt_nav.grading.scores import NOT_GRADED_VERDICT, unscored
 
-#: The lab sheet's name for the node file.
-NODE_NAME = "reactive_navigator.py"
-#: Folders never searched: a colcon workspace's outputs, caches.
-SKIPPED = {"build", "install", "log", "__pycache__", "node_modules"}
 #: Files that make a folder one submission rather than a folder of students.
 SUBMISSION_MARKS = ("package.xml", "setup.py", "setup.cfg")
 FEEDBACK = "feedback.md"
@@ -66,61 +62,6 @@ class HandIn:
         """The hand-in as ``class.json`` holds it (``"handin"`` of the student's row)."""
         return {"folder": str(self.folder), "node": None if self.node is None else str(self.node),
                 "launch": self.launch.to_dict(), "problem": self.problem}
-
-
-def _visible(path: Path, top: Path) -> bool:
-    return not any(part.startswith(".") or part in SKIPPED for part in path.relative_to(top).parts[:-1])
-
-
-def _files(folder: Path, pattern: str) -> list[Path]:
-    return sorted(p for p in folder.rglob(pattern) if p.is_file() and _visible(p, folder))
-
-
-def defines_node(path: Path) -> bool | None:
-    """Whether ``path`` defines a class deriving from rclpy's ``Node`` (None: not parseable Python)."""
-    try:
-        tree = ast.parse(path.read_bytes())
-    except (OSError, SyntaxError, ValueError):
-        return None
-    names = {"rclpy.node.Node"}
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom) and node.module in ("rclpy.node", "rclpy"):
-            names |= {a.asname or a.name for a in node.names if a.name == "Node"}
-            names |= {f"{a.asname or a.name}.Node" for a in node.names if a.name == "node"}
-        elif isinstance(node, ast.Import):
-            names |= {f"{a.asname}.Node" for a in node.names if a.name == "rclpy.node" and a.asname}
-    return any(isinstance(n, ast.ClassDef) and any(ast.unparse(b) in names for b in n.bases) for n in ast.walk(tree))
-
-
-def find_node(folder: Path) -> tuple[Path | None, str | None]:
-    """(the student's node file, None) or (None, why none: what was found instead)."""
-    named = _files(folder, NODE_NAME)
-    if len(named) == 1:
-        return named[0], None
-    if named:
-        return None, f"{len(named)} files named {NODE_NAME}: " + ", ".join(str(p.relative_to(folder)) for p in named)
-    sources = [p for p in _files(folder, "*.py") if not p.name.endswith("launch.py") and p.name != "setup.py"]
-    verdicts = {p: defines_node(p) for p in sources}
-    nodes = [p for p, v in verdicts.items() if v]
-    if len(nodes) == 1:
-        return nodes[0], None
-    rel = [str(p.relative_to(folder)) for p in sources]
-    if nodes:
-        return None, (f"no {NODE_NAME}, and {len(nodes)} Python files define an rclpy Node ("
-                      + ", ".join(str(p.relative_to(folder)) for p in nodes) + f"): name the node's {NODE_NAME}")
-    broken = [str(p.relative_to(folder)) for p, v in verdicts.items() if v is None]
-    found = f"Python files: {', '.join(rel)}" if rel else "no Python file"
-    extra = f"; not valid Python: {', '.join(broken)}" if broken else ""
-    return None, f"no {NODE_NAME} and no Python file defining an rclpy Node ({found}{extra})"
-
-
-def find_launch(folder: Path) -> Path | None:
-    """The student's launch file: the sheet's name, else the one ``*.launch.py`` / ``*_launch.py`` (None: none)."""
-    named = _files(folder, LAUNCH_NAME)
-    if named:
-        return named[0]
-    others = [p for p in _files(folder, "*.py") if p.name.endswith(("launch.py", "_launch.py"))]
-    return others[0] if len(others) == 1 else None
 
 
 def is_submission(folder: Path) -> bool:

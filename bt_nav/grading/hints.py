@@ -5,7 +5,7 @@ a turn of the wrong angle, forward motion during a turn, ...), per finding, per 
 Why per kind and not per check: one check, ``maneuver N``, fails for a trigger that did not hold, a turn of the wrong
 size, the wrong side or forward motion, and each needs other advice: a student whose trigger is wrong and whose turn
 is right, told how to turn, rewrites working code. The judge names the kinds (the check's ``kinds``,
-:func:`bt_nav_sim.checkoff_words.maneuver_faults`) and the rule each broke (``rules``); a grade written before the
+:func:`bt_nav.judge.checkoff_words.maneuver_faults`) and the rule each broke (``rules``); a grade written before the
 judge named them is read from its words (:func:`check_kinds`).
 
 Why here and not in the judges: a judge says what happened (``maneuver 1 turned 45 deg right; the Smart Pivot needs
@@ -15,7 +15,7 @@ student, said where the student reads it: each failed test of Gradescope's ``res
 names), true for any node and accepting every method the sheet allows (the sheet prescribes no way of measuring a
 turn: odometry and a turn timed at the rate the node commands are both right when they land within the tolerance),
 naming no file of the grader's. A launch-file check's advice comes from the file itself (the check's ``fix``,
-:mod:`bt_nav.grading.launchfile`); :data:`LAUNCH_HINTS` is the rule said plainly, for a check that carries none.
+:mod:`bt_nav.grading.launch.check`); :data:`LAUNCH_HINTS` is the rule said plainly, for a check that carries none.
 """
 
 from __future__ import annotations
@@ -23,13 +23,12 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from bt_nav_sim.checkoff_core import CheckoffConfig
-from bt_nav_sim.checkoff_words import ANGLE, FORWARD, LATE, MOVED_ON, SIDE, STILL_TURNING, TRIGGER
-from bt_nav_sim.findings import BACK_TO_BACK
-from bt_nav_sim.findings import MOVED_ON as MOVED_ON_FINDING
-from bt_nav_sim.findings import SIDE as SIDE_FINDING
-
 from bt_nav.grading.grid import CRASH_REASONS
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from bt_nav.judge.checkoff_words import ANGLE, FORWARD, LATE, MOVED_ON, SIDE, STILL_TURNING, TRIGGER
+from bt_nav.judge.findings import BACK_TO_BACK
+from bt_nav.judge.findings import MOVED_ON as MOVED_ON_FINDING
+from bt_nav.judge.findings import SIDE as SIDE_FINDING
 from bt_nav.mission.maneuver_spec import maneuver_spec
 
 #: A judge check's advice by its name, for the checks whose name is their one kind of failure.
@@ -62,7 +61,7 @@ CHECK_HINTS = {
 }
 
 #: What the sheet's Task 3 asks of each launch-file check, said plainly: the advice of a check that carries none
-#: of its own (``fix``: what the file holds and what it misses, :mod:`bt_nav.grading.launchfile`).
+#: of its own (``fix``: what the file holds and what it misses, :mod:`bt_nav.grading.launch.check`).
 LAUNCH_HINTS = {
     "starts the node": "the sheet asks the launch description returned by `generate_launch_description()` to hold "
                        "a `launch_ros.actions.Node(package=..., executable='reactive_navigator')` for your node",

@@ -4,8 +4,8 @@ Why generated: a student must find in two minutes the topics, services and param
 maneuver's trigger, angle, side and tolerances, and the schedule. Typed by hand into a guide, those drift from
 what the judges do (the Smart Pivot's 0.3 m sat inside one bullet of the lab's page, the homework's service names
 only in remap strings). Here every value is read where the judges and the grader hold it: the lab's
-:class:`~bt_nav_sim.checkoff_core.CheckoffConfig` (``trigger_rule``, ``angle_rule``, its tolerances and schedule),
-the homework's :class:`~bt_nav_sim.referee_core.RefereeConfig`, the checks' words (``CHECK_WORDS``), the service
+:class:`~bt_nav.judge.checkoff_core.CheckoffConfig` (``trigger_rule``, ``angle_rule``, its tolerances and schedule),
+the homework's :class:`~bt_nav.judge.referee_core.RefereeConfig`, the checks' words (``CHECK_WORDS``), the service
 names of :mod:`bt_nav.ros.bringup`, what ``bt-nav grade --exe`` appends and runs (:mod:`bt_nav.grading.exe.run`,
 :mod:`bt_nav.grading.plan`). What only the ROS edge holds (the simulator's QoS, the graph audit's topics: rclpy
 modules, which this pure module does not import) is a constant here, and ``tests/ros/test_node_rules.py`` checks
@@ -23,18 +23,18 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from bt_nav_sim.chains import ANNOUNCE_WINDOW
-from bt_nav_sim.checkoff_core import CHECKS as LAB_CHECKS
-from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, MANEUVER_NAMES, CheckoffConfig
-from bt_nav_sim.checkoff_creep import CREEP_CHECK, CREEP_SHEET
-from bt_nav_sim.checkoff_schedule import schedule_words
 from bt_nav_sim.lidar import LIDARS
-from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
-from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
 
 from bt_nav.grading.exe.pace import speed_words
 from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
 from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
+from bt_nav.judge.chains import ANNOUNCE_WINDOW
+from bt_nav.judge.checkoff_core import CHECKS as LAB_CHECKS
+from bt_nav.judge.checkoff_core import INTERRUPT_SLACK, MANEUVER_NAMES, CheckoffConfig
+from bt_nav.judge.checkoff_creep import CREEP_CHECK, CREEP_SHEET
+from bt_nav.judge.checkoff_schedule import schedule_words
+from bt_nav.judge.referee_core import CHECK_WORDS, RefereeConfig
+from bt_nav.judge.referee_core import CHECKS as HOMEWORK_CHECKS
 from bt_nav.mission.params import LAB_MANEUVERS
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, param_arg
 from bt_nav.run.terminal import shell_text

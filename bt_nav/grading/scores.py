@@ -3,7 +3,7 @@ instructor's weights), whether a run or a check counts, and the hand-in's verdic
 
 Why one module: Gradescope's ``results.json``, the gradebook's CSV and the class page all say a student's score and
 verdict; computed once here they cannot disagree. A *record* is one node's ``grade.json`` document, optionally with
-``"launch"`` (the hand-in's launch-file checks, :meth:`bt_nav.grading.launchfile.LaunchReport.to_dict`) and
+``"launch"`` (the hand-in's launch-file checks, :meth:`bt_nav.grading.launch.check.LaunchReport.to_dict`) and
 ``"refused"`` (why the hand-in was not run). A run that hit a bt_nav error, or that was not graded (a program
 outside the node interfered), is none of the node's doing: it scores 0 of 0 and the others share its points; a
 hand-in with a run not graded has no score at all (:func:`not_graded_reason`). A launch-file check that ended
@@ -36,7 +36,7 @@ ERROR = "bt_nav error"
 #: outside the node interfered, not the student's doing (its outcome is :data:`ERROR` too).
 NOT_GRADED = "not_graded"
 #: A launch-file check's key, false when the grader could not follow the file: "not checked: a TA should look"
-#: (:class:`bt_nav.grading.launch_report.LaunchCheck`); it scores as passed and says so, for the TA.
+#: (:class:`bt_nav.grading.launch.report.LaunchCheck`); it scores as passed and says so, for the TA.
 CHECKED = "checked"
 
 

@@ -14,9 +14,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bt_nav_sim.referee_core import RefereeConfig
 from bt_nav_sim.world import World, box_corners
 
+from bt_nav.judge.referee_core import RefereeConfig
 from bt_nav.mission.maneuver_spec import tips as maneuver_tips
 from bt_nav.mission.resources import written_whole
 

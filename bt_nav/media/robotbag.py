@@ -1,5 +1,5 @@
 """A real robot's bag read for the check-off (``bt-nav checkoff --bag``): /odom, /scan, /cmd_vel, the
-``toggle_navigation`` service events and /tf's LiDAR mount, as a :class:`bt_nav_sim.recorded.Recording`.
+``toggle_navigation`` service events and /tf's LiDAR mount, as a :class:`bt_nav.judge.recorded.Recording`.
 
 Why not :func:`bt_nav.media.bagread.read_bag`: that reads the bags bt_nav writes (MCAP, one scan geometry, sim
 time). A TurtleBot3's bag is whatever ``ros2 bag record`` (sqlite3 or MCAP) or ``rosbag record`` (ROS 1) wrote on
@@ -26,8 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bt_nav_sim.recorded import Recording, ServiceCall
 
+from bt_nav.judge.recorded import Recording, ServiceCall
 from bt_nav.media.bag import BagError
 from bt_nav.media.bagformats import SETBOOL_EVENT, bag_topics, decoded_messages, robot_typestore  # noqa: F401
 from bt_nav.mission.geometry import yaw_from_quaternion

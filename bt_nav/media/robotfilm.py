@@ -14,7 +14,7 @@ corner where the data came from (:attr:`RobotRun.source`). The film ends on the 
 every line of the verdict, whole, the overall verdict first and last) held for :data:`CARD_HOLD` s.
 
 The film never judges: every word of the panel, the banners and the card is the judge's
-(:func:`bt_nav_sim.recorded.judge_recording`, read once by :func:`bt_nav.media.robotrun.load_robot_run`).
+(:func:`bt_nav.judge.recorded.judge_recording`, read once by :func:`bt_nav.media.robotrun.load_robot_run`).
 
 :func:`write_robot_video` also writes, per frame, every text drawn on it (``<video>.console.json``,
 :class:`bt_nav.media.console.ConsoleLog`): label, caption, banners, notes, scale, check-off lines, console rows, card.

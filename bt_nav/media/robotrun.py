@@ -5,7 +5,7 @@ from and, given the maneuver, the check-off's lines at the times they were decid
 Why its own module: :mod:`bt_nav.media.bagread` is the simulator's bags (ground truth, one scan geometry, sim
 time); a robot's bag has only its odometry and its own scans, with an LDS-02's beam count changing scan to scan.
 So the picture of the room is the scans laid out from the odometry (:meth:`RobotRun.scan_points`), and the
-check-off's lines come from the same judge as ``bt-nav checkoff --bag`` (:func:`bt_nav_sim.recorded.judge_recording`).
+check-off's lines come from the same judge as ``bt-nav checkoff --bag`` (:func:`bt_nav.judge.recorded.judge_recording`).
 
 Where the data came from, said on every frame (:attr:`RobotRun.source`): :data:`REAL_LABEL`, or
 :data:`SYNTHETIC_LABEL` for a bag with a ``/synthetic`` topic (tests/media/robotsynth.py writes one),
@@ -22,8 +22,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from bt_nav_sim.recorded import Recording
 
+from bt_nav.judge.recorded import Recording
 from bt_nav.media.bag import TRUTH
 from bt_nav.media.console import SIM_LABEL
 
@@ -188,11 +188,11 @@ class RobotRun:
 
 
 def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
-    """The verdict's lines (:func:`bt_nav_sim.recorded.report_lines`) at the times they were decided: each
+    """The verdict's lines (:func:`bt_nav.judge.recorded.report_lines`) at the times they were decided: each
     maneuver's line (judged, or why not) when its turn settled, each data line when its interval ended, the rest (the
     static checks, the count, what was not judged, the overall verdict) at the window's end. Absolute times (the
     verdict's ``feed.t0`` plus its own)."""
-    from bt_nav_sim.recorded import report_lines
+    from bt_nav.judge.recorded import report_lines
 
     t0 = float(res["feed"]["t0"])
     end = t0 + float(res["feed"]["window"][1])  # the window's times are on the report's one time zero
@@ -211,9 +211,8 @@ def checkoff_timeline(res: dict[str, Any]) -> list[TimedLine]:
 
 def load_robot_run(path: str | Path, maneuver: str | None = None) -> RobotRun:
     """Read a robot's bag and, given the maneuver, judge it. BagError: unreadable (one line)."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig
-    from bt_nav_sim.recorded import judge_recording, report_lines
-
+    from bt_nav.judge.checkoff_core import CheckoffConfig
+    from bt_nav.judge.recorded import judge_recording, report_lines
     from bt_nav.media.robotbag import read_robot_bag
 
     about: dict[str, Any] = {}

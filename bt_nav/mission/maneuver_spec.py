@@ -5,7 +5,7 @@ name it shows in the tree, its log and its pictures (the tip), which subtree of 
 it, when it fires (its trigger), how far and which way it turns (its angle and side rules) and in which
 arenas it is checked off. Every other table derives from :data:`MANEUVER_SPECS`: the ``maneuver`` parameter's
 spellings and titles (:mod:`bt_nav.mission.params`), the leaf registry and the tree's subtree slot, the
-check-off judge's trigger and angle rules (:mod:`bt_nav_sim.checkoff_core`), the default check-off
+check-off judge's trigger and angle rules (:mod:`bt_nav.judge.checkoff_core`), the default check-off
 arenas, the plots' maneuver tips, the terminal's shown lines, the grader's ``# CHOICE:`` line and the docs.
 
 Why lookups are calls (or live views) rather than tables built at import: a maneuver added to

@@ -1,7 +1,7 @@
 """The lab's check-off in a run: which judge a lab run gets, and how far each maneuver landed from its angle.
 
 Why here: a lock-step run of the ``lab`` profile is judged by the lab's check-off judge
-(:class:`bt_nav_sim.checkoff_core.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
+(:class:`bt_nav.judge.checkoff_core.CheckoffJudge`), not by the homework's referee, and grading wants to know, per
 maneuver, the angle the executive chose (its maneuver event: :mod:`bt_nav.mission.snapshot`, ``side`` and
 ``angle_deg``, the whole degrees its log line ``Randomizer: front 0.49 m: turning right 143 deg`` says)
 against the angle the robot really turned (the judge measures it on ground truth, at rest). Both lock-step
@@ -13,8 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from bt_nav_sim.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
+from bt_nav_sim.truth import truth_feed
 from bt_nav_sim.world import World
+
+from bt_nav.judge.checkoff_core import MANEUVERS, CheckoffConfig, CheckoffJudge
 
 #: s: an announcement this long before a judged turn's first turning command is that turn's (the still
 #: before a lagging turn is latency + 0.1 s; a repeated maneuver follows its predecessor at once).
@@ -23,14 +25,15 @@ MATCH_WINDOW = 1.0
 
 def lab_judge(maneuver: str, world: World, config: CheckoffConfig | None = None, lidar: str = ""
               ) -> Callable[[int, str], CheckoffJudge]:
-    """A referee factory (index, name) -> the check-off judge of ``maneuver`` on the simulated ``world``
-    (the simulator's own object, which reveals appearing objects itself), reading along the robot's ``lidar``."""
+    """A referee factory (index, name) -> the check-off judge of ``maneuver`` fed the simulator's truth in
+    ``world`` (the simulator's own object, which reveals appearing objects itself), reading along the robot's
+    ``lidar``."""
     if maneuver not in MANEUVERS:
         raise ValueError(f"the lab's check-off judges maneuver A, B or C, not {maneuver!r}")
     cfg = config or CheckoffConfig(maneuver=maneuver, lidar=lidar)
 
     def make(_index: int, _name: str) -> CheckoffJudge:
-        return CheckoffJudge(cfg, world, update_world=False)
+        return CheckoffJudge(cfg, truth_feed(cfg, world, update_world=False))
 
     return make
 

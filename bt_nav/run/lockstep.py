@@ -4,7 +4,7 @@ number of robots (one robot is a list of one).
 The simulator is :class:`bt_nav_sim.multi.MultiSimCore` (with one robot it *is* the
 :class:`bt_nav_sim.core.SimCore` the ROS simulator node steps, bit for bit), each robot's tree is a
 :class:`bt_nav.mission.core.MissionCore` (the object the executive ticks, with a blackboard of its own) and
-each robot's referee is by default :class:`bt_nav_sim.referee_core.Referee` (the ROS referee node's core);
+each robot's referee is by default :class:`bt_nav.judge.referee_core.Referee` (the ROS referee node's core);
 any object with the referee's driver protocol will do (:class:`RefereeLike`; the lab's check-off judge
 is one). Only the transport differs: each physics step (100 Hz of sim time) is followed, in a fixed order,
 by what the ROS graph would do at that instant:
@@ -39,9 +39,9 @@ from typing import Any, Protocol
 import numpy as np
 from bt_nav_sim.core import SimConfig, profile
 from bt_nav_sim.multi import ROBOT_SEED_STRIDE, MultiSimCore
-from bt_nav_sim.referee_core import Referee, RefereeConfig
 from bt_nav_sim.world import World, load_world
 
+from bt_nav.judge.referee_core import Referee, RefereeConfig
 from bt_nav.media.plot import Trajectory, branch_of_tip
 from bt_nav.mission.assignments import LAB, assignment_of
 from bt_nav.mission.core import MissionCore
@@ -61,7 +61,7 @@ HARD_STOP = 60.0  # s after t0: the run ends even if the referees have not repor
 
 
 class RefereeLike(Protocol):
-    """The driver protocol of :class:`bt_nav_sim.referee_core.Referee`, which the engine drives.
+    """The driver protocol of :class:`bt_nav.judge.referee_core.Referee`, which the engine drives.
 
     Optional: ``on_command(t, v, w)``, called with every command a tree publishes (after its tick, at the
     tick's sim time), and ``on_walkers(t, circles)``, called before each ground-truth pose in a world with

@@ -113,13 +113,14 @@ def worlds_page() -> str:
 
 
 def checks_page() -> str:
-    from bt_nav_sim.checkoff_core import MANEUVER_NAMES, CheckoffConfig, maneuver_problems
-    from bt_nav_sim.referee_core import CHECK_WORDS, RefereeConfig
+    from bt_nav.judge.checkoff_core import MANEUVER_NAMES, CheckoffConfig, maneuver_problems
+    from bt_nav.judge.referee_core import CHECK_WORDS, RefereeConfig
 
     cfg = RefereeConfig()
     out = ["# What the judges check", "", GENERATED, "",
            "A failed check reads, in a summary line and in the report, as the sentence below followed by the "
-           "judge's own figures (`bt_nav_sim.referee_core.CHECK_WORDS`, `bt_nav_sim.checkoff_core.maneuver_problems`).",
+           "judge's own figures (`bt_nav.judge.referee_core.CHECK_WORDS`, "
+           "`bt_nav.judge.checkoff_core.maneuver_problems`).",
            "", "## The homework's referee", "",
            f"Schedule (from the referee's start): static until {cfg.static_before:g} s, activated then; deactivated "
            f"at {cfg.deactivate_at:g} s ({cfg.grace:g} s to brake), reactivated at {cfg.reactivate_at:g} s; the "

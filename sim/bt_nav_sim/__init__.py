@@ -2,7 +2,8 @@
 
 Kept free of rclpy so the executive's behaviours can be tested and benchmarked headless and fast; the ROS nodes
 that wrap it (the simulator publishing /scan and /odom and consuming /cmd_vel, the two judges) live in
-:mod:`bt_nav.ros.nodes`.
+:mod:`bt_nav.ros.nodes`. The judges themselves live in :mod:`bt_nav.judge`; the simulator only feeds them its truth
+(:mod:`bt_nav_sim.truth`: readings cast in its world).
 """
 
 from bt_nav_sim.lidar import HOMEWORK_LIDAR, LDS01, LidarModel, RayCaster, cast_rays

@@ -8,12 +8,14 @@ ones ``docs/architecture.md`` draws; a module may import its own layer's package
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 #: (layer, module prefixes), bottom first. A module belongs to the first layer with the longest matching prefix.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("mission", ("bt_nav.mission",)),
+    ("judges", ("bt_nav.judge",)),
     ("simulator", ("bt_nav_sim",)),
     ("media", ("bt_nav.media",)),
     ("ros", ("bt_nav.ros",)),
@@ -145,6 +147,7 @@ def test_the_checker_sees_a_cycle_and_an_upward_import() -> None:
 #: a folder may import its own and the ones below it, so a reader finds the layers in the tree as well.
 FOLDERS: list[tuple[str, str]] = [
     ("bt_nav/mission", "bt_nav.mission"),
+    ("bt_nav/judge", "bt_nav.judge"),
     ("sim/bt_nav_sim", "bt_nav_sim"),
     ("bt_nav/media", "bt_nav.media"),
     ("bt_nav/ros", "bt_nav.ros"),
@@ -193,3 +196,71 @@ def test_folders_follow_the_layers() -> None:
               if order.index(b) > order.index(a)]
     assert not upward, "folders importing upwards:\n" + "\n".join(upward)
     assert find_cycle({"sim": {"ros"}, "ros": {"sim"}}) == ["ros", "sim", "ros"]  # the check can fail
+
+
+#: What the judges may import from the project: themselves and the mission core (their rules' parameters and
+#: maneuver records); never the simulator, ROS, the media, the runs or the grading they serve.
+JUDGE_MAY_IMPORT = ("bt_nav.judge", "bt_nav.mission")
+#: What the simulator may import from the judges: the feed protocol and the readings it builds its truth feed from.
+SIM_MAY_IMPORT_FROM_JUDGE = ("bt_nav.judge.feeds", "bt_nav.judge.readings")
+
+
+def external_imports(path: Path) -> set[str]:
+    """The top-level names of every absolute import in ``path`` (``rclpy`` of ``from rclpy.node import Node``)."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            found |= {alias.name.partition(".")[0] for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            found.add(node.module.partition(".")[0])
+    return found
+
+
+def _within(name: str, packages: tuple[str, ...]) -> bool:
+    return any(name == p or name.startswith(p + ".") for p in packages)
+
+
+def test_the_judges_import_only_the_mission_core() -> None:
+    """The judge package is pure: the same judge reads the simulator's truth, a bag and a live robot, so it imports
+    neither rclpy nor the simulator (the simulator hands it a feed), only itself and bt_nav.mission."""
+    modules = project_modules()
+    judges = [name for name in modules if _within(name, ("bt_nav.judge",))]
+    assert "bt_nav.judge.checkoff_core" in judges and "bt_nav.judge.referee_core" in judges
+    wrong = [f"{name} imports {dep}" for name in judges for dep in sorted(imports_of(name, modules[name], modules))
+             if not _within(dep, JUDGE_MAY_IMPORT)]
+    wrong += [f"{name} imports {root}" for name in judges for root in sorted(external_imports(modules[name]))
+              if root in ("rclpy", "bt_nav_sim", "rosbags", "launch", "launch_ros") or root.endswith("_msgs")]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_no_module_under_sim_defines_a_judge_or_a_check() -> None:
+    """sim/ holds the simulator and its worlds: no judge is defined or named there (the check-off judge and the
+    referee live in bt_nav.judge), and the simulator takes from the judges only the feed protocol it builds its truth
+    feed on."""
+    sources = sorted((ROOT / "sim").rglob("*.py"))
+    assert sources
+    named = [str(p.relative_to(ROOT)) for p in sources if re.search(r"CheckoffJudge|class Referee", p.read_text())]
+    assert not named, f"modules under sim/ defining or naming a judge: {named}"
+    modules = project_modules()
+    taken = [f"{name} imports {dep}" for name in modules if _within(name, ("bt_nav_sim",))
+             for dep in sorted(imports_of(name, modules[name], modules))
+             if _within(dep, ("bt_nav.judge",)) and not _within(dep, SIM_MAY_IMPORT_FROM_JUDGE)]
+    assert not taken, "\n".join(taken)
+
+
+#: The launch-file checking room and the entry points it offers (its ``__init__``).
+LAUNCH_ROOM = "bt_nav.grading.launch"
+
+
+def test_launch_file_checking_is_one_room_used_through_its_entry_points() -> None:
+    """Reading, evaluating (with its stand-ins), reports and targets of launch files live in one package, and
+    everything outside it imports that package's entry points, never a module inside it."""
+    modules = project_modules()
+    room = {name for name in modules if name.startswith(LAUNCH_ROOM + ".")}
+    assert {f"{LAUNCH_ROOM}.{m}" for m in ("check", "evaluate", "standins", "static", "report", "target")} <= room
+    flat = [name for name in modules if name.startswith("bt_nav.grading.launch") and not _within(name, (LAUNCH_ROOM,))]
+    assert not flat, f"launch-file modules outside {LAUNCH_ROOM}: {flat}"
+    inside = [f"{name} imports {dep}" for name in sorted(modules) if not _within(name, (LAUNCH_ROOM,))
+              for dep in sorted(imports_of(name, modules[name], modules)) if dep in room]
+    assert not inside, "import the launch room's entry points (bt_nav.grading.launch), not its modules:\n" + \
+        "\n".join(inside)

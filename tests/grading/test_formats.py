@@ -35,7 +35,7 @@ from bt_nav.grading.formats import (
 )
 from bt_nav.grading.grid import Job
 from bt_nav.grading.hints import student_words
-from bt_nav.grading.launchfile import check_launch
+from bt_nav.grading.launch import check_launch
 from tests.gradescope_schema import gradescope_problems
 from tests.grading.classfixture import make_class
 

@@ -13,7 +13,8 @@ from typing import Any
 import pytest
 
 from bt_nav.grading import classroom
-from bt_nav.grading.handins import find_node, is_submission, read_handins, student_name
+from bt_nav.grading.handin_files import find_node
+from bt_nav.grading.handins import is_submission, read_handins, student_name
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 LAUNCH = FIXTURES / "launch"

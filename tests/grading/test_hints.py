@@ -6,11 +6,11 @@ from __future__ import annotations
 import re
 
 import pytest
-from bt_nav_sim.checkoff_core import MANEUVERS
-from bt_nav_sim.checkoff_words import ANGLE, FORWARD, LATE, SIDE, STILL_TURNING, TRIGGER, maneuver_check
 
 from bt_nav.grading import hints
 from bt_nav.grading.grid import maneuvers_text
+from bt_nav.judge.checkoff_core import MANEUVERS
+from bt_nav.judge.checkoff_words import ANGLE, FORWARD, LATE, SIDE, STILL_TURNING, TRIGGER, maneuver_check
 
 AGAINST_TIMING = re.compile(r"rather than tim|instead of tim|not tim|never tim|don't tim|avoid tim|stop tim|"
                             r"measured from odometry", re.IGNORECASE)

@@ -1,5 +1,5 @@
 """The launch-file suite: the lab sheet's Task 3 checked as ``ros2 launch`` would run each file
-(bt_nav.grading.launchfile), on right files written the many ways students write them and on wrong ones, each with
+(bt_nav.grading.launch.check), on right files written the many ways students write them and on wrong ones, each with
 the verdict it must get and the words of its reason. The grader must pass every right file, fail every wrong one
 for its reason, and say "not checked" (never "failed") where it cannot follow a file.
 
@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.launchfile import DECLARES, PASSES, STARTS, check_launch
+from bt_nav.grading.launch import DECLARES, PASSES, STARTS, check_launch
 
 LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
 NODE = Path("reactive_navigator.py")

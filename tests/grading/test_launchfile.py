@@ -1,4 +1,4 @@
-"""The launch-file checker's edges (bt_nav.grading.launchfile): the reasons' words and lines, the node matched by
+"""The launch-file checker's edges (bt_nav.grading.launch.check): the reasons' words and lines, the node matched by
 its name, odd files never crashing it, a file that hangs, the static reader as the fallback, the JSON record. The
 suite of right and wrong files is tests/grading/test_launch_suite.py."""
 
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from bt_nav.grading.launch_static import read_statically
-from bt_nav.grading.launchfile import DECLARES, PASSES, STARTS, LaunchReport, check_launch
+from bt_nav.grading.launch import DECLARES, PASSES, STARTS, LaunchReport, check_launch
+from bt_nav.grading.launch.static import read_statically
 
 LAUNCH = Path(__file__).resolve().parents[1] / "fixtures" / "launch"
 NODE = Path("reactive_navigator.py")

@@ -10,14 +10,14 @@ import sys
 from pathlib import Path
 
 import pytest
-from bt_nav_sim.checkoff_core import CHECKS as LAB_CHECKS
-from bt_nav_sim.checkoff_core import CheckoffConfig
-from bt_nav_sim.referee_core import CHECKS as HOMEWORK_CHECKS
-from bt_nav_sim.referee_core import RefereeConfig
 
 from bt_nav.grading.exe.run import ExeSettings, exe_graph
 from bt_nav.grading.grid import Job
 from bt_nav.grading.rules import RULES_FILE, GradeSetup, grader_checkoff, rules_markdown
+from bt_nav.judge.checkoff_core import CHECKS as LAB_CHECKS
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from bt_nav.judge.referee_core import CHECKS as HOMEWORK_CHECKS
+from bt_nav.judge.referee_core import RefereeConfig
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -11,9 +11,9 @@ import sys
 from pathlib import Path
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig
-from bt_nav_sim.recorded import judge_recording, report_lines
 
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from bt_nav.judge.recorded import judge_recording, report_lines
 from bt_nav.media.bag import BagError
 from bt_nav.media.robotbag import Topics, read_robot_bag
 from tests.media.robotsynth import Effects, Layout, Synth, simulate, write_rosbag1, write_rosbag2
@@ -110,7 +110,7 @@ def test_a_stalled_turn_is_named_and_not_judged(tmp_path: Path) -> None:
 
 
 def test_a_window_and_an_arming_time_are_honoured(tmp_path: Path) -> None:
-    from bt_nav_sim.recorded import Window
+    from bt_nav.judge.recorded import Window
 
     rec = read_robot_bag(write_rosbag2(simulate(), tmp_path / "run", "mcap"))
     before = judge_recording(rec, CheckoffConfig(maneuver="A"), Window(end=10.0))

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig
-from bt_nav_sim.recorded import Recording, Window, judge_recording, report_lines
 
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from bt_nav.judge.recorded import Recording, Window, judge_recording, report_lines
 from bt_nav.media.robotbag import read_robot_bag
 
 ROOT = Path(os.environ.get("BT_NAV_REALBAGS", Path(__file__).resolve().parents[3] / "shared" / "realbags"))

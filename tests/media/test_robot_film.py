@@ -158,8 +158,7 @@ def test_the_browser_view_plays_a_robot_bag_back(synth_bags: dict[str, Path]) ->
 
 
 def test_the_nodes_lines_at_info_and_above_repeats_folded_and_the_command_current_or_how_long_none() -> None:
-    from bt_nav_sim.recorded import Recording
-
+    from bt_nav.judge.recorded import Recording
     from bt_nav.media.robotfilm import RobotFilmRenderer
     from bt_nav.media.robotrun import RobotRun
     from bt_nav.mission.scan import Scan

@@ -7,9 +7,9 @@ from dataclasses import replace
 
 import pytest
 from bt_nav_sim import core as sim_core
-from bt_nav_sim.checkoff_core import CheckoffConfig
 
 from bt_nav.grading.exe import run as exe_run
+from bt_nav.judge.checkoff_core import CheckoffConfig
 from bt_nav.mission import assignments as A
 from bt_nav.mission import profiles
 from bt_nav.mission.params import SPECS
@@ -30,7 +30,7 @@ def test_the_judge_writes_no_copy_of_a_default() -> None:
     import ast
     import inspect
 
-    import bt_nav_sim.checkoff_core as checkoff_core
+    import bt_nav.judge.checkoff_core as checkoff_core
 
     tree = ast.parse(inspect.getsource(checkoff_core.CheckoffConfig))
     defaults = {node.target.id: node.value for node in ast.walk(tree)

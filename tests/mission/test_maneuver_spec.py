@@ -11,10 +11,10 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from bt_nav_sim.checkoff_core import MANEUVER_NAMES, CheckoffConfig, CheckoffJudge, maneuver_problems
 from bt_nav_sim.world import list_worlds, load_world, world_file
 
 from bt_nav.grading.exe.grid import choice_line
+from bt_nav.judge.checkoff_core import MANEUVER_NAMES, CheckoffConfig, maneuver_problems
 from bt_nav.media.plot import branch_of_tip
 from bt_nav.mission import maneuver_spec as S
 from bt_nav.mission import params as P
@@ -25,6 +25,7 @@ from bt_nav.mission.tree import load_tree
 from bt_nav.ros.bringup import CHECKOFF_WORLDS
 from bt_nav.run.lockstep import run_mission
 from bt_nav.testing import TickHarness
+from tests.judge.truthkit import truth_judge
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "docs" / "_ext"))
@@ -88,7 +89,7 @@ def test_d_runs_a_lock_step_check_off_judged_by_its_own_rules(maneuver_d: S.Mane
 
 
 def test_the_judge_holds_d_to_45_deg_not_to_cs_90(maneuver_d: S.ManeuverSpec) -> None:
-    judge = CheckoffJudge(CheckoffConfig(maneuver="D"), load_world("lab_object"))
+    judge = truth_judge(CheckoffConfig(maneuver="D"), load_world("lab_object"))
     assert judge._angle_rule(44.0, None)[0] and not judge._angle_rule(90.0, None)[0]
     assert judge._within_max(50.0) and not judge._within_max(90.0)
     assert judge.config.limits() == (0.5, 0.5)
@@ -116,7 +117,7 @@ def test_an_unknown_maneuver_is_an_error_never_judged_as_another() -> None:
 def test_a_judge_whose_maneuver_left_the_spec_refuses_to_judge(monkeypatch: pytest.MonkeyPatch) -> None:
     """The rules are looked up on every use: a maneuver gone from the spec is an error, never C's rules."""
     monkeypatch.setitem(S.MANEUVER_SPECS, "D", WIGGLE)
-    judge = CheckoffJudge(CheckoffConfig(maneuver="D"), load_world("lab_object"))
+    judge = truth_judge(CheckoffConfig(maneuver="D"), load_world("lab_object"))
     monkeypatch.delitem(S.MANEUVER_SPECS, "D")
     for rule in (lambda: judge._angle_rule(90.0, None), lambda: judge._within_max(90.0), judge.config.limits):
         with pytest.raises(ValueError, match="unknown maneuver 'D'"):

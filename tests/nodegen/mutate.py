@@ -55,7 +55,7 @@ EXPECT: dict[str, dict[str, tuple[str, str | None]]] = {
               "safety_distance=0.7")},
     "moves_before_toggle": {c: (r"moved before it was activated", _EVERY) for c in "ABC"},
     "ignores_toggle_off": {c: (r"did not stop and stay still after the deactivation", _EVERY) for c in "ABC"},
-    # the check-off's creep check (sim/bt_nav_sim/checkoff_creep.py), or no maneuver at all. B only in lab_hallway:
+    # the check-off's creep check (bt_nav/judge/checkoff_creep.py), or no maneuver at all. B only in lab_hallway:
     # a B node whose sides reach 45 deg reads the dead end's mouth as a squeeze at its spawn, spins there without
     # creeping, and the run may end before it stood 3 s (seen passing once in two runs)
     "never_creeps": {c: (r"stood still for [\d.]+ s from t=[\d.]+ s while armed with nothing triggering|"

@@ -2,7 +2,7 @@
 seeded draw from it.
 
 Each knob's values stay inside what the sheet allows and what the check-off judge accepts
-(``bt_nav_sim.readings.SectorFamily``: a front from +-5 to +-30 deg, sides centred 60-110 deg, +-5 to +-30 deg
+(``bt_nav.judge.readings.SectorFamily``: a front from +-5 to +-30 deg, sides centred 60-110 deg, +-5 to +-30 deg
 wide). A few knobs bound one another so every drawn node is right on the grader's LiDARs (the slowest publishes
 5 scans a second): an open-loop turn ends on the control step nearest its end, so the angle a step covers
 (turn rate x step period) is kept under 0.12 rad (+-3.5 deg at the end); a closed loop on odometry is kept at or

@@ -53,7 +53,7 @@ def test_the_judges_and_the_simulators_own_lines_and_lines_before_t0_do_not() ->
 def test_a_wall_stamped_line_is_placed_at_its_stamp_on_the_sim_clock_not_at_its_arrival() -> None:
     """Issue 52: a line logged at wall 1000.5 s, when the sim clock read 40.5 s, arrives at sim 42 s (a busy machine
     delivered it late): it marks its maneuver at 40.5 s. A stamp the clock map does not cover is timed on arrival."""
-    from bt_nav_sim.segments import ClockMap
+    from bt_nav.judge.segments import ClockMap
 
     node = _node()
     node.clocks = ClockMap()

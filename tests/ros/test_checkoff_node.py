@@ -9,8 +9,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig
 from simtools import Proc, StubRobot
+
+from bt_nav.judge.checkoff_core import CheckoffConfig
 
 LAB_ARM = "/toggle_navigation"
 

@@ -43,7 +43,7 @@ def _grade(command: str, out: Path, *extra: str) -> list[str]:
 #: The compared grids run at 3x real time: a fraction of the CPU per wall second of the default (as fast as the node
 #: keeps up), so that the judges of two runs at once keep up on a 2-core machine that other work shares.
 COMPARED = ("--rtf", "3")
-#: How the referee details a check it had no samples for (sim/bt_nav_sim/referee_core.py).
+#: How the referee details a check it had no samples for (bt_nav/judge/referee_core.py).
 NO_DATA = "no ground truth"
 
 

@@ -8,8 +8,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from bt_nav_sim.referee_core import RefereeConfig, scaled
 from simtools import Proc, StubRobot, wait_until
+
+from bt_nav.judge.referee_core import RefereeConfig, scaled
 
 ACTIVATE = "/reactive_control/activate"
 EVALUATE = "/reactive_control/evaluate_mission"

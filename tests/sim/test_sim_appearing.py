@@ -7,11 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig, SimCore
 from bt_nav_sim.lidar import LDS01, RayCaster
 from bt_nav_sim.multi import MultiSimCore
 from bt_nav_sim.world import load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from tests.judge.truthkit import truth_judge
 
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
 
@@ -78,8 +80,8 @@ def test_the_simulation_reveals_it_at_the_threshold_and_never_inside_the_robot()
 def test_appearance_is_reproduced_by_a_judge_with_a_world_of_its_own() -> None:
     core = SimCore(SimConfig(world="lab_appearing", noise=False, profile="lab"))
     own = load_world("lab_appearing")
-    judge = CheckoffJudge(CheckoffConfig(), own)  # update_world=True: reveals from observed poses
-    shared = CheckoffJudge(CheckoffConfig(), core.world, update_world=False)
+    judge = truth_judge(CheckoffConfig(), own)  # update_world=True: reveals from observed poses
+    shared = truth_judge(CheckoffConfig(), core.world, update_world=False)
     for judge_ in (judge, shared):
         judge_.start(0.0)
         judge_.activation_requested = 0.0  # armed: readings are cast

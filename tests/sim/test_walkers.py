@@ -7,11 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.core import SimConfig
 from bt_nav_sim.multi import MultiSimCore
 from bt_nav_sim.walkers import GIVE_WAY, Walkers, WalkerSpec
 from bt_nav_sim.world import load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig
+from tests.judge.truthkit import truth_judge
 
 NO_ROBOTS = np.zeros((0, 3))
 ROOM = [{"x": 0, "y": -2.0, "length": 8, "thickness": 0.1}, {"x": 0, "y": 2.0, "length": 8, "thickness": 0.1},
@@ -95,7 +97,7 @@ def test_the_lidar_sees_a_person_and_driving_into_one_is_a_collision() -> None:
 
 
 def test_the_checkoff_judge_sees_people_where_the_simulator_said() -> None:
-    judge = CheckoffJudge(CheckoffConfig(), world_from_dict({"name": "w", "boxes": ROOM}))
+    judge = truth_judge(CheckoffConfig(), world_from_dict({"name": "w", "boxes": ROOM}))
     far = judge.readings.read(-2.0, 0.0, 0.0, None).front
     near = judge.readings.read(-2.0, 0.0, 0.0, np.array([[-1.5, 0.0, 0.2]])).front
     assert far > 3.0 and near == pytest.approx(0.3)
@@ -122,7 +124,7 @@ def _judge_a_turn_after_a_person_passed(walkers: bool, leaves: float = 6.0, turn
     ``leaves`` who is gone by ``turns``, when the robot starts a 120 deg turn in place for 1 s (it decided on
     the older scan). ``walkers``: whether the simulator reported the person (else the judge sees a static
     world)."""
-    judge = CheckoffJudge(CheckoffConfig(maneuver="A"), world_from_dict({"name": "w", "boxes": ROOM}))
+    judge = truth_judge(CheckoffConfig(maneuver="A"), world_from_dict({"name": "w", "boxes": ROOM}))
     judge.start(0.0)
     for k in range(0, 161):  # ground truth at 20 Hz, 0..8 s
         t = k * 0.05

@@ -23,6 +23,7 @@ from bt_nav_sim import World, list_worlds, load_world
 from bt_nav_sim.world import WORLDS_DIR, world_from_dict
 
 from bt_nav.run.settings import DEFAULT_JITTER
+from tests.judge.truthkit import truth_judge
 
 ROBOT_RADIUS = 0.12  # TurtleBot3 Burger collision disk
 RES = 0.04  # grid resolution, m
@@ -353,13 +354,14 @@ def _creep(name: str) -> dict[str, float]:
     """Creep straight ahead from the spawn at 0.05 m/s (noise-free) and note, per maneuver, the distance
     crept when its trigger first holds on noise-free ground truth, read over the sectors the arenas' headers
     describe (front +-30 deg, sides 90 +-30 deg: one member of the judge's family of readings)."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
     from bt_nav_sim.core import SimConfig, SimCore
+
+    from bt_nav.judge.checkoff_core import CheckoffConfig
 
     core = SimCore(SimConfig(world=name, noise=False, profile="lab"))
     classic = CheckoffConfig(front_min_half_deg=30.0, side_centre_min_deg=90.0, side_centre_max_deg=90.0,
                              side_min_half_deg=30.0)
-    judge = CheckoffJudge(classic, core.world, update_world=False)
+    judge = truth_judge(classic, core.world, update_world=False)
     x0, y0 = core.state.x, core.state.y
     first: dict[str, float] = {}
     while core.collisions == 0 and core.t < 40.0:
@@ -385,11 +387,11 @@ def test_lab_arena_triggers_what_it_checks_off_within_reach(name: str) -> None:
 
 def _reading_at_spawn(name: str, dx: float, dy: float, dyaw: float) -> Any:
     """The check-off judge's readings at the spawn moved by (dx, dy, dyaw deg)."""
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
+    from bt_nav.judge.checkoff_core import CheckoffConfig
 
     w = load_world(name)
     x, y, yaw = w.spawn
-    judge = CheckoffJudge(CheckoffConfig(), w, update_world=False)
+    judge = truth_judge(CheckoffConfig(), w, update_world=False)
     return judge.readings.read(x + dx, y + dy, yaw + math.radians(dyaw))
 
 

@@ -49,7 +49,7 @@ def grade_exe(args: argparse.Namespace, jobs: Sequence[Job], maneuvers: bool, pa
         run_exe_grid,
     )
     from bt_nav.grading.exe.pace import preview, speed_words
-    from bt_nav.grading.launch_target import attach_launch, exe_launch
+    from bt_nav.grading.launch import attach_launch, exe_launch
     from bt_nav.grading.media import Drawer
     from bt_nav.grading.report import format_exe_table, summarize_exe, write_exe_report
     from bt_nav.ros.supervise import StopRequest
@@ -106,7 +106,7 @@ def _verdict(args: argparse.Namespace, ended: Sequence[dict[str, Any]], planned:
     """The grid's last lines and exit code: 0 every run passed; 1 a run failed; 3 no run failed but some hit a
     bt_nav error (not the node's: ``--resume`` reruns them); 128 + the signal after a stop."""
     from bt_nav.grading.exe.grid import ERROR
-    from bt_nav.grading.launch_target import launch_passed
+    from bt_nav.grading.launch import launch_passed
 
     errors = [r for r in ended if r["outcome"] == ERROR]
     judged = [r for r in ended if r["outcome"] != ERROR]

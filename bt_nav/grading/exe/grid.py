@@ -138,8 +138,8 @@ def exe_settings(args: Any, maneuvers: bool, command: str | None = None) -> ExeS
 
 def strict_option(args: Any) -> str:
     """``--strict-findings`` checked before any run (an unknown kind is refused): the check-off's finding kinds that
-    fail instead (:mod:`bt_nav_sim.findings`; the lab's judge parameter ``strict_findings``)."""
-    from bt_nav_sim.findings import strict_kinds
+    fail instead (:mod:`bt_nav.judge.findings`; the lab's judge parameter ``strict_findings``)."""
+    from bt_nav.judge.findings import strict_kinds
 
     text = str(getattr(args, "strict_findings", "") or "")
     strict_kinds(text)

@@ -50,12 +50,12 @@ from pathlib import Path
 from typing import Any
 
 from bt_nav_sim.pacing import PACE_FILE
-from bt_nav_sim.referee_core import failure_reason
 
 from bt_nav.grading.exe.bag import bag_row, record_args
 from bt_nav.grading.exe.log import Crash, import_findings, last_traceback, node_crash, rclpy_shutdown_race
 from bt_nav.grading.exe.pace import REAL_TIME, SIM_NICE, sim_pace
 from bt_nav.grading.grid import Job
+from bt_nav.judge.referee_core import failure_reason
 from bt_nav.mission.assignments import ASSIGNMENTS, assignment_of
 from bt_nav.ros import forkserver
 from bt_nav.ros.bringup import NodeSpec, host_judge, nodes, param_arg
@@ -97,7 +97,7 @@ class ExeSettings:
     # preview's (tests that need no verdict of 1x, a student's quick look)
     realtime_check: bool = True
     rtf_max: float = 0.0  # in a preview at rtf 0, the most sim seconds per wall second (0: no cap)
-    strict_findings: str = ""  # the check-off's finding kinds that fail instead (bt_nav_sim.findings; "": none)
+    strict_findings: str = ""  # the check-off's finding kinds that fail instead (bt_nav.judge.findings; "": none)
 
 
 @dataclass(frozen=True)

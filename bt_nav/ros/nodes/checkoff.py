@@ -1,4 +1,4 @@
-"""``bt_nav_checkoff``: the lab's check-off judge (:mod:`bt_nav_sim.checkoff_core`) over real DDS, in sim time.
+"""``bt_nav_checkoff``: the lab's check-off judge (:mod:`bt_nav.judge.checkoff_core`) over real DDS, in sim time.
 
 Run: ``bt-nav checkoff --maneuver C --world lab_object [--json PATH] [--timeout S] [--ros-args ...]`` or
 ``ros2 run bt_nav checkoff``; ``bt-nav demo --profile lab`` and ``launch/lab_checkoff.launch.py`` start it
@@ -20,13 +20,13 @@ the simulator's lines excluded) goes to the judge as announcements (``on_announc
 times count, as marks where the node began a new maneuver within one continuous rotation. A line is placed in sim
 time from its own stamp: rclpy stamps a ``/rosout`` line with the wall clock even under ``use_sim_time`` (rcutils'
 system time; measured), so the stamp is mapped onto the sim clock by the wall and sim times the judge saw together
-as ground truth came (:class:`bt_nav_sim.segments.ClockMap`), not timed by its arrival (a busy machine delivers it
+as ground truth came (:class:`bt_nav.judge.segments.ClockMap`), not timed by its arrival (a busy machine delivers it
 late); a stamp within ``LOG_STAMP_SLACK`` s of the judge's clock (a node that logs on sim time) is taken as it is,
 and one the map cannot place is timed by its arrival.
 
 The driver (t0, sim-time steps, calls with retries, sim_sync, time base of the log lines: ``sim 12.30 s (t0 +
 7.30 s)``) is :class:`bt_nav.ros.nodes.judging.JudgeNode`, the referee's. ``use_sim_time`` is true by default.
-Every :class:`bt_nav_sim.checkoff_core.CheckoffConfig` field is a parameter of the same name (``armed_for``,
+Every :class:`bt_nav.judge.checkoff_core.CheckoffConfig` field is a parameter of the same name (``armed_for``,
 ``safety_distance``, ``pivot_distance``, ...): the trigger distances must be the robot's.
 """
 
@@ -37,13 +37,14 @@ import time
 from dataclasses import fields
 from typing import Any
 
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-from bt_nav_sim.checkoff_schedule import schedule_words
-from bt_nav_sim.segments import ClockMap
+from bt_nav_sim.truth import truth_feed
 from bt_nav_sim.world import load_world
 from rcl_interfaces.msg import Log
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav.judge.checkoff_schedule import schedule_words
+from bt_nav.judge.segments import ClockMap
 from bt_nav.mission.assignments import LAB
 from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver
@@ -105,7 +106,8 @@ class CheckoffNode(JudgeNode):
         self.judge.on_announcement(t, str(msg.name), str(msg.msg))
 
     def make_judge(self, p: dict[str, Any]) -> tuple[CheckoffJudge, CheckoffConfig]:
-        """The judge for the parameters' config, in the simulator's world (ValueError/FileNotFoundError: refused)."""
+        """The judge for the parameters' config, fed the simulator's truth in its own copy of the world (which it
+        reveals appearing objects in from the poses it observes; ValueError/FileNotFoundError: refused)."""
         values = {f.name: type(getattr(_DEFAULTS, f.name))(p[f.name]) for f in fields(_DEFAULTS)}
         values["maneuver"] = normalise_maneuver(str(values["maneuver"]))  # randomizer, a, ... are A
         config = CheckoffConfig(**values)
@@ -115,7 +117,7 @@ class CheckoffNode(JudgeNode):
             self.get_logger().warning(f"world {world.name} lists check-offs of {', '.join(world.checkoff_maneuvers)}, "
                                       f"not {config.maneuver}: its trigger may never hold here")
         self.world_name = world.name
-        return CheckoffJudge(config, world, update_world=True), config
+        return CheckoffJudge(config, truth_feed(config, world, update_world=True)), config
 
     def schedule_text(self) -> str:
         """The lab's schedule, sim seconds from t0."""

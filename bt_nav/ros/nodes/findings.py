@@ -2,7 +2,7 @@
 first clause beside the sentence a student reads.
 
 Why: the sentence is for people and may be reworded; a program that decides on a finding (the check-off's strict
-findings, :mod:`bt_nav_sim.findings`; the judge's own verdict) reads its ``kind`` instead.
+findings, :mod:`bt_nav.judge.findings`; the judge's own verdict) reads its ``kind`` instead.
 The verdict JSON carries both: ``findings`` (the sentences) and ``finding_kinds`` (:meth:`Finding.record`, in the
 same order). Pure (no rclpy), so the grader reads the kinds without ROS.
 """

@@ -76,8 +76,6 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from bt_nav_sim.referee_core import ANSWERED, UNANSWERED, UNAVAILABLE
-from bt_nav_sim.unjudged import FreeMotion
 from bt_nav_sim.walkers import read_walkers_message
 from geometry_msgs.msg import Twist, TwistStamped
 from nav_msgs.msg import Odometry
@@ -87,6 +85,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 from std_srvs.srv import SetBool
 
+from bt_nav.judge.referee_core import ANSWERED, UNANSWERED, UNAVAILABLE
+from bt_nav.judge.unjudged import FreeMotion
 from bt_nav.mission.geometry import yaw_from_quaternion
 from bt_nav.mission.resources import written_whole
 from bt_nav.mission.snapshot import call_event, snapshot_json
@@ -684,7 +684,7 @@ class JudgeNode(QuietQosEvents, Node):
         # the judge's own first (the check-off's maneuvers back to back), then the audit's
         judged = [str(f) for f in self.judge.results().get("findings") or []] if self.started else []
         self.findings = [*judged, *(found.text for found in records)]
-        # each with its kind where the judge gives one (the check-off's: bt_nav_sim.findings), else the judge's
+        # each with its kind where the judge gives one (the check-off's: bt_nav.judge.findings), else the judge's
         kinds = (self.judge.results().get("finding_kinds") or []) if self.started else []
         self.finding_kinds = [*(kinds if len(kinds) == len(judged) else
                                 ({"kind": JUDGE_FINDING, "topic": None, "clause": f} for f in judged)),

@@ -1,4 +1,4 @@
-"""``bt_nav_referee``: the homework referee (:mod:`bt_nav_sim.referee_core`) over real DDS, in sim time.
+"""``bt_nav_referee``: the homework referee (:mod:`bt_nav.judge.referee_core`) over real DDS, in sim time.
 
 Run: ``bt-nav referee [--json PATH] [--timeout S] [--time-scale X] [--ros-args ...]`` or
 ``ros2 run bt_nav referee``.
@@ -28,9 +28,9 @@ import time
 from dataclasses import fields
 from typing import Any
 
-from bt_nav_sim.referee_core import Referee, RefereeConfig, scaled
 from std_srvs.srv import Trigger
 
+from bt_nav.judge.referee_core import Referee, RefereeConfig, scaled
 from bt_nav.mission.assignments import HOMEWORK
 from bt_nav.ros.nodes.judging import DRIVER_PARAMETERS, JudgeNode, locked
 from bt_nav.ros.runner import param_args, run_node

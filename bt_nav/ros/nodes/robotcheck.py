@@ -12,7 +12,7 @@ For ``--duration`` seconds, or until Ctrl-C, it keeps every /odom, /scan and /cm
 TwistStamped, whichever the graph has), the ``toggle_navigation`` service events and ``/rosout`` (the node's lines:
 the judge's announcements), with the time it heard each and the message's own stamp; then it hands them to the same
 reading and judging as a bag of them (:func:`bt_nav.media.robotbag.recording_from`,
-:func:`bt_nav_sim.recorded.judge_recording`). So the live verdict and the verdict on the bag of the same run follow
+:func:`bt_nav.judge.recorded.judge_recording`). So the live verdict and the verdict on the bag of the same run follow
 one rule; only the clock that times the arrivals is this process's (the wall clock).
 
 QoS: best effort for the sensors and the commands (it hears a reliable publisher as well as a best-effort one, and
@@ -196,9 +196,9 @@ def listen(names: dict[str, str], duration: float, call_toggle: bool = False,
            on_progress: Callable[[Raw, list[Any]], None] | None = None,
            ros_args: list[str] | None = None) -> tuple[Raw, list[str], list[Any] | None]:
     """Listen for ``duration`` seconds (0: until Ctrl-C), calling toggle_navigation if told to; what was heard,
-    notes on it, and the listener's own calls (:class:`bt_nav_sim.recorded.ServiceCall`; None when it made
+    notes on it, and the listener's own calls (:class:`bt_nav.judge.recorded.ServiceCall`; None when it made
     none). ``on_progress(raw, calls)`` is called every :data:`REJUDGE_EVERY` s with what was heard so far."""
-    from bt_nav_sim.recorded import ServiceCall
+    from bt_nav.judge.recorded import ServiceCall
 
     rclpy.init(args=["bt_nav_checkoff", *(["--ros-args", *ros_args] if ros_args else [])])
     node = RobotListener(names)

@@ -1,5 +1,5 @@
 """The lab's check-off judge as a pure, clock-driven state machine (no rclpy), beside the homework's
-:class:`bt_nav_sim.referee_core.Referee` and driven the same way.
+:class:`bt_nav.judge.referee_core.Referee` and driven the same way.
 
 The lab is checked off by watching the robot: after ``toggle_navigation`` (std_srvs/SetBool) true it
 creeps ahead, and when its maneuver's trigger holds it rotates in place (each maneuver's trigger, angle and
@@ -22,32 +22,28 @@ maneuver ends (the robot creeping on: no turning command for that long), ``grace
 it (``answer_allowance`` after the call at the latest: :meth:`CheckoffJudge.disarmed_from`), static for
 ``static_after``, and ``toggle_navigation(true)`` again ``toggle_off_for`` s after the false (a cycle that would not
 end ``toggle_off_for`` s before the final disarm is left out; ``toggle_off_for`` 0: no cycle); ``drive_on_for`` s
-after the cycle's true was answered (a turn under way ended first: :mod:`bt_nav_sim.checkoff_schedule`), or at
+after the cycle's true was answered (a turn under way ended first: :mod:`bt_nav.judge.checkoff_schedule`), or at
 ``activate_at + armed_for`` at the latest, ``toggle_navigation(false)`` until success; ``grace`` to brake; static for
 ``static_after``; then the report. Each call is asked on every step until an answer says success. While armed the
-node must keep moving whenever nothing triggers (:mod:`bt_nav_sim.checkoff_creep`).
+node must keep moving whenever nothing triggers (:mod:`bt_nav.judge.checkoff_creep`).
 
 Announcements (:meth:`CheckoffJudge.on_announcement`): the lines the judged node logs (``/rosout`` over DDS; any
 words, only their times count) mark where it began a new maneuver within one continuous rotation, so maneuvers
-made back to back are judged one by one (:mod:`bt_nav_sim.chains`).
+made back to back are judged one by one (:mod:`bt_nav.judge.chains`).
 
 Maneuver episodes come from the commands: a maximal run of commands with |w| >= ``rotation_min_rate``, whatever
 their forward speed (one that drives forward while turning is judged for that; a run that drives and turns the
 robot less than ``steer_max_deg`` is steering, not a turn). Trigger readings (front, left and right sector
-minima and the distance to the first obstacle in the robot's swept path) are cast noise-free from the true
-pose of a ground-truth sample while armed, as the world was at that moment (objects that appear later do not
-count; when they are cast: :mod:`bt_nav_sim.trigger_readings`). See :meth:`CheckoffJudge._judge_episode` for the
-rules.
+minima and the distance to the first obstacle in the robot's swept path) come from the judge's feed
+(:class:`bt_nav.judge.feeds.TriggerFeed`), one per pose sample while armed: in the simulator cast noise-free from
+the true pose in its world, as the world was at that moment (the simulator's truth feed, ``bt_nav_sim.truth``); from
+a real robot, its recorded scans (:class:`bt_nav.judge.feeds.SourceReadings`). The judge owns no world: whoever
+drives it (the ROS node, the lock-step runner, the recorded feed) hands it its feed. See
+:meth:`CheckoffJudge._judge_episode` for the rules.
 
-People walking (a world's ``walkers``): the trigger readings see them where they were at the pose's time,
+People walking (a world's ``walkers``): the truth feed's readings see them where they were at the pose's time,
 from :meth:`CheckoffJudge.on_walkers` (the simulator's ``walkers`` samples; the latest one at or before the
 pose), so a maneuver that a person passing in front of the robot triggered is judged like any other.
-
-Appearing objects (``appear_within`` in a world file): the judge's ray caster sees an object once it has
-appeared. ``update_world=True`` (default) reveals them from the poses the judge observes; that is what a
-judge with a world of its own needs (over DDS), and it is harmless on a world the simulator shares
-(appearance is a monotone function of the robot's positions, and every observed pose is one the simulator
-has already checked). ``update_world=False`` leaves the world to the simulator that shares it.
 """
 
 from __future__ import annotations
@@ -57,20 +53,24 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from bt_nav.judge.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
+from bt_nav.judge.checkoff_creep import CREEP_CHECK, creep_check
+from bt_nav.judge.checkoff_schedule import cycle_due, drove_on
+from bt_nav.judge.checkoff_words import (
+    MANEUVER_NAMES,
+    _forward_text,
+    maneuver_check,
+    maneuver_problems,
+    performed_check,
+)
+from bt_nav.judge.feeds import TriggerFeed
+from bt_nav.judge.findings import implied_rules, maneuver_findings, strict_kinds
+from bt_nav.judge.readings import Reading, SectorFamily
+from bt_nav.judge.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
+from bt_nav.judge.segments import announced_between, join_small
 from bt_nav.mission.maneuver_spec import ManeuverSpec, maneuver_spec
 from bt_nav.mission.params import LAB_MANEUVERS as MANEUVERS  # what ``CheckoffConfig.maneuver`` may be (live)
 from bt_nav.mission.params import SPECS  # the trigger distances' defaults are the executive's, never copies
-from bt_nav_sim.chains import INTERRUPT_SLACK, chain_check, split_run, turning_point
-from bt_nav_sim.checkoff_creep import CREEP_CHECK, creep_check
-from bt_nav_sim.checkoff_schedule import cycle_due, drove_on
-from bt_nav_sim.checkoff_words import MANEUVER_NAMES, _forward_text, maneuver_check, maneuver_problems, performed_check
-from bt_nav_sim.feeds import ReadingSource
-from bt_nav_sim.findings import implied_rules, maneuver_findings, strict_kinds
-from bt_nav_sim.readings import Reading, SectorFamily
-from bt_nav_sim.referee_core import ANSWERED, Activate, ServiceAnswers, Verdict, since_t0, static_check
-from bt_nav_sim.segments import announced_between, join_small
-from bt_nav_sim.trigger_readings import TriggerReadings
-from bt_nav_sim.world import World
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ class CheckoffConfig:
     safety_distance: float = float(SPECS["safety_distance"].default)
     pivot_distance: float = float(SPECS["pivot_distance"].default)  # C trigger (the sheet's; the table's default)
     trigger_margin: float = 0.05  # the trigger reading may exceed its threshold by this much (sensor noise)
-    # The reasonable sector readings (bt_nav_sim.readings.SectorFamily): "did not hold" only when none held,
+    # The reasonable sector readings (bt_nav.judge.readings.SectorFamily): "did not hold" only when none held,
     # "late" only when every one held
     front_min_half_deg: float = 5.0
     front_max_half_deg: float = 30.0
@@ -127,18 +127,18 @@ class CheckoffConfig:
     toggle_off_after: float = 1.0  # s: the toggle cycle's false this long after the first maneuver ends ...
     toggle_off_for: float = 3.0  # s: ... and its true again this long after it (0: no toggle cycle)
     # s after the cycle's true was answered: the node has been shown driving on (a turn under way ends first), so the
-    # final false comes then (bt_nav_sim.checkoff_schedule; 0: only at activate_at + armed_for)
+    # final false comes then (bt_nav.judge.checkoff_schedule; 0: only at activate_at + armed_for)
     drive_on_for: float = 4.5
-    creep_start: float = 1.0  # s after an arming answered before a standstill counts (bt_nav_sim.checkoff_creep) ...
+    creep_start: float = 1.0  # s after an arming answered before a standstill counts (bt_nav.judge.checkoff_creep) ...
     creep_settle: float = 1.0  # ... and after a turning command
     creep_still: float = 3.0  # s: standing this long while armed with nothing triggering fails "creep while armed"
     # s: a node turning on without a pause (maneuvers back to back) gets the cycle's false this long after its first
-    # turning command, and the final false this long after the true again (bt_nav_sim.checkoff_schedule)
+    # turning command, and the final false this long after the true again (bt_nav.judge.checkoff_schedule)
     chain_for: float = 10.0
     # The robot's LiDAR (bt_nav_sim.lidar.LIDARS; empty: the world file's, else an LDS-01 at the robot's centre):
     # the lab measures its distances "from the LiDAR", so the readings are cast from its mount, along its beams.
     lidar: str = ""
-    # The finding kinds (bt_nav_sim.findings: comma-separated, or "all") that fail their check instead: what the sheet
+    # The finding kinds (bt_nav.judge.findings: comma-separated, or "all") that fail their check instead: what the sheet
     # only implies is a finding unless the course teaches it (bt-nav grade --strict-findings)
     strict_findings: str = ""
 
@@ -202,19 +202,14 @@ CHECKS = ("static before activation", "toggle_navigation answered", "maneuvers p
           "back-to-back maneuvers", "recovery turns", CREEP_CHECK, "no collision", "static after deactivation")
 
 
-
-
 class CheckoffJudge(Verdict):
     """The lab's check-off: schedule, ground truth and commands, the maneuver episodes, the verdict."""
 
-    def __init__(self, config: CheckoffConfig, world: World | None, *, update_world: bool = True,
-                 readings: ReadingSource | None = None) -> None:
-        """``readings``: where the trigger readings come from instead of casts in ``world`` (a real robot's recorded
-        scans, :class:`bt_nav_sim.feeds.ScanReadings`: the reading at a pose is the latest scan at or before it)."""
+    def __init__(self, config: CheckoffConfig, readings: TriggerFeed) -> None:
+        """``readings``: where the trigger reading at each pose sample comes from (the simulator's truth feed, cast
+        in its world; a real robot's scans, :class:`bt_nav.judge.feeds.SourceReadings`)."""
         self.config = config
-        self.world = world
-        self.update_world = update_world and world is not None
-        self.readings = TriggerReadings(world, config.lidar, config.family(), config.half_width, readings)
+        self.readings = readings
         self.t0: float | None = None
         self._t: list[float] = []
         self._x: list[float] = []
@@ -319,7 +314,7 @@ class CheckoffJudge(Verdict):
 
     def on_announcement(self, t: float, node: str, text: str) -> None:
         """A line the judged node logged at ``t`` (its clock: sim time). Any words: only when it came counts, as a
-        mark that the node began a new maneuver there (:mod:`bt_nav_sim.chains`); never as a reading."""
+        mark that the node began a new maneuver there (:mod:`bt_nav.judge.chains`); never as a reading."""
         if not self._late(t) and math.isfinite(t):
             self.announcements.append((float(t), str(node), str(text)))
 
@@ -329,11 +324,9 @@ class CheckoffJudge(Verdict):
 
     def observe(self, t: float, x: float, y: float, yaw: float) -> None:
         """One ground-truth pose; out-of-order samples and those stamped after the report are ignored. While
-        armed the trigger readings are cast here, against the world as it is now."""
+        armed the feed takes its trigger reading here (the truth feed casts it against the world as it is now)."""
         if self._late(t) or (self._t and t <= self._t[-1]):
             return
-        if self.update_world and self.world.appearing:
-            self.world.update([(x, y)])
         if self._t:
             if self._armed_at(t):
                 self.travelled += math.hypot(x - self._x[-1], y - self._y[-1])
@@ -448,7 +441,7 @@ class CheckoffJudge(Verdict):
         armed, whatever their forward speed (a node that drives forward while it turns is judged for it, not
         left unseen), cut where the turn reverses (:meth:`_reversals`) and joined across another publisher's creep
         commands sent while it went on (:meth:`_interleaved`; never a turn the node announced: the creep before it
-        lies between two maneuvers, :mod:`bt_nav_sim.segments`); a run that drove forward and turned less than
+        lies between two maneuvers, :mod:`bt_nav.judge.segments`); a run that drove forward and turned less than
         ``steer_max_deg`` is steering, not a turn."""
         cfg = self.config
         runs: list[tuple[int, int]] = []
@@ -508,7 +501,7 @@ class CheckoffJudge(Verdict):
 
     def _judge_all(self, now: float) -> list[dict[str, Any]]:
         """Every episode judged (see :meth:`_judge_episode`), with its settling time; a rotation that holds
-        maneuvers back to back judged one by one (:func:`bt_nav_sim.chains.split_run`)."""
+        maneuvers back to back judged one by one (:func:`bt_nav.judge.chains.split_run`)."""
         runs = join_small(self, [piece for a, b in self.episodes() for piece in split_run(self, a, b)])
         starts = [self.commands[a][0] for a, _, _, _ in runs]
         out = []

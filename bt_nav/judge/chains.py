@@ -1,5 +1,5 @@
 """Maneuvers back to back: where one continuous rotation holds several of a node's maneuvers, and how a chain of
-them is judged (the check-off judge's, :mod:`bt_nav_sim.checkoff_core`; pure, no rclpy).
+them is judged (the check-off judge's, :mod:`bt_nav.judge.checkoff_core`; pure, no rclpy).
 
 Why: a node whose trigger still holds after its turn starts the next one at once (a Randomizer in a dead end whose
 front stays blocked, a Retreat still squeezed after its spin). The commands then never pause, and a judge that
@@ -26,7 +26,7 @@ maneuvers visible (:data:`SPLIT_HINT`). Maneuvers the robot made without travell
 :func:`chain_verdict`): a search (the Randomizer, the Smart Pivot) that turns again on a still-blocked front is
 searching on, and passes with a finding that counts the turns; an exit (the Retreat) that never leads out before the
 disarm failed its purpose ("never moved on"): a finding too, as the sheet only implies driving out, unless the
-course makes it strict (:mod:`bt_nav_sim.findings`).
+course makes it strict (:mod:`bt_nav.judge.findings`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ import statistics
 from collections.abc import Sequence
 from typing import Any
 
-from bt_nav_sim.findings import BACK_TO_BACK, SEARCH_CHAIN, finding
+from bt_nav.judge.findings import BACK_TO_BACK, SEARCH_CHAIN, finding
 
 #: s: an episode whose last turning command came this close to the disarm request (or after it) was
 #: stopped by the disarm, as it must be: its angle is not judged. A node that publishes from its scan callback
@@ -201,7 +201,7 @@ def chain_verdict(judge: Any, chain: Sequence[dict[str, Any]], now: float) -> tu
 def chain_check(judge: Any, episodes: Sequence[dict[str, Any]], now: float) -> tuple[dict[str, Any] | None,
                                                                                       list[dict[str, Any]]]:
     """The "back-to-back maneuvers" check (None without a chain to judge) and its findings (records of
-    :mod:`bt_nav_sim.findings`). A chain is a finding: a search's counts its turns (a student sees that the judge
+    :mod:`bt_nav.judge.findings`). A chain is a finding: a search's counts its turns (a student sees that the judge
     counted each), an exit's that never moved on says so, as the sheet only implies driving out (its Retreat is "a
     full 180 deg spin to exit"). Only a kind the course makes strict (``strict_findings``) fails the check. A chain
     holding a failed maneuver is judged only when it failed its purpose (that maneuver's own line says why)."""

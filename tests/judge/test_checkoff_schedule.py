@@ -1,5 +1,5 @@
-"""The lab check-off's run as long as its checks need (bt_nav_sim.checkoff_schedule) and its creep check
-(bt_nav_sim.checkoff_creep), on the default schedule: bt_nav's own executive in lock-step, and a small reactive node
+"""The lab check-off's run as long as its checks need (bt_nav.judge.checkoff_schedule) and its creep check
+(bt_nav.judge.checkoff_creep), on the default schedule: bt_nav's own executive in lock-step, and a small reactive node
 played by a kinematic driver (commands 20 Hz, ground truth ~33 Hz, the schedule's calls at 2 Hz, obeyed)."""
 
 from __future__ import annotations
@@ -7,10 +7,11 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
 
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav.run.lockstep import Lockstep
+from tests.judge.truthkit import truth_judge
 
 DT = 0.01
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
@@ -69,7 +70,7 @@ def _play(node: _Node, config: CheckoffConfig | None = None, end: float = 90.0, 
     """Play ``node`` in the room with the wall ahead until the judge reports (the default schedule unless given);
     ``answer_false_after``: the node hears (and answers) each false that long after the judge first calls it."""
     world = world_from_dict({"name": "test", "segments": ROOM + WALL_AHEAD})
-    judge = CheckoffJudge(config or CheckoffConfig(maneuver="A"), world)
+    judge = truth_judge(config or CheckoffConfig(maneuver="A"), world)
     judge.start(0.0)
     x = y = yaw = 0.0
     cmd = (0.0, 0.0)

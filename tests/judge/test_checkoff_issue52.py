@@ -10,10 +10,12 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
-from bt_nav_sim.findings import strict_kinds
-from bt_nav_sim.segments import ClockMap
 from bt_nav_sim.world import World, load_world, world_from_dict
+
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+from bt_nav.judge.findings import strict_kinds
+from bt_nav.judge.segments import ClockMap
+from tests.judge.truthkit import truth_judge
 
 DT = 0.01
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
@@ -90,7 +92,7 @@ def _pivot(world: World, start_x: float, degrees: float, **kw: object) -> Checko
     creep_until = 5.0 + (-0.28 - start_x - 0.0) / 0.05
     turn, after = _turn(creep_until, degrees, 1.0)
     cmds = _every(0.0, 5.0, 0.0, 0.0) + _every(5.0, creep_until, 0.05, 0.0) + turn + _tail(after)
-    return _feed(CheckoffJudge(_cfg("C", **kw), world, update_world=False), cmds, start=(start_x, 0.0, 0.0))
+    return _feed(truth_judge(_cfg("C", **kw), world, update_world=False), cmds, start=(start_x, 0.0, 0.0))
 
 
 def test_a_pivot_left_in_lab_beside_as_a_70_deg_or_30_150_deg_reading_decides_passes_with_a_finding() -> None:
@@ -134,7 +136,7 @@ def test_a_closed_loop_pivot_split_by_a_stray_stop_is_judged_as_one_90_deg_turn(
         left -= w * 0.05
         t += 0.05
     cmds += _tail(t)
-    judge = _feed(CheckoffJudge(_cfg("C"), world), cmds)
+    judge = _feed(truth_judge(_cfg("C"), world), cmds)
     (m,) = judge.results()["maneuvers"]
     assert m["angle_deg"] == pytest.approx(-90.0, abs=2.0) and m["passed"], judge.report_lines()
     assert judge.passed, judge.report_lines()
@@ -151,7 +153,7 @@ def test_three_announced_right_turns_in_a_row_are_three_maneuvers() -> None:
         turn, t = _turn(t, degrees, 1.0)
         cmds += turn
     cmds += _tail(t)
-    judge = _feed(CheckoffJudge(_cfg("A"), _world(WALL_AHEAD)), cmds, tuple(s - 0.01 for s in starts))
+    judge = _feed(truth_judge(_cfg("A"), _world(WALL_AHEAD)), cmds, tuple(s - 0.01 for s in starts))
     res = judge.results()
     assert [round(m["angle_deg"]) for m in res["maneuvers"]] == pytest.approx([-96, -142, -103], abs=3), \
         res["maneuvers"]
@@ -171,7 +173,7 @@ def test_a_creep_of_one_scan_period_between_two_announced_turns_lies_between_the
     second, end2 = _turn(end1 + 0.2, 100.0, 1.0)
     cmds = _every(0.0, 5.0, 0.0, 0.0) + _every(5.0, t1, 0.05, 0.0) + first + creep + second
     cmds += _tail(end2)
-    judge = _feed(CheckoffJudge(_cfg("A"), _world(*DEAD_END)), cmds, (t1 - 0.01, end1 + 0.19))
+    judge = _feed(truth_judge(_cfg("A"), _world(*DEAD_END)), cmds, (t1 - 0.01, end1 + 0.19))
     res = judge.results()
     assert [round(m["angle_deg"]) for m in res["maneuvers"]] == pytest.approx([100, 100], abs=4), res["maneuvers"]
     assert all(m["forward_ok"] for m in res["maneuvers"]) and judge.passed, judge.report_lines()

@@ -1,4 +1,4 @@
-"""The bag check-off's pure feeds (sim/bt_nav_sim/feeds.py): readings from recorded scans at their own angles, the
+"""The bag check-off's pure feeds (bt_nav/judge/feeds.py): readings from recorded scans at their own angles, the
 silences of a topic, the commands a robot did not follow."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.feeds import ScanReadings, gaps, not_followed, story, usable_ranges
-from bt_nav_sim.readings import SectorFamily
 
+from bt_nav.judge.feeds import ScanReadings, SourceReadings, TriggerFeed, gaps, not_followed, story, usable_ranges
+from bt_nav.judge.readings import SectorFamily
 from bt_nav.mission.scan import Scan
 
 
@@ -52,6 +52,24 @@ def test_the_reading_at_a_time_is_the_latest_scan_at_or_before_it_and_none_after
     assert source.reading_at(1.4).ahead == pytest.approx(0.5 * math.cos(math.asin(0.18 / 0.5)) - 0.032, abs=0.01)
     assert source.reading_at(2.3) is not None and source.reading_at(2.5) is None and source.skipped == 1
 
+
+
+def test_a_robots_feed_gives_each_armed_pose_its_scans_reading_and_an_earlier_pose_one_only_when_asked() -> None:
+    """The judge's feed over recorded scans (a :class:`TriggerFeed`): an armed sample reads the scan at or before it;
+    a sample before the arming has no reading (``at``) unless an episode asks for it (``cast``), and then the scan
+    of its own time, not a later one."""
+    source = ScanReadings(SectorFamily(), half_width=0.18)
+    for t, d in ((1.0, 2.0), (1.2, 1.0), (1.4, 0.5)):
+        source.add(t, _scan(360, 0.0, np.full(360, d)))
+    feed: TriggerFeed = SourceReadings(source)
+    for t, armed in ((1.1, False), (1.3, True), (1.5, True), (0.5, True)):
+        feed.add(0.0, 0.0, 0.0, t, armed)
+    assert feed.at(0) is None and feed.cast(0).front == pytest.approx(2.0)
+    assert feed.at(1).front == pytest.approx(1.0) and feed.cast(1) is feed.at(1)
+    assert feed.at(2).front == pytest.approx(0.5)
+    assert feed.at(3) is None  # armed, but no scan yet: nothing known then
+    feed.on_walkers(1.0, [[0.0, 0.5, 0.2]])  # a robot's scans see people themselves: nothing changes
+    assert feed.at(2).front == pytest.approx(0.5)
 
 def test_gaps_name_a_silence_and_not_a_hiccup() -> None:
     t = list(np.arange(0.0, 12.0, 0.2))

@@ -4,8 +4,8 @@ check-launch FILE|DIR`` and ``bt-nav grade --exe ... --launch FILE``; and the ch
 files hold the launch checks too.
 
 Why here and not in the commands: one code path -- a folder is searched as a class's hand-in is
-(:func:`bt_nav.grading.handins.find_launch`, :func:`~bt_nav.grading.handins.find_node`), and the checks are
-:func:`bt_nav.grading.launchfile.check_launch`, as ``bt-nav grade --class`` runs them.
+(:func:`find_launch`, :func:`bt_nav.grading.handin_files.find_node`), and the checks are
+:func:`bt_nav.grading.launch.check.check_launch`, as ``bt-nav grade --class`` runs them.
 """
 
 from __future__ import annotations
@@ -16,9 +16,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.handins import find_launch, find_node
-from bt_nav.grading.launchfile import LaunchReport, check_launch
-from bt_nav.grading.report import GRADE_FILE
+from bt_nav.grading.handin_files import files_in, find_node
+from bt_nav.grading.launch.check import LAUNCH_NAME, LaunchReport, check_launch
+
+
+def find_launch(folder: Path) -> Path | None:
+    """The student's launch file: the sheet's name, else the one ``*.launch.py`` / ``*_launch.py`` (None: none)."""
+    named = files_in(folder, LAUNCH_NAME)
+    if named:
+        return named[0]
+    others = [p for p in files_in(folder, "*.py") if p.name.endswith(("launch.py", "_launch.py"))]
+    return others[0] if len(others) == 1 else None
 
 
 def launch_target(target: Path, node: Path | None = None) -> tuple[Path | None, Path | None, Path]:
@@ -61,6 +69,8 @@ def node_of_command(command: str) -> Path | None:
 
 def attach_launch(grid_dir: Path, report: LaunchReport | None) -> None:
     """Put the launch checks into the grid's ``grade.json`` (``"launch"``, as a hand-in's class row holds them)."""
+    from bt_nav.grading.report import GRADE_FILE  # here: the evaluation's sandboxed child imports this package
+
     path = Path(grid_dir) / GRADE_FILE
     if report is None or not path.is_file():
         return
@@ -91,6 +101,8 @@ def exe_launch(launch: str | None, command: str, show: Callable[[str], Any] = pr
 
 def launch_passed(grid_dir: Path) -> bool:
     """Whether the grid's ``grade.json`` holds no failed launch check (True: none attached, or every one passed)."""
+    from bt_nav.grading.report import GRADE_FILE  # here: the evaluation's sandboxed child imports this package
+
     try:
         doc = json.loads((Path(grid_dir) / GRADE_FILE).read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError):

@@ -1,6 +1,6 @@
 """Recording stand-ins for the ROS 2 launch API (``launch``, ``launch_ros``, ``ament_index_python``): a launch file's
 ``generate_launch_description()`` runs against them as it would under ``ros2 launch``, and what it builds can then
-be inspected (:mod:`bt_nav.grading.launch_eval` walks it) or asserted on (tests/test_launch.py).
+be inspected (:mod:`bt_nav.grading.launch.evaluate` walks it) or asserted on (tests/test_launch.py).
 
 Why stand-ins and not the real packages: ``launch`` and ``launch_ros`` are not on PyPI, so neither a pip venv nor a
 Gradescope image has them; and a stand-in keeps what it was called with (``.args``, ``.kwargs``, the student's
@@ -47,7 +47,7 @@ class LaunchError(Exception):
 
 def _standin_files() -> set[str]:
     here = Path(__file__).resolve().parent
-    return {str(here / "launch_standins.py"), str(here / "launch_eval.py")}
+    return {str(here / "standins.py"), str(here / "evaluate.py")}
 
 
 _OWN = _standin_files()

@@ -1,5 +1,5 @@
 """A launch file evaluated as ``ros2 launch`` would run it, against the stand-ins of
-:mod:`bt_nav.grading.launch_standins`: which nodes and processes it starts, with which parameters, and which launch
+:mod:`bt_nav.grading.launch.standins`: which nodes and processes it starts, with which parameters, and which launch
 arguments it declares -- once with the defaults, once with ``safety_distance:=0.7`` given on the command line.
 
 Why in a child process (:func:`evaluate`): evaluating runs the student's Python. The child has a time limit (a file
@@ -28,12 +28,15 @@ from typing import Any
 
 import yaml
 
-from bt_nav.grading import launch_standins as s
+import bt_nav.grading.launch.standins as s
 
 #: Seconds a launch file may take to describe itself.
 TIME_LIMIT = 10.0
 #: How deep IncludeLaunchDescription may nest (a file including itself stops there).
 INCLUDE_DEPTH = 8
+#: The child's program: :func:`child_main` called, not this module run with ``-m`` (the package's ``__init__``
+#: imports this module first, and ``-m`` would then run a second copy of it).
+CHILD = "import sys; from bt_nav.grading.launch.evaluate import child_main; sys.exit(child_main(sys.argv[1:]))"
 
 
 @dataclass
@@ -429,7 +432,7 @@ def evaluate(path: Path, share: Path, overrides: dict[str, str], limit: float = 
     env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONDONTWRITEBYTECODE": "1"}
     with tempfile.TemporaryDirectory(prefix="bt_nav_launch_") as tmp:
         out = Path(tmp) / "evaluation.json"
-        command = [sys.executable, "-P", "-m", "bt_nav.grading.launch_eval", str(Path(path).resolve()),
+        command = [sys.executable, "-P", "-c", CHILD, str(Path(path).resolve()),
                    str(Path(share).resolve()), str(out), *(f"{k}:={v}" for k, v in overrides.items())]
         try:
             done = subprocess.run(command, cwd=share, env=env, capture_output=True, timeout=limit, check=False,
@@ -442,6 +445,3 @@ def evaluate(path: Path, share: Path, overrides: dict[str, str], limit: float = 
             tail = done.stderr.decode(errors="replace").strip().splitlines()[-1:] or ["no output"]
             return {"failed": f"evaluating it ended with exit code {done.returncode} ({tail[0]})"}
 
-
-if __name__ == "__main__":
-    sys.exit(child_main(sys.argv[1:]))

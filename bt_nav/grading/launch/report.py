@@ -3,7 +3,7 @@ node, declares the launch argument ``safety_distance`` with the default 0.5, and
 passed, failed, or not checked.
 
 Why "not checked" is a status of its own: the grader evaluates a launch file against stand-ins of the launch API
-(:mod:`bt_nav.grading.launch_eval`), and a file may do what they cannot follow (a shell ``Command``, a package of
+(:mod:`bt_nav.grading.launch.evaluate`), and a file may do what they cannot follow (a shell ``Command``, a package of
 its own). Such a check is never failed for the grader's limits: it counts as passed, and says a TA should look.
 A check may also be "not checked" because it depends on another that failed (``depends``: nothing to pass to a
 Node that is not started; a launch argument declared right that reaches no parameter of the sheet's name): one root

@@ -8,7 +8,8 @@ import math
 
 import numpy as np
 import pytest
-from bt_nav_sim.readings import Reading, SectorReader
+
+from bt_nav.judge.readings import Reading, SectorReader
 
 LAYOUTS = {
     "lds01 0..2pi, 360": np.arange(360) * (2 * math.pi / 360),

@@ -1,5 +1,5 @@
 """A student's launch file read statically (Python's ``ast``; nothing of it run): the fallback of
-:func:`bt_nav.grading.launchfile.check_launch` when the file cannot be evaluated, and the first word on files that
+:func:`bt_nav.grading.launch.check.check_launch` when the file cannot be evaluated, and the first word on files that
 are not Python or have no ``generate_launch_description()``.
 
 Why the checks follow the launch description and not just any call in the file: a ``Node(...)`` built but never
@@ -14,7 +14,7 @@ import ast
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.launch_report import (
+from bt_nav.grading.launch.report import (
     ARGUMENT,
     DECLARES,
     DEFAULT,

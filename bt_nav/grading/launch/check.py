@@ -3,7 +3,7 @@ the student's node, declares the launch argument ``safety_distance`` with the de
 into the node's parameters.
 
 How: the file's ``generate_launch_description()`` is evaluated in a child process against stand-ins of the launch
-API (:mod:`bt_nav.grading.launch_eval`), twice -- with the defaults, and with ``safety_distance:=0.7`` given on the
+API (:mod:`bt_nav.grading.launch.evaluate`), twice -- with the defaults, and with ``safety_distance:=0.7`` given on the
 command line. The node passes "passes" when it would get 0.5; "declares" when it would get 0.5 by default *and* 0.7
 with the override (a launch argument that reaches it), so a constant ``{'safety_distance': 0.5}`` passes the one
 and fails the other. Each check cites the line it is about (the Node's ``parameters=`` line, a params file's line).
@@ -11,7 +11,7 @@ and fails the other. Each check cites the line it is about (the Node's ``paramet
 Why evaluated and not read: students write the same launch file many ways (variables, helper lists, ``add_action``,
 ``ParameterValue``, a params YAML, ``OpaqueFunction``, included files); only running it says what the node gets.
 What the evaluation cannot follow is "not checked: a TA should look", never a failure; the static reader
-(:mod:`bt_nav.grading.launch_static`) is the fallback when the evaluation cannot run at all. Pure: no rclpy.
+(:mod:`bt_nav.grading.launch.static`) is the fallback when the evaluation cannot run at all. Pure: no rclpy.
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from bt_nav.grading.launch_eval import TIME_LIMIT, evaluate, hand_in_files
-from bt_nav.grading.launch_report import (
+from bt_nav.grading.launch.evaluate import TIME_LIMIT, evaluate, hand_in_files
+from bt_nav.grading.launch.report import (
     ARGUMENT,
     DECLARES,
     DEFAULT,
@@ -37,7 +37,7 @@ from bt_nav.grading.launch_report import (
     LaunchCheck,
     LaunchReport,
 )
-from bt_nav.grading.launch_static import read_statically
+from bt_nav.grading.launch.static import read_statically
 
 __all__ = ["ARGUMENT", "DECLARES", "DEFAULT", "LAUNCH_NAME", "NOT_CHECKED", "OVERRIDE", "PASSES", "STARTS",
            "LaunchCheck", "LaunchReport", "check_launch", "launch_ros_installed"]

@@ -1,5 +1,5 @@
 """The lab check-off's run as long as its checks need: when the final ``toggle_navigation(false)`` may come before
-``activate_at + armed_for`` (pure, no rclpy; the judge is :class:`bt_nav_sim.checkoff_core.CheckoffJudge`).
+``activate_at + armed_for`` (pure, no rclpy; the judge is :class:`bt_nav.judge.checkoff_core.CheckoffJudge`).
 
 Why: grading runs at real time (1x), so every sim second is a wall second, and a lab grade of 12 runs must fit in a
 minute. The fixed schedule kept a right node armed for 60 s although every check was decided long before: the
@@ -8,7 +8,7 @@ re-armed node going on. Worse, a right node then crept on for half a minute more
 triggers watches (lab_dead_end's side wall grazed at t=47-51 s), failing for what the sheet never asked.
 
 So once the toggle cycle's true was answered, the judge watches the node drive on for ``drive_on_for`` s (its
-``creep_start`` to start, then long enough for the creep check, :mod:`bt_nav_sim.checkoff_creep`, to see a standstill
+``creep_start`` to start, then long enough for the creep check, :mod:`bt_nav.judge.checkoff_creep`, to see a standstill
 of ``creep_still``), lets a turn under way end (no turning command for ``toggle_off_after`` s: the maneuver it began
 is judged whole), and then disarms for good: the grace, the static window and the verdict follow as before. A node
 that never triggers gets no toggle cycle and keeps the upper bound, ``activate_at + armed_for``.

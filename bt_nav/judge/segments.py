@@ -1,5 +1,5 @@
 """Maneuvers read as the node made them, at any speed: the check-off judge's last word on where one maneuver ends and
-the next begins (pure, no rclpy; :mod:`bt_nav_sim.checkoff_core` finds the turns, :mod:`bt_nav_sim.chains` splits a
+the next begins (pure, no rclpy; :mod:`bt_nav.judge.checkoff_core` finds the turns, :mod:`bt_nav.judge.chains` splits a
 continuous rotation at the node's marks).
 
 Why: how a node's commands fall on the sim clock depends on the machine's speed, and the node's own turn did not
@@ -10,7 +10,7 @@ the turn as another publisher's (``drove forward during the turn``). So:
 - a piece smaller than half the maneuver's smallest angle is never judged alone: it joins the neighbour it is
   closest to in time (within :data:`JOIN_GAP` s, with no forward command between them), unless the disarm cut it
   short or a recording sets it apart (``judge.apart``: the intervals where the robot did not follow its commands,
-  :func:`bt_nav_sim.feeds.not_followed`);
+  :func:`bt_nav.judge.feeds.not_followed`);
 - a turn the node announced (a line it logged, timed by its own stamp) is never joined to the one before it.
 """
 
@@ -20,7 +20,7 @@ import bisect
 import math
 from typing import Any
 
-from bt_nav_sim.chains import ANNOUNCE_WINDOW, INTERRUPT_SLACK, PAUSE_MIN
+from bt_nav.judge.chains import ANNOUNCE_WINDOW, INTERRUPT_SLACK, PAUSE_MIN
 
 #: s: a small piece joins a neighbour at most this far away in time (the shortest silence that is a pause).
 JOIN_GAP = PAUSE_MIN

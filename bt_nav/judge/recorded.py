@@ -22,20 +22,21 @@ from typing import Any
 
 import numpy as np
 
-from bt_nav.mission.scan import Scan
-from bt_nav_sim.checkoff_core import INTERRUPT_SLACK, CheckoffConfig, CheckoffJudge
-from bt_nav_sim.checkoff_creep import CREEP_CHECK
-from bt_nav_sim.checkoff_words import maneuver_check
-from bt_nav_sim.feeds import (
+from bt_nav.judge.checkoff_core import INTERRUPT_SLACK, CheckoffConfig, CheckoffJudge
+from bt_nav.judge.checkoff_creep import CREEP_CHECK
+from bt_nav.judge.checkoff_words import maneuver_check
+from bt_nav.judge.feeds import (
     ODOMETRY_FORWARD_MOTION_MAX,
     SCAN_MAX_AGE,
     Disobeyed,
     Gap,
     ScanReadings,
+    SourceReadings,
     gaps,
     not_followed,
     story,
 )
+from bt_nav.mission.scan import Scan
 
 #: The report's one time zero, in the words the help, the terminal, the JSON and the film use (a window does not move
 #: it: a turn keeps its time in every window that holds it).
@@ -122,10 +123,10 @@ def judge_recording(rec: Recording, config: CheckoffConfig, window: Window = Win
     for t, scan in rec.scans:
         if a - SCAN_MAX_AGE <= t <= b:
             source.add(t, scan)
-    judge = CheckoffJudge(cfg, None, readings=source)
+    judge = CheckoffJudge(cfg, SourceReadings(source))
     judge.start(origin)  # one time zero for every window (TIME_ZERO)
     disobeyed = _disobeyed(rec, a, b)
-    judge.apart = [(d.start, d.end) for d in disobeyed]  # never joined to a turn beside it (bt_nav_sim.segments)
+    judge.apart = [(d.start, d.end) for d in disobeyed]  # never joined to a turn beside it (bt_nav.judge.segments)
     arming = _arm(judge, rec, window, a, b)
     for t, x, y, yaw in odom:
         judge.observe(t, x, y, yaw)

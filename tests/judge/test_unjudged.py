@@ -6,7 +6,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from bt_nav_sim.unjudged import FreeMotion
+
+from bt_nav.judge.unjudged import FreeMotion
 
 
 def _drive(free: FreeMotion, seconds: float, v: float, w: float, t0: float = 0.0, dt: float = 0.1) -> None:

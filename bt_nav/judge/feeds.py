@@ -1,10 +1,11 @@
-"""The check-off judge's feeds from a recording: trigger readings from the robot's own LaserScans, and what the
-recording says about itself (gaps, commands the robot did not follow). Pure: NumPy and the mission's scan module.
+"""The check-off judge's feed protocol (:class:`TriggerFeed`: a trigger reading per pose sample), and its feeds from a
+recording: trigger readings from the robot's own LaserScans, and what the recording says about itself (gaps, commands
+the robot did not follow). Pure: NumPy and the mission's scan module.
 
-Why a second feed: in the simulator the judge casts its readings noise-free from ground truth
-(:meth:`bt_nav_sim.checkoff_core.CheckoffJudge._read`). On a real TurtleBot3 there is no ground truth and no world
-map; what there is, is the scans the robot recorded and its odometry. :class:`ScanReadings` turns each recorded
-scan into the same :class:`bt_nav_sim.readings.Reading` (the whole reasonable-sector family, over *that scan's*
+Why a second feed: in the simulator the readings are cast noise-free from ground truth in its world (the simulator's
+truth feed, ``bt_nav_sim.truth``, built on :class:`TriggerFeed`). On a real TurtleBot3 there is no ground truth and no
+world map; what there is, is the scans the robot recorded and its odometry. :class:`ScanReadings` turns each recorded
+scan into the same :class:`bt_nav.judge.readings.Reading` (the whole reasonable-sector family, over *that scan's*
 angles, so an LDS-02 with a different beam count every scan reads right), and the judge takes "the reading at a
 pose's time" as the latest scan at or before it. The rules do not change; only where the readings come from.
 
@@ -27,8 +28,8 @@ from typing import Protocol
 
 import numpy as np
 
+from bt_nav.judge.readings import Reading, SectorFamily, SectorReader
 from bt_nav.mission.scan import Scan, ScanError, beam_angles, clean_validated, validate_scan
-from bt_nav_sim.readings import Reading, SectorFamily, SectorReader
 
 #: m: displacement allowed during a turn when the poses are odometry (a pivot's wheel slip drifts it by a few cm
 #: on a real TurtleBot3); the ground-truth judge keeps its own ``forward_motion_max``.
@@ -37,12 +38,60 @@ ODOMETRY_FORWARD_MOTION_MAX = 0.03
 SCAN_MAX_AGE = 1.0
 
 
+class TriggerFeed(Protocol):
+    """Where a check-off judge takes the trigger reading of each of its pose samples, by sample index: the simulator's
+    truth feed (cast in its world from the true pose) or :class:`SourceReadings` (a robot's scans). The judge owns no
+    world; its driver hands it a feed."""
+
+    def add(self, x: float, y: float, yaw: float, t: float, armed: bool) -> None:
+        """The next pose sample (in order), and whether the robot was armed then."""
+        ...
+
+    def at(self, k: int) -> Reading | None:
+        """Sample ``k``'s reading while armed (None: not armed then, or no reading)."""
+        ...
+
+    def cast(self, k: int) -> Reading | None:
+        """Sample ``k``'s reading though the robot was not armed then (an episode that starts at the arming may have
+        been decided on a scan from just before it)."""
+        ...
+
+    def on_walkers(self, t: float, circles: object) -> None:
+        """Where the people walking were at ``t`` (the simulator's; a robot's scans see people themselves)."""
+        ...
+
+
 class ReadingSource(Protocol):
-    """Where a judge takes its trigger readings when it does not cast them from a world."""
+    """Readings by time (a robot's scans): what :class:`SourceReadings` reads at each pose sample."""
 
     def reading_at(self, t: float) -> Reading | None:
         """The readings at time ``t`` (None: none known then)."""
         ...
+
+
+class SourceReadings:
+    """A :class:`TriggerFeed` over a :class:`ReadingSource`: an armed sample's reading is the source's at its time,
+    read as the sample comes; a sample from before the arming is read only when an episode asks (:meth:`cast`)."""
+
+    def __init__(self, source: ReadingSource) -> None:
+        self.source = source
+        self._t: list[float] = []
+        self._armed: list[bool] = []
+        self._readings: list[Reading | None] = []
+
+    def add(self, x: float, y: float, yaw: float, t: float, armed: bool) -> None:
+        self._t.append(t)
+        self._armed.append(armed)
+        self._readings.append(self.source.reading_at(t) if armed else None)
+
+    def at(self, k: int) -> Reading | None:
+        return self._readings[k]
+
+    def cast(self, k: int) -> Reading | None:
+        return self._readings[k] if self._armed[k] else self.source.reading_at(self._t[k])
+
+    def on_walkers(self, t: float, circles: object) -> None:
+        """Nothing: a robot's scans see the people walking themselves."""
 
 
 def usable_ranges(scan: Scan) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""The check-off judge on maneuvers back to back (bt_nav_sim.chains) and on its toggle cycle: a tiny kinematic
+"""The check-off judge on maneuvers back to back (bt_nav.judge.chains) and on its toggle cycle: a tiny kinematic
 driver plays a node's script in a small world, feeding the judge commands (20 Hz), ground truth (~33 Hz), the
 node's announcements (its log lines) and the schedule's service calls, which the scripted node obeys unless told
 otherwise (a false stops it, a true lets it go on)."""
@@ -9,9 +9,11 @@ import math
 import re
 
 import pytest
-from bt_nav_sim.chains import SPLIT_HINT, marks
-from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
 from bt_nav_sim.world import world_from_dict
+
+from bt_nav.judge.chains import SPLIT_HINT, marks
+from bt_nav.judge.checkoff_core import CheckoffConfig, CheckoffJudge
+from tests.judge.truthkit import truth_judge
 
 DT = 0.01
 ROOM = [[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]]
@@ -28,7 +30,7 @@ def _judge(maneuver: str, segments: list[list[float]], **kw) -> CheckoffJudge:
     # (test_checkoff_schedule.py plays the default one); disarm at 25 s, report at 29 s
     cfg = CheckoffConfig(**{"maneuver": maneuver, "activate_at": 5.0, "toggle_off_for": 5.0, "drive_on_for": 0.0,
                             "chain_for": math.inf, "armed_for": 20.0, **kw})
-    return CheckoffJudge(cfg, world_from_dict({"name": "test", "segments": ROOM + segments}))
+    return truth_judge(cfg, world_from_dict({"name": "test", "segments": ROOM + segments}))
 
 
 def _play(judge: CheckoffJudge, script: list[tuple[float, float, float, bool]], *, obey: bool = True,

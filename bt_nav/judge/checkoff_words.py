@@ -1,5 +1,5 @@
 """The check-off's words: what is wrong with a judged maneuver and the report lines of the maneuver checks, in
-sentences a student can act on (the pure judge :mod:`bt_nav_sim.checkoff_core` makes the figures; the docs' judge
+sentences a student can act on (the pure judge :mod:`bt_nav.judge.checkoff_core` makes the figures; the docs' judge
 page and the grader quote these).
 
 Why apart from the judge: the judge's state machine and its words change for different reasons, and one module
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from bt_nav.judge.chains import SPLIT_HINT
 from bt_nav.mission.maneuver_spec import LiveMap, judge_names, maneuver_spec
-from bt_nav_sim.chains import SPLIT_HINT
 
 #: The lab's names of the maneuvers (``the Randomizer``), a live view of the maneuver spec.
 MANEUVER_NAMES = LiveMap(judge_names)

@@ -12,7 +12,9 @@ import re
 from dataclasses import dataclass
 
 import pytest
-from bt_nav_sim.referee_core import CHECKS, Activate, Referee, RefereeConfig
+
+from bt_nav.judge.referee_core import CHECKS, Activate, Referee, RefereeConfig
+from tests.judge.truthkit import truth_judge
 
 RATE = 30.0  # ground-truth samples per second
 
@@ -247,10 +249,11 @@ def test_a_step_on_a_schedule_time_acts_whatever_the_float_error_of_t0() -> None
     ref = Referee()
     ref.start(t0)
     assert ref.step(t) == [Activate(True)]  # static_before 5 s
-    from bt_nav_sim.checkoff_core import CheckoffConfig, CheckoffJudge
     from bt_nav_sim.world import world_from_dict
 
-    judge = CheckoffJudge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
+    from bt_nav.judge.checkoff_core import CheckoffConfig
+
+    judge = truth_judge(CheckoffConfig(maneuver="C"), world_from_dict({"name": "empty", "segments": []}))
     judge.start(t0)
     assert judge.step(t) == [Activate(True)]  # activate_at 5 s
 

@@ -13,11 +13,11 @@ against the whole family, and which way a rule leans depends on what it accuses 
   and, for each side, the largest over the sector centres of the narrow (+-5 deg) sector's nearest distance,
   against the tightest limit (C: the smaller of the two), with no margin;
 - **C's side**: the sides as each (centre, half-width) pair of the family reads them, and their means; a side is
-  required only where every pair agrees (see :class:`bt_nav_sim.checkoff_core.CheckoffJudge`). The pairs reach
+  required only where every pair agrees (see :class:`bt_nav.judge.checkoff_core.CheckoffJudge`). The pairs reach
   as close to the bow as :data:`SIDE_REACH_DEG` and as wide as :data:`WIDE_SIDE` (30-150 deg): right nodes read
   their sides centred at 70 deg, or spanning 30-150 deg, and such a sector may see the obstacle C pivots from (its
   corner, where the robot's yaw puts it) and call that side the closer one. Where they disagree with the sectors
-  beside the robot either side passes, with a finding (:mod:`bt_nav_sim.findings`).
+  beside the robot either side passes, with a finding (:mod:`bt_nav.judge.findings`).
 
 Pure (NumPy only): the judge casts noise-free ranges from the true pose and hands them here.
 """
