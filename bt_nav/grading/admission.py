@@ -226,6 +226,14 @@ def describe(jobs: int, real_time: bool = False) -> str:
     return f"{bounds[0]} at a time, up to {bounds[1]} while the cores stay idle"
 
 
+#: At 1x, after the opening wave (the grade's first ``gap`` s, every place at once) and beyond one run per core, a run
+#: starts only this long after the last start (wall s) ...
+REALTIME_GAP = 1.0
+#: ... and while the cores were at least this idle over the last second. Why: a class keeps every place busy, and
+#: each run's start-up (imports, discovery: some 3 CPU s) lands on runs being judged; a class of 10 (180 runs) with
+#: every place taken as soon as free ran at load 10 on 2 cores and one run in ten fell behind real time.
+REALTIME_IDLE = 0.1
+
 #: Where the machine's real-time places are (a lock file each, in the temporary directory unless set).
 SLOTS_ENV = "BT_NAV_SLOTS_DIR"
 #: Wall seconds after a 1x run fell behind anywhere on the machine during which new runs, of every grade on it, take
@@ -312,6 +320,7 @@ class Admission:
         self.places: int | None = None  # decided by the opening look, at the first start
         self.slots: MachineSlots | None = None  # at 1x: the machine's places, shared by its grades
         self._last_start = self._last_change = -float("inf")
+        self._wave_ends = -float("inf")  # at 1x: the end of the opening wave (every place at once)
         self._cond = threading.Condition()
 
     @classmethod
@@ -361,7 +370,25 @@ class Admission:
         """No start and no change of places for ``gap`` s: the idle share now says what the runs in flight use."""
         return now >= self._quiet_from()
 
+    def _may_start_1x(self) -> bool:
+        """At 1x: every free place in the opening wave; after it, beyond one run per core, a run starts
+        :data:`REALTIME_GAP` s after the last and only while the cores were :data:`REALTIME_IDLE` idle (a measured
+        load the runs in flight leave room in; unknown: no hold)."""
+        now = self.clock()
+        if self.places is None:
+            self.places, self._wave_ends = self._open(), now + self.gap
+        if self.running >= self.places:
+            return False
+        if now <= self._wave_ends or self.running < usable_cores():
+            return True
+        if now - self._last_start < REALTIME_GAP:
+            return False
+        idle = self.meter.idle_share()
+        return idle is None or idle >= REALTIME_IDLE
+
     def _may_start(self) -> bool:
+        if self.slots is not None:
+            return self._may_start_1x()
         if self.places is None:
             self.places = self._open()
         now = self.clock()

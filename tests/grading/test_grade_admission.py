@@ -268,6 +268,37 @@ def test_fell_behind_calms_the_machine(tmp_path: Path, monkeypatch: pytest.Monke
         admission.leave()
 
 
+def test_a_1x_grade_opens_every_place_then_starts_runs_only_while_the_cores_carry_them(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """At 1x the opening wave takes every place at once (a grid of 18 runs at once); after it, beyond one run per
+    core, a freed place is taken only REALTIME_GAP after the last start and while the cores were REALTIME_IDLE idle."""
+    from bt_nav.grading.admission import REALTIME_GAP, REALTIME_IDLE, MachineSlots
+
+    monkeypatch.setattr("bt_nav.grading.admission.usable_cores", lambda: 2)
+
+    class Stop:
+        requested = True
+
+    meter, clock = Meter(0.0, opening=1.0), Clock()
+    gate = Admission(6, 6, meter=meter, clock=clock, gap=3.0, poll=0.01)
+    gate.slots = MachineSlots(6, str(tmp_path))
+    assert all(gate.enter() for _ in range(6)), "the opening wave: every place, however busy the cores"
+    clock.now = 10.0
+    gate.leave()
+    assert gate.enter(Stop()) is False, "the cores are busy (0 % idle): the freed place waits"
+    meter.share = REALTIME_IDLE
+    assert gate.enter(Stop()) is True, "idle enough: it starts"
+    gate.leave()
+    clock.now += REALTIME_GAP / 2
+    assert gate.enter(Stop()) is False, "too soon after the last start"
+    clock.now += REALTIME_GAP
+    for _ in range(5):
+        gate.leave()
+    meter.share = 0.0
+    assert gate.enter(Stop()) and gate.enter(Stop()), "one run per core starts whatever the load"
+    assert gate.enter(Stop()) is False
+
+
 def test_a_1x_admission_takes_a_machine_place_per_run() -> None:
     admission = Admission.for_jobs(AutoJobs(2), real_time=True)
     assert admission is not None and admission.slots is not None and admission.base == admission.limit
