@@ -14,8 +14,19 @@ import argparse
 import sys
 from dataclasses import dataclass, field
 
-#: The simulated runs, by maneuver: the template node's turn (deg, - = right) and its trigger (m).
-TURNS = {"A": (-120.0, 0.5), "C": (-90.0, 0.5)}
+
+def _turns() -> dict[str, tuple[float, float]]:
+    """The simulated runs, by maneuver (those the sheet triggers on the front: the simulated node reads no sides):
+    the template node's turn (deg, - = right: 120 deg, or the rule's nearest angle) and its trigger (m: the
+    ``safety_distance`` default, which the judge accepts for every front trigger)."""
+    from bt_nav.mission.maneuver_spec import MANEUVER_SPECS
+
+    return {letter: (-min(max(120.0, spec.angle.low_deg), spec.angle.high_deg), 0.5)
+            for letter, spec in MANEUVER_SPECS.items() if spec.trigger.reads == "front"}
+
+
+#: The simulated runs, by maneuver (:func:`_turns`).
+TURNS = _turns()
 #: s of the simulated run: armed at 1 s, disarmed at 9 s.
 ARM_AT, DISARM_AT, RUN_END = 1.0, 9.0, 10.0
 
@@ -33,7 +44,8 @@ class _Command:
 
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="bt-nav rehearse", description=__doc__.split("\n\n")[0].replace("``", ""))
-    p.add_argument("--maneuver", default="A", choices=sorted(TURNS), help="the simulated node's maneuver (default A)")
+    p.add_argument("--maneuver", default=min(TURNS), choices=sorted(TURNS),
+                   help=f"the simulated node's maneuver (default {min(TURNS)})")
     p.add_argument("--duration", type=float, default=20.0, help="s the judge listens (default 20; the run is 10 s)")
     p.add_argument("--domain-id", type=int, help="the rehearsal's ROS domain (default: a free one, 100-199)")
     p.add_argument("--robot-only", action="store_true", help="only the simulated robot, in this shell's domain")
