@@ -86,8 +86,9 @@ def test_the_judge_moves_into_the_simulators_command_line() -> None:
     assert "use_sim_time:=false" in own and 'json:="/tmp/v.json"' in own, own
 
 
-def test_the_host_runs_at_its_unjudged_pace_before_t0_and_after_the_verdict() -> None:
-    """:meth:`HostedJudge.poll` tells the simulator whether its judge is judging (started, no verdict yet): the
+def test_the_host_runs_at_its_unjudged_pace_before_t0_and_after_the_schedule() -> None:
+    """:meth:`HostedJudge.poll` tells the simulator whether its judge is judging: from its t0 until its schedule is
+    done, before the verdict is made (making it can hold the loop up: no window of the run is open then). The
     simulator's pace between those instants is the only one a verdict depends on."""
     from types import SimpleNamespace
 
@@ -96,11 +97,17 @@ def test_the_host_runs_at_its_unjudged_pace_before_t0_and_after_the_verdict() ->
     said: list[bool] = []
     sim = SimpleNamespace(robots=[SimpleNamespace(prefix="")], sim=SimpleNamespace(walkers=[]), observers=[],
                           follow_report=None, robot_armed=None, set_judging=said.append, poll=lambda: False)
-    judge = SimpleNamespace(started=False, finished=False, poll=lambda: None)
+    core = SimpleNamespace(done=False)
+    judge = SimpleNamespace(started=False, finished=False, judge=core)
+
+    def poll() -> None:  # the verdict is made in the judge's poll once its schedule is done
+        judge.finished = judge.finished or core.done
+
+    judge.poll = poll
     hosted = HostedJudge(sim, judge)  # type: ignore[arg-type]
     hosted.poll()
     judge.started = True
     hosted.poll()
-    judge.finished = True
+    core.done = True  # the last window closed (the step timer): the verdict comes in the next poll
     hosted.poll()
-    assert said == [False, False, True, False]
+    assert said == [False, False, False, True, True, False, False], said

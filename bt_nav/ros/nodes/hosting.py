@@ -104,9 +104,17 @@ class HostedJudge:
 
     def poll(self) -> bool:
         """The judge's duties between spins; True once the simulator's loop has ended (never at the verdict)."""
+        self._judging()
         self.judge.poll()
-        self.sim.set_judging(self.judge.started and not self.judge.finished)
+        self._judging()
         return self.sim.poll()
+
+    def _judging(self) -> None:
+        """Tell the simulator whether the judge is judging: from its t0 until its schedule is done (its last window
+        closed), not until its verdict is made. Making it (a long run's creep check casts a reading at every armed
+        sample, in this process) held the loop up to 0.6 s while the run counted as judged, and a node that never
+        crept, standing 66 s, fell behind real time in every run and ended NOT GRADED."""
+        self.sim.set_judging(self.judge.started and not self.judge.finished and not self.judge.judge.done)
 
     def close(self) -> None:
         """The judge first (stopped before its verdict, it says so and lets the world go), then the loop."""
