@@ -125,7 +125,7 @@ LAB = Assignment(
     name="lab", files=("lab.yaml",), arm_service="toggle_navigation", evaluate_service=None,
     judge=Judge("checkoff", "bt_nav_checkoff", ("safety_distance", "pivot_distance"), ("safety_distance",)),
     graph="checkoff", world_kind="lab", maneuvers=LAB_MANEUVERS, grid=Grid("all", 20),
-    # A node over DDS: per choice two cells (C: three) x 3 LiDARs x 2 seeds = 12 (18) runs, each choice where its
+    # A node over DDS: per choice two cells (A, C: three) x 3 LiDARs x 2 seeds = 12 (18) runs, each choice where its
     # mistakes show. lab_dead_end checks all three off at the sheet's 0.5 m. lab_beside starts the robot beside a
     # wall 0.23 m to its left that no front sector sees: a whole-scan or side reading taken for "front" fires there
     # (A, C); A is graded there with safety_distance 0.7 (the check-off's `ros2 param list` step: the parameter
@@ -133,10 +133,14 @@ LAB = Assignment(
     # (left OR right fires) and narrows evenly, with safety_distance 0.7: a node that keeps 0.5 m turns late.
     # lab_slant is C's clearer side where every reasonable reading of the sides agrees (lab_beside's box corners fall
     # in a 30-150 deg side sector, where either side passes since issue 52): a node turning toward the closer side
-    # fails there.
-    exe_grid=Grid("lab_beside,lab_dead_end,lab_hallway,lab_slant", 2, cells=(
+    # fails there. lab_object is the check-off itself (a static object ahead in an open room), A's at the sheet's
+    # 0.5 m (the parameter given: only a choice triggering on safety_distance is graded there): a Randomizer that
+    # spins until its front clears turns 40-60 deg there, while in lab_dead_end and lab_beside "clear" comes at
+    # 130-150 deg, within A's 90-180, and at 1x it passed every run of A's other cells.
+    exe_grid=Grid("lab_beside,lab_dead_end,lab_hallway,lab_slant,lab_object", 2, cells=(
         Cell("lab_beside"), Cell("lab_beside", (("safety_distance", 0.7),)), Cell("lab_dead_end"),
-        Cell("lab_hallway", (("safety_distance", 0.7),)), Cell("lab_slant"))))
+        Cell("lab_hallway", (("safety_distance", 0.7),)), Cell("lab_slant"),
+        Cell("lab_object", (("safety_distance", 0.5),)))))
 
 #: The assignments, by name.
 ASSIGNMENTS: dict[str, Assignment] = {a.name: a for a in (HOMEWORK, LAB)}

@@ -29,7 +29,7 @@ def _jobs(*argv: str) -> list[Job]:
 
 
 @pytest.mark.parametrize(("choice", "cells"), [
-    ("A", {("lab_beside", SD), ("lab_dead_end", ())}),
+    ("A", {("lab_beside", SD), ("lab_dead_end", ()), ("lab_object", (("safety_distance", 0.5),))}),
     ("B", {("lab_dead_end", ()), ("lab_hallway", SD)}),
     ("C", {("lab_beside", ()), ("lab_dead_end", ()), ("lab_slant", ())}),
 ])
@@ -46,11 +46,12 @@ def test_worlds_given_replace_the_cells_and_a_parameter_given_wins() -> None:
     assert [(j.world, j.node_params) for j in plain] == [("lab_object", ()), ("lab_object", ())]
     assert plain[0].key == "lab_object|A|0|lab|-|0.05m10deg|lidar=lds01"  # no parameters: the key as before
     given = _jobs("--maneuvers", "A", "--node-param", "safety_distance=0.6", "--lidars", "lds01", "--seeds", "1")
-    assert {(j.world, j.node_params) for j in given} == {("lab_beside", ()), ("lab_dead_end", ())}
+    assert {(j.world, j.node_params) for j in given} == {("lab_beside", ()), ("lab_dead_end", ()), ("lab_object", ())}
     every = _jobs("--maneuvers", "A,B,C", "--lidars", "lds01", "--seeds", "1")
-    assert len(every) == 7
+    assert len(every) == 8
     # the grid's cells for B: lab_beside's cell of its trigger distance too; the plan keeps what the world checks off
-    assert [c.world for c in LAB.exe_grid.cells_of("B")] == ["lab_beside", "lab_dead_end", "lab_hallway", "lab_slant"]
+    assert [c.world for c in LAB.exe_grid.cells_of("B")] == ["lab_beside", "lab_dead_end", "lab_hallway", "lab_slant",
+                                                              "lab_object"]
     assert [(c.world, c.params) for c in LAB.exe_grid.cells_of("C")] == [("lab_beside", ()), ("lab_dead_end", ()),
                                                                          ("lab_slant", ())]
 

@@ -26,9 +26,9 @@ class _Node:
     ``spin`` (once triggered it turns on without a pause whenever armed, as maneuvers back to back)."""
 
     def __init__(self, *, pause: float = 0.0, brake: float = 0.0, stand_after_rearm: bool = False,
-                 turn_after_rearm: float | None = None, spin: bool = False) -> None:
+                 turn_after_rearm: float | None = None, spin: bool = False, spin_rate: float = 1.0) -> None:
         self.pause, self.brake, self.stand, self.turn_after = pause, brake, stand_after_rearm, turn_after_rearm
-        self.spin, self.spinning = spin, False
+        self.spin, self.spinning, self.spin_rate = spin, False, spin_rate
         self.armed, self.armed_at, self.arms = False, 0.0, 0
         self.turn_to: float | None = None
         self.braked_at: float | None = None
@@ -44,7 +44,7 @@ class _Node:
         if not self.armed or t < self.armed_at + self.pause:
             return 0.0, 0.0
         if self.spinning:
-            return 0.0, 1.0
+            return 0.0, self.spin_rate
         if self.turn_to is not None:
             if math.remainder(self.turn_to - yaw, 2 * math.pi) > 0.0:  # until it passed the target (left turns)
                 return 0.0, 1.0
@@ -229,3 +229,16 @@ def test_a_disarm_takes_effect_when_the_node_answers_it_within_the_allowance(lat
     assert times["cycle_off"] == pytest.approx(times["cycle_off_requested"] + late, abs=0.02)
     check = _check(judge, "static after deactivation")
     assert check["passed"] is passes, check["detail"]
+
+
+def test_a_slow_node_that_never_stops_turning_is_cut_only_past_its_largest_angle() -> None:
+    """A node that never stops turning once triggered, at 0.3 rad/s: cut at chain_for (10 s, 172 deg) it would be
+    "interrupted by the disarm (angle not judged)" within A's 190 deg and pass; its false comes once it turned past
+    190 + 10 deg, and it fails for turning past the rule."""
+    judge = _play(_Node(spin=True, spin_rate=0.3))
+    res = judge.results()
+    first = res["maneuvers"][0]
+    assert first["interrupted"] and not first["passed"], first
+    assert "still turning at the disarm" in first["rule"], first
+    cut = res["times"]["cycle_off_requested"]
+    assert cut - first["t"] >= math.radians(200.0) / 0.3 - 0.6, (cut, first["t"])

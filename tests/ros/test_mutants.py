@@ -61,8 +61,10 @@ LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
           "front_is_whole_scan": (NOT_HELD, "lab_beside"),
           "ignores_safety_distance": (r"turned late: triggered at front 0\.[3-5]\d m with safety_distance 0\.70: "
                                       r"it crept on 0\.[12]\d m", "safety_distance=0.7"),
-          "spins_360": (r"turned 3[5-7]\d deg \w+; the Randomizer needs 80-190 deg", None),
-          "spins_until_clear": (r"turned \d+ deg \w+; the Randomizer needs 80-190 deg", "lab_object|lab_dead_end")},
+          "spins_360": (r"turned 3[0-7]\d deg \w+; the Randomizer needs 80-190 deg", None),
+          # clear comes at 130-150 deg in lab_dead_end and lab_beside (within A's 90-180: at 1x it passes there), at
+          # 30-60 deg in lab_object's open room: caught there (A's default cell at the sheet's 0.5 m)
+          "spins_until_clear": (r"turned \d+ deg \w+; the Randomizer needs 80-190 deg", "lab_object")},
     "B": {**_EVERY_CHOICE, "no_trigger": (r"performed no maneuver", None),
           "half_angle": (r"turned [89]\d deg \w+; the Retreat needs 180 \+- 10 deg", None),
           "left_or_right": (r"turned although its trigger did not hold \(left", "lab_hallway"),
@@ -70,7 +72,7 @@ LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
                                       r"safety_distance 0\.70: it crept on", "safety_distance=0.7"),
           # respins_forever ("never moved on") is a finding since issue 52 (the sheet only implies driving out): it
           # fails only with --strict-findings back_to_back (tests/sim/test_checkoff_chains.py)
-          "spins_360": (r"turned 3[5-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None)},
+          "spins_360": (r"turned 3[0-7]\d deg \w+; the Retreat needs 180 \+- 10 deg", None)},
     "C": {**_EVERY_CHOICE, **{name: (LAB_C[name], None) for name in (
               "hardcoded_indices", "zero_is_obstacle", "half_angle", "no_trigger")},
           # wrong_side is caught where every reasonable reading of the sides agrees (lab_slant, made for it); in
@@ -78,7 +80,7 @@ LAB_BY_CHOICE: dict[str, dict[str, tuple[str, str | None]]] = {
           # passes there, with a finding
           "wrong_side": (LAB_C["wrong_side"], "lab_slant"),
           "side_as_front": (NOT_HELD, "lab_beside"),
-          "spins_360": (r"turned 3[5-7]\d deg \w+; the Smart Pivot needs 90 \+- 10 deg", None)},
+          "spins_360": (r"turned 3[0-7]\d deg \w+; the Smart Pivot needs 90 \+- 10 deg", None)},
 }
 #: Homework mistakes and their reasons.
 HOMEWORK_MISTAKES = {
