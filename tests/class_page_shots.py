@@ -42,7 +42,7 @@ def shoot(page_file: Path, docs: Path) -> list[Path]:
                                      args=["--headless", "--no-sandbox", "--disable-gpu"])
         try:
             page = browser.new_page(viewport=WINDOW)
-            page.goto(page_file.as_uri())
+            page.goto(page_file.resolve().as_uri())
             page.screenshot(path=str(shots[0]))
             page.locator(f'tr[data-name="{OPENED}"] details summary').click()
             page.screenshot(path=str(shots[1]))
@@ -65,6 +65,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         write_class_html(args.out)
         code = 0
     else:
+        import shutil
+
+        shutil.rmtree(args.out, ignore_errors=True)  # this script's own grade: a new one each time, never a stale one
         code = grade(args.out)
     page = args.out / "class.html"
     if not page.is_file():
