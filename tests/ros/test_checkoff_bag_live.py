@@ -6,51 +6,19 @@ TurtleBot's clock may be; the listener's verdict must match the run's ground tru
 from __future__ import annotations
 
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from sensor_msgs.msg import LaserScan
 from simtools import Proc
 
+from bt_nav.ros.nodes.fakerobot import messages
 from bt_nav.testing import wait_until
-from tests.media.robotsynth import Synth, simulate
-
-LEAD = 0.3  # s the robot's stamps run ahead of the wall clock
-
-
-def _stamp(msg: Any, t: float) -> None:
-    ns = round(t * 1e9)
-    msg.header.stamp.sec, msg.header.stamp.nanosec = ns // 1_000_000_000, ns % 1_000_000_000
-
-
-def _messages(run: Synth, start: float) -> list[tuple[float, str, Any]]:
-    """(run time, kind, message) in time order, header stamps on the wall clock from ``start`` plus LEAD."""
-    out: list[tuple[float, str, Any]] = []
-    for t, x, y, yaw, v, w in run.odom:
-        m = Odometry()
-        _stamp(m, start + t + LEAD)
-        m.pose.pose.position.x, m.pose.pose.position.y = x, y
-        m.pose.pose.orientation.z, m.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
-        m.twist.twist.linear.x, m.twist.twist.angular.z = v, w
-        out.append((t, "odom", m))
-    for t, a0, da, n, ranges in run.scans:
-        m = LaserScan()
-        _stamp(m, start + t + LEAD)
-        m.angle_min, m.angle_increment, m.angle_max = a0, da, a0 + (n - 1) * da
-        m.range_min, m.range_max = 0.0, 100.0
-        m.ranges = np.asarray(ranges, dtype=np.float32).tolist()
-        out.append((t, "scan", m))
-    for t, v, w in run.cmds:
-        m = Twist()
-        m.linear.x, m.angular.z = v, w
-        out.append((t, "cmd", m))
-    return sorted(out, key=lambda item: item[0])
+from tests.media.robotsynth import simulate
 
 
 def test_the_live_listener_judges_a_robot_as_its_bag_would_be(ros_context: Any, tmp_path: Path) -> None:
@@ -60,12 +28,12 @@ def test_the_live_listener_judges_a_robot_as_its_bag_would_be(ros_context: Any, 
     judge = Proc("checkoff", "--robot", "--duration", "16", "--maneuver", "A", "--json", str(verdict))
     node = Node("fake_turtlebot", context=ros_context)
     pubs = {"odom": node.create_publisher(Odometry, "odom", 50), "scan": node.create_publisher(LaserScan, "scan", 10),
-            "cmd": node.create_publisher(Twist, "cmd_vel", 10)}
+            "cmd_vel": node.create_publisher(Twist, "cmd_vel", 10)}
     try:
         wait_until(lambda: any("listening to" in line for line in judge.stdout), 30.0, "the listener started")
         wait_until(lambda: all(p.get_subscription_count() > 0 for p in pubs.values()), 10.0, "it subscribed")
         start = time.time()
-        for t, kind, msg in _messages(run, start):
+        for t, kind, msg in messages(run, start):  # what `bt-nav rehearse` publishes
             time.sleep(max(0.0, start + t - time.time()))
             pubs[kind].publish(msg)
         assert judge.wait(30.0) == 0, judge.output()
