@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from bt_nav_sim.lidar import LIDARS
+from bt_nav_sim.world import load_world
 
 from bt_nav.grading.exe.pace import speed_words
 from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
@@ -35,6 +36,7 @@ from bt_nav.judge.checkoff_creep import CREEP_CHECK, CREEP_SHEET
 from bt_nav.judge.checkoff_schedule import schedule_words
 from bt_nav.judge.referee_core import CHECK_WORDS, RefereeConfig
 from bt_nav.judge.referee_core import CHECKS as HOMEWORK_CHECKS
+from bt_nav.mission.assignments import LAB
 from bt_nav.mission.params import LAB_MANEUVERS
 from bt_nav.ros.bringup import HOMEWORK_ACTIVATE, HOMEWORK_EVALUATE, LAB_ARM, param_arg
 from bt_nav.run.terminal import shell_text
@@ -421,7 +423,21 @@ def _run(profile: str, setup: GradeSetup) -> list[str]:
             f"It runs the world{'s' if len(worlds) > 1 else ''} " + ", ".join(f"`{w}`" for w in worlds)
             + f" ({where}, `--worlds`) on each of these LiDARs ({which}, `--lidars`), each run in its own ROS "
             "domain, and writes `summary.md`, `report.html` and this page as `rules.md` in its output directory:", "",
-            *_lidar_lines(setup.lidars)]
+            *_lidar_lines(setup.lidars),
+            *(["", _lab_cells()] if profile == "lab" and not setup.worlds else [])]
+
+
+def _lab_cells() -> str:
+    """The default grid's cells of each lab choice (:meth:`bt_nav.mission.assignments.Grid.cells_of`, kept where the
+    arena checks the choice off), with the parameter a cell passes."""
+    def cell(world: str, params: tuple[tuple[str, float], ...]) -> str:
+        return f"`{world}`" + "".join(f" (`-p {k}:={v:g}`)" for k, v in params)
+
+    each = [f"{m}: " + ", ".join(cell(c.world, c.params) for c in LAB.exe_grid.cells_of(m)
+                                 if m in load_world(c.world).checkoff_maneuvers) for m in LAB_MANEUVERS]
+    return (f"By default your maneuver is graded only in the cells that show its mistakes ({LAB.exe_grid.seeds} "
+            "seeds each): "
+            + "; ".join(each) + ". A parameter a cell names is appended to your command, and the judge uses it too.")
 
 
 def _homework(level: int, cfg: RefereeConfig, setup: GradeSetup) -> list[str]:

@@ -99,6 +99,22 @@ def test_the_page_s_grade_defaults_are_bt_nav_grade_s() -> None:
     assert (args.rtf, args.timeout) == (GradeSetup().rtf, GradeSetup().limit)
 
 
+def test_the_lab_page_names_each_choice_s_cells_as_a_grade_plans_them() -> None:
+    """A student reads which arenas their choice is graded in (and the parameter a cell passes) from the page, the
+    same cells `bt-nav grade --exe` plans; a grade given --worlds has no such line."""
+    from bt_nav.cli.grade import _parser
+    from bt_nav.grading.plan import build_jobs
+
+    page = rules_markdown("lab", setup=GradeSetup())
+    for choice in "ABC":
+        args = _parser().parse_args(["--exe", "python3 n.py", "--profile", "lab", "--maneuvers", choice])
+        jobs = build_jobs(args, ["lab_beside", "lab_dead_end", "lab_hallway", "lab_slant", "lab_object"], [0])
+        cells = list(dict.fromkeys(f"`{j.world}`" + "".join(f" (`-p {k}:={v:g}`)" for k, v in j.node_params or ())
+                                   for j in jobs))
+        assert f"{choice}: " + ", ".join(cells) in page
+    assert "graded only in the cells" not in rules_markdown("lab", setup=GradeSetup(worlds=("lab_object",)))
+
+
 def _bt_nav(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "bt_nav.cli", *args], cwd=ROOT, capture_output=True, text=True,
                           timeout=60)

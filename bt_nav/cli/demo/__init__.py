@@ -44,7 +44,8 @@ def build_parser() -> argparse.ArgumentParser:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     add_mission_options(parser)
     parser.add_argument("--rtf", type=float, default=0.0,
-                        help="real-time factor; 0 (default) = as fast as the executive keeps up")
+                        help="real-time factor; 0 (default) = as fast as the executive keeps up; with --exe, 0 = real "
+                        "time (1x, as graded and as on the robot)")
     parser.add_argument("--name", help="run directory name (default: <date>-<time>_<world>_<maneuver>_seed<seed>;"
                         " never overwritten: a suffix -2, -3 ... is added)")
     parser.add_argument("--out", default="runs", help="where run directories go (default runs/)")

@@ -30,9 +30,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-#: Sim seconds per wall second when ``--rtf 0``: the demo's simulator does not wait for a foreign node (a grade's
-#: does, and keeps just behind it: :mod:`bt_nav.grading.exe.pace`).
-EXE_RTF = 5.0
+#: Sim seconds per wall second when ``--rtf 0``: real time, the speed a grade judges at and the robot runs at. A
+#: student's node filmed faster can misbehave in ways it never would on the robot (its turns timed late, its
+#: callbacks queued); ``--rtf N`` films a faster preview on request.
+EXE_RTF = 1.0
 #: Sim seconds a terminal line waits for earlier ones that come over DDS (:class:`bt_nav.run.terminal.NodeTerminal`).
 HOLD = 2.0
 

@@ -79,8 +79,9 @@ def _parser() -> argparse.ArgumentParser:
                         "scan by fixed indices passes one and fails another)")
     parser.add_argument("--first-seed", type=int, default=0, help="the first seed (default 0)")
     parser.add_argument("--jobs", type=jobs_arg, default=None, metavar="N|auto",
-                        help="runs at once on this machine (without --scheduler); auto: one per usable core, and "
-                        "for --exe up to three per core while the cores stay idle (default auto)")
+                        help="runs at once on this machine (without --scheduler); auto (default): for --exe at 1x "
+                        "the whole grid at once, up to ten per usable core and 400 MiB a run, then one more at a time "
+                        "while the cores stay idle; in a preview up to three per core; N: exactly N at a time")
     parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                         help="run on this Dask scheduler (an address or a scheduler file .json)")
     add_mission_options(parser, grid=True)
