@@ -90,6 +90,7 @@ def test_a_failing_submission_reads_on_gradescope(tmp_path: Path) -> None:
     assert doc["score"] == 3, doc  # the launch file's 3 of the zip's 10 points (launch_share 0.3)
     assert unopenable(json.dumps(doc)) == [], doc
     assert abs(doc["execution_time"] - wall) <= 0.1 * wall, (doc["execution_time"], wall)
+    assert not list((tmp_path / "work").rglob("*.mp4")), "a film nobody on Gradescope can open (--videos off)"
     for line in said.splitlines():  # each message on a line of its own
         for mark in (r"run_autograder:", r"bt-nav grade:", r"class of 1 in [\d.]+ s wall"):
             assert not re.search(mark, line) or re.match(mark, line.lstrip()), line
