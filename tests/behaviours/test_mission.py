@@ -101,10 +101,27 @@ def test_a_live_duration_change_moves_the_deadline() -> None:
 # ----------------------------------------------------------------------------------- EvaluateMission
 def evaluate(client: LocalTriggerClient | None, clock: FakeClock, events: Events | None = None, *,
              retries: int = 2) -> EvaluateMission:
+    """The leaf past its first tick, which only holds the request (see the test below)."""
     Board().set(timeout=1.0, retries=retries, retry_delay=0.5)
     leaf = make(EvaluateMission, clock=clock, events=events)
     leaf.setup(clock=clock, events=events or leaf.events, evaluation_client=client)
+    if client is not None:
+        assert tick(leaf) == Status.RUNNING and client.calls == [] and leaf.attempts == 0
     return leaf
+
+
+def test_the_request_waits_for_the_tick_after_the_stop() -> None:
+    """"Stop its motion and send the request": on the tick the deadline latches, the Stop before this leaf
+    commands the zero twist the node publishes at the tick's end, so the request goes out on the next tick."""
+    clock = FakeClock(1.0)
+    client = LocalTriggerClient(clock=clock)
+    Board().set(timeout=1.0, retries=2, retry_delay=0.5)
+    leaf = make(EvaluateMission, clock=clock)
+    leaf.setup(clock=clock, events=leaf.events, evaluation_client=client)
+    assert tick(leaf) == Status.RUNNING and client.calls == [], "no request on the stop's own tick"
+    assert "stopping first" in leaf.feedback_message
+    clock.advance(0.05)
+    assert tick(leaf) == Status.SUCCESS and client.calls == [1.05]
 
 
 def test_evaluation_accepted_on_the_first_call_stays_success_without_calling_again() -> None:

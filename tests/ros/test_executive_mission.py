@@ -39,13 +39,17 @@ def test_deadline_follows_sim_time_and_calls_exactly_once(executive: Callable[..
     assert h.tick(scan=FREE).linear > 0.0
     assert h.calls == []
 
-    # The tick at the deadline (or the next one: float rounding of the due time) stops and sends the request.
+    # The tick at the deadline (or the next one: float rounding of the due time) stops; the request goes out on the
+    # tick after, once the zero twist is out ("stop its motion and send the request").
     latch = h.tick(scan=FREE)
     if not latch.is_zero:
         latch = h.tick(scan=FREE)
     assert latch.is_zero
+    time.sleep(0.5)
+    assert h.calls == [], "the request went out before the stop was published"
+    assert h.tick(scan=FREE).is_zero
     h.wait(lambda: len(h.calls) == 1, "the evaluation call")  # simulated time stands still meanwhile
-    assert armed_at + DUE - 1e-6 <= h.calls[0].sim_time <= armed_at + DUE + PERIOD + 1e-6
+    assert armed_at + DUE + PERIOD - 1e-6 <= h.calls[0].sim_time <= armed_at + DUE + 2 * PERIOD + 1e-6
     assert h.tick(armed_at + DUE + 0.1, scan=FREE).is_zero  # /clock on past the deadline: still stopped
     assert time.monotonic() - wall_start < 20.0  # nowhere near 50 s of wall time
 

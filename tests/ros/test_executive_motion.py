@@ -140,7 +140,8 @@ def test_remapped_service_names(executive: Callable[..., Harness]) -> None:
     assert h.arm(True).success
     armed_at = h.sim_time
     assert h.tick(scan=FREE).linear > 0.0
-    h.tick(armed_at + 5.0 - float(SPECS["stop_margin"].default) + PERIOD)  # past the deadline: stop and call
+    h.tick(armed_at + 5.0 - float(SPECS["stop_margin"].default) + PERIOD)  # past the deadline: stop
+    h.tick(scan=FREE)  # then call
     h.wait(lambda: len(h.calls) == 1, "the evaluation call on the remapped name")
     assert h.samples[-1].is_zero
     assert h.process.has_line(r"arm server /reactive_control/activate")

@@ -197,6 +197,7 @@ class EvaluateMission(Leaf):
         self._attempt_elapsed = 0.0  # seconds spent in the current attempt
         self._wait_left = 0.0  # seconds of retry delay still to wait
         self._last_time: float | None = None
+        self._held = False  # the first request waits for the tick after the stop (initialise)
 
     def setup(self, **kwargs: Any) -> None:
         """Use the injected ``evaluation_client`` or create a Trigger client on the node."""
@@ -208,13 +209,20 @@ class EvaluateMission(Leaf):
             self.client = self.node.create_client(Trigger, "evaluate_mission")
 
     def initialise(self) -> None:
-        """Send the first request right away (``call_async``); later ticks only poll.
+        """Hold the first request for one tick; later ticks send it (``call_async``) and poll.
 
-        After a tree reset (an exception elsewhere) a request already in flight is kept and polled
-        again: sending a second one would ask the referee twice.
+        The sheet's order is "stop its motion and send the request": the Stop before this leaf
+        commands a zero twist that the node publishes only at the end of this tick, so a request sent
+        now would reach the evaluator while the last command it heard still drives the robot. On the
+        next tick the stop is out. After a tree reset (an exception elsewhere) a request already in
+        flight is kept and polled again: sending a second one would ask the referee twice.
         """
         if self.final is None and self.client is not None:
-            self._advance(self.clock())
+            if self.attempts == 0 and not self._in_attempt:
+                self._held = True
+                self._elapse(self.clock())
+            else:
+                self._advance(self.clock())
 
     def _elapse(self, now: float) -> float:
         """Seconds since the previous call, never negative: a clock jumping back (a simulator reset)
@@ -248,6 +256,10 @@ class EvaluateMission(Leaf):
             return self.final
         if self.client is None:
             return self._give_up("no evaluation client (no node and none injected)")
+        if self._held:  # the tick that initialised it: its stop is published at this tick's end
+            self._held = False
+            self.feedback_message = "stopping first: the request goes out on the next tick"
+            return Status.RUNNING
         self._advance(self.clock())
         if not self._in_attempt:
             return Status.RUNNING  # waiting out the retry delay
