@@ -76,3 +76,32 @@ def test_announced_angles_come_from_the_event_fields_whatever_the_leaf_is_called
 def test_the_lab_profile_needs_a_lab_maneuver() -> None:
     with pytest.raises(ValueError, match="A, B or C"):
         run_mission("lab_object", "none", 0, profile="lab")
+
+
+#: A 12 x 12 m room (wider than the LDS-01's 3.5 m): a box 1 m ahead and a wall along the robot's left only.
+WIDE_ROOM = """name: lab_wide
+checkoff_maneuvers: [A, C]
+spawn: {x: 0.0, y: 0.0, yaw_deg: 0}
+boxes:
+  - {x: 6.05, y: 0.0, length: 12.2, thickness: 0.1, yaw_deg: 90}
+  - {x: -6.05, y: 0.0, length: 12.2, thickness: 0.1, yaw_deg: 90}
+  - {x: 0.0, y: 6.05, length: 12.2, thickness: 0.1, yaw_deg: 0}
+  - {x: 0.0, y: -6.05, length: 12.2, thickness: 0.1, yaw_deg: 0}
+  - {x: 1.15, y: 0.0, length: 0.3, thickness: 0.3, yaw_deg: 0}
+  - {x: 0.3, y: 0.55, length: 2.0, thickness: 0.1, yaw_deg: 0}
+"""
+
+
+@pytest.mark.parametrize("lidar", ["lds01", "lds02"])
+def test_in_a_room_wider_than_the_lidar_sees_no_reading_is_no_obstacle(lidar: str, tmp_path) -> None:
+    """An LDS-01 reads 0.0 (an LDS-02 NaN) wherever nothing is within range: the open right is an unknown sector.
+    The Smart Pivot turns there, away from the wall it sees (it turned towards the wall), and the Retreat does not
+    fire beside one wall (it fired at once, twice)."""
+    world = tmp_path / "lab_wide.yaml"
+    world.write_text(WIDE_ROOM)
+    pivot = run_mission(load_world(str(world)), "C", 1, profile="lab", sim_params={"lidar": lidar})
+    assert pivot.passed, pivot.report_lines
+    turns = [record for record in pivot.announcements if record["event"] == "maneuver"]
+    assert turns and turns[0]["side"] == "right", turns
+    retreat = run_mission(load_world(str(world)), "B", 1, profile="lab", sim_params={"lidar": lidar})
+    assert not [r for r in retreat.announcements if r["event"] == "maneuver"], retreat.report_lines

@@ -530,11 +530,13 @@ def classify(reading: SectorReading, close_distance: float, far_distance: float)
 def clearer_side(sectors: Sectors) -> int:
     """+1 (turn left / CCW) if the left sector is clearer, -1 (turn right / CW) otherwise.
 
-    An unknown side counts as distance 0 so the robot never turns towards a direction it cannot see.
-    Ties - including both unknown and both +inf - go left (+1): a fixed choice keeps the robot from
-    oscillating between left and right on successive ticks.
+    An unknown side (too few beams with a return) counts as free space (+inf): a TurtleBot3's LDS-01 reads
+    0.0 and its LDS-02 NaN where nothing is within range, so in a room wider than the LiDAR's range the open
+    side is the unknown one, and the Smart Pivot must turn there, not towards the wall it does see. Ties -
+    both unknown, both +inf - go left (+1): a fixed choice keeps the robot from oscillating between left
+    and right on successive ticks.
     """
-    left = sectors.left.min_range if sectors.left.known else 0.0
-    right = sectors.right.min_range if sectors.right.known else 0.0
+    left = sectors.left.min_range if sectors.left.known else math.inf
+    right = sectors.right.min_range if sectors.right.known else math.inf
     return 1 if left >= right else -1
 

@@ -162,14 +162,26 @@ def test_front_trigger_rearms_after_driving_under_a_lasting_condition() -> None:
     assert tick(leaf) == Status.SUCCESS
 
 
-def test_unknown_front_holds_but_never_clears() -> None:
+def test_an_unknown_front_neither_fires_nor_clears() -> None:
+    """An LDS-01 reads 0.0 (an LDS-02 NaN) where nothing is within range: no reading fires no maneuver, and a
+    fired trigger is not re-armed by it either (only a reading beyond the hysteresis band clears)."""
     board = trigger_board(sectors=sectors(front=math.nan), rearm_distance=0.0)
     clock = FakeClock(1.0)
     leaf = make(FrontTrigger, clock=clock)
+    assert tick(leaf) == Status.FAILURE, "fired on no reading"
+    board.set(sectors=sectors(front=0.3))
     assert tick(leaf) == Status.SUCCESS
-    clock.now = 2.0
-    board.set(odom=odom(5.0, 0.0, 2.0))
-    assert tick(leaf) == Status.FAILURE, "still unknown, 5 m on: not a new edge, unknown is not cleared"
+    board.set(sectors=sectors(front=math.nan))
+    assert tick(leaf) == Status.FAILURE
+    board.set(sectors=sectors(front=0.3))
+    assert tick(leaf) == Status.FAILURE, "unknown cleared the trigger"
+
+
+def test_one_wall_and_open_space_is_no_squeeze() -> None:
+    """B beside one wall with nothing within range on the other side (LDS-01 0.0): not squeezed."""
+    trigger_board(sectors=sectors(left=0.3, right=math.nan))
+    leaf = make(SqueezeTrigger, clock=FakeClock(1.0))
+    assert tick(leaf) == Status.FAILURE
 
 
 def test_squeeze_trigger_needs_both_sides_and_rearms_on_one_side_clearing() -> None:

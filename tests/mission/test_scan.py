@@ -352,9 +352,9 @@ def test_classify_unknown_and_bad_thresholds() -> None:
         (reading(INF), reading(3.0), 1),
         (reading(3.0), reading(INF), -1),
         (UNKNOWN, UNKNOWN, 1),
-        (UNKNOWN, reading(0.5), -1),  # unknown is never clearer
-        (reading(0.5), UNKNOWN, 1),
-        (UNKNOWN, reading(0.0), 1),  # unknown counts as 0: tie -> left
+        (UNKNOWN, reading(0.5), 1),  # unknown is no return within range: free space, the clearer side
+        (reading(0.5), UNKNOWN, -1),
+        (UNKNOWN, reading(INF), 1),  # unknown counts as +inf: tie -> left
     ],
 )
 def test_clearer_side(left: SectorReading, right: SectorReading, clearer: int) -> None:

@@ -17,8 +17,13 @@ robot never leaves its spot. A trigger here fires on the condition's rising edge
 
 A new arming (``arm_count`` changes) is a fresh start: the trigger is armed, so a condition that already
 holds then fires at once (a robot armed beside a wall meets a new situation). A trigger that has never
-been ticked is armed too. An unknown reading counts as "near" (never drive into what cannot be seen) and
-never as "cleared". The latch is :class:`EdgeLatch`, pure state with no py_trees in it.
+been ticked is armed too. An unknown reading (too few beams with a return) neither fires nor clears a
+trigger: the sheet's conditions are readings ("front < safety_distance"), and what a TurtleBot3's LDS-01
+(0.0) and LDS-02 (NaN) publish for a sector with nothing within range is no reading at all. Firing there
+spun the robot in any room wider than the LiDAR's 3.5 m (and fired B beside one wall with open space on
+the other side). Not driving blind is the other branches' job: the homework's close branch rotates in
+place on an unknown front, the lab creeps at ``creep_speed`` and brakes on any return in its path. The
+latch is :class:`EdgeLatch`, pure state with no py_trees in it.
 
 With ``repeat`` (the lab's front triggers) the trigger is level-triggered instead: it is only ticked when
 no maneuver runs, so a front still blocked after a turn fires the next turn, until the front is clear.
@@ -116,8 +121,8 @@ class Odometer:
 
 
 def _near(reading: SectorReading, distance: float) -> bool:
-    """Nearer than ``distance``, or unknown."""
-    return not reading.known or reading.min_range < distance
+    """Known and nearer than ``distance`` (an unknown sector is no reading: see the module docstring)."""
+    return reading.known and reading.min_range < distance
 
 
 def _clear(reading: SectorReading, distance: float) -> bool:
@@ -189,7 +194,7 @@ class _EdgeTrigger(Condition, register=False):
 
 
 class FrontTrigger(_EdgeTrigger):
-    """Front sector nearer than ``distance`` (or unknown), on its rising edge: the trigger of every maneuver whose
+    """Front sector nearer than ``distance``, on its rising edge: the trigger of every maneuver whose
     spec's trigger reads ``front`` (:mod:`bt_nav.mission.maneuver_spec`; A and C)."""
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
@@ -202,7 +207,7 @@ class FrontTrigger(_EdgeTrigger):
 
 
 class SqueezeTrigger(_EdgeTrigger):
-    """Left AND right sectors nearer than ``distance`` (or unknown), on its rising edge: the trigger of every maneuver
+    """Left AND right sectors nearer than ``distance``, on its rising edge: the trigger of every maneuver
     whose spec's trigger reads ``sides`` (B)."""
 
     def holds(self, sectors: Sectors, distance: float) -> bool:
