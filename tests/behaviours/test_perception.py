@@ -102,3 +102,21 @@ def test_obstacle_questions(obstacle: tuple[float, float], width_deg: float, clo
     feed(board, clock, synthetic_scan([obstacle], width_deg=width_deg))
     tick(perception)
     assert (tick(make(ObstacleClose)), tick(make(ObstacleFar))) == (close, far)
+
+
+def test_a_scan_without_a_single_return_blocks_every_path_and_says_so_once() -> None:
+    """An LDS-01 reading 0.0 everywhere (dead, covered, or in a room wider than 3.5 m) cannot tell open space from a
+    blind LiDAR: no path is free (the lab's brake holds, the homework rotates), while a scan with returns elsewhere
+    and nothing within range ahead leaves the path ahead free (the lab creeps on into the open)."""
+    board, clock, events = Board(), FakeClock(1.0), Events()
+    leaf = perceive(board, clock, events)
+    feed(board, clock, synthetic_scan(background=0.0))  # 0.0: below range_min, the LDS-01's "no return"
+    tick(leaf)
+    tick(leaf)
+    assert board.get("scan_ok") is True and not board.get("sectors").front.known
+    assert board.get("paths").ahead == 0.0, "drove on a scan with no return at all"
+    assert events.count("warning", "no return in the whole scan") == 1
+    feed(board, clock, synthetic_scan([(90.0, 0.5), (-90.0, 0.6)], width_deg=40.0, background=math.nan))  # LDS-02
+    tick(leaf)
+    assert not board.get("sectors").front.known and board.get("paths").ahead > 1.0
+    assert events.count("info", "returns again") == 1

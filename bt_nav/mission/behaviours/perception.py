@@ -81,6 +81,7 @@ class ProcessScan(Leaf):
         self._error: str = ""
         self._status = "no scan yet"
         self._front_known: bool | None = None
+        self._no_returns = False
         self._config_inputs: tuple[Any, ...] = ()
         self._config_cache = SectorConfig()
 
@@ -111,6 +112,7 @@ class ProcessScan(Leaf):
                 self._sectors, self._error = sectors_from_clean(scan, clean, config), ""
                 self._paths = free_paths_from_clean(scan, clean, path_inputs[0], path_inputs[1],
                                                     mount=path_inputs[2:])
+                self._watch_returns(bool(clean.size) and bool(np.isnan(clean).all()))
             except ScanError as exc:
                 self._sectors, self._paths, self._error = UNKNOWN_SECTORS, BLOCKED_PATHS, f"malformed scan: {exc}"
         if self._error:
@@ -123,6 +125,21 @@ class ProcessScan(Leaf):
             return self._publish(False, "scan stamped in the future (clock jumped back?)", UNKNOWN_SECTORS)
         return self._publish(True, "ok", self._sectors, self._paths)
 
+    def _watch_returns(self, none: bool) -> None:
+        """A scan with no return anywhere (an LDS-01's all 0.0, an LDS-02's all NaN) cannot tell a room wider
+        than the LiDAR's range from a dead or covered LiDAR, so its paths count as blocked: the robot turns or
+        stands rather than drive on it (no maneuver fires on its unknown sectors). One line per change."""
+        if none:
+            self._paths = BLOCKED_PATHS
+        if none == self._no_returns:
+            return
+        if none:
+            self.events.warning(f"{self.label}: no return in the whole scan (LiDAR blind, or nothing within its "
+                                "range) — not driving on it")
+        elif self._no_returns:
+            self.events.info(f"{self.label}: returns again")
+        self._no_returns = none
+
     def _watch_front(self, front: SectorReading) -> None:
         """One line when the front sector becomes unknown (the robot then only rotates) and one when
         it is known again: otherwise a robot turning on the spot for a blind LiDAR says nothing."""
@@ -130,7 +147,7 @@ class ProcessScan(Leaf):
             return
         if not front.known:
             self.events.warning(f"{self.label}: front sector unknown ({front.valid_beams} of {front.total_beams} "
-                                "beams valid) — treated as an obstacle")
+                                "beams valid) — no reading ahead")
         elif self._front_known is False:
             self.events.info(f"{self.label}: front sector known again")
         self._front_known = front.known
