@@ -110,9 +110,13 @@ class ProcessScan(Leaf):
                 validate_scan(scan)
                 clean = clean_validated(scan)
                 self._sectors, self._error = sectors_from_clean(scan, clean, config), ""
-                self._paths = free_paths_from_clean(scan, clean, path_inputs[0], path_inputs[1],
-                                                    mount=path_inputs[2:])
-                self._watch_returns(bool(clean.size) and bool(np.isnan(clean).all()))
+                # no return anywhere (an LDS-01's all 0.0, an LDS-02's all NaN): a room wider than the LiDAR's
+                # range reads like a dead or covered LiDAR, so no path is free (no maneuver fires on unknown
+                # sectors either: the robot turns or stands rather than drive blind)
+                blind = bool(clean.size) and bool(np.isnan(clean).all())
+                self._paths = BLOCKED_PATHS if blind else free_paths_from_clean(
+                    scan, clean, path_inputs[0], path_inputs[1], mount=path_inputs[2:])
+                self._watch_returns(blind)
             except ScanError as exc:
                 self._sectors, self._paths, self._error = UNKNOWN_SECTORS, BLOCKED_PATHS, f"malformed scan: {exc}"
         if self._error:
@@ -126,11 +130,8 @@ class ProcessScan(Leaf):
         return self._publish(True, "ok", self._sectors, self._paths)
 
     def _watch_returns(self, none: bool) -> None:
-        """A scan with no return anywhere (an LDS-01's all 0.0, an LDS-02's all NaN) cannot tell a room wider
-        than the LiDAR's range from a dead or covered LiDAR, so its paths count as blocked: the robot turns or
-        stands rather than drive on it (no maneuver fires on its unknown sectors). One line per change."""
-        if none:
-            self._paths = BLOCKED_PATHS
+        """One line when the scans start to carry no return anywhere (their paths then count as blocked) and
+        one when they carry returns again."""
         if none == self._no_returns:
             return
         if none:
@@ -141,8 +142,8 @@ class ProcessScan(Leaf):
         self._no_returns = none
 
     def _watch_front(self, front: SectorReading) -> None:
-        """One line when the front sector becomes unknown (the robot then only rotates) and one when
-        it is known again: otherwise a robot turning on the spot for a blind LiDAR says nothing."""
+        """One line when the front sector becomes unknown and one when it is known again: the homework's
+        close branch then rotates in place and no maneuver fires, which would otherwise go unexplained."""
         if front.known == self._front_known:
             return
         if not front.known:
