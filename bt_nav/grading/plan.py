@@ -17,7 +17,7 @@ from bt_nav_sim.world import list_worlds, load_world, world_file
 
 from bt_nav.grading.exe.grid import declared_choice, node_file
 from bt_nav.grading.grid import Job, checkoff_jobs, make_jobs, parse_lidars
-from bt_nav.mission.assignments import ASSIGNMENTS, Grid, assignment_of
+from bt_nav.mission.assignments import ASSIGNMENTS, Cell, Grid, assignment_of
 from bt_nav.mission.maneuver_spec import letters_text
 from bt_nav.mission.params import normalise_maneuver, parse_assignments
 from bt_nav.run.settings import DEFAULT_JITTER
@@ -103,6 +103,12 @@ def default_cells(args: argparse.Namespace) -> Grid | None:
     return grid if grid.cells else None
 
 
+def checked_cells(grid: Grid, maneuver: str) -> list[Cell]:
+    """The cells of ``grid`` that grade ``maneuver`` (:meth:`~bt_nav.mission.assignments.Grid.cells_of`), kept
+    where the arena can check it off (its ``checkoff_maneuvers``): what a grade runs and the rules page lists."""
+    return [cell for cell in grid.cells_of(maneuver) if maneuver in load_world(cell.world).checkoff_maneuvers]
+
+
 def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[int],
                left_out: set[str] | None = None) -> list[Job]:
     """The grid of the options: worlds x maneuvers x LiDARs x seeds (the lab's arenas only where they can check
@@ -121,8 +127,7 @@ def build_jobs(args: argparse.Namespace, worlds: Sequence[str], seeds: Sequence[
         jobs = make_jobs(worlds, maneuvers, seeds, *options)
     else:  # the default grid's cells: each choice where its mistakes show
         given = set(parse_assignments(getattr(args, "node_param", None) or []))
-        checked = {world: load_world(world).checkoff_maneuvers for world in worlds}  # a cell grades these only
-        jobs = list(dict.fromkeys(job for m in maneuvers for cell in cells.cells_of(m) if m in checked[cell.world]
+        jobs = list(dict.fromkeys(job for m in maneuvers for cell in checked_cells(cells, m)
                                   for job in make_jobs([cell.world], [m], seeds, *options,
                                                        tuple((k, v) for k, v in cell.params if k not in given))))
     if not lab:

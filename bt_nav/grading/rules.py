@@ -24,11 +24,10 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from bt_nav_sim.lidar import LIDARS
-from bt_nav_sim.world import load_world
 
 from bt_nav.grading.exe.pace import speed_words
 from bt_nav.grading.exe.run import ROBOT_CLOCK_WAIT, START_WAIT, ExeSettings, exe_ros_args, profile_remaps
-from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS
+from bt_nav.grading.plan import EXE_LIDARS, EXE_WORLDS, checked_cells
 from bt_nav.judge.chains import ANNOUNCE_WINDOW
 from bt_nav.judge.checkoff_core import CHECKS as LAB_CHECKS
 from bt_nav.judge.checkoff_core import INTERRUPT_SLACK, MANEUVER_NAMES, CheckoffConfig
@@ -428,13 +427,13 @@ def _run(profile: str, setup: GradeSetup) -> list[str]:
 
 
 def _lab_cells() -> str:
-    """The default grid's cells of each lab choice (:meth:`bt_nav.mission.assignments.Grid.cells_of`, kept where the
-    arena checks the choice off), with the parameter a cell passes."""
+    """The default grid's cells of each lab choice (:func:`bt_nav.grading.plan.checked_cells`, as a grade plans
+    them), with the parameter a cell passes."""
     def cell(world: str, params: tuple[tuple[str, float], ...]) -> str:
         return f"`{world}`" + "".join(f" (`-p {k}:={v:g}`)" for k, v in params)
 
-    each = [f"{m}: " + ", ".join(cell(c.world, c.params) for c in LAB.exe_grid.cells_of(m)
-                                 if m in load_world(c.world).checkoff_maneuvers) for m in LAB_MANEUVERS]
+    each = [f"{m}: " + ", ".join(cell(c.world, c.params) for c in checked_cells(LAB.exe_grid, m))
+            for m in LAB_MANEUVERS]
     return (f"By default your maneuver is graded only in the cells that show its mistakes ({LAB.exe_grid.seeds} "
             "seeds each): "
             + "; ".join(each) + ". A parameter a cell names is appended to your command, and the judge uses it too.")
