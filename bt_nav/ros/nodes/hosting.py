@@ -104,7 +104,7 @@ class HostedJudge:
 
     def poll(self) -> bool:
         """The judge's duties between spins; True once the simulator's loop has ended (never at the verdict)."""
-        self._judging()
+        self._judging()  # before: the judge's poll may make its verdict, which is no longer judged time
         self.judge.poll()
         self._judging()
         return self.sim.poll()
